@@ -1,0 +1,21 @@
+# make test  - create .venv, install everything, run the test suite
+# make demo  - create .venv, install everything, start the web demo (added with the app)
+VENV ?= .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.setup-done
+export NUMBA_CACHE_DIR ?= $(CURDIR)/$(VENV)/numba-cache
+export GRADIO_ANALYTICS_ENABLED := False
+export HF_HUB_DISABLE_TELEMETRY := 1
+
+.PHONY: setup test clean
+setup: $(STAMP)
+
+$(STAMP): requirements.txt pyproject.toml scripts/setup.sh
+	VENV=$(VENV) bash scripts/setup.sh
+	touch $@
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+clean:
+	rm -rf $(VENV) .pytest_cache

@@ -1,0 +1,1 @@
+"""GestureLSM: speech-to-gesture generation."""

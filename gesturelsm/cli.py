@@ -1,0 +1,60 @@
+"""The `gesturelsm` command line. Each subcommand lives next to the code it drives and registers here.
+
+A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`.
+User errors (bad files, bad settings) are printed as one clear line and exit with status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# module paths of subcommands; each has add_parser(subparsers)
+SUBCOMMANDS: tuple[str, ...] = (
+    "gesturelsm.body.cli",
+    "gesturelsm.data.cli",
+    "gesturelsm.align.cli",
+    "gesturelsm.tokenizer.cli",
+)
+
+
+class UserError(Exception):
+    """An error caused by input or settings; printed without a traceback."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="gesturelsm", description="Speech-to-gesture generation (GestureLSM).")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for mod in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(mod)
+        except ModuleNotFoundError as exc:
+            if exc.name and mod.startswith(exc.name):  # that subcommand is not part of this build
+                continue
+            raise
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 0
+    from .audio import AudioError
+    from .motion.sequence import MotionFileError
+
+    try:
+        result = args.func(args)
+    except (UserError, AudioError, MotionFileError, FileNotFoundError, ValueError) as exc:
+        print(f"gesturelsm {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    return int(result or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

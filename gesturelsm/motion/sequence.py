@@ -1,0 +1,148 @@
+"""`MotionSequence`: one SMPL-X motion clip in BEAT2's layout, and its 433-d feature encoding.
+
+BEAT2 npz keys: `poses` (T, 165) axis-angle of the 55 joints (radians), `trans` (T, 3) metres y-up,
+`expressions` (T, 100) FLAME coefficients, `betas` (300,), `model`, `gender`, `mocap_frame_rate` (30).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .regions import EXPR_OFFSET, FEATURE_DIM, NUM_EXPRESSIONS, ROT_DIM, TRANS_OFFSET
+from .rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
+from .skeleton import MIRROR_PERM, NUM_JOINTS
+from .translation import trans_to_velocity, velocity_to_trans
+
+FPS = 30
+NUM_BETAS = 300
+
+
+class MotionFileError(ValueError):
+    """A motion file that cannot be read as BEAT2/SMPL-X; the message names the file and the problem."""
+
+
+@dataclass
+class MotionSequence:
+    poses: np.ndarray                      # (T, 165) float32, axis-angle, SMPL-X joint order
+    trans: np.ndarray                      # (T, 3) float32, metres, y up
+    expressions: np.ndarray                # (T, 100) float32
+    betas: np.ndarray = field(default_factory=lambda: np.zeros(NUM_BETAS, np.float32))  # (300,)
+    fps: int = FPS
+
+    def __post_init__(self) -> None:
+        self.poses = np.asarray(self.poses, np.float32).reshape(-1, NUM_JOINTS * 3)
+        T = len(self.poses)
+        self.trans = np.asarray(self.trans, np.float32).reshape(T, 3)
+        self.expressions = np.asarray(self.expressions, np.float32).reshape(T, -1)
+        betas = np.zeros(NUM_BETAS, np.float32)
+        b = np.asarray(self.betas, np.float32).reshape(-1)[:NUM_BETAS]
+        betas[: len(b)] = b
+        self.betas = betas
+
+    # ---- basics -----------------------------------------------------------------------------------
+    @property
+    def num_frames(self) -> int:
+        return len(self.poses)
+
+    @property
+    def duration(self) -> float:
+        return self.num_frames / self.fps
+
+    def __len__(self) -> int:
+        return self.num_frames
+
+    def slice(self, start: int, stop: int) -> "MotionSequence":
+        return replace(self, poses=self.poses[start:stop], trans=self.trans[start:stop],
+                       expressions=self.expressions[start:stop])
+
+    # ---- file I/O ---------------------------------------------------------------------------------
+    @classmethod
+    def load(cls, path: str | Path) -> "MotionSequence":
+        path = Path(path)
+        try:
+            data = np.load(path, allow_pickle=False)
+        except FileNotFoundError:
+            raise MotionFileError(f"{path}: file not found") from None
+        except Exception as exc:  # zip/npz corruption, wrong format
+            raise MotionFileError(f"{path}: not a readable .npz motion file ({exc})") from None
+        with data:
+            for key in ("poses", "trans"):
+                if key not in data.files:
+                    raise MotionFileError(f"{path}: missing array '{key}' (has: {', '.join(data.files)})")
+            poses = data["poses"]
+            if poses.ndim != 2 or poses.shape[1] != NUM_JOINTS * 3:
+                raise MotionFileError(f"{path}: 'poses' has shape {poses.shape}, expected (T, 165) "
+                                      "axis-angle of the 55 SMPL-X joints")
+            T = poses.shape[0]
+            trans = data["trans"]
+            if trans.shape != (T, 3):
+                raise MotionFileError(f"{path}: 'trans' has shape {trans.shape}, expected ({T}, 3)")
+            expr = data["expressions"] if "expressions" in data.files else np.zeros((T, NUM_EXPRESSIONS))
+            if expr.ndim != 2 or expr.shape[0] != T:
+                raise MotionFileError(f"{path}: 'expressions' has shape {expr.shape}, expected ({T}, 100)")
+            if expr.shape[1] < NUM_EXPRESSIONS:  # e.g. 50-coefficient files: pad with zeros
+                expr = np.pad(expr, ((0, 0), (0, NUM_EXPRESSIONS - expr.shape[1])))
+            betas = data["betas"] if "betas" in data.files else np.zeros(NUM_BETAS)
+            fps = int(data["mocap_frame_rate"]) if "mocap_frame_rate" in data.files else FPS
+            if not np.isfinite(poses).all() or not np.isfinite(trans).all():
+                raise MotionFileError(f"{path}: contains NaN or infinite values")
+        return cls(poses, trans, expr[:, :NUM_EXPRESSIONS], betas, fps)
+
+    def save(self, path: str | Path) -> Path:
+        """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads)."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(path, poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
+                 expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
+                 model=np.array("smplx2020"), gender=np.array("neutral"),
+                 mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+        return path
+
+    # ---- features ---------------------------------------------------------------------------------
+    def to_features(self) -> torch.Tensor:
+        """(T, 433) float32: [55 x 6D | dx, y, dz | 100 expressions] (see regions.py)."""
+        T = self.num_frames
+        aa = torch.from_numpy(self.poses).reshape(T, NUM_JOINTS, 3)
+        rot = axis_angle_to_rot6d(aa).reshape(T, ROT_DIM)
+        vel = trans_to_velocity(torch.from_numpy(self.trans))
+        return torch.cat([rot, vel, torch.from_numpy(self.expressions)], dim=-1).float()
+
+    @classmethod
+    def from_features(cls, x: torch.Tensor, betas: np.ndarray | None = None,
+                      start_xz: tuple[float, float] = (0.0, 0.0), fps: int = FPS) -> "MotionSequence":
+        """Inverse of `to_features` (x, z start at `start_xz`)."""
+        x = x.detach().float().cpu()
+        if x.ndim != 2 or x.shape[-1] != FEATURE_DIM:
+            raise ValueError(f"features must be (T, {FEATURE_DIM}), got {tuple(x.shape)}")
+        T = x.shape[0]
+        aa = rot6d_to_axis_angle(x[:, :ROT_DIM].reshape(T, NUM_JOINTS, 6)).reshape(T, -1)
+        trans = velocity_to_trans(x[:, TRANS_OFFSET:TRANS_OFFSET + 3], start_xz)
+        expr = x[:, EXPR_OFFSET:]
+        return cls(aa.numpy(), trans.numpy(), expr.numpy(),
+                   betas if betas is not None else np.zeros(NUM_BETAS, np.float32), fps)
+
+    # ---- augmentation -----------------------------------------------------------------------------
+    def mirrored(self) -> "MotionSequence":
+        """Left/right mirror: swap left/right joints, reflect rotations and translation in the x = 0 plane.
+
+        Reflection S = diag(-1, 1, 1): R -> S R S, which for axis-angle (x, y, z) is (x, -y, -z).
+        FLAME expressions have no mirror map and are kept as they are.
+        """
+        aa = self.poses.reshape(-1, NUM_JOINTS, 3)[:, list(MIRROR_PERM)] * np.array([1, -1, -1], np.float32)
+        trans = self.trans * np.array([-1, 1, 1], np.float32)
+        return replace(self, poses=aa.reshape(-1, NUM_JOINTS * 3), trans=trans)
+
+
+# Sign flips of S R S on the two 6D rows (row0: (R00, R01, R02), row1: (R10, R11, R12)), S = diag(-1,1,1).
+_MIRROR_6D_SIGN = torch.tensor([1.0, -1.0, -1.0, -1.0, 1.0, 1.0])
+
+
+def mirror_features(x: torch.Tensor) -> torch.Tensor:
+    """Mirror (..., T, 433) features; equals `to_features(seq.mirrored())` for x = `seq.to_features()`."""
+    rot = x[..., :ROT_DIM].reshape(*x.shape[:-1], NUM_JOINTS, 6)
+    rot = rot[..., list(MIRROR_PERM), :] * _MIRROR_6D_SIGN.to(x)
+    vel = x[..., TRANS_OFFSET:TRANS_OFFSET + 3] * torch.tensor([-1.0, 1.0, 1.0]).to(x)
+    return torch.cat([rot.reshape(*x.shape[:-1], ROT_DIM), vel, x[..., EXPR_OFFSET:]], dim=-1)
