@@ -1,61 +1,10 @@
 import warnings
-from pathlib import Path
-
 import numpy as np
 import pytest
-import soundfile as sf
 import torch
 
-from gesturelsm.data import Beat2Dataset, DatasetError, iter_windows, match_length, window_starts
 from gesturelsm.motion import MotionSequence
-
-TEXTGRID = '''File type = "ooTextFile"
-Object class = "TextGrid"
-
-xmin = 0
-xmax = {dur}
-tiers? <exists>
-size = 1
-item []:
-    item [1]:
-        class = "IntervalTier"
-        name = "words"
-        xmin = 0
-        xmax = {dur}
-        intervals: size = 3
-        intervals [1]:
-            xmin = 0
-            xmax = 0.5
-            text = ""
-        intervals [2]:
-            xmin = 0.5
-            xmax = 1.0
-            text = "hello"
-        intervals [3]:
-            xmin = 1.0
-            xmax = {dur}
-            text = "world"
-'''
-
-
-def make_take(root: Path, name: str, frames: int, sr: int = 16000, dtype: str = "float32",
-              audio_extra_s: float = 0.5, textgrid: bool = True) -> MotionSequence:
-    rng = np.random.default_rng(frames)
-    seq = MotionSequence(rng.normal(scale=0.3, size=(frames, 165)), np.tile([0, 1.3, 0], (frames, 1)),
-                         rng.normal(size=(frames, 100)))
-    seq.save(root / "smplxflame_30" / f"{name}.npz")
-    n = int((frames / 30 + audio_extra_s) * sr)
-    y = (0.3 * np.sin(np.arange(n) / sr * 2 * np.pi * 220)).astype(np.float32)
-    (root / "wave16k").mkdir(parents=True, exist_ok=True)
-    if dtype == "int16":
-        sf.write(root / "wave16k" / f"{name}.wav", (y * 32767).astype(np.int16), sr, subtype="PCM_16")
-    else:
-        sf.write(root / "wave16k" / f"{name}.wav", y, sr, subtype="FLOAT")
-    if textgrid:
-        (root / "textgrid").mkdir(parents=True, exist_ok=True)
-        (root / "textgrid" / f"{name}.TextGrid").write_text(TEXTGRID.format(dur=frames / 30))
-    return seq
-
+from gesturelsm.data import Beat2Dataset, DatasetError, iter_windows, match_length, window_starts
 
 def test_window_starts():
     assert window_starts(10, 4, 3) == [0, 3, 6]
@@ -70,10 +19,10 @@ def test_match_length_trims_and_pads():
     assert len(padded) == 16000 and padded[99] == 1 and padded[100] == 0
 
 
-def test_reader_handles_layout_formats_and_filters(tmp_path):
-    make_take(tmp_path, "2_scott_0_1_1", 90, dtype="float32")
-    make_take(tmp_path, "2_scott_0_2_2", 60, sr=44100, dtype="int16", textgrid=False)
-    make_take(tmp_path, "4_lawrence_0_1_1", 60)
+def test_reader_handles_layout_formats_and_filters(tmp_path, beat2_maker):
+    beat2_maker(tmp_path, "2_scott_0_1_1", 90, dtype="float32")
+    beat2_maker(tmp_path, "2_scott_0_2_2", 60, sr=44100, dtype="int16", textgrid=False)
+    beat2_maker(tmp_path, "4_lawrence_0_1_1", 60)
     (tmp_path / "train_test_split.csv").write_text("id,type\n2_scott_0_1_1,train\n2_scott_0_2_2,test\n"
                                                   "4_lawrence_0_1_1,train\n")
     ds = Beat2Dataset(tmp_path)
@@ -92,9 +41,9 @@ def test_reader_handles_layout_formats_and_filters(tmp_path):
     assert 0.25 < np.abs(take2.audio).max() <= 1.0
 
 
-def test_windows_skip_short_takes_with_a_warning_and_cover_the_range(tmp_path):
-    make_take(tmp_path, "2_scott_0_1_1", 100)
-    make_take(tmp_path, "2_scott_0_2_2", 20)
+def test_windows_skip_short_takes_with_a_warning_and_cover_the_range(tmp_path, beat2_maker):
+    beat2_maker(tmp_path, "2_scott_0_1_1", 100)
+    beat2_maker(tmp_path, "2_scott_0_2_2", 20)
     ds = Beat2Dataset(tmp_path)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -109,8 +58,8 @@ def test_windows_skip_short_takes_with_a_warning_and_cover_the_range(tmp_path):
     assert max(w.start + 32 for w in train) <= 80
 
 
-def test_feature_cache_is_invalidated_when_source_changes(tmp_path):
-    make_take(tmp_path, "2_scott_0_1_1", 40)
+def test_feature_cache_is_invalidated_when_source_changes(tmp_path, beat2_maker):
+    beat2_maker(tmp_path, "2_scott_0_1_1", 40)
     ds = Beat2Dataset(tmp_path, cache_dir=tmp_path / "cache")
     a = ds.features("2_scott_0_1_1")
     assert len(list((tmp_path / "cache").glob("*.pt"))) == 1
@@ -128,8 +77,8 @@ def test_feature_cache_is_invalidated_when_source_changes(tmp_path):
     assert len(list((tmp_path / "cache").glob("*.pt"))) == 1  # stale entry replaced
 
 
-def test_unreadable_files_are_named(tmp_path):
-    make_take(tmp_path, "2_scott_0_1_1", 40)
+def test_unreadable_files_are_named(tmp_path, beat2_maker):
+    beat2_maker(tmp_path, "2_scott_0_1_1", 40)
     (tmp_path / "smplxflame_30" / "2_scott_0_9_9.npz").write_bytes(b"garbage")
     ds = Beat2Dataset(tmp_path)
     with pytest.raises(ValueError, match="2_scott_0_9_9.npz"):

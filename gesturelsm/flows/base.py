@@ -1,0 +1,57 @@
+"""The interface every generative method implements, and classifier-free guidance.
+
+Convention (all methods): **t = 0 is noise, t = 1 is data**; x_t = t * x1 + (1 - t) * x0 for the flows.
+A *model function* is `f(x, t, d, drop) -> prediction`:
+    x: (B, ...) current state, t: (B,) time in [0, 1], d: (B,) step size (0 = instantaneous),
+    drop: (B,) bool, True where the speech condition is replaced by the learned null condition.
+It may be called with a batch that is a multiple of the bound condition's batch (CFG stacks the
+conditional and unconditional halves into one call).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Protocol
+
+import torch
+
+ModelFn = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]
+
+
+@dataclass
+class LossResult:
+    loss: torch.Tensor               # scalar to minimise
+    logs: dict[str, float]           # parts of the loss for progress bars
+
+
+class Method(Protocol):
+    name: str
+    uses_step_size: bool             # whether the network's d input is meaningful
+
+    def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,
+             generator: torch.Generator | None = None) -> LossResult: ...
+
+    def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor: ...
+
+
+def guided(f: ModelFn, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, scale: float) -> torch.Tensor:
+    """Classifier-free guidance: u + s (c - u), conditional and unconditional in one batched call.
+
+    scale == 1 is exactly the conditional prediction (one pass, no null-condition call).
+    """
+    B = x.shape[0]
+    no = torch.zeros(B, dtype=torch.bool, device=x.device)
+    if scale == 1.0:
+        return f(x, t, d, no)
+    out = f(torch.cat([x, x]), torch.cat([t, t]), torch.cat([d, d]), torch.cat([no, ~no]))
+    cond, uncond = out[:B], out[B:]
+    return uncond + scale * (cond - uncond)
+
+
+def drop_mask(B: int, p: float, device, generator: torch.Generator | None = None) -> torch.Tensor:
+    """(B,) bool: True with probability p (the condition is dropped for CFG training)."""
+    return torch.rand(B, generator=generator, device=device) < p
+
+
+def bcast(v: torch.Tensor, like: torch.Tensor) -> torch.Tensor:
+    """(B,) -> (B, 1, 1, ...) to broadcast against `like`."""
+    return v.reshape(-1, *([1] * (like.ndim - 1)))

@@ -1,0 +1,107 @@
+"""Training loop for the per-region RVQ-VAE tokenizers (`gesturelsm train-tokenizer`)."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import torch
+from tqdm import tqdm
+
+from ..data.split import Split, WindowSampler
+from ..motion.normalize import Normalizer
+from ..motion.regions import GENERATED_REGIONS, REGIONS
+from ..motion.sequence import mirror_features
+from .config import preset
+from .model import RVQVAE
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    preset: str = "small"
+    regions: tuple[str, ...] = GENERATED_REGIONS
+    steps: int = 3000
+    batch_size: int = 64
+    window: int = 64                 # frames per training crop (multiple of 4)
+    lr: float = 2e-4
+    lr_min_ratio: float = 0.1        # cosine decay to lr * this
+    weight_decay: float = 0.0
+    seed: int = 0
+    eval_every: int = 500
+    save_every: int = 500
+    mirror: bool = True
+    device: str = "auto"
+    threads: int = 0                 # torch CPU threads (0 = leave torch's default)
+    extra: dict = field(default_factory=dict)
+
+
+def pick_device(name: str) -> torch.device:
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch.device(name)
+
+
+def fit_normalizer(split: Split, mirror: bool) -> Normalizer:
+    frames = torch.cat(split.train)
+    if mirror:  # training sees mirrored crops, so the statistics cover both sides
+        frames = torch.cat([frames, mirror_features(frames)])
+    return Normalizer.fit(frames)
+
+
+def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log=print) -> RVQVAE:
+    """Train (or resume) one region's tokenizer; writes out_dir/<region>.safetensors and a resume state."""
+    torch.manual_seed(cfg.seed)
+    device = pick_device(cfg.device)
+    cols = list(REGIONS[region].columns)
+    norm = fit_normalizer(split, cfg.mirror).subset(cols)
+    model = RVQVAE(preset(cfg.preset, len(cols)), region, norm).to(device)
+    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, betas=(0.9, 0.99), weight_decay=cfg.weight_decay)
+    sampler = WindowSampler(split.train, cfg.window, cfg.mirror, seed=cfg.seed)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    ckpt, state_path = out_dir / f"{region}.safetensors", out_dir / f"{region}.state.pt"
+    step = 0
+    if state_path.exists() and ckpt.exists():  # resume
+        st = torch.load(state_path, weights_only=False)
+        model = RVQVAE.load(ckpt).to(device)
+        model.load_state_dict(st["model"])
+        opt.load_state_dict(st["optim"])
+        sampler.set_state(st["sampler"])
+        torch.set_rng_state(st["torch_rng"])
+        step = st["step"]
+        log(f"[{region}] resumed at step {step}")
+    model.train()
+    heldout = [h for h in split.heldout if h.shape[0] >= 8]
+    bar = tqdm(total=cfg.steps, initial=step, desc=f"tokenizer {region}", dynamic_ncols=True, mininterval=2)
+    t0 = time.time()
+    while step < cfg.steps:
+        lr = cfg.lr * (cfg.lr_min_ratio + (1 - cfg.lr_min_ratio) * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+        for g in opt.param_groups:
+            g["lr"] = lr
+        x = norm.normalize(sampler.sample(cfg.batch_size)[..., cols]).to(device)  # (B, W, C)
+        out = model(x)
+        opt.zero_grad(set_to_none=True)
+        out.loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        opt.step()
+        step += 1
+        bar.update(1)
+        if step % 20 == 0 or step == cfg.steps:
+            resets = sum(layer.num_resets for layer in model.rvq.layers)
+            for layer in model.rvq.layers:
+                layer.num_resets = 0
+            bar.set_postfix(loss=f"{out.recon_loss.item():.4f}", ppl=f"{out.quant.perplexity[0].item():.0f}",
+                            use=f"{out.quant.usage[:out.quant.num_layers].mean().item():.2f}", dead=resets)
+        if heldout and (step % cfg.eval_every == 0 or step == cfg.steps):
+            from .evaluate import reconstruction_error
+
+            model.eval()
+            err = reconstruction_error(model, heldout)
+            model.train()
+            bar.write(f"[{region}] step {step}: held-out rotation error {err:.2f} deg ({time.time() - t0:.0f}s)")
+        if step % cfg.save_every == 0 or step == cfg.steps:
+            model.save(ckpt, meta={"step": step, "data": split.policy, "train_config": cfg.__dict__})
+            torch.save({"model": model.state_dict(), "optim": opt.state_dict(), "sampler": sampler.state(),
+                        "torch_rng": torch.get_rng_state(), "step": step}, state_path)
+    bar.close()
+    return model.eval()

@@ -1,0 +1,129 @@
+import math
+
+import pytest
+import torch
+
+from gesturelsm.flows import DDIM, RectifiedFlow, Shortcut, guided, make_method, sample_t
+from gesturelsm.flows.ddim import cosine_alpha_bar, model_time
+
+
+def exact_velocity(x1: torch.Tensor):
+    """The true velocity field of the straight path to a single data point x1: (x1 - x_t) / (1 - t)."""
+    def f(x, t, d, drop):
+        return (x1.repeat(x.shape[0] // x1.shape[0], *[1] * (x.ndim - 1)) - x) / (1 - t).clamp_min(1e-6).reshape(-1, *[1] * (x.ndim - 1))
+    return f
+
+
+@pytest.mark.parametrize("method", [Shortcut(), RectifiedFlow()])
+@pytest.mark.parametrize("steps", [1, 2, 8])
+def test_sampler_given_exact_velocity_lands_on_data(method, steps):
+    x1 = torch.randn(3, 4, 8, 5)
+    out = method.sample(exact_velocity(x1), torch.randn_like(x1), steps)
+    assert torch.allclose(out, x1, atol=1e-5)
+
+
+def test_ddim_given_exact_x0_lands_on_data_in_one_step():
+    x1 = torch.randn(2, 4, 8, 5)
+    oracle = lambda x, t, d, drop: x1.repeat(x.shape[0] // 2, 1, 1, 1)  # noqa: E731
+    for steps in (1, 5, 20):
+        assert torch.allclose(DDIM().sample(oracle, torch.randn_like(x1), steps), x1, atol=1e-5)
+
+
+def test_shortcut_target_for_a_linear_model_is_the_two_half_step_average():
+    torch.manual_seed(0)
+    A, b, c = torch.randn(6, 6) * 0.3, torch.randn(6), torch.randn(6)
+    f = lambda x, t, d, drop: x @ A.T + t[:, None] * b + d[:, None] * c  # noqa: E731
+    x_t, t = torch.randn(5, 6), torch.rand(5) * 0.5
+    d = torch.full((5,), 0.25)
+    drop = torch.zeros(5, dtype=torch.bool)
+    got = Shortcut().consistency_target(f, x_t, t, d, drop)
+    v1 = x_t @ A.T + t[:, None] * b + 0.25 * c
+    x_mid = x_t + 0.25 * v1
+    v2 = x_mid @ A.T + (t + 0.25)[:, None] * b + 0.25 * c
+    assert torch.allclose(got, (v1 + v2) / 2, atol=1e-6)
+    # the smallest level is queried as the instantaneous (d = 0) velocity
+    tiny = torch.full((5,), 1 / 128)
+    v1 = x_t @ A.T + t[:, None] * b
+    v2 = (x_t + v1 / 128) @ A.T + (t + 1 / 128)[:, None] * b
+    assert torch.allclose(Shortcut().consistency_target(f, x_t, t, tiny, drop), (v1 + v2) / 2, atol=1e-6)
+
+
+def test_shortcut_loss_rows_use_grid_times_and_double_step():
+    seen = {}
+
+    def f(x, t, d, drop):
+        seen.setdefault("calls", []).append((t.clone(), d.clone()))
+        return torch.zeros_like(x)
+
+    g = torch.Generator().manual_seed(0)
+    Shortcut().loss(f, torch.randn(64, 3), generator=g)
+    t, d = seen["calls"][-1]                       # the prediction call (after two teacher calls)
+    sc = d > 0
+    assert sc.sum() == 16                           # 25 % consistency rows
+    assert torch.all(t[sc] + d[sc] <= 1 + 1e-6)     # a 2d step never passes the data end
+    assert torch.allclose(t[sc] / d[sc], torch.round(t[sc] / d[sc]), atol=1e-4)  # on the grid of 2d
+    assert set((1 / d[sc]).round().tolist()) <= {1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0}
+
+
+def test_cfg_scale_one_is_the_conditional_prediction_and_batches_both_halves():
+    calls = []
+
+    def f(x, t, d, drop):
+        calls.append(x.shape[0])
+        return torch.where(drop.reshape(-1, 1), torch.full_like(x, -1.0), x + 1)
+
+    x = torch.randn(4, 3)
+    t = d = torch.zeros(4)
+    assert torch.equal(guided(f, x, t, d, 1.0), x + 1) and calls == [4]
+    out = guided(f, x, t, d, 2.0)
+    assert calls[-1] == 8                                   # one batched call for both halves
+    assert torch.allclose(out, -1 + 2 * (x + 1 + 1))        # u + s (c - u)
+
+
+@pytest.mark.parametrize("alpha,beta", [(2.0, 1.2), (1.0, 1.0), (0.7, 3.0)])
+def test_beta_sampler_mean_matches_alpha_over_alpha_plus_beta(alpha, beta):
+    t = sample_t(200_000, "beta", alpha, beta, generator=torch.Generator().manual_seed(0))
+    assert abs(t.mean().item() - alpha / (alpha + beta)) < 3e-3
+    var = alpha * beta / ((alpha + beta) ** 2 * (alpha + beta + 1))
+    assert abs(t.var().item() - var) < 3e-3
+    assert t.min() >= 1e-5 and t.max() <= 1 - 1e-5
+
+
+def test_other_time_samplers():
+    g = torch.Generator().manual_seed(0)
+    assert abs(sample_t(100_000, "uniform", generator=g).mean().item() - 0.5) < 5e-3
+    assert abs(sample_t(100_000, "logit_normal", generator=g).median().item() - 0.5) < 1e-2
+    with pytest.raises(ValueError):
+        sample_t(3, "cauchy")
+
+
+def test_cosine_schedule_and_time_convention():
+    ab = cosine_alpha_bar()
+    assert ab.shape == (1000,) and ab[0] > 0.999 and ab[-1] < 1e-6
+    assert torch.all(ab[1:] <= ab[:-1])
+    assert model_time(torch.tensor(999)).item() == 0.0          # pure noise is t = 0
+    assert math.isclose(model_time(torch.tensor(0)).item(), 0.999, abs_tol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["gesturelsm", "rectified_flow", "ddim"])
+def test_every_method_learns_a_toy_distribution(name):
+    """Same tiny network, each method's own loss: few-step samples land near the two data modes."""
+    torch.manual_seed(0)
+    net = torch.nn.Sequential(torch.nn.Linear(4, 64), torch.nn.SiLU(), torch.nn.Linear(64, 64), torch.nn.SiLU(),
+                              torch.nn.Linear(64, 2))
+    f = lambda x, t, d, drop: net(torch.cat([x, t[:, None], d[:, None]], 1))  # noqa: E731
+    m = make_method(name)
+    opt = torch.optim.Adam(net.parameters(), 3e-3)
+    g = torch.Generator().manual_seed(0)
+    for _ in range(1500):
+        x1 = torch.where(torch.rand(256, 1, generator=g) < 0.5, -1.0, 1.0) * torch.tensor([2.0, 1.0])
+        loss = m.loss(f, x1, cond_drop_p=0.0, generator=g).loss
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+    with torch.no_grad():
+        steps = 4 if name != "ddim" else 10
+        out = m.sample(f, torch.randn(512, 2, generator=g), steps)
+    dist = torch.minimum((out - torch.tensor([2.0, 1.0])).norm(dim=1), (out + torch.tensor([2.0, 1.0])).norm(dim=1))
+    assert dist.median() < 0.35, dist.median()
+    assert 0.25 < (out[:, 0] > 0).float().mean() < 0.75   # both modes, not collapsed

@@ -1,0 +1,142 @@
+import torch
+import pytest
+
+from gesturelsm.motion import REGIONS, Normalizer
+from gesturelsm.tokenizer import RVQVAE, preset
+from gesturelsm.tokenizer.evaluate import reconstruct, rotation_errors_deg
+from gesturelsm.tokenizer.quantizer import EMAQuantizer, ResidualVQ
+
+
+def tiny(in_dim: int = 78, **kw) -> RVQVAE:
+    torch.manual_seed(0)
+    return RVQVAE(preset("tiny", in_dim), "upper")
+
+
+def test_codes_to_quantized_equals_forward_quantized():
+    m = tiny()
+    m.train()
+    m(torch.randn(8, 32, 78))  # initialise codebooks from data
+    m.eval()
+    z = m.encode(torch.randn(3, 32, 78))
+    q = m.quantize(z)
+    assert torch.allclose(m.codes_to_quantized(q.codes.reshape(3, 8, -1)), q.quantized.reshape(z.shape), atol=1e-6)
+    # first k layers only: unused layers are marked -1 and contribute nothing
+    q2 = m.quantize(z, num_layers=2)
+    assert (q2.codes[:, 2:] == -1).all() and (q2.codes[:, :2] == q.codes[:, :2]).all()
+    assert torch.allclose(m.rvq.codes_to_quantized(q2.codes), q2.quantized, atol=1e-6)
+
+
+def test_decode_encode_equals_forward_in_eval():
+    m = tiny()
+    m.train()
+    m(torch.randn(8, 32, 78))
+    m.eval()
+    x = torch.randn(2, 32, 78)
+    out = m(x)
+    assert torch.allclose(m.decode_latents(m.encode(x)), out.recon, atol=1e-6)
+    assert out.latents.shape == (2, 8, 16)
+
+
+def test_residual_layers_reduce_error_monotonically():
+    rvq = ResidualVQ(4, 64, 8, dead_threshold=0.0)
+    x = torch.randn(2000, 8)
+    rvq.train()
+    for _ in range(30):
+        rvq(x, num_layers=4)
+    rvq.eval()
+    errs = [(rvq(x, num_layers=k).quantized - x).pow(2).mean().item() for k in range(1, 5)]
+    assert all(a > b for a, b in zip(errs, errs[1:])), errs
+
+
+def test_dead_code_reset_revives_unused_codes():
+    q = EMAQuantizer(16, 4, decay=0.5, dead_threshold=1.0)
+    q.train()
+    q(torch.randn(256, 4))
+    q.codebook[:8] = 1e3   # make half the codes unreachable
+    q.cluster_size[:8] = 0.0
+    q.num_resets = 0
+    x = torch.randn(256, 4)
+    q(x)
+    assert q.num_resets >= 8
+    assert q.codebook[:8].abs().max() < 100          # moved back onto the data
+    codes, _ = q(x)
+    assert len(set(codes.tolist()) & set(range(8))) > 0  # and now used
+
+
+def test_quantizer_dropout_path_trains_and_is_used():
+    m = tiny()
+    m.rvq.dropout = 1.0  # always drop to a random k
+    m.train()
+    seen = set()
+    opt = torch.optim.Adam(m.parameters(), 1e-3)
+    x = torch.randn(8, 32, 78)
+    first = None
+    for _ in range(40):
+        out = m(x)
+        seen.add(out.quant.num_layers)
+        opt.zero_grad()
+        out.loss.backward()
+        opt.step()
+        first = first if first is not None else out.recon_loss.item()
+    assert len(seen) > 1 and min(seen) >= 1 and max(seen) <= 3
+    assert out.recon_loss.item() < first
+    assert all(p.grad is not None for p in m.encoder.parameters())  # straight-through reaches the encoder
+
+
+def test_save_load_round_trip_fp32_and_shipped_fp16(tmp_path):
+    m = tiny()
+    m.normalizer = Normalizer(torch.randn(78), torch.rand(78) + 0.5)
+    m.train()
+    m(torch.randn(8, 32, 78))
+    m.eval()
+    x = torch.randn(2, 32, 78)
+    ref = m(x).recon
+    full = RVQVAE.load(m.save(tmp_path / "a.safetensors"))
+    assert torch.allclose(full(x).recon, ref, atol=1e-6)
+    assert torch.equal(full.normalizer.std, m.normalizer.std)
+    small = RVQVAE.load(m.save(tmp_path / "b.safetensors", half=True))
+    assert (tmp_path / "b.safetensors").stat().st_size < (tmp_path / "a.safetensors").stat().st_size * 0.6
+    assert torch.allclose(small(x).recon, ref, atol=5e-2)
+    assert small.region == "upper" and small.config == m.config
+
+
+def test_tiny_model_overfits_a_short_real_clip(real_motion):
+    """A few hundred CPU steps on 64 real frames reach a small rotation error (upper body)."""
+    torch.manual_seed(0)
+    cols = list(REGIONS["upper"].columns)
+    clip = real_motion.to_features()[300:364, cols]
+    norm = Normalizer.fit(clip)
+    m = RVQVAE(preset("tiny", len(cols)), "upper", norm)
+    m.rvq.dropout = 0.0
+    x = norm.normalize(clip)[None]
+    opt = torch.optim.Adam(m.parameters(), 3e-3)
+    m.train()
+    for _ in range(300):
+        out = m(x)
+        opt.zero_grad()
+        out.loss.backward()
+        opt.step()
+    rec, _ = reconstruct(m, clip)
+    err = rotation_errors_deg("upper", clip, rec).mean().item()
+    assert err < 2.0, err
+
+
+def test_train_and_eval_cli_on_a_tiny_folder(tmp_path, beat2_maker, capsys):
+    """train-tokenizer writes resumable checkpoints and shipped fp16 copies; rerunning resumes, not restarts."""
+    from gesturelsm.cli import main
+
+    data = tmp_path / "beat2"
+    beat2_maker(data, "2_scott_0_1_1", 200)
+    args = ["train-tokenizer", "--data", str(data), "--out", str(tmp_path / "run"), "--preset", "tiny",
+            "--regions", "upper", "face", "--steps", "6", "--batch-size", "4", "--window", "32",
+            "--eval-every", "3", "--ship", str(tmp_path / "ship")]
+    assert main(args) == 0
+    assert (tmp_path / "run" / "upper.state.pt").exists()
+    shipped = RVQVAE.load(tmp_path / "ship" / "face.safetensors")
+    assert shipped.region == "face" and shipped.config.in_dim == 106
+    state = torch.load(tmp_path / "run" / "upper.state.pt", weights_only=False)
+    assert state["step"] == 6
+    assert main(args[:-2] + ["--steps", "8"]) == 0   # resumes from step 6 to 8
+    assert "resumed at step 6" in capsys.readouterr().out
+    assert main(["train-tokenizer", "--data", str(data), "--window", "30"]) == 2  # clear error, no traceback
+    assert "multiple of 4" in capsys.readouterr().err
