@@ -15,6 +15,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.data.cli",
     "gesturelsm.align.cli",
     "gesturelsm.tokenizer.cli",
+    "gesturelsm.generator.cli",
 )
 
 

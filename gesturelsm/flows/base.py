@@ -5,7 +5,8 @@ A *model function* is `f(x, t, d, drop) -> prediction`:
     x: (B, ...) current state, t: (B,) time in [0, 1], d: (B,) step size (0 = instantaneous),
     drop: (B,) bool, True where the speech condition is replaced by the learned null condition.
 It may be called with a batch that is a multiple of the bound condition's batch (CFG stacks the
-conditional and unconditional halves into one call).
+conditional and unconditional halves into one call), or, with the keyword `rows` (a (b,) index tensor),
+on a subset of the rows of the batch it was bound to (the shortcut targets need only some rows).
 """
 from __future__ import annotations
 

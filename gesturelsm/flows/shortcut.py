@@ -39,13 +39,15 @@ class Shortcut:
         return 1.0 / 2 ** self.max_level
 
     def consistency_target(self, teacher: ModelFn, x_t: torch.Tensor, t: torch.Tensor, d: torch.Tensor,
-                           drop: torch.Tensor) -> torch.Tensor:
-        """Average of two d-steps of the teacher from (x_t, t): the target for one 2d-step. No gradient."""
+                           drop: torch.Tensor, rows: torch.Tensor | None = None) -> torch.Tensor:
+        """Average of two d-steps of the teacher from (x_t, t): the target for one 2d-step. No gradient.
+        `rows`: which rows of the teacher's bound batch these are (None: all of them)."""
+        kw = {} if rows is None else {"rows": rows}
         with torch.no_grad():
             dq = torch.where(d <= self.min_d + 1e-12, torch.zeros_like(d), d)  # smallest level = flow limit
-            v1 = teacher(x_t, t, dq, drop)
+            v1 = teacher(x_t, t, dq, drop, **kw)
             x_mid = x_t + bcast(d, x_t) * v1
-            v2 = teacher(x_mid, t + d, dq, drop)
+            v2 = teacher(x_mid, t + d, dq, drop, **kw)
             return (v1 + v2) / 2
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,
@@ -67,7 +69,8 @@ class Shortcut:
         target = x1 - x0
         if n_sc:
             target = target.clone()
-            target[:n_sc] = self.consistency_target(teacher or f, x_t[:n_sc], t[:n_sc], d[:n_sc] / 2, drop[:n_sc])
+            target[:n_sc] = self.consistency_target(teacher or f, x_t[:n_sc], t[:n_sc], d[:n_sc] / 2, drop[:n_sc],
+                                                    rows=torch.arange(n_sc, device=dev))
         pred = f(x_t, t, d, drop)
         per_row = (pred - target).pow(2).flatten(1).mean(1)
         loss = per_row.mean()

@@ -99,8 +99,8 @@ def evaluate_region(model: RVQVAE, heldout: list[torch.Tensor], rest_joints: tor
         rows.append(row)
         if k == L:
             c = torch.cat(codes_all)
-            usage = [(torch.bincount(c[:, i], minlength=model.config.codebook_size) > 0).float().mean().item()
-                     for i in range(L)]
+            usage = [sum((torch.bincount(c[:, i, g], minlength=model.config.codebook_size) > 0).float().mean().item()
+                         for g in range(c.shape[2])) / c.shape[2] for i in range(L)]
     return {"region": model.region, "full": rows[-1], "by_layers": rows, "codebook_usage": usage,
             "codebook_size": model.config.codebook_size}
 

@@ -2,7 +2,7 @@
 mirrored decoder with nearest-neighbour upsampling.
 
 Shapes: motion x is (B, T, C) normalised region features at 30 fps; latents are (B, T/4, code_dim).
-The generator works on `encode(x)` (continuous, before quantisation) scaled by `config.latent_scale`;
+The generator works on `encode(x)` (continuous, before quantisation), scaled to unit std per region;
 `decode` re-quantises through all layers, then decodes.
 """
 from __future__ import annotations
@@ -23,20 +23,21 @@ KIND = "gesturelsm.tokenizer"
 
 
 class ResBlock(nn.Module):
-    def __init__(self, width: int, dilation: int):
+    def __init__(self, width: int, dilation: int, dropout: float = 0.0):
         super().__init__()
         self.conv1 = nn.Conv1d(width, width, 3, padding=dilation, dilation=dilation)
         self.conv2 = nn.Conv1d(width, width, 1)
+        self.dropout = nn.Dropout(dropout)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, C, T)
-        return x + self.conv2(F.relu(self.conv1(F.relu(x))))
+        return x + self.conv2(self.dropout(F.relu(self.conv1(F.relu(x)))))
 
 
-def resnet1d(width: int, depth: int, growth: int, reverse: bool) -> nn.Sequential:
+def resnet1d(width: int, depth: int, growth: int, reverse: bool, dropout: float = 0.0) -> nn.Sequential:
     dil = [growth ** i for i in range(depth)][::-1]  # e.g. 9, 3, 1
     if reverse:
         dil = dil[::-1]
-    return nn.Sequential(*[ResBlock(width, d) for d in dil])
+    return nn.Sequential(*[ResBlock(width, d, dropout) for d in dil])
 
 
 class Encoder(nn.Module):
@@ -45,12 +46,16 @@ class Encoder(nn.Module):
         layers: list[nn.Module] = [nn.Conv1d(c.in_dim, c.width, 3, padding=1), nn.ReLU()]
         for _ in range(c.down_t):
             layers += [nn.Conv1d(c.width, c.width, 4, stride=2, padding=1),
-                       resnet1d(c.width, c.res_depth, c.dilation_growth, reverse=False)]
+                       resnet1d(c.width, c.res_depth, c.dilation_growth, reverse=False, dropout=c.dropout)]
         layers.append(nn.Conv1d(c.width, c.code_dim, 3, padding=1))
         self.net = nn.Sequential(*layers)
+        # linear path: each latent frame also gets a linear projection of its own block of 4 frames
+        # (what PCA would do); the conv stack learns the non-linear rest. Generalises far better on small data.
+        self.skip = nn.Conv1d(c.in_dim, c.code_dim, c.downsample, stride=c.downsample) if c.linear_skip else None
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, C_in, T) -> (B, D, T/4)
-        return self.net(x)
+        z = self.net(x)
+        return z + self.skip(x) if self.skip is not None else z
 
 
 class Decoder(nn.Module):
@@ -58,15 +63,18 @@ class Decoder(nn.Module):
         super().__init__()
         layers: list[nn.Module] = [nn.Conv1d(c.code_dim, c.width, 3, padding=1), nn.ReLU()]
         for _ in range(c.down_t):
-            layers += [resnet1d(c.width, c.res_depth, c.dilation_growth, reverse=True),
+            layers += [resnet1d(c.width, c.res_depth, c.dilation_growth, reverse=True, dropout=c.dropout),
                        nn.Upsample(scale_factor=2, mode="nearest"),
                        nn.Conv1d(c.width, c.width, 3, padding=1)]
         layers += [nn.Conv1d(c.width, c.width, 3, padding=1), nn.ReLU(),
                    nn.Conv1d(c.width, c.in_dim, 3, padding=1)]
         self.net = nn.Sequential(*layers)
+        self.skip = (nn.ConvTranspose1d(c.code_dim, c.in_dim, c.downsample, stride=c.downsample)
+                     if c.linear_skip else None)
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:  # (B, D, T/4) -> (B, C_in, T)
-        return self.net(z)
+        y = self.net(z)
+        return y + self.skip(z) if self.skip is not None else y
 
 
 @dataclass
@@ -85,7 +93,7 @@ class RVQVAE(nn.Module):
         self.encoder = Encoder(config)
         self.decoder = Decoder(config)
         self.rvq = ResidualVQ(config.num_quantizers, config.codebook_size, config.code_dim, config.ema_decay,
-                              config.dead_code_threshold, config.quantizer_dropout)
+                              config.dead_code_threshold, config.quantizer_dropout, config.groups)
         # per-dimension statistics of this region's raw features (identity until fitted)
         self.normalizer = normalizer or Normalizer(torch.zeros(config.in_dim), torch.ones(config.in_dim))
 
@@ -104,9 +112,9 @@ class RVQVAE(nn.Module):
         return self.decoder(zq.transpose(1, 2)).transpose(1, 2)
 
     def codes_to_quantized(self, codes: torch.Tensor) -> torch.Tensor:
-        """(B, t, L) codes -> (B, t, D)."""
-        B, t, L = codes.shape
-        return self.rvq.codes_to_quantized(codes.reshape(B * t, L)).reshape(B, t, -1)
+        """(B, t, L, G) codes -> (B, t, D)."""
+        B, t = codes.shape[:2]
+        return self.rvq.codes_to_quantized(codes.reshape(B * t, *codes.shape[2:])).reshape(B, t, -1)
 
     def decode_latents(self, z: torch.Tensor, num_layers: int | None = None) -> torch.Tensor:
         """Continuous latents (e.g. generated, un-scaled) -> re-quantised -> decoded (B, 4t, C)."""

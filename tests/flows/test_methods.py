@@ -51,8 +51,10 @@ def test_shortcut_target_for_a_linear_model_is_the_two_half_step_average():
 def test_shortcut_loss_rows_use_grid_times_and_double_step():
     seen = {}
 
-    def f(x, t, d, drop):
+    def f(x, t, d, drop, rows=None):
         seen.setdefault("calls", []).append((t.clone(), d.clone()))
+        if rows is not None:
+            assert torch.equal(rows, torch.arange(16))  # teacher calls name the rows they are for
         return torch.zeros_like(x)
 
     g = torch.Generator().manual_seed(0)
@@ -111,7 +113,7 @@ def test_every_method_learns_a_toy_distribution(name):
     torch.manual_seed(0)
     net = torch.nn.Sequential(torch.nn.Linear(4, 64), torch.nn.SiLU(), torch.nn.Linear(64, 64), torch.nn.SiLU(),
                               torch.nn.Linear(64, 2))
-    f = lambda x, t, d, drop: net(torch.cat([x, t[:, None], d[:, None]], 1))  # noqa: E731
+    f = lambda x, t, d, drop, rows=None: net(torch.cat([x, t[:, None], d[:, None]], 1))  # noqa: E731
     m = make_method(name)
     opt = torch.optim.Adam(net.parameters(), 3e-3)
     g = torch.Generator().manual_seed(0)

@@ -19,7 +19,8 @@ def test_codes_to_quantized_equals_forward_quantized():
     m.eval()
     z = m.encode(torch.randn(3, 32, 78))
     q = m.quantize(z)
-    assert torch.allclose(m.codes_to_quantized(q.codes.reshape(3, 8, -1)), q.quantized.reshape(z.shape), atol=1e-6)
+    assert q.codes.shape == (24, 3, 2)  # (B*t, layers, groups)
+    assert torch.allclose(m.codes_to_quantized(q.codes.reshape(3, 8, 3, 2)), q.quantized.reshape(z.shape), atol=1e-6)
     # first k layers only: unused layers are marked -1 and contribute nothing
     q2 = m.quantize(z, num_layers=2)
     assert (q2.codes[:, 2:] == -1).all() and (q2.codes[:, :2] == q.codes[:, :2]).all()
@@ -37,8 +38,9 @@ def test_decode_encode_equals_forward_in_eval():
     assert out.latents.shape == (2, 8, 16)
 
 
-def test_residual_layers_reduce_error_monotonically():
-    rvq = ResidualVQ(4, 64, 8, dead_threshold=0.0)
+@pytest.mark.parametrize("groups", [1, 4])
+def test_residual_layers_reduce_error_monotonically(groups):
+    rvq = ResidualVQ(4, 64, 8, dead_threshold=0.0, groups=groups)
     x = torch.randn(2000, 8)
     rvq.train()
     for _ in range(30):
@@ -49,18 +51,33 @@ def test_residual_layers_reduce_error_monotonically():
 
 
 def test_dead_code_reset_revives_unused_codes():
-    q = EMAQuantizer(16, 4, decay=0.5, dead_threshold=1.0)
+    q = EMAQuantizer(16, 4, groups=2, decay=0.5, dead_threshold=1.0)
     q.train()
-    q(torch.randn(256, 4))
-    q.codebook[:8] = 1e3   # make half the codes unreachable
-    q.cluster_size[:8] = 0.0
+    q(torch.randn(256, 2, 4))
+    q.codebook[1, :8] = 1e3   # make half the codes of group 1 unreachable
+    q.cluster_size[1, :8] = 0.0
     q.num_resets = 0
-    x = torch.randn(256, 4)
+    x = torch.randn(256, 2, 4)
     q(x)
     assert q.num_resets >= 8
-    assert q.codebook[:8].abs().max() < 100          # moved back onto the data
+    assert q.codebook[1, :8].abs().max() < 100          # moved back onto the data
     codes, _ = q(x)
-    assert len(set(codes.tolist()) & set(range(8))) > 0  # and now used
+    assert len(set(codes[:, 1].tolist()) & set(range(8))) > 0  # and now used
+
+
+@pytest.mark.parametrize("groups", [1, 4])
+def test_grouped_quantizer_equals_independent_codebooks_per_slice(groups):
+    """A grouped layer quantises each slice against its own codebook only."""
+    torch.manual_seed(0)
+    q = EMAQuantizer(8, 12 // groups, groups)
+    q.codebook.normal_()
+    q.eval()
+    x = torch.randn(50, groups, 12 // groups)
+    codes, quant = q(x)  # eval: no update
+    for g in range(groups):
+        d = torch.cdist(x[:, g], q.codebook[g])
+        assert torch.equal(codes[:, g], d.argmin(1))
+        assert torch.equal(quant[:, g], q.codebook[g][codes[:, g]])
 
 
 def test_quantizer_dropout_path_trains_and_is_used():

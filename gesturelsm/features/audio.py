@@ -1,0 +1,80 @@
+"""Audio channels and the strided conv audio encoder.
+
+Input speech is 16 kHz mono. Two channels per sample:
+- amplitude envelope: max |y| over the forward window [i, i + 1024);
+- onset impulses: 1 at the *sample position* of each librosa onset (frame index x hop 512), else 0.
+  (The reference wrote onset frame indices into the per-sample array, so almost every onset was lost.)
+The encoder maps (B, 2, N) samples to (B, T, C) features, one per 30 fps frame (T = N * 30 / 16000).
+"""
+from __future__ import annotations
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+from scipy.ndimage import maximum_filter1d
+
+SR = 16_000
+ENVELOPE_WINDOW = 1024
+ONSET_HOP = 512
+
+
+def envelope(y: np.ndarray, window: int = ENVELOPE_WINDOW) -> np.ndarray:
+    """(N,) -> (N,) max |y[i:i+window]| (forward window, shorter at the end)."""
+    a = np.abs(y).astype(np.float32)
+    # maximum_filter1d's window for size w and origin o covers [i - w//2 - o, i + (w-1)//2 - o]
+    return maximum_filter1d(a, size=window, origin=-(window // 2), mode="constant", cval=0.0)
+
+
+def onset_samples(y: np.ndarray, sr: int = SR, hop: int = ONSET_HOP) -> np.ndarray:
+    """Sample positions of speech onsets (librosa's spectral-flux onset detector)."""
+    import librosa
+
+    if len(y) < 2048 or np.abs(y).max() < 1e-6:
+        return np.zeros(0, dtype=np.int64)
+    frames = librosa.onset.onset_detect(y=y.astype(np.float32), sr=sr, hop_length=hop, units="frames")
+    return np.asarray(frames, dtype=np.int64) * hop
+
+
+def audio_channels(y: np.ndarray, sr: int = SR) -> np.ndarray:
+    """(N,) float32 16 kHz -> (2, N) float32 [envelope, onset impulses]."""
+    if sr != SR:
+        raise ValueError(f"audio channels expect {SR} Hz audio, got {sr}")
+    imp = np.zeros(len(y), np.float32)
+    on = onset_samples(y, sr)
+    imp[on[on < len(y)]] = 1.0
+    return np.stack([envelope(y), imp])
+
+
+class ResDown(nn.Module):
+    """Strided residual block: conv(k, stride) -> BN -> LeakyReLU -> conv(k) -> BN, plus a strided 1x1 skip."""
+
+    def __init__(self, c_in: int, c_out: int, stride: int, kernel: int = 15):
+        super().__init__()
+        self.conv1 = nn.Conv1d(c_in, c_out, kernel, stride=stride, padding=kernel // 2)
+        self.bn1 = nn.BatchNorm1d(c_out)
+        self.conv2 = nn.Conv1d(c_out, c_out, kernel, padding=kernel // 2)
+        self.bn2 = nn.BatchNorm1d(c_out)
+        self.skip = nn.Conv1d(c_in, c_out, 1, stride=stride)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = F.leaky_relu(self.bn1(self.conv1(x)), 0.2)
+        return F.leaky_relu(self.bn2(self.conv2(h)) + self.skip(x), 0.2)
+
+
+class AudioEncoder(nn.Module):
+    """(B, 2, N) at 16 kHz -> (B, T, out_dim) at 30 fps. Six strided residual blocks, total stride 540
+    (5 * 4 * 3 * 3 * 3 * 1), then linear interpolation onto exactly T frames (533.3 samples per frame)."""
+
+    STRIDES = (5, 4, 3, 3, 3, 1)
+
+    def __init__(self, channels: tuple[int, ...] = (64, 64, 64, 128, 128, 256), kernel: int = 15):
+        super().__init__()
+        dims = (2,) + tuple(channels)
+        self.blocks = nn.Sequential(*[ResDown(dims[i], dims[i + 1], s, kernel) for i, s in enumerate(self.STRIDES)])
+        self.out_dim = channels[-1]
+
+    def forward(self, x: torch.Tensor, num_frames: int) -> torch.Tensor:
+        h = self.blocks(x)                                          # (B, C, ~N / 540)
+        h = F.interpolate(h, size=num_frames, mode="linear", align_corners=False)
+        return h.transpose(1, 2)                                    # (B, T, C)

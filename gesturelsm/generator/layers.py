@@ -1,0 +1,128 @@
+"""Transformer building blocks: embeddings, attention with rotary positions, cross/spatial-temporal blocks."""
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+
+def sinusoidal(t: torch.Tensor, dim: int, max_period: float = 1e4) -> torch.Tensor:
+    """(B,) values in [0, 1] (not rescaled) -> (B, dim)."""
+    half = dim // 2
+    freqs = torch.exp(-math.log(max_period) * torch.arange(half, device=t.device, dtype=torch.float32) / half)
+    args = t.float()[:, None] * freqs[None]
+    return torch.cat([torch.cos(args), torch.sin(args)], dim=-1)
+
+
+def rotary_cache(n: int, head_dim: int, device, base: float = 1e4) -> tuple[torch.Tensor, torch.Tensor]:
+    inv = 1.0 / base ** (torch.arange(0, head_dim, 2, device=device, dtype=torch.float32) / head_dim)
+    ang = torch.arange(n, device=device, dtype=torch.float32)[:, None] * inv[None]   # (n, hd/2)
+    return ang.cos(), ang.sin()
+
+
+def apply_rotary(x: torch.Tensor, cos: torch.Tensor, sin: torch.Tensor) -> torch.Tensor:
+    """x: (..., n, hd) rotated pairwise by position."""
+    x1, x2 = x[..., 0::2], x[..., 1::2]
+    return torch.stack([x1 * cos - x2 * sin, x1 * sin + x2 * cos], dim=-1).flatten(-2)
+
+
+class DropPath(nn.Module):
+    def __init__(self, p: float):
+        super().__init__()
+        self.p = p
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if not self.training or self.p == 0:
+            return x
+        keep = torch.rand(x.shape[0], *([1] * (x.ndim - 1)), device=x.device) >= self.p
+        return x * keep / (1 - self.p)
+
+
+class SelfAttention(nn.Module):
+    def __init__(self, dim: int, heads: int, rotary: bool):
+        super().__init__()
+        self.heads, self.rotary = heads, rotary
+        self.qkv = nn.Linear(dim, 3 * dim)
+        self.out = nn.Linear(dim, dim)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:  # (N, L, dim)
+        N, L, C = x.shape
+        q, k, v = self.qkv(x).reshape(N, L, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)  # (N, h, L, hd)
+        if self.rotary:
+            cos, sin = rotary_cache(L, C // self.heads, x.device)
+            q, k = apply_rotary(q, cos, sin), apply_rotary(k, cos, sin)
+        y = F.scaled_dot_product_attention(q, k, v)
+        return self.out(y.transpose(1, 2).reshape(N, L, C))
+
+
+class CrossAttention(nn.Module):
+    """Queries from gesture tokens, keys/values from speech features. K/V can be precomputed once per clip
+    (`kv`), since the speech condition does not change across sampling steps."""
+
+    def __init__(self, dim: int, cond_dim: int, heads: int):
+        super().__init__()
+        self.heads = heads
+        self.q = nn.Linear(dim, dim)
+        self.kv = nn.Linear(cond_dim, 2 * dim)
+        self.out = nn.Linear(dim, dim)
+
+    def project_kv(self, cond: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        N, S, _ = cond.shape
+        C = self.q.out_features
+        k, v = self.kv(cond).reshape(N, S, 2, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)
+        return k, v  # (N, h, S, hd)
+
+    def forward(self, x: torch.Tensor, kv: tuple[torch.Tensor, torch.Tensor]) -> torch.Tensor:
+        N, L, C = x.shape
+        q = self.q(x).reshape(N, L, self.heads, C // self.heads).transpose(1, 2)
+        y = F.scaled_dot_product_attention(q, kv[0], kv[1])
+        return self.out(y.transpose(1, 2).reshape(N, L, C))
+
+
+class MLP(nn.Sequential):
+    def __init__(self, dim: int, hidden: int):
+        super().__init__(nn.Linear(dim, hidden), nn.GELU(), nn.Linear(hidden, dim))
+
+
+class CrossBlock(nn.Module):
+    """Pre-LN cross-attention of every (region, frame) token to the speech features, then an MLP.
+    Regions and frames stay separate tokens (the reference's `.view` mixed three frames into one)."""
+
+    def __init__(self, dim: int, cond_dim: int, heads: int, ffn: int, drop_path: float):
+        super().__init__()
+        self.norm1, self.norm2 = nn.LayerNorm(dim), nn.LayerNorm(dim)
+        self.norm_c = nn.LayerNorm(cond_dim)
+        self.attn = CrossAttention(dim, cond_dim, heads)
+        self.mlp = MLP(dim, ffn)
+        self.drop = DropPath(drop_path)
+
+    def kv(self, cond: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        return self.attn.project_kv(self.norm_c(cond))
+
+    def forward(self, x: torch.Tensor, kv) -> torch.Tensor:  # x: (B, R*t, dim)
+        x = x + self.drop(self.attn(self.norm1(x), kv))
+        return x + self.drop(self.mlp(self.norm2(x)))
+
+
+class STBlock(nn.Module):
+    """Spatial attention across regions within a frame, then temporal attention across frames within a
+    region (rotary positions), then an FFN; pre-LN residuals (paper order: spatial, then temporal)."""
+
+    def __init__(self, dim: int, heads: int, ffn: int, drop_path: float):
+        super().__init__()
+        self.norm_s, self.norm_t, self.norm_f = nn.LayerNorm(dim), nn.LayerNorm(dim), nn.LayerNorm(dim)
+        self.spatial = SelfAttention(dim, heads, rotary=False)   # regions carry a learned embedding
+        self.temporal = SelfAttention(dim, heads, rotary=True)
+        self.mlp = MLP(dim, ffn)
+        self.drop = DropPath(drop_path)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, R, t, dim)
+        B, R, t, C = x.shape
+        s = x.transpose(1, 2).reshape(B * t, R, C)
+        s = s + self.drop(self.spatial(self.norm_s(s)))
+        x = s.reshape(B, t, R, C).transpose(1, 2).reshape(B * R, t, C)
+        x = x + self.drop(self.temporal(self.norm_t(x)))
+        x = x + self.drop(self.mlp(self.norm_f(x)))
+        return x.reshape(B, R, t, C)

@@ -1,0 +1,154 @@
+"""The GestureLSM network: speech encoder + spatial-temporal transformer denoiser over region latents.
+
+Shapes (B batch, R regions, t = 32 latent frames per 128-frame window, D latent dim, s seed latents):
+    x      (B, R, t, D)   noisy latents (or, for DDIM, noised latents); output has the same shape
+    t, d   (B,)           flow time (0 noise -> 1 data) and step size (0 = instantaneous)
+    cond   (B, t, C)      fused speech features, one per latent frame
+    seed   (B, R, s, D)   the previous window's last latents (or the neutral seed)
+    drop   (B,)           True: use the learned null condition instead of `cond` (classifier-free guidance)
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
+from ..features.audio import AudioEncoder
+from .config import GeneratorConfig
+from .layers import CrossBlock, STBlock, sinusoidal
+
+KIND = "gesturelsm.generator"
+
+
+class SpeechEncoder(nn.Module):
+    """audio channels (B, 2, N) + per-frame word vectors (B, T, 384) -> (B, T/4, cond_dim)."""
+
+    def __init__(self, c: GeneratorConfig):
+        super().__init__()
+        self.audio = AudioEncoder(c.audio_channels)
+        self.text_proj = nn.Linear(c.text_in, c.text_dim)
+        self.pad = nn.Parameter(torch.zeros(c.text_dim))       # silence between words
+        self.no_text = nn.Parameter(torch.zeros(c.text_dim))   # no transcript at all (audio-only mode)
+        self.fuse = nn.Linear(self.audio.out_dim + c.text_dim, c.cond_dim)
+        self.pos = nn.Parameter(torch.zeros(c.window_latents, c.cond_dim))
+        nn.init.normal_(self.pad, std=0.02)
+        nn.init.normal_(self.no_text, std=0.02)
+        nn.init.normal_(self.pos, std=0.02)
+
+    def forward(self, audio: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
+                has_text: torch.Tensor) -> torch.Tensor:
+        """audio (B, 2, N); words (B, T, 384); has_word (B, T) bool; has_text (B,) bool."""
+        T = words.shape[1]
+        a = self.audio(audio, T)                                                  # (B, T, A)
+        w = torch.where(has_word[..., None], self.text_proj(words), self.pad)    # (B, T, Tx)
+        w = torch.where(has_text[:, None, None], w, self.no_text)
+        h = self.fuse(torch.cat([a, w], dim=-1))                                 # (B, T, C)
+        h = F.avg_pool1d(h.transpose(1, 2), 4).transpose(1, 2)                   # (B, T/4, C)
+        return h + self.pos[: h.shape[1]]
+
+
+class Denoiser(nn.Module):
+    def __init__(self, c: GeneratorConfig):
+        super().__init__()
+        self.c = c
+        R, D, C = c.num_regions, c.latent_dim, c.dim
+        self.in_proj = nn.Linear(D, C)
+        self.region_emb = nn.Parameter(torch.randn(R, C) * 0.02)
+        self.frame_emb = nn.Parameter(torch.randn(c.window_latents, C) * 0.02)
+        self.t_embed = nn.Linear(C, C)
+        self.d_embed = nn.Linear(C, C)
+        self.emb_mlp = nn.Sequential(nn.Linear(C, C), nn.GELU(), nn.Linear(C, C))
+        self.seed_proj = nn.Linear(R * c.seed_latents * D, C)
+        self.merge = nn.Linear(2 * C, C)
+        self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn, c.drop_path) for _ in range(c.cross_layers))
+        self.st = nn.ModuleList(STBlock(C, c.heads, c.ffn, c.drop_path) for _ in range(c.st_layers))
+        self.out_norm = nn.LayerNorm(C)
+        self.out = nn.Linear(C, D)
+        nn.init.zeros_(self.d_embed.weight)   # d enters through a zero-initialised layer (METHOD-FACTS)
+        nn.init.zeros_(self.d_embed.bias)
+        nn.init.zeros_(self.out.weight)       # start as the zero velocity
+        nn.init.zeros_(self.out.bias)
+
+    def embed(self, t: torch.Tensor, d: torch.Tensor, seed: torch.Tensor) -> torch.Tensor:
+        C = self.c.dim
+        e = self.t_embed(sinusoidal(t, C))
+        if self.c.uses_step_size:
+            e = e + self.d_embed(sinusoidal(d, C))
+        return self.emb_mlp(e) + self.seed_proj(seed.flatten(1))       # (B, C)
+
+    def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, seed: torch.Tensor,
+                kv: list[tuple[torch.Tensor, torch.Tensor]]) -> torch.Tensor:
+        B, R, tt, _ = x.shape
+        h = self.in_proj(x) + self.region_emb[None, :, None] + self.frame_emb[None, None, :tt]   # (B, R, t, C)
+        e = self.embed(t, d, seed)[:, None, None].expand(-1, R, tt, -1)
+        h = self.merge(torch.cat([h, e], dim=-1))
+        h = h.reshape(B, R * tt, -1)
+        for block, kv_i in zip(self.cross, kv):
+            h = block(h, kv_i)
+        h = h.reshape(B, R, tt, -1)
+        for block in self.st:
+            h = block(h)
+        return self.out(self.out_norm(h))                                # (B, R, t, D)
+
+
+class GestureGenerator(nn.Module):
+    def __init__(self, config: GeneratorConfig, method: str = "gesturelsm"):
+        super().__init__()
+        self.config, self.method = config, method
+        self.speech = SpeechEncoder(config)
+        self.denoiser = Denoiser(config)
+        self.null_cond = nn.Parameter(torch.randn(config.window_latents, config.cond_dim) * 0.02)
+        R, s, D = config.num_regions, config.seed_latents, config.latent_dim
+        # per-region latent scale (the paper uses a fixed 1/5; we store the measured std of the training
+        # latents so every region enters the flow at unit scale) and the neutral seed for a first window
+        self.register_buffer("latent_std", torch.ones(R))
+        self.register_buffer("neutral_seed", torch.zeros(R, s, D))
+
+    # ---- conditioning ---------------------------------------------------------------------------------
+    def cross_kv(self, cond: torch.Tensor, drop: torch.Tensor) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """Per cross block, K/V of the speech condition, with the null condition where `drop`."""
+        null = self.null_cond[None, : cond.shape[1]].expand_as(cond)
+        c = torch.where(drop[:, None, None], null, cond)
+        return [blk.kv(c) for blk in self.denoiser.cross]
+
+    def bind(self, cond: torch.Tensor, seed: torch.Tensor):
+        """A model function f(x, t, d, drop) for the samplers (see flows/base.py), with the conditional and
+        null K/V computed once, not at every step. Accepts batches that are multiples of cond's batch."""
+        B = cond.shape[0]
+        no = torch.zeros(B, dtype=torch.bool, device=cond.device)
+        kv_c, kv_u = self.cross_kv(cond, no), self.cross_kv(cond, ~no)
+
+        def f(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor,
+              rows: torch.Tensor | None = None) -> torch.Tensor:
+            idx = torch.arange(B, device=x.device) if rows is None else rows
+            idx = idx.repeat(x.shape[0] // len(idx))                  # CFG stacks both halves
+            m = drop.reshape(-1, 1, 1, 1)
+            kv = [(torch.where(m, ku[idx], kc[idx]), torch.where(m, vu[idx], vc[idx]))
+                  for (kc, vc), (ku, vu) in zip(kv_c, kv_u)]
+            return self.denoiser(x, t, d, seed[idx], kv)
+
+        return f
+
+    def forward(self, x, t, d, cond, seed, drop, speech: tuple | None = None) -> torch.Tensor:
+        """Training path (no caching). `speech` = (audio, words, has_word, has_text) computes `cond` inside
+        this call, which DistributedDataParallel needs to see every parameter used."""
+        if speech is not None:
+            cond = self.speech(*speech)
+            cond = cond.repeat(x.shape[0] // cond.shape[0], 1, 1)
+        return self.denoiser(x, t, d, seed.repeat(x.shape[0] // seed.shape[0], 1, 1, 1), self.cross_kv(cond, drop))
+
+    # ---- files -----------------------------------------------------------------------------------------
+    def save(self, path: str | Path, half: bool = False, meta: dict | None = None) -> Path:
+        return save_checkpoint(path, self.state_dict(), KIND, self.config, {"method": self.method, **(meta or {})},
+                               half=half)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "GestureGenerator":
+        tensors, meta = load_checkpoint(path, KIND)
+        model = cls(config_from_dict(GeneratorConfig, meta["config"]), meta.get("method", "gesturelsm"))
+        model.load_state_dict(tensors)
+        model.meta = {k: v for k, v in meta.items() if k != "config"}
+        return model.eval()

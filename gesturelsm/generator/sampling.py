@@ -1,0 +1,86 @@
+"""Generation for speech of any length: overlapping windows, seeds carried across, seamless stitching.
+
+Window i covers latent frames [i * stride, i * stride + t) with stride = t - s (t = 32 latents = 128 frames,
+s = 4 seed latents = 16 frames of overlap). Window 0 starts from the neutral seed (no ground truth needed);
+window i's seed is the last s latents window i-1 generated, i.e. exactly the overlap, which window i
+generates again in context: the two versions are cross-faded linearly, so there is no jump at borders.
+Speech features are computed per window (bounded memory), and the conditional and unconditional CFG
+passes run as one batch. The last window is padded with silence and cropped.
+"""
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import torch
+import torch.nn.functional as F
+
+from ..flows import make_method
+from .data import samples_for
+from .model import GestureGenerator
+
+Progress = Callable[[float, str], None]
+
+
+def window_layout(num_latents: int, t: int, s: int) -> list[int]:
+    """Start latent of every window so that [0, num_latents) is covered."""
+    stride = t - s
+    n = max(1, math.ceil(max(num_latents - s, 1) / stride))
+    return [i * stride for i in range(n)]
+
+
+@torch.no_grad()
+def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
+                     has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
+                     progress: Progress | None = None, batch_windows: int = 1) -> torch.Tensor:
+    """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents."""
+    c = model.config
+    t, s = c.window_latents, c.seed_latents
+    method = make_method(model.method)
+    dev = next(model.parameters()).device
+    L = math.ceil(num_frames / 4)
+    starts = window_layout(L, t, s)
+    total = starts[-1] + t                                     # latents covered incl. padding
+    n_samp = samples_for(4 * total)
+    audio_ch = F.pad(audio_ch, (0, max(0, n_samp - audio_ch.shape[1])))
+    words = F.pad(words, (0, 0, 0, max(0, 4 * total - words.shape[0])))
+    has_word = F.pad(has_word, (0, max(0, 4 * total - has_word.shape[0])))
+    g = torch.Generator(device="cpu").manual_seed(int(seed))
+    R, D = c.num_regions, c.latent_dim
+    out = torch.zeros(R, total, D)
+    seed_lat = model.neutral_seed.to(dev)[None]                # (1, R, s, D), scaled
+    ramp = torch.arange(1, s + 1, dtype=torch.float32) / (s + 1)   # weight of the new window in the overlap
+    for i, st in enumerate(starts):
+        a0 = samples_for(4 * st)
+        cond = model.speech(audio_ch[None, :, a0:a0 + samples_for(4 * t)].to(dev), words[None, 4 * st:4 * (st + t)].to(dev),
+                            has_word[None, 4 * st:4 * (st + t)].to(dev), torch.tensor([has_text], device=dev))
+        noise = torch.randn(1, R, t, D, generator=g).to(dev)
+        x = method.sample(model.bind(cond, seed_lat), noise, steps, cfg_scale)[0].cpu()   # (R, t, D) scaled
+        if i == 0:
+            out[:, st:st + t] = x
+        else:
+            ov = out[:, st:st + s]
+            out[:, st:st + s] = ov * (1 - ramp)[None, :, None] + x[:, :s] * ramp[None, :, None]
+            out[:, st + s:st + t] = x[:, s:]
+        seed_lat = out[:, st + t - s:st + t][None].to(dev)
+        if progress:
+            progress((i + 1) / len(starts), f"window {i + 1}/{len(starts)}")
+    return out[:, :L] * model.latent_std.cpu()[:, None, None]
+
+
+@torch.no_grad()
+def decode_latents(tokenizers: dict, latents: torch.Tensor, num_frames: int, chunk: int = 512, margin: int = 16
+                   ) -> dict[str, torch.Tensor]:
+    """(R, L, D) latents -> {region: (T, C) raw features}; decoded in chunks of `chunk` latents with `margin`
+    latents of context each side (cropped), so memory is bounded for any length. Re-quantises first."""
+    out = {}
+    L = latents.shape[1]
+    for r, (region, tok) in enumerate(tokenizers.items()):
+        pieces = []
+        for a in range(0, L, chunk):
+            lo, hi = max(0, a - margin), min(L, a + chunk + margin)
+            z = latents[r:r + 1, lo:hi]
+            y = tok.decode_latents(z)[0]                              # (4 (hi - lo), C) normalised
+            pieces.append(y[4 * (a - lo):4 * (a - lo) + 4 * min(chunk, L - a)])
+        out[region] = tok.normalizer.denormalize(torch.cat(pieces)[:num_frames])
+    return out

@@ -1,0 +1,168 @@
+"""Training loop for the generator (`gesturelsm train`), single process or DistributedDataParallel under
+torchrun (gloo on CPU, nccl on CUDA). Tokenizers are frozen; the speech encoder trains with the denoiser."""
+from __future__ import annotations
+
+import copy
+import math
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import torch
+import torch.distributed as dist
+from tqdm import tqdm
+
+from ..flows import make_method
+from ..tokenizer.model import RVQVAE
+from .config import PRESETS, GeneratorConfig
+from .data import LatentWindowSampler, TakeTensors, encode_regions
+from .model import GestureGenerator
+
+
+@dataclass(frozen=True)
+class GenTrainConfig:
+    method: str = "gesturelsm"       # gesturelsm | rectified_flow | ddim
+    preset: str = "small"
+    steps: int = 4000
+    batch_size: int = 32
+    lr: float = 2e-4
+    betas: tuple[float, float] = (0.5, 0.999)   # the reference's Adam betas
+    warmup: int = 200
+    grad_clip: float = 1.0
+    cond_drop: float = 0.1           # classifier-free guidance dropout
+    text_drop: float = 0.2           # transcript dropout (trains audio-only mode)
+    neutral_seed_p: float = 0.1      # windows started from the neutral seed
+    ema: float = 0.999               # EMA weights are what gets exported
+    ema_teacher: bool = False        # shortcut targets from the EMA network (Shortcut Models) or online
+    time_sampler: str = "beta"       # gesturelsm: beta | uniform | logit_normal
+    seed: int = 0
+    eval_every: int = 500
+    save_every: int = 500
+    device: str = "auto"
+
+
+def _dist() -> tuple[int, int]:
+    if int(os.environ.get("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
+        backend = "nccl" if torch.cuda.is_available() else "gloo"
+        dist.init_process_group(backend)
+    if dist.is_initialized():
+        return dist.get_rank(), dist.get_world_size()
+    return 0, 1
+
+
+@torch.no_grad()
+def latent_stats(tokenizers: dict[str, RVQVAE], takes: list[TakeTensors], cfg: GeneratorConfig
+                 ) -> tuple[torch.Tensor, torch.Tensor]:
+    """Per-region std of the training latents, and the neutral seed: the scaled latents of the mean pose
+    (normalised features = 0) held still for one window; its last `seed_latents` frames."""
+    std = torch.cat([tk.latents for tk in takes], dim=1).std(dim=(1, 2)).clamp_min(1e-3)     # (R,)
+    zeros = torch.zeros(cfg.window_frames, 433)
+    for region, tok in tokenizers.items():  # raw mean pose = normaliser mean
+        from ..motion.regions import REGIONS
+
+        zeros[:, list(REGIONS[region].columns)] = tok.normalizer.mean
+    neutral = encode_regions(tokenizers, zeros)[:, -cfg.seed_latents:] / std[:, None, None]
+    return std, neutral
+
+
+def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokenizers: dict[str, RVQVAE],
+                    tc: GenTrainConfig, out_path: Path, config: GeneratorConfig | None = None, meta: dict | None = None,
+                    log=print) -> GestureGenerator:
+    rank, world = _dist()
+    device = torch.device(("cuda" if torch.cuda.is_available() else "cpu") if tc.device == "auto" else tc.device)
+    if device.type == "cuda" and world > 1:
+        device = torch.device("cuda", rank % torch.cuda.device_count())
+    torch.manual_seed(tc.seed)
+    method = make_method(tc.method, **({"time_sampler": tc.time_sampler} if tc.method == "gesturelsm" else {}))
+    base = config or PRESETS[tc.preset]
+    cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
+                             "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size})
+    model = GestureGenerator(cfg, tc.method)
+    std, neutral = latent_stats(tokenizers, takes, cfg)
+    model.latent_std.copy_(std)
+    model.neutral_seed.copy_(neutral)
+    model.to(device)
+    ema = copy.deepcopy(model).eval().requires_grad_(False)
+    opt = torch.optim.Adam(model.parameters(), lr=tc.lr, betas=tc.betas)
+    state_path = out_path.with_suffix(".state.pt")
+    step = 0
+    sampler = LatentWindowSampler(takes, cfg.window_latents, cfg.seed_latents, std, neutral, tc.neutral_seed_p,
+                                  tc.text_drop, seed=tc.seed + 1000 * rank)
+    if state_path.exists():
+        st = torch.load(state_path, weights_only=False, map_location=device)
+        model.load_state_dict(st["model"])
+        ema.load_state_dict(st["ema"])
+        opt.load_state_dict(st["optim"])
+        sampler.g.set_state(st["sampler"])
+        step = st["step"]
+        if rank == 0:
+            log(f"resumed {out_path.name} at step {step}")
+    net = model
+    if world > 1:
+        net = torch.nn.parallel.DistributedDataParallel(model, device_ids=[device.index] if device.type == "cuda" else None)
+    g = torch.Generator(device=device).manual_seed(tc.seed * 7919 + rank * 104729 + step)
+    bar = tqdm(total=tc.steps, initial=step, desc=f"train {tc.method}", disable=rank != 0, dynamic_ncols=True,
+               mininterval=2)
+    model.train()
+    t0 = time.time()
+    while step < tc.steps:
+        lr = tc.lr * min(1.0, (step + 1) / tc.warmup) * (0.5 * (1 + math.cos(math.pi * step / tc.steps)) * 0.9 + 0.1)
+        for grp in opt.param_groups:
+            grp["lr"] = lr
+        b = sampler.sample(tc.batch_size).to(device)
+        cond = model.speech(b.audio, b.words, b.has_word, b.has_text) if world == 1 else None
+
+        def f(x, t, d, drop, rows=None):
+            r = slice(None) if rows is None else rows
+            if world > 1:  # DDP needs the whole forward inside the wrapped module's call
+                return net(x, t, d, None, b.seed[r], drop,
+                           speech=(b.audio[r], b.words[r], b.has_word[r], b.has_text[r]))
+            return net(x, t, d, cond[r], b.seed[r], drop)
+
+        teacher = None
+        if tc.ema_teacher:
+            ema_cond = ema.speech(b.audio, b.words, b.has_word, b.has_text)
+
+            def teacher(x, t, d, drop, rows=None):
+                r = slice(None) if rows is None else rows
+                return ema(x, t, d, ema_cond[r], b.seed[r], drop)
+        res = method.loss(f, b.x1, tc.cond_drop, generator=g, **({"teacher": teacher} if teacher else {}))
+        opt.zero_grad(set_to_none=True)
+        res.loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), tc.grad_clip)
+        opt.step()
+        with torch.no_grad():
+            for pe, pm in zip(ema.parameters(), model.parameters()):
+                pe.lerp_(pm, 1 - tc.ema)
+        step += 1
+        bar.update(1)
+        if step % 10 == 0:
+            bar.set_postfix({k: f"{v:.4f}" for k, v in res.logs.items()} | {"lr": f"{lr:.1e}"})
+        if rank == 0 and heldout and (step % tc.eval_every == 0 or step == tc.steps):
+            val = heldout_loss(ema, method, heldout, cfg, std, neutral, device)
+            bar.write(f"[{tc.method}] step {step}: held-out loss {val:.4f} ({time.time() - t0:.0f}s)")
+        if rank == 0 and (step % tc.save_every == 0 or step == tc.steps):
+            out_path.parent.mkdir(parents=True, exist_ok=True)
+            ema.save(out_path, meta={"step": step, "train": asdict(tc), **(meta or {})})
+            torch.save({"model": model.state_dict(), "ema": ema.state_dict(), "optim": opt.state_dict(),
+                        "sampler": sampler.g.get_state(), "step": step}, state_path)
+    bar.close()
+    if world > 1:
+        dist.barrier()
+    return ema.cpu().eval()
+
+
+@torch.no_grad()
+def heldout_loss(model: GestureGenerator, method, heldout: list[TakeTensors], cfg: GeneratorConfig,
+                 std: torch.Tensor, neutral: torch.Tensor, device, n: int = 32) -> float:
+    """The method's own loss on held-out windows with fixed noise (comparable across steps)."""
+    sampler = LatentWindowSampler(heldout, cfg.window_latents, cfg.seed_latents, std, neutral, 0.0, 0.0, seed=123)
+    b = sampler.sample(n).to(device)
+    cond = model.speech(b.audio, b.words, b.has_word, b.has_text)
+    g = torch.Generator(device=device).manual_seed(0)
+    def f(x, t, d, drop, rows=None):
+        r = slice(None) if rows is None else rows
+        return model(x, t, d, cond[r], b.seed[r], drop)
+
+    return method.loss(f, b.x1, 0.0, generator=g).loss.item()

@@ -1,0 +1,204 @@
+"""The one pure-Python entry point: speech (+ transcript) -> SMPL-X motion. The app, the CLI, the
+benchmarks and the tests all call this.
+
+    pipe = GesturePipeline.from_pretrained()            # shipped checkpoints in assets/
+    res = pipe.generate(audio, sr, text="hello there", steps=8, cfg=2.0, seed=0, method="gesturelsm")
+    res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import torch
+
+from .audio import SAMPLE_RATE, AudioError, resample, to_mono
+from .motion.regions import join_regions
+from .motion.sequence import FPS, MotionSequence
+
+ASSETS = Path(__file__).resolve().parents[1] / "assets"
+MIN_SECONDS = 0.5
+MAX_STEPS = {"gesturelsm": 128, "rectified_flow": 128, "ddim": 1000}
+Progress = Callable[[float, str], None]
+
+
+class InputError(ValueError):
+    """Input or settings a person must change; the message says what and how."""
+
+
+@dataclass
+class SpeechInput:
+    """Speech prepared once and reusable across methods, steps and seeds."""
+    audio: np.ndarray                   # (N,) 16 kHz mono float32
+    num_frames: int
+    channels: torch.Tensor              # (2, N) envelope + onsets
+    words: list | None                  # list[Word] used, or None (audio-only)
+    word_features: torch.Tensor         # (T, 384)
+    has_word: torch.Tensor              # (T,) bool
+    text_mode: str                      # how the transcript was used, said to the user
+    timings: dict[str, float] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def duration(self) -> float:
+        return self.num_frames / FPS
+
+
+@dataclass
+class GenerationResult:
+    motion: MotionSequence
+    method: str
+    steps: int
+    cfg: float
+    seed: int
+    timings: dict[str, float]           # seconds: features, alignment, sampling, decoding
+    text_mode: str
+    warnings: list[str]
+
+    @property
+    def generation_seconds(self) -> float:
+        """Inference time without transcript alignment (the paper's AITS convention)."""
+        return sum(v for k, v in self.timings.items() if k != "alignment")
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.motion.duration / max(self.generation_seconds, 1e-9)
+
+
+class GesturePipeline:
+    def __init__(self, tokenizers: dict, generators: dict, device: str | torch.device = "cpu",
+                 max_seconds: float = 600.0):
+        self.tokenizers = tokenizers            # region -> RVQVAE
+        self.generators = generators            # method -> GestureGenerator
+        self.device = torch.device(device)
+        self.max_seconds = max_seconds
+        for g in generators.values():
+            if tuple(g.config.regions) != tuple(tokenizers):
+                raise ValueError(f"generator regions {g.config.regions} do not match tokenizers {tuple(tokenizers)}")
+
+    @classmethod
+    def from_pretrained(cls, path: str | Path | None = None, device: str = "cpu", methods: list[str] | None = None,
+                        max_seconds: float = 600.0) -> "GesturePipeline":
+        """`path`: a folder with tokenizer/<region>.safetensors and generator/<method>.safetensors
+        (default: the shipped assets/)."""
+        from .generator.model import GestureGenerator
+        from .motion.regions import GENERATED_REGIONS
+        from .tokenizer.model import RVQVAE
+
+        root = Path(path) if path else ASSETS
+        tok_dir, gen_dir = root / "tokenizer", root / "generator"
+        missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
+        if missing:
+            raise FileNotFoundError(f"{tok_dir}: missing tokenizer checkpoints for {', '.join(missing)}")
+        tokenizers = {r: RVQVAE.load(tok_dir / f"{r}.safetensors").to(device) for r in GENERATED_REGIONS}
+        gens = {}
+        for p in sorted(gen_dir.glob("*.safetensors")):
+            if methods is None or p.stem in methods:
+                gens[p.stem] = GestureGenerator.load(p).to(device)
+        if not gens:
+            raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
+        return cls(tokenizers, gens, device, max_seconds)
+
+    @property
+    def methods(self) -> list[str]:
+        return list(self.generators)
+
+    # ---- speech ------------------------------------------------------------------------------------------
+    def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
+                       text: str | None = None, progress: Progress | None = None) -> SpeechInput:
+        """Validate and resample audio; word timings from `words` (e.g. a TextGrid), else from aligning
+        `text`, else audio-only. Features that do not depend on the method are computed here once."""
+        from .features.audio import audio_channels
+        from .features.text import TEXT_DIM, TextEmbedder
+
+        timings: dict[str, float] = {}
+        warnings: list[str] = []
+        t0 = time.perf_counter()
+        y = to_mono(audio)
+        if sr <= 0:
+            raise InputError(f"invalid sample rate {sr}")
+        y = resample(y, int(sr), SAMPLE_RATE)
+        dur = len(y) / SAMPLE_RATE
+        if not np.isfinite(y).all():
+            raise InputError("the audio contains invalid samples (NaN or infinity)")
+        if dur < MIN_SECONDS:
+            raise InputError(f"the audio is {dur:.2f} s long; at least {MIN_SECONDS} s of speech is needed")
+        if dur > self.max_seconds:
+            raise InputError(f"the audio is {dur / 60:.1f} minutes long; the limit is {self.max_seconds / 60:.0f} "
+                             "minutes (a setting: max_seconds)")
+        if np.abs(y).max() < 1e-4:
+            raise InputError("the audio is silent: there is no speech to gesture to")
+        T = int(len(y) * FPS // SAMPLE_RATE)
+        y = y[: int(round(T * SAMPLE_RATE / FPS))]
+        channels = torch.from_numpy(audio_channels(y))
+        timings["features"] = time.perf_counter() - t0
+        if progress:
+            progress(0.1, "audio features")
+        mode = "audio-only (no transcript given)"
+        if words is None and text and text.strip():
+            from .align import align_words
+
+            t1 = time.perf_counter()
+            res = align_words(y, text)
+            timings["alignment"] = time.perf_counter() - t1
+            words = res.words
+            mode = f"transcript, word timings aligned automatically ({res.method}, confidence {res.confidence:.2f})"
+            if res.warning:
+                warnings.append(res.warning)
+            if progress:
+                progress(0.2, "transcript aligned")
+        elif words is not None:
+            mode = "transcript with given word timings"
+        wf, hw = torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool)
+        if words:
+            t2 = time.perf_counter()
+            emb = TextEmbedder.shared()
+            if emb.available:
+                ft = emb.frame_features(words, T)
+                wf, hw = torch.from_numpy(ft.features), torch.from_numpy(ft.has_word)
+            else:
+                warnings.append(f"{emb.error}; generating from audio only")
+                words, mode = None, "audio-only (text encoder unavailable)"
+            timings["features"] += time.perf_counter() - t2
+        return SpeechInput(y, T, channels, words or None, wf, hw, mode, timings, warnings)
+
+    # ---- generation --------------------------------------------------------------------------------------
+    def check_settings(self, method: str, steps: int, cfg: float) -> None:
+        if method not in self.generators:
+            raise InputError(f"unknown method {method!r}; available: {', '.join(self.generators)}")
+        hi = MAX_STEPS.get(method, 128)
+        if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
+            raise InputError(f"steps must be a whole number from 1 to {hi} for {method} (got {steps})")
+        if not np.isfinite(cfg) or not 0.0 <= cfg <= 10.0:
+            raise InputError(f"CFG scale must be between 0 and 10 (got {cfg})")
+
+    @torch.no_grad()
+    def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
+                 text: str | None = None, steps: int = 8, cfg: float = 2.0, seed: int = 0,
+                 method: str = "gesturelsm", progress: Progress | None = None) -> GenerationResult:
+        from .generator.sampling import decode_latents, generate_latents
+
+        self.check_settings(method, steps, cfg)
+        speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress)
+        gen = self.generators[method]
+        timings = dict(speech.timings)
+        t0 = time.perf_counter()
+        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        lat = generate_latents(gen, speech.channels, speech.word_features, speech.has_word, speech.words is not None,
+                               speech.num_frames, steps, cfg, seed, prog)
+        timings["sampling"] = time.perf_counter() - t0
+        t1 = time.perf_counter()
+        parts = decode_latents(self.tokenizers, lat.to(self.device), speech.num_frames)
+        feats = join_regions({k: v.cpu() for k, v in parts.items()})
+        motion = MotionSequence.from_features(feats)
+        timings["decoding"] = time.perf_counter() - t1
+        if progress:
+            progress(1.0, f"{method}: done")
+        return GenerationResult(motion, method, int(steps), float(cfg), int(seed), timings, speech.text_mode,
+                                list(speech.warnings))
+
+
+__all__ = ["GesturePipeline", "GenerationResult", "SpeechInput", "InputError", "AudioError", "ASSETS"]
