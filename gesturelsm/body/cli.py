@@ -1,6 +1,6 @@
 """`gesturelsm body`: build the built-in mannequin file, or check that a body model file loads.
 
-    gesturelsm body build [--out PATH]      rebuild assets/body/mannequin_smplx.npz (or PATH)
+    gesturelsm body build [--out PATH]      rebuild assets/body/SMPLX_MANNEQUIN.npz (or PATH)
     gesturelsm body check [--model PATH]    load a body (default: $GESTURELSM_SMPLX_MODEL or the mannequin)
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="body_command", metavar="ACTION", required=True)
     b = sub.add_parser("build", help="rebuild the built-in mannequin npz")
-    b.add_argument("--out", type=Path, default=None, help="output file (default: assets/body/mannequin_smplx.npz)")
+    b.add_argument("--out", type=Path, default=None, help="output file (default: assets/body/SMPLX_MANNEQUIN.npz)")
     b.set_defaults(func=run_build)
     c = sub.add_parser("check", help="load a body model file and print what it contains")
     c.add_argument("--model", default=None, help="SMPL-X npz or a folder holding SMPLX_NEUTRAL_2020.npz")

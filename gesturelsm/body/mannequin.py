@@ -14,7 +14,7 @@ Blend shapes (shapedirs, metres per unit coefficient):
     beta 1   girth: +8 % cross-section scale of torso, neck, arms and legs about their axes
     expression 0 / 1 / 2   mouth open / smile / brows raised (see `mannequin_head.expression_fields`)
 All other directions are zero; posedirs are zero (no pose correctives).
-J_regressor: each row is an affine combination (weights sum to 1) of one ring of surface vertices around
+J_regressor: each row is an affine combination (weights sum to 1) of one ring (or band) of surface vertices around
 the joint, solved so that it reproduces the designed joint exactly.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ from .proportions import FINGERS
 
 NUM_SHAPE, NUM_EXPR = 300, 100
 HEIGHT_PER_BETA, GIRTH_PER_BETA = 0.04, 0.08
-DEFAULT_PATH = Path(__file__).resolve().parents[2] / "assets" / "body" / "mannequin_smplx.npz"
+DEFAULT_PATH = Path(__file__).resolve().parents[2] / "assets" / "body" / "SMPLX_MANNEQUIN.npz"
 MODEL_TAG = "gesturelsm-mannequin"
 
 # joint -> (part, ring) whose vertices regress it

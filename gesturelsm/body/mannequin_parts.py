@@ -13,7 +13,7 @@ import numpy as np
 from ..motion.skeleton import JOINT_INDEX as JI
 from ..motion.skeleton import MIRROR_PERM
 from .mannequin_mesh import Part, chain_weights, join_rings, merge_parts, profile, smoothstep, sweep
-from .mannequin_skeleton import EYE, KNUCKLE_Y, KNUCKLE_Z, RestSkeleton
+from .mannequin_skeleton import KNUCKLE_Y, KNUCKLE_Z, RestSkeleton
 from .proportions import FINGERS
 
 X, Y, Z = np.eye(3)
@@ -96,7 +96,8 @@ def _torso(sk: RestSkeleton) -> tuple[Part, dict[str, float]]:
     J = sk.joints
     hip = J[JI["left_hip"]]
     jh = {n: float(J[JI[n], 1] - hip[1]) for n in ("pelvis", "spine1", "spine2", "spine3", "neck", "head")}
-    h = np.unique(np.concatenate([np.linspace(CROTCH_H, 0.5, 21), np.linspace(0.515, 0.695, 11), [0.0], list(jh.values())]))
+    h = np.concatenate([np.linspace(CROTCH_H, 0.5, 21), np.linspace(0.515, 0.695, 11), [0.0], list(jh.values())])
+    h = np.unique(h)                                                         # stations incl. every joint
     pr = profile(TRUNK_KEYS, h)                                             # (K, 5)
     centres = np.stack([np.zeros_like(h), hip[1] + h, pr[:, 3]], 1)
     radii = np.stack([pr[:, 0], pr[:, 0], pr[:, 1], pr[:, 2]], 1)           # +x, -x, +z, -z

@@ -1,12 +1,13 @@
 """Load an SMPL-X body (the real SMPLX_NEUTRAL_2020.npz or the built-in mannequin) and pose it.
 
 Path resolution for `load_body_model(path)` (see `model_file.py`): the argument, else the environment variable
-`GESTURELSM_SMPLX_MODEL`, else the shipped mannequin (`assets/body/mannequin_smplx.npz`). A directory is
+`GESTURELSM_SMPLX_MODEL`, else the shipped mannequin (`assets/body/SMPLX_MANNEQUIN.npz`). A directory is
 searched for SMPLX_NEUTRAL_2020.npz / SMPLX_NEUTRAL.npz (also in a `smplx/` subfolder, EMAGE's layout).
 
 Both kinds of file go through the same code: `smplx.SMPLX(path, use_pca=False, ...)`, the class that
-`smplx.create` dispatches to (we call it directly because `smplx.create` picks the class from the file
-*name*, so it refuses e.g. `mannequin_smplx.npz`). smplx 0.1.28 hard-codes SMPL-X's extra-joint vertex
+`smplx.create` dispatches to. We call it directly because `smplx.create` picks the class from the file
+*name* (the part before the first '_'), so it would refuse a user's file named e.g. `model.npz`; the
+shipped mannequin is named `SMPLX_MANNEQUIN.npz` so that `smplx.create(path)` loads it too (tested). smplx 0.1.28 hard-codes SMPL-X's extra-joint vertex
 ids (up to 9929) and does not accept a `vertex_ids` argument for SMPL-X, so for a file that carries its own
 (`vertex_id_names` / `vertex_id_values`, as the mannequin does) the module's `vertex_joint_selector` is
 replaced by one built from them.

@@ -1,7 +1,7 @@
 """SMPL-X model files: where to find one, and checking that smplx can use it (clear errors otherwise).
 
 Resolution: an explicit path, else $GESTURELSM_SMPLX_MODEL, else the built-in mannequin
-(`assets/body/mannequin_smplx.npz`). A directory is searched for SMPLX_NEUTRAL_2020.npz / SMPLX_NEUTRAL.npz,
+(`assets/body/SMPLX_MANNEQUIN.npz`). A directory is searched for SMPLX_NEUTRAL_2020.npz / SMPLX_NEUTRAL.npz,
 also in a `smplx/` subfolder (EMAGE's layout). Keys smplx reads: v_template (V, 3), f (F, 3),
 J_regressor (55, V), weights (V, 55), kintree_table (2, 55), shapedirs (V, 3, 400), posedirs (V, 3, 486),
 hands_components{l,r} (45, 45), hands_mean{l,r} (45,), lmk_faces_idx (51,), lmk_bary_coords (51, 3).

@@ -42,7 +42,8 @@ def synthetic_smplx_arrays(seed: int = 0) -> dict[str, np.ndarray]:
         "posedirs": (rng.normal(size=(V, 3, 486)) * 0.001).astype(f32),
         "hands_componentsl": Q.astype(f32), "hands_componentsr": Q.T.copy().astype(f32),
         "hands_meanl": (rng.normal(size=45) * 0.3).astype(f32), "hands_meanr": (rng.normal(size=45) * 0.3).astype(f32),
-        "lmk_faces_idx": rng.integers(0, F, 51).astype(np.int64), "lmk_bary_coords": (bary / bary.sum(1, keepdims=True)).astype(f32),
+        "lmk_faces_idx": rng.integers(0, F, 51).astype(np.int64),
+        "lmk_bary_coords": (bary / bary.sum(1, keepdims=True)).astype(f32),
     }
 
 

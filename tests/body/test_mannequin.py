@@ -36,17 +36,25 @@ def test_loads_through_smplx_create_with_its_own_vertex_ids(tmp_path, mannequin_
     import smplx
     from smplx.vertex_joint_selector import VertexJointSelector
 
-    path = tmp_path / "SMPLX_MANNEQUIN.npz"   # smplx.create picks the class from the "SMPLX_" name prefix
-    shutil.copy(DEFAULT_PATH, path)
-    model = smplx.create(str(path), model_type="smplx", ext="npz", use_pca=False, num_betas=300,
-                         num_expression_coeffs=100)
+    assert DEFAULT_PATH.name.startswith("SMPLX_")  # smplx.create picks the class from this name prefix
+    model = smplx.create(str(DEFAULT_PATH), model_type="smplx", ext="npz", use_pca=False, num_betas=300,
+                         num_expression_coeffs=100, flat_hand_mean=True)
     assert model.v_template.shape[0] == len(mannequin_arrays["v_template"])
     with pytest.raises((IndexError, RuntimeError)):  # smplx's hard-coded SMPL-X vertex ids (up to 9929) do not fit
         model()
     ids = dict(zip(mannequin_arrays["vertex_id_names"].tolist(), mannequin_arrays["vertex_id_values"].tolist()))
     model.vertex_joint_selector = VertexJointSelector(vertex_ids=ids)
-    out = model()
+    rng = np.random.default_rng(0)
+    pose = torch.from_numpy(rng.normal(scale=0.3, size=(1, 165)).astype(np.float32))
+    out = model(global_orient=pose[:, :3], body_pose=pose[:, 3:66], jaw_pose=pose[:, 66:69],
+                leye_pose=pose[:, 69:72], reye_pose=pose[:, 72:75], left_hand_pose=pose[:, 75:120],
+                right_hand_pose=pose[:, 120:165])
     assert out.joints.shape[1] == 55 + 21 + 51  # joints + extra vertex joints + landmarks
+    # the project's loader gives the same body as plain smplx.create
+    from gesturelsm.body import load_body_model
+
+    ours = load_body_model().forward(pose.numpy(), np.zeros((1, 3), np.float32))
+    np.testing.assert_allclose(ours.vertices[0], out.vertices[0].detach().numpy(), atol=1e-4)
 
 
 def test_skinning_weights_are_a_partition_of_unity(mannequin_arrays):

@@ -1,0 +1,110 @@
+import numpy as np
+import pytest
+import soundfile as sf
+import torch
+
+from gesturelsm.generator.sampling import window_layout
+from gesturelsm.pipeline import InputError
+
+from _support import speech_like
+
+
+def test_fixed_seed_gives_identical_output_and_other_seeds_differ(tiny_pipeline):
+    y = speech_like(6.0)
+    a = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3)
+    b = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3)
+    c = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=4)
+    np.testing.assert_array_equal(a.motion.poses, b.motion.poses)
+    assert not np.allclose(a.motion.poses, c.motion.poses)
+
+
+@pytest.mark.parametrize("seconds", [0.5, 1.0, 4.27, 30.0])
+def test_output_has_the_speech_length(tiny_pipeline, seconds):
+    res = tiny_pipeline.generate(speech_like(seconds), 16000, steps=2)
+    assert res.motion.num_frames == int(seconds * 30)
+    assert np.isfinite(res.motion.poses).all() and np.isfinite(res.motion.trans).all()
+    assert set(res.timings) >= {"features", "sampling", "decoding"}
+
+
+def test_window_layout_covers_everything_with_overlap():
+    for L in [1, 8, 31, 32, 33, 100, 1000]:
+        starts = window_layout(L, 32, 4)
+        assert starts[0] == 0 and starts[-1] + 32 >= L
+        assert all(b - a == 28 for a, b in zip(starts, starts[1:]))
+
+
+def test_every_method_and_any_sample_rate(tiny_pipeline):
+    y16 = speech_like(3.0)
+    import scipy.signal
+
+    y44 = scipy.signal.resample_poly(y16, 441, 160).astype(np.float32)
+    for method, steps in [("gesturelsm", 1), ("rectified_flow", 2), ("ddim", 5)]:
+        r = tiny_pipeline.generate(y44, 44100, steps=steps, method=method)
+        assert r.motion.num_frames == 90 and r.method == method
+    stereo = np.stack([y16, y16], 1)
+    assert tiny_pipeline.generate(stereo, 16000, steps=1).motion.num_frames == 90
+
+
+def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
+    y = speech_like(4.0)
+    a = tiny_pipeline.generate(y, 16000, steps=2, cfg=1.0, seed=0).motion.poses
+    b = tiny_pipeline.generate(y, 16000, steps=2, cfg=3.0, seed=0).motion.poses
+    assert not np.allclose(a, b)
+
+
+@pytest.mark.parametrize("kwargs,msg", [
+    (dict(steps=0), "steps must be"), (dict(steps=500), "steps must be"), (dict(cfg=-1.0), "CFG scale"),
+    (dict(cfg=float("nan")), "CFG scale"), (dict(method="magic"), "unknown method"),
+])
+def test_absurd_settings_are_refused_with_a_message(tiny_pipeline, kwargs, msg):
+    with pytest.raises(InputError, match=msg):
+        tiny_pipeline.generate(speech_like(1.0), 16000, **kwargs)
+
+
+def test_bad_audio_is_refused_with_a_message(tiny_pipeline):
+    with pytest.raises(InputError, match="silent"):
+        tiny_pipeline.generate(np.zeros(32000, np.float32), 16000)
+    with pytest.raises(InputError, match="at least"):
+        tiny_pipeline.generate(speech_like(0.2), 16000)
+    with pytest.raises(InputError, match="invalid"):
+        tiny_pipeline.generate(np.full(32000, np.nan, np.float32), 16000)
+    long = GesturePipelineWithLimit(tiny_pipeline, 5.0)
+    with pytest.raises(InputError, match="limit"):
+        long.generate(speech_like(6.0), 16000)
+
+
+def GesturePipelineWithLimit(pipe, seconds):
+    from gesturelsm.pipeline import GesturePipeline
+
+    return GesturePipeline(pipe.tokenizers, pipe.generators, max_seconds=seconds)
+
+
+def test_long_audio_stitches_windows_without_jumps(tiny_pipeline):
+    """No velocity spike at window borders compared with inside windows."""
+    res = tiny_pipeline.generate(speech_like(40.0), 16000, steps=2, seed=1)
+    gen = tiny_pipeline.generators["gesturelsm"]
+    t, s = gen.config.window_latents, gen.config.seed_latents
+    feats = res.motion.to_features()
+    vel = (feats[1:, :330] - feats[:-1, :330]).abs().max(dim=1).values        # (T-1,) max 6D change per frame
+    borders = [4 * (st + s // 2) for st in window_layout(feats.shape[0] // 4, t, s)[1:]]
+    near = torch.tensor([vel[max(0, b - 4):b + 4].max().item() for b in borders if b + 4 < len(vel)])
+    assert len(near) >= 3
+    assert near.max() <= 2.0 * vel.quantile(0.99), (near.max(), vel.quantile(0.99))
+
+
+def test_generate_cli_writes_beat2_npz(tiny_assets, tmp_path, capsys):
+    from gesturelsm.cli import main
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(3.0, sr=22050), 22050)
+    out = tmp_path / "out.npz"
+    assert main(["generate", str(wav), "--checkpoints", str(tiny_assets), "--steps", "2", "--out", str(out)]) == 0
+    with np.load(out) as d:
+        assert d["poses"].shape == (90, 165) and d["trans"].shape == (90, 3) and d["expressions"].shape == (90, 100)
+        assert int(d["mocap_frame_rate"]) == 30
+    assert "real-time factor" in capsys.readouterr().out
+    (tmp_path / "broken.wav").write_bytes(b"RIFF....WAVEfmt garbage")
+    assert main(["generate", str(tmp_path / "broken.wav"), "--checkpoints", str(tiny_assets), "--out",
+                 str(tmp_path / "x.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "broken.wav" in err and "Traceback" not in err
