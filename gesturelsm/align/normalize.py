@@ -4,7 +4,8 @@ Rules: Unicode NFKC; tokens are runs of letters/digits with inner apostrophes, d
 (`don't`, `3.5`, `1,000`, `$20`, `50%`, `21st`, `1990s`, `mp3`); every other character separates tokens
 and is dropped (punctuation, dashes, slashes, emoji). Han/kana characters are one token each (those scripts
 do not put spaces between words). The spoken form is case-folded, curly apostrophes become ', numbers are
-written out in English words (`num2words`-style, no dependency) and `&`, `%`, `$`, `€`, `£`, `@`, `+` are said.
+written out in English words (`num2words`-style, no dependency) and `&`, `%`, `$`, `€`, `£`, `@`, `+` are said
+(English only: for other languages the casefolded token is passed on, eSpeak reads numbers itself).
 """
 from __future__ import annotations
 
@@ -38,13 +39,14 @@ class Token:
     spoken: str
 
 
-def tokenize(text: str) -> list[Token]:
-    """Tokens of a transcript, in order; tokens with nothing to say (a lone apostrophe) are dropped."""
+def tokenize(text: str, language: str = "en") -> list[Token]:
+    """Tokens of a transcript, in order; tokens with nothing to say (a lone apostrophe) are dropped.
+    For languages other than English ("en") numbers and symbols are left for the synthesiser to read."""
     text = unicodedata.normalize("NFKC", text).replace("’", "'").replace("‘", "'")
     out = []
     for m in _TOKEN.finditer(text):
         raw = m.group(0).strip("'")
-        spoken = speak(raw)
+        spoken = speak(raw) if language == "en" else raw.casefold()
         if spoken:
             out.append(Token(raw, spoken))
     return out

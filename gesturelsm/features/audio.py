@@ -62,19 +62,29 @@ class ResDown(nn.Module):
         return F.leaky_relu(self.bn2(self.conv2(h)) + self.skip(x), 0.2)
 
 
+STRIDES = {1: (5, 4, 3, 3, 3, 1), 4: (5, 3, 3, 3, 1, 1)}  # total stride 540 samples with the pre-pool
+
+
 class AudioEncoder(nn.Module):
     """(B, 2, N) at 16 kHz -> (B, T, out_dim) at 30 fps. Six strided residual blocks, total stride 540
-    (5 * 4 * 3 * 3 * 3 * 1), then linear interpolation onto exactly T frames (533.3 samples per frame)."""
+    (5 * 4 * 3 * 3 * 3 * 1), then linear interpolation onto exactly T frames (533.3 samples per frame).
 
-    STRIDES = (5, 4, 3, 3, 3, 1)
+    `pool` = 4 max-pools the two channels to 4 kHz first (strides 5 * 3 * 3 * 3 * 1 * 1 after it): the envelope
+    and the onset impulses carry nothing above a few hundred Hz, max-pooling keeps every impulse (at 0.25 ms
+    precision), and the convolutions cost about a quarter. The paper's encoder is pool = 1."""
 
-    def __init__(self, channels: tuple[int, ...] = (64, 64, 64, 128, 128, 256), kernel: int = 15):
+    def __init__(self, channels: tuple[int, ...] = (64, 64, 64, 128, 128, 256), kernel: int = 15, pool: int = 1):
         super().__init__()
+        if pool not in STRIDES:
+            raise ValueError(f"audio pre-pool must be one of {sorted(STRIDES)}")
         dims = (2,) + tuple(channels)
-        self.blocks = nn.Sequential(*[ResDown(dims[i], dims[i + 1], s, kernel) for i, s in enumerate(self.STRIDES)])
+        self.pool = pool
+        self.blocks = nn.Sequential(*[ResDown(dims[i], dims[i + 1], s, kernel) for i, s in enumerate(STRIDES[pool])])
         self.out_dim = channels[-1]
 
     def forward(self, x: torch.Tensor, num_frames: int) -> torch.Tensor:
+        if self.pool > 1:
+            x = F.max_pool1d(x, self.pool, ceil_mode=True)
         h = self.blocks(x)                                          # (B, C, ~N / 540)
         h = F.interpolate(h, size=num_frames, mode="linear", align_corners=False)
         return h.transpose(1, 2)                                    # (B, T, C)

@@ -19,6 +19,7 @@ class GeneratorConfig:
     ffn: int = 1024
     drop_path: float = 0.1
     audio_channels: tuple[int, ...] = (64, 64, 64, 128, 128, 256)
+    audio_pool: int = 1            # 4: max-pool the audio channels to 4 kHz before the strided convs
     text_in: int = 384             # MiniLM word vectors
     text_dim: int = 256
     cond_dim: int = 768            # fused speech feature per latent frame
@@ -39,7 +40,7 @@ PRESETS: dict[str, GeneratorConfig] = {
                             text_dim=16, cond_dim=32),
     # the paper's sizes: 3 cross + 8 spatial-temporal layers, width 256, FFN 1024 (~30M with the face region)
     "paper": GeneratorConfig(),
-    # shipped: same structure, narrower and shallower (trained on one speaker's minute of motion on CPU)
-    "small": GeneratorConfig(dim=192, heads=4, cross_layers=2, st_layers=4, ffn=576,
-                             audio_channels=(32, 32, 64, 64, 128, 128), text_dim=128, cond_dim=256),
+    # shipped: same structure, narrower and shallower, trained on one speaker's minute of motion on 2 CPU cores
+    "small": GeneratorConfig(dim=128, heads=4, cross_layers=2, st_layers=4, ffn=512, drop_path=0.1,
+                             audio_channels=(16, 16, 32, 32, 64, 128), audio_pool=4, text_dim=128, cond_dim=256),
 }

@@ -28,7 +28,7 @@ class SpeechEncoder(nn.Module):
 
     def __init__(self, c: GeneratorConfig):
         super().__init__()
-        self.audio = AudioEncoder(c.audio_channels)
+        self.audio = AudioEncoder(c.audio_channels, pool=c.audio_pool)
         self.text_proj = nn.Linear(c.text_in, c.text_dim)
         self.pad = nn.Parameter(torch.zeros(c.text_dim))       # silence between words
         self.no_text = nn.Parameter(torch.zeros(c.text_dim))   # no transcript at all (audio-only mode)

@@ -69,7 +69,10 @@ class Decoder(nn.Module):
         layers += [nn.Conv1d(c.width, c.width, 3, padding=1), nn.ReLU(),
                    nn.Conv1d(c.width, c.in_dim, 3, padding=1)]
         self.net = nn.Sequential(*layers)
-        self.skip = (nn.ConvTranspose1d(c.code_dim, c.in_dim, c.downsample, stride=c.downsample)
+        # linear path back: interpolate latents linearly to 30 fps, then a k3 conv. (A transposed conv with
+        # kernel = stride = 4 made every 4-frame block its own linear function: visible steps, 6x the jitter.)
+        self.skip = (nn.Sequential(nn.Upsample(scale_factor=c.downsample, mode="linear", align_corners=False),
+                                   nn.Conv1d(c.code_dim, c.in_dim, 3, padding=1))
                      if c.linear_skip else None)
 
     def forward(self, z: torch.Tensor) -> torch.Tensor:  # (B, D, T/4) -> (B, C_in, T)

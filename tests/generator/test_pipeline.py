@@ -108,3 +108,21 @@ def test_generate_cli_writes_beat2_npz(tiny_assets, tmp_path, capsys):
                  str(tmp_path / "x.npz")]) == 2
     err = capsys.readouterr().err
     assert "broken.wav" in err and "Traceback" not in err
+
+
+def test_transcript_falls_back_to_audio_only_with_a_warning_when_text_encoder_is_missing(tiny_pipeline, monkeypatch,
+                                                                                          tmp_path):
+    from dataclasses import dataclass
+
+    from gesturelsm.features.text import TextEmbedder
+
+    @dataclass
+    class W:
+        text: str
+        start: float
+        end: float
+
+    monkeypatch.setattr(TextEmbedder, "_shared", TextEmbedder(model_dir=str(tmp_path / "missing")))
+    res = tiny_pipeline.generate(speech_like(2.0), 16000, words=[W("hello", 0.2, 0.8)], steps=1)
+    assert res.text_mode.startswith("audio-only") and any("unavailable" in w for w in res.warnings)
+    assert res.motion.num_frames == 60

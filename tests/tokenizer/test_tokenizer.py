@@ -157,3 +157,18 @@ def test_train_and_eval_cli_on_a_tiny_folder(tmp_path, beat2_maker, capsys):
     assert "resumed at step 6" in capsys.readouterr().out
     assert main(["train-tokenizer", "--data", str(data), "--window", "30"]) == 2  # clear error, no traceback
     assert "multiple of 4" in capsys.readouterr().err
+
+
+def test_decoder_linear_path_has_no_block_steps():
+    """The linear skip must not produce steps every 4 frames: latents that change linearly in time decode to
+    a linear ramp (second differences ~0 away from the ends)."""
+    from dataclasses import replace
+
+    torch.manual_seed(0)
+    cfg = replace(preset("tiny", 12), linear_skip=True)
+    m = RVQVAE(cfg, "upper")
+    z = torch.linspace(0, 1, 16)[None, :, None] * torch.randn(1, 1, cfg.code_dim)       # (1, 16, D) linear ramp
+    y = m.decoder.skip(z.transpose(1, 2)).transpose(1, 2)[0]                           # (64, C)
+    acc = (y[2:] - 2 * y[1:-1] + y[:-2])[4:-4].abs().max()
+    vel = (y[1:] - y[:-1]).abs().max()
+    assert acc < 1e-4 * max(vel.item(), 1e-6) + 1e-6, (acc, vel)

@@ -1,0 +1,202 @@
+"""Motions -> frames: input checks, the clip's camera and floor, posing in chunks, tiles, labels.
+
+    frames = render_frames([seq], frame_indices=[0, 30])            # (2, H, W, 3) uint8
+    for frame in iter_frames([a, b, c], labels=["8 steps", "RF", "GT"]): ...   # (H, 3 W, 3) each
+
+Frame k of the output shows motion frame k (30 fps, frame 0 = time 0). Motions of different lengths in one
+side-by-side are padded with their last frame (a `RenderWarning` says so).
+"""
+from __future__ import annotations
+
+import warnings
+from functools import lru_cache
+from pathlib import Path
+from typing import Iterator, Sequence
+
+import numpy as np
+
+from ..motion.sequence import FPS, MotionSequence
+from .camera import Camera
+from .labels import LabelPatch, label_lines, make_label
+from .style import RenderStyle
+
+MotionLike = MotionSequence | str | Path
+SAMPLE_FRAMES = 120          # frames sampled to frame the camera (evenly over the clip)
+MAX_BODIES = 8
+
+
+class RenderWarning(UserWarning):
+    """Something the user should know about a render (padding, trimmed audio); the render went on."""
+
+
+@lru_cache(maxsize=4)
+def _load_body(path: str | None):
+    from ..body.model import load_body_model
+
+    return load_body_model(path)
+
+
+def resolve_body(body=None):
+    """A BodyModel, a path to an SMPL-X npz, or None ($GESTURELSM_SMPLX_MODEL or the mannequin)."""
+    if body is None or isinstance(body, (str, Path)):
+        from ..body.model import resolve_model_path
+
+        return _load_body(str(resolve_model_path(body)))
+    return body
+
+
+def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSequence]:
+    """Load paths, check frame rates, pad shorter motions with their last frame (with a warning)."""
+    if isinstance(motions, (MotionSequence, str, Path)):
+        motions = [motions]
+    seqs = [m if isinstance(m, MotionSequence) else MotionSequence.load(m) for m in motions]
+    if not seqs:
+        raise ValueError("nothing to render: no motions given")
+    if len(seqs) > MAX_BODIES:
+        raise ValueError(f"{len(seqs)} motions: at most {MAX_BODIES} can be shown side by side")
+    for i, s in enumerate(seqs):
+        if s.num_frames == 0:
+            raise ValueError(f"motion {i + 1} has no frames")
+        if s.fps != FPS:
+            raise ValueError(f"motion {i + 1} is at {s.fps} fps; rendering expects {FPS} fps (BEAT2)")
+    T = max(s.num_frames for s in seqs)
+    out = []
+    for i, s in enumerate(seqs):
+        if s.num_frames < T:
+            warnings.warn(f"motion {i + 1} has {s.num_frames} frames, the longest {T}: padded with its last "
+                          f"frame ({(T - s.num_frames) / FPS:.2f} s held still)", RenderWarning, stacklevel=3)
+            pad = T - s.num_frames
+            s = MotionSequence(np.concatenate([s.poses, np.repeat(s.poses[-1:], pad, 0)]),
+                               np.concatenate([s.trans, np.repeat(s.trans[-1:], pad, 0)]),
+                               np.concatenate([s.expressions, np.repeat(s.expressions[-1:], pad, 0)]), s.betas, s.fps)
+        out.append(s)
+    return out
+
+
+def _sample_vertices(seqs: list[MotionSequence], body, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
+    """Per motion: (k, V, 3) vertices at k <= max_frames evenly spaced frames (first and last included)."""
+    out = []
+    for s in seqs:
+        idx = np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
+        out.append(body.forward(s.poses[idx], s.trans[idx], s.expressions[idx], s.betas).vertices)
+    return out
+
+
+def clip_layout(motions: Sequence[MotionLike] | MotionLike, body=None, style: RenderStyle | None = None,
+                labels: Sequence[str] | None = None, gen_seconds: Sequence[float | None] | None = None,
+                size: tuple[int, int] | None = None) -> tuple[Camera, float]:
+    """The clip's fixed camera (framing every body over the whole clip, below the labels) and floor height."""
+    style = (style or RenderStyle()).with_size(size)
+    seqs = prepare_motions(motions)
+    patches = _label_patches(len(seqs), labels, gen_seconds, style)
+    return _layout(seqs, resolve_body(body), style, _reserve(patches, style))
+
+
+def fit_camera(motions: Sequence[MotionLike] | MotionLike, body=None, style: RenderStyle | None = None,
+               labels: Sequence[str] | None = None, gen_seconds: Sequence[float | None] | None = None,
+               size: tuple[int, int] | None = None) -> Camera:
+    """The camera `render_video` uses for these motions and labels (2D keypoints are projected through it)."""
+    return clip_layout(motions, body, style, labels, gen_seconds, size)[0]
+
+
+def _reserve(patches: list[LabelPatch | None], style: RenderStyle) -> float:
+    """Fraction of the tile height the labels take at the top (kept free of bodies)."""
+    r = max([(p.y + p.rgba.shape[0] + 2) / style.height for p in patches if p is not None], default=0.0)
+    return min(r, 0.3)
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull's vertices (what framing depends on), or all points when qhull cannot run."""
+    if len(points) < 64:
+        return points
+    try:
+        from scipy.spatial import ConvexHull
+
+        return points[ConvexHull(points).vertices]
+    except Exception:  # degenerate (flat) point sets
+        return points
+
+
+def _layout(seqs: list[MotionSequence], body, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
+    pts, floor_y = [], np.inf
+    for s, v in zip(seqs, _sample_vertices(seqs, body)):
+        p = v.reshape(-1, 3).astype(np.float64)
+        floor_y = min(floor_y, float(p[:, 1].min()))
+        if style.framing == "upper":
+            hips = float(body.joints(s.poses[:1], s.trans[:1], s.betas)[0, 0, 1])
+            p = p[p[:, 1] > hips - 0.12]
+        pts.append(_hull(p))
+    W, H = style.size
+    cam = Camera.fit(np.concatenate(pts), W, H, style.yfov_deg, style.elevation_deg, style.margin,
+                     reserve_top=reserve_top)
+    return cam, floor_y
+
+
+def _label_patches(n: int, labels: Sequence[str] | None, gen_seconds: Sequence[float | None] | None,
+                   style: RenderStyle) -> list[LabelPatch | None]:
+    if labels is not None and len(labels) != n:
+        raise ValueError(f"{len(labels)} labels for {n} motions: give one label per motion")
+    if gen_seconds is not None and len(gen_seconds) != n:
+        raise ValueError(f"{len(gen_seconds)} generation times for {n} motions: give one per motion")
+    if labels is None and gen_seconds is None:
+        return [None] * n
+    px = style.label_px or max(10, round(style.height / 30))
+    dark = float(np.mean(style.background)) < 0.45
+    return [make_label(label_lines(labels[i] if labels else None, gen_seconds[i] if gen_seconds else None),
+                       style.width, px, dark) for i in range(n)]
+
+
+def compose(tiles: list[np.ndarray], patches: list[LabelPatch | None], style: RenderStyle) -> np.ndarray:
+    """Tiles side by side (a 1-pixel divider between them), labels blended in."""
+    frame = tiles[0] if len(tiles) == 1 else np.concatenate(tiles, axis=1)
+    frame = np.ascontiguousarray(frame)
+    W = style.width
+    if len(tiles) > 1:
+        div = np.asarray(style.background) * 0.82 * 255
+        for i in range(1, len(tiles)):
+            frame[:, i * W] = div.astype(np.uint8)
+    for i, p in enumerate(patches):
+        if p is not None:
+            p.blend_into(frame, i * W)
+    return frame
+
+
+def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style: RenderStyle | None = None,
+                size: tuple[int, int] | None = None, labels: Sequence[str] | None = None,
+                gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
+                frame_indices: Sequence[int] | None = None, chunk: int = 32) -> Iterator[np.ndarray]:
+    """Yield (H, N * W, 3) uint8 frames, one per motion frame (or per index in `frame_indices`)."""
+    from .scene import SceneRenderer
+
+    style = (style or RenderStyle()).with_size(size)
+    seqs = prepare_motions(motions)
+    body = resolve_body(body)
+    patches = _label_patches(len(seqs), labels, gen_seconds, style)
+    cam, floor_y = _layout(seqs, body, style, _reserve(patches, style))
+    if camera is not None:
+        cam = camera if (camera.width, camera.height) == style.size else camera.resized(*style.size)
+    T = seqs[0].num_frames
+    idx = np.arange(T) if frame_indices is None else np.asarray(frame_indices, np.int64).reshape(-1)
+    if idx.size and (idx.min() < 0 or idx.max() >= T):
+        raise ValueError(f"frame indices must be in 0..{T - 1}")
+    rest = body.forward(np.zeros((1, 165)), np.zeros((1, 3)), betas=seqs[0].betas).vertices[0]
+    with SceneRenderer(body.faces, body.num_vertices, len(seqs), cam, style, floor_y, rest) as renderer:
+        for s in range(0, len(idx), chunk):
+            ids = idx[s:s + chunk]
+            outs = [body.forward(q.poses[ids], q.trans[ids], q.expressions[ids], q.betas) for q in seqs]
+            for k in range(len(ids)):
+                tiles = renderer.render([o.vertices[k] for o in outs], [o.joints[k, 0, [0, 2]] for o in outs])
+                yield compose(tiles, patches, style)
+
+
+def render_frames(motions: Sequence[MotionLike] | MotionLike, frame_indices: Sequence[int] | None = None, *,
+                  body=None, style: RenderStyle | None = None, size: tuple[int, int] | None = None,
+                  labels: Sequence[str] | None = None, gen_seconds: Sequence[float | None] | None = None,
+                  camera: Camera | None = None) -> np.ndarray:
+    """(K, H, N * W, 3) uint8: the frames at `frame_indices` (all frames when None)."""
+    frames = list(iter_frames(motions, body=body, style=style, size=size, labels=labels, gen_seconds=gen_seconds,
+                              camera=camera, frame_indices=frame_indices))
+    if not frames:
+        st = (style or RenderStyle()).with_size(size)
+        return np.zeros((0, st.height, st.width, 3), np.uint8)
+    return np.stack(frames)

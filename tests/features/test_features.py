@@ -1,0 +1,77 @@
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+import torch
+
+from gesturelsm.features.audio import AudioEncoder, audio_channels, envelope, onset_samples
+from gesturelsm.features.text import TextEmbedder, frame_word_index
+
+
+@dataclass
+class W:
+    text: str
+    start: float
+    end: float
+
+
+def test_envelope_is_the_forward_window_maximum():
+    y = np.zeros(5000, np.float32)
+    y[3000] = -0.7
+    env = envelope(y, 1024)
+    assert env[3000] == pytest.approx(0.7) and env[3000 - 1023] == pytest.approx(0.7)   # window [i, i+1024)
+    assert env[3000 - 1024] == 0.0 and env[3001] == 0.0
+    brute = np.array([np.abs(y[i:i + 1024]).max() for i in range(0, 5000, 97)])
+    np.testing.assert_allclose(env[::97], brute)
+
+
+def test_onsets_land_at_their_sample_positions():
+    """Clicks at known times: impulses within one hop (512 samples) of each click, not at frame indices."""
+    sr = 16000
+    y = np.random.default_rng(0).normal(scale=1e-3, size=sr * 4).astype(np.float32)
+    clicks = [8000, 24000, 40000, 56000]
+    for c in clicks:
+        y[c:c + 800] += np.sin(np.arange(800) / sr * 2 * np.pi * 1000) * np.exp(-np.arange(800) / 200)
+    on = onset_samples(y)
+    for c in clicks:
+        assert np.abs(on - c).min() <= 1024, (c, on)
+    ch = audio_channels(y)
+    assert ch.shape == (2, len(y)) and set(np.unique(ch[1])) <= {0.0, 1.0}
+    assert ch[1].sum() == len(on) and (ch[1][on] == 1).all()
+    assert onset_samples(np.zeros(16000, np.float32)).size == 0   # silence: no onsets, no error
+
+
+@pytest.mark.parametrize("pool", [1, 4])
+@pytest.mark.parametrize("frames", [1, 37, 128])
+def test_audio_encoder_gives_one_feature_per_frame(pool, frames):
+    enc = AudioEncoder((4, 4, 4, 8, 8, 8), pool=pool)
+    n = int(round(frames * 16000 / 30))
+    out = enc(torch.randn(2, 2, n), frames)
+    assert out.shape == (2, frames, 8)
+
+
+def test_frame_word_index_picks_the_word_spoken_at_each_frame():
+    words = [W("", 0.0, 0.5), W("hello", 0.5, 1.0), W("world", 1.0, 1.2)]
+    idx = frame_word_index(words, 45)
+    assert (idx[:15] == -1).all() and (idx[15:30] == 1).all() and (idx[30:36] == 2).all() and (idx[36:] == -1).all()
+
+
+def test_text_vectors_are_contextual_and_frames_follow_words():
+    emb = TextEmbedder.shared()
+    if not emb.available:
+        pytest.skip(f"text encoder not installed: {emb.error}")
+    a = emb.embed_words("i sat on the river bank".split())
+    b = emb.embed_words("i put money in the bank".split())
+    assert a.shape == (6, 384)
+    cos = float(a[-1] @ b[-1] / np.linalg.norm(a[-1]) / np.linalg.norm(b[-1]))
+    assert 0.3 < cos < 0.99          # same word, different context: related but not identical
+    long = [f"word{i % 7}" for i in range(600)]   # longer than one chunk: every word gets a vector
+    assert (np.linalg.norm(emb.embed_words(long), axis=1) > 0).all()
+    ft = emb.frame_features([W("", 0, 0.5), W("hello", 0.5, 1.0)], 30)
+    assert not ft.has_word[:15].any() and ft.has_word[15:].all()
+    assert (ft.features[:15] == 0).all() and np.allclose(ft.features[15], ft.features[29])
+
+
+def test_missing_text_model_falls_back_to_audio_only(tmp_path):
+    emb = TextEmbedder(model_dir=str(tmp_path / "nowhere"))
+    assert not emb.available and "unavailable" in emb.error

@@ -1,0 +1,37 @@
+import numpy as np
+
+from gesturelsm.metrics.beat import beat_consistency, beat_score, motion_beats
+
+
+def joints_with_pauses(pause_frames: list[int], T: int = 600) -> np.ndarray:
+    """Upper-body joints swinging with speed dips (but not stops) exactly at the given frames."""
+    t = np.arange(T)
+    speed = np.ones(T)
+    for p in pause_frames:
+        speed -= 0.6 * np.exp(-((t - p) ** 2) / (2 * 3.0 ** 2))
+    pos = np.cumsum(speed) / 30.0
+    joints = np.zeros((T, 55, 3))
+    joints[:, :, 0] = pos[:, None] * 0.5
+    return joints
+
+
+def test_beats_on_audio_onsets_score_near_one_and_drop_when_shifted():
+    beats_s = np.arange(3.0, 17.0, 0.9)
+    frames = list((beats_s * 30).round().astype(int))
+    on = beat_consistency(joints_with_pauses(frames), beats=beats_s)
+    off = beat_consistency(joints_with_pauses([f + 12 for f in frames]), beats=beats_s)   # 0.4 s late
+    assert on > 0.95
+    assert off < 0.6 and off < on - 0.3
+
+
+def test_rest_minima_and_edges_are_not_beats():
+    speed = np.ones(300)
+    speed[150] = 0.1            # a stop (below 0.3 of mean speed): not a beat
+    speed[30] = 0.5             # inside the first 60 frames: ignored
+    speed[200] = 0.5            # a dip while moving: a beat
+    assert list(motion_beats(speed)) == [200 / 30]
+
+
+def test_score_formula():
+    assert abs(beat_score(np.array([1.0]), np.array([1.3])) - np.exp(-0.09 / 0.18)) < 1e-12
+    assert beat_score(np.array([1.0, 2.0]), np.array([])) == 0.0
