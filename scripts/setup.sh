@@ -7,14 +7,16 @@ cd "$(dirname "$0")/.."
 VENV=${VENV:-.venv}
 PYTHON=${PYTHON:-python3}
 
-# --- system libraries: EGL + OSMesa for offscreen pyrender (Mesa llvmpipe on CPU) ------------------
-APT_PKGS="libegl1 libegl-mesa0 libgl1-mesa-dri libgl1 libxrender1 libosmesa6"
+# --- system libraries: EGL + OSMesa for offscreen pyrender (Mesa llvmpipe on CPU), eSpeak NG for the
+# transcript aligner (it synthesises the transcript to align it against the speech) ----------------------
+APT_PKGS="libegl1 libegl-mesa0 libgl1-mesa-dri libgl1 libxrender1 libosmesa6 espeak-ng"
 have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
 missing=()
 have_lib libEGL.so.1 || missing+=(libegl1 libegl-mesa0)
 have_lib libOSMesa.so || missing+=(libosmesa6)
 have_lib libGL.so.1 || missing+=(libgl1)
 have_lib libXrender.so.1 || missing+=(libxrender1)
+command -v espeak-ng >/dev/null || missing+=(espeak-ng)
 [ -e /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so ] || [ -e /usr/lib/aarch64-linux-gnu/dri/swrast_dri.so ] \
   || ls /usr/lib/*/dri/*swrast* >/dev/null 2>&1 || missing+=(libgl1-mesa-dri)
 if [ ${#missing[@]} -gt 0 ]; then

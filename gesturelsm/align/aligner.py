@@ -9,7 +9,7 @@ through the path; the median over voices is the estimate; an onset inside a paus
 resumes. Times are seconds from the first sample; audio is 16 kHz mono float32.
 
 Confidence (0..1) compares the mean frame distance along the path with that along the path found for the
-time-reversed synthetic speech (same sounds, wrong order). When it is below `min_confidence`, when the
+synthetic words in reverse order (same sounds, wrong sequence). When it is below `min_confidence`, when the
 transcript cannot fit the speech, or when eSpeak NG is missing, the words are spread over the voiced time in
 proportion to their length (method "even") and the result carries a warning saying why.
 """
@@ -21,13 +21,15 @@ import numpy as np
 
 from . import tts
 from .dtw import downsample, multiscale_dtw
-from .features import FRAME_RATE, Activity, frame_time, mfcc_rows, voice_activity
+from .features import FRAME_RATE, Activity, flip_short_runs, frame_time, mfcc_rows, voice_activity
 from .normalize import Token, tokenize
 from .words import AlignmentResult, Word
 
 SAMPLE_RATE = 16_000
 MIN_AUDIO_S = 0.3
-CONFIDENCE_SCALE = 0.12  # relative distance gain over the reversed-speech baseline that counts as certain
+CONFIDENCE_SCALE = 0.12  # relative distance gain over the word-reversed baseline that counts as certain
+SNAP_EDGE_S = 0.1        # an onset this close before a long pause belongs after it
+END_PAUSE_S = 0.15       # a word ends early only where the speech stops for at least this long
 
 
 @dataclass(frozen=True)
@@ -38,13 +40,14 @@ class AlignConfig:
     pause_s: float = 0.25          # pauses longer than this are cut out before DTW ...
     margin_s: float = 0.06         # ... keeping this much silence on each side
     skip_cost: float = 0.9         # per frame skipped at either end (cosine-distance units)
-    gap_cost: float | None = 1.5   # per frame left unmatched inside (None: never)
-    min_confidence: float = 0.3
+    gap_cost: float | None = None  # per frame left unmatched inside (None: never; see `dtw`)
+    min_confidence: float = 0.2
     max_speed: float = 3.5         # fall back when the transcript would need this x eSpeak's tempo
+    warn_speed: float = 2.0        # warn (but align) above this
     min_word_s: float = 0.02       # onsets are at least this far apart where the audio allows
 
     @classmethod
-    def for_language(cls, language: str) -> "AlignConfig":
+    def for_language(cls, language: str) -> AlignConfig:
         """Default settings with eSpeak NG voices of `language` (e.g. "en-us", "en-gb", "de", "fr")."""
         base = language.split("+")[0]
         return cls(voices=tuple(f"{base}+{v}" for v in ("klatt", "m7", "f3")), language=base.split("-")[0])
@@ -75,53 +78,60 @@ def align_words(audio: np.ndarray, text: str, config: AlignConfig = DEFAULT) -> 
     except tts.TTSUnavailable as exc:
         return _even(tokens, act, duration, f"{exc}. Words spread over the speech by length instead.")
     keep_real = _keep_frames(act, config)
-    speed = float(np.median([_voiced_frames(s, config) for s in syntheses])) / len(keep_real)
+    keep_syn = [_keep_frames(voice_activity(s.audio, s.sr), config) for s in syntheses]
+    speed = float(np.median([len(k) for k in keep_syn])) / len(keep_real)
     if speed > config.max_speed:
         return _even(tokens, act, duration, f"The transcript is much longer than the speech ({len(tokens)} words "
                      f"would need {speed:.1f}x a normal tempo): words spread evenly; check the text.")
-    onsets, conf = _dtw_onsets(audio, keep_real, act, syntheses, config)
+    try:
+        onsets, conf = _dtw_onsets(audio, keep_real, act, syntheses, keep_syn, config)
+    except ValueError as exc:  # no warping path (only without skip_cost); say so rather than fail
+        return _even(tokens, act, duration, f"Alignment failed ({exc}): words spread over the speech by length.")
     if conf < config.min_confidence:
         return _even(tokens, act, duration, f"Low alignment confidence ({conf:.2f}): does the transcript match "
                      "the audio? Words spread over the speech by length instead.", conf)
-    return AlignmentResult(_intervals(tokens, onsets, act, duration, config.min_word_s), conf, "dtw", None,
+    warning = None
+    if speed > config.warn_speed:
+        warning = (f"The transcript looks longer than the speech ({speed:.1f}x a normal tempo): words that are "
+                   "not spoken get squeezed between their neighbours.")
+    return AlignmentResult(_intervals(tokens, onsets, act, duration, config.min_word_s), conf, "dtw", warning,
                            {"speed": speed, "voices": [s.voice for s in syntheses]})
 
 
 def _dtw_onsets(audio: np.ndarray, keep_real: np.ndarray, act: Activity, syntheses: list[tts.Synthesis],
-                config: AlignConfig) -> tuple[np.ndarray, float]:
-    """(W,) onsets in seconds (median over voices) and the median confidence."""
+                keep_syn: list[np.ndarray], config: AlignConfig) -> tuple[np.ndarray, float]:
+    """(W,) onsets in seconds (median over voices) and the median confidence. `keep_*`: the frames left
+    after cutting long pauses, of the audio and of each synthetic clip."""
     B = mfcc_rows(audio, SAMPLE_RATE)[keep_real]
     estimates, confs = [], []
-    for syn in syntheses:
-        keep_syn = _keep_frames(voice_activity(syn.audio, syn.sr), config)
-        A = mfcc_rows(syn.audio, syn.sr)[keep_syn]
+    for syn, keep in zip(syntheses, keep_syn):
+        A = mfcc_rows(syn.audio, syn.sr)[keep]
         path, _ = multiscale_dtw(A, B, config.skip_cost, config.gap_cost)
-        confs.append(_confidence(A, B, config.skip_cost))
+        onset_rows = np.clip(np.searchsorted(keep, np.round(syn.starts * FRAME_RATE)), 0, len(A) - 1)
+        confs.append(_confidence(A, B, onset_rows, config.skip_cost))
         first = np.full(len(A), -1, np.int64)  # first reference frame matched to each synthetic frame
         for i, j in path[::-1]:
             first[i] = j
         first = _fill_unmatched(first)
-        onset_rows = np.clip(np.searchsorted(keep_syn, np.round(syn.starts * FRAME_RATE)), 0, len(A) - 1)
         estimates.append(frame_time(keep_real[first[onset_rows]]))
     onsets = np.maximum.accumulate(np.median(np.array(estimates), axis=0))
     return _snap_to_speech(onsets, act), float(np.median(confs))
 
 
-def _confidence(A: np.ndarray, B: np.ndarray, skip_cost: float, factor: int = 4) -> float:
+def _confidence(A: np.ndarray, B: np.ndarray, onset_rows: np.ndarray, skip_cost: float, factor: int = 4,
+                ) -> float:
     """0..1: how much closer the matched frames are on the (coarse) DTW path than on the path found for the
-    time-reversed synthetic speech. Frames skipped at the ends do not count, so a transcript of only part
-    of the speech can still be confident."""
-    Ac, Bc = downsample(A, factor), downsample(B, factor)
+    same synthetic words spoken in reverse order (each word still forward: same sounds, wrong sequence).
+    Frames skipped at the ends do not count, so a transcript of only part of the speech can be confident."""
+    bounds = np.unique(np.concatenate([[0], onset_rows, [len(A)]]))
+    shuffled = np.concatenate([A[a:b] for a, b in zip(bounds[:-1], bounds[1:])][::-1])
     costs = []
-    for query in (Ac, Ac[::-1].copy()):
+    for query in (downsample(A, factor), downsample(shuffled, factor)):
+        Bc = downsample(B, factor)
         path, _ = multiscale_dtw(query, Bc, skip_cost)
         costs.append(float(np.mean(1.0 - np.sum(query[path[:, 0]] * Bc[path[:, 1]], axis=1))))
     cost, null = costs
     return float(np.clip((null - cost) / max(null, 1e-6) / CONFIDENCE_SCALE, 0.0, 1.0))
-
-
-def _voiced_frames(syn: tts.Synthesis, config: AlignConfig) -> int:
-    return len(_keep_frames(voice_activity(syn.audio, syn.sr), config))
 
 
 def _keep_frames(act: Activity, config: AlignConfig) -> np.ndarray:
@@ -148,15 +158,22 @@ def _fill_unmatched(first: np.ndarray) -> np.ndarray:
     return first[idx[np.clip(np.searchsorted(idx, np.arange(len(first))), 0, len(idx) - 1)]]
 
 
-def _snap_to_speech(onsets: np.ndarray, act: Activity) -> np.ndarray:
-    """An onset inside a pause moves to the end of that pause (words start where speech starts)."""
+def _snap_to_speech(onsets: np.ndarray, act: Activity, edge_s: float = SNAP_EDGE_S,
+                    min_pause_s: float = 0.2) -> np.ndarray:
+    """Words start where speech starts: an onset inside a pause, or less than `edge_s` before a pause of at
+    least `min_pause_s` that lies before the next word's onset, moves to the end of that pause."""
     segs = act.segments()
     starts = frame_time(np.array([s for s, _ in segs]))
     ends = frame_time(np.array([e for _, e in segs]))
+    nxt = np.append(onsets[1:], np.inf)
     out = onsets.copy()
     for k, t in enumerate(onsets):
         n = int(np.searchsorted(starts, t, side="right"))  # voiced runs starting at or before t
-        if (n == 0 or t >= ends[n - 1]) and n < len(starts):
+        if n >= len(starts):
+            continue
+        in_pause = n == 0 or t >= ends[n - 1]
+        long_pause_ahead = n > 0 and ends[n - 1] - t < edge_s and starts[n] - ends[n - 1] >= min_pause_s
+        if in_pause or (long_pause_ahead and starts[n] <= nxt[k]):
             out[k] = starts[n]
     return np.maximum.accumulate(out)
 
@@ -179,9 +196,11 @@ def _intervals(tokens: list[Token], onsets: np.ndarray, act: Activity | None, du
     return [Word(t.text, float(s), float(e)) for t, s, e in zip(tokens, starts, ends)]
 
 
-def _speech_end_after(starts: np.ndarray, act: Activity) -> np.ndarray:
-    """For each onset, the end (s) of the voiced run it falls in, or of the next one."""
-    ends = frame_time(np.array([e for _, e in act.segments()]))
+def _speech_end_after(starts: np.ndarray, act: Activity, min_pause_s: float = END_PAUSE_S) -> np.ndarray:
+    """For each onset, where speech next stops for at least `min_pause_s` (s); shorter dips (stop closures)
+    do not end a word."""
+    voiced = flip_short_runs(act.voiced, False, round(min_pause_s * FRAME_RATE))
+    ends = frame_time(np.array([e for _, e in Activity(voiced, act.floor_db, act.speech_db).segments()]))
     return ends[np.clip(np.searchsorted(ends, starts, side="right"), 0, len(ends) - 1)]
 
 

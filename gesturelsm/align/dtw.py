@@ -8,7 +8,8 @@ Steps (di, dj) in {(1,1), (1,2), (2,1), (1,3), (3,1)} bound the local slope to [
 weighted so that every path from (0,0) to (N-1, M-1) carries the same total weight N + M, which removes the
 usual bias towards the diagonal. Open ends: the path may start at (i0, 0) or (0, j0) and end at (N-1, j1) or
 (i1, M-1); every skipped frame costs `skip_cost` (a "garbage" match), which absorbs music or noise before
-and after the speech, and transcript words with no speech at the ends.
+and after the speech, and transcript words with no speech at the ends. Optional gap steps (1, 0) and (0, 1)
+at `gap_cost` per frame leave frames unmatched inside the path.
 """
 from __future__ import annotations
 
@@ -39,20 +40,18 @@ class Band:
         self.width = int((self.hi - self.lo).max())
 
     @classmethod
-    def full(cls, n: int, m: int) -> "Band":
+    def full(cls, n: int, m: int) -> Band:
         return cls(np.zeros(n, np.int64), np.full(n, m, np.int64), m)
-
-    @property
-    def cells(self) -> int:
-        return int((self.hi - self.lo).sum())
 
 
 def dtw(A: np.ndarray, B: np.ndarray, band: Band | None = None, skip_cost: float | None = None,
         gap_cost: float | None = None) -> tuple[np.ndarray, float]:
     """Best path and its cost per unit weight (mean cosine distance along the path, skips included).
+    ValueError when no path fits (only possible without `skip_cost`: lengths more than 3x apart).
 
-    Rows are processed one at a time; accumulated and local costs of the last four rows are kept in
-    full-width buffers (so every step is a slice), the step choices in band coordinates."""
+    Rows are processed one at a time, each vectorised over its band; accumulated and local costs of the
+    last few rows are kept in full-width buffers (so every step is a slice), step choices in band
+    coordinates (int8, N x band width) for the backtrack."""
     n, m = len(A), len(B)
     band = band or Band.full(n, m)
     lo, hi = band.lo, band.hi
@@ -71,8 +70,7 @@ def dtw(A: np.ndarray, B: np.ndarray, band: Band | None = None, skip_cost: float
             pa, pb = int(lo[i - R]), int(hi[i - R])
             D[cur, pa + pad:pb + pad] = np.inf
             C[cur, pa + pad:pb + pad] = np.inf
-        sim = B[a:b] @ A[i].T  # (W,) or (W, V) for several templates: the best one counts
-        c = np.maximum(1.0 - (sim.max(1) if sim.ndim == 2 else sim), 0.0)
+        c = np.maximum(1.0 - B[a:b] @ A[i], 0.0)  # (W,) cosine distances of query row i in its band
         C[cur, a + pad:b + pad] = c
         j = np.arange(a, b)
         if i == 0:  # start at (0, j) after skipping j reference frames
@@ -157,10 +155,10 @@ def band_around(path: np.ndarray, f: int, n: int, m: int, radius: int) -> Band:
     """Fine-level band: the coarse path scaled by f, widened by `radius` fine frames on each side."""
     lo = np.full(n, m, np.int64)
     hi = np.zeros(n, np.int64)
-    for I, J in path:
-        r0, r1 = I * f, min(n, I * f + f)
-        lo[r0:r1] = np.minimum(lo[r0:r1], J * f)
-        hi[r0:r1] = np.maximum(hi[r0:r1], J * f + f)
+    for ci, cj in path:  # coarse cell -> f x f block of fine cells
+        r0, r1 = ci * f, min(n, ci * f + f)
+        lo[r0:r1] = np.minimum(lo[r0:r1], cj * f)
+        hi[r0:r1] = np.maximum(hi[r0:r1], cj * f + f)
     lo = np.minimum.accumulate(lo[::-1])[::-1]  # rows the coarse path did not reach keep a valid window
     hi = np.maximum.accumulate(hi)
     return Band(lo - radius, hi + radius, m)

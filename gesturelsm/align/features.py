@@ -22,14 +22,16 @@ def frame_time(k: np.ndarray | int) -> np.ndarray | float:
     return np.asarray(k) / FRAME_RATE
 
 
-def _frames(y: np.ndarray, sr: int) -> np.ndarray:
-    """(T, win) Hann-windowed frames centred on round(k * sr / FRAME_RATE), T = 1 + len(y) * FRAME_RATE // sr."""
+def _frame_blocks(y: np.ndarray, sr: int, block: int = 2000):
+    """Yield (t, win) Hann-windowed frames, `block` frames at a time (memory stays flat for long audio).
+    Frame k is centred on sample round(k * sr / FRAME_RATE); there are 1 + len(y) * FRAME_RATE // sr."""
     win = int(round(WIN_S * sr))
     n = 1 + len(y) * FRAME_RATE // sr
     pad = np.pad(np.asarray(y, np.float32), (win // 2, win // 2 + sr // FRAME_RATE + 1))
-    starts = np.round(np.arange(n) * (sr / FRAME_RATE)).astype(np.int64)
-    idx = starts[:, None] + np.arange(win)[None, :]
-    return pad[idx] * np.hanning(win + 2)[1:-1].astype(np.float32)
+    window = np.hanning(win + 2)[1:-1].astype(np.float32)
+    for k0 in range(0, n, block):
+        starts = np.round(np.arange(k0, min(n, k0 + block)) * (sr / FRAME_RATE)).astype(np.int64)
+        yield pad[starts[:, None] + np.arange(win)[None, :]] * window
 
 
 @lru_cache(maxsize=8)
@@ -55,25 +57,23 @@ def _dct_matrix(n_in: int, n_out: int) -> np.ndarray:
     return d.astype(np.float32)
 
 
-def mfcc_rows(y: np.ndarray, sr: int = 16_000, n_mfcc: int = N_MFCC, context: int = 0) -> np.ndarray:
-    """(T, n_mfcc * (2 * context + 1)) MFCCs with per-utterance mean/variance normalisation, `context`
-    neighbouring frames on each side stacked, rows scaled to unit length (dot product = cosine similarity)."""
-    fr = _frames(y, sr)
-    n_fft = 1 << int(np.ceil(np.log2(fr.shape[1])))
-    power = np.abs(np.fft.rfft(fr, n_fft, axis=1)) ** 2
-    logmel = np.log(power @ _mel_matrix(sr, n_fft) + 1e-8)
-    m = logmel @ _dct_matrix(N_MELS, n_mfcc)
+def mfcc_rows(y: np.ndarray, sr: int = 16_000, n_mfcc: int = N_MFCC) -> np.ndarray:
+    """(T, n_mfcc) MFCCs (40 mel bands, 50-7600 Hz) with per-utterance mean/variance normalisation, rows
+    scaled to unit length (so a dot product is a cosine similarity)."""
+    logmel = []
+    for fr in _frame_blocks(y, sr):
+        n_fft = 1 << int(np.ceil(np.log2(fr.shape[1])))
+        power = np.abs(np.fft.rfft(fr, n_fft, axis=1)) ** 2
+        logmel.append(np.log(power @ _mel_matrix(sr, n_fft) + 1e-8))
+    m = np.concatenate(logmel) @ _dct_matrix(N_MELS, n_mfcc)
     m = (m - m.mean(0)) / (m.std(0) + 1e-8)
-    if context:
-        padded = np.pad(m, ((context, context), (0, 0)), mode="edge")
-        m = np.concatenate([padded[k:k + len(m)] for k in range(2 * context + 1)], axis=1)
     return (m / np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-8)).astype(np.float32)
 
 
 def frame_db(y: np.ndarray, sr: int = 16_000) -> np.ndarray:
     """(T,) frame energy in dB re full scale (same frames as `mfcc_rows`)."""
-    fr = _frames(y, sr).astype(np.float64)
-    return 10.0 * np.log10(np.mean(fr ** 2, axis=1) * 8.0 / 3.0 + 1e-14)  # 8/3: Hann power loss
+    power = [np.mean(fr.astype(np.float64) ** 2, axis=1) for fr in _frame_blocks(y, sr)]
+    return 10.0 * np.log10(np.concatenate(power) * 8.0 / 3.0 + 1e-14)  # 8/3: Hann power loss
 
 
 @dataclass(frozen=True)
@@ -91,25 +91,26 @@ class Activity:
         return list(zip(np.nonzero(d == 1)[0].tolist(), np.nonzero(d == -1)[0].tolist()))
 
 
-def voice_activity(y: np.ndarray, sr: int = 16_000, min_gap_s: float = 0.12, min_run_s: float = 0.06,
+def voice_activity(y: np.ndarray, sr: int = 16_000, min_gap_s: float = 0.0, min_run_s: float = 0.06,
                    ) -> Activity:
     """Energy detector with an adaptive threshold: 35 % of the way from the noise floor (10th percentile)
-    to the speech level (95th percentile); gaps shorter than `min_gap_s` are filled, bursts shorter than
-    `min_run_s` dropped. Good enough for pauses in speech; music counts as voiced (the DTW skips it)."""
+    to the speech level (95th percentile); bursts up to `min_run_s` are dropped, dips up to `min_gap_s`
+    filled (none by default: the short dips of stop closures and word boundaries are where the aligner
+    snaps onsets to). Good enough for pauses in speech; music counts as voiced (the DTW skips it)."""
     db = frame_db(y, sr)
     floor, loud = float(np.percentile(db, 10)), float(np.percentile(db, 95))
     voiced = db > floor + 0.35 * max(loud - floor, 0.0)
     if loud - floor < 6.0:  # no level contrast: all one level, voiced unless that level is near silence
         voiced[:] = loud > -50.0
-    voiced = _flip_short_runs(voiced, False, int(round(min_gap_s * FRAME_RATE)))
-    voiced = _flip_short_runs(voiced, True, int(round(min_run_s * FRAME_RATE)))
+    voiced = flip_short_runs(voiced, False, int(round(min_gap_s * FRAME_RATE)))
+    voiced = flip_short_runs(voiced, True, int(round(min_run_s * FRAME_RATE)))
     return Activity(voiced, floor, loud)
 
 
-def _flip_short_runs(x: np.ndarray, value: bool, max_len: int) -> np.ndarray:
+def flip_short_runs(x: np.ndarray, value: bool, max_len: int) -> np.ndarray:
     """Flip runs of `value` of at most max_len frames (runs touching either end are kept)."""
     x = x.copy()
-    v = np.concatenate([[not value], x == value, [not value]]).astype(np.int8)
+    v = np.concatenate([[0], (x == value).astype(np.int8), [0]])
     d = np.diff(v)
     for s, e in zip(np.nonzero(d == 1)[0], np.nonzero(d == -1)[0]):
         if e - s <= max_len and s > 0 and e < len(x):

@@ -15,7 +15,7 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .words import Word
+from .words import AlignmentResult, Word
 
 _TOKEN = re.compile(r'"(?:[^"]|"")*"?|![^\n]*|<[A-Za-z]+>|[^\s"]+')  # strings may span lines
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -56,13 +56,17 @@ class _Values:
         self.source = source
         newlines = [m.start() for m in re.finditer("\n", text)]
         self.items: list[tuple[str, int]] = []
+        self.multiline: list[tuple[int, int]] = []  # (first, last) line of strings that span lines
         for m in _TOKEN.finditer(text):
             tok = m.group(0)
             if tok.startswith("!") or _LABEL.match(tok):
                 continue
-            self.items.append((tok, bisect.bisect_right(newlines, m.start()) + 1))
+            line = bisect.bisect_right(newlines, m.start()) + 1
+            if tok.startswith('"') and "\n" in tok:
+                self.multiline.append((line, line + tok.count("\n")))
+            self.items.append((tok, line))
         if self.items and self.items[-1][0].startswith('"') and not _closed(self.items[-1][0]):
-            raise TextGridError(f"{source}, line {self.items[-1][1]}: a string is never closed (missing \")")
+            raise self.error(self.items[-1][1], 'a quoted text is never closed (missing ")')
         self.pos = 0
         self.last_line = len(newlines) + 1
 
@@ -74,6 +78,10 @@ class _Values:
         return tok
 
     def error(self, line: int, msg: str) -> TextGridError:
+        spans = [(a, b) for a, b in self.multiline if a <= line]
+        if spans:  # an unbalanced quote earlier shifts everything after it
+            msg += (f" (the text that starts on line {spans[0][0]} runs on to line {spans[0][1]}: "
+                    "a missing or extra quote there?)")
         return TextGridError(f"{self.source}, line {line}: {msg}")
 
     def number(self, what: str) -> tuple[float, int]:
@@ -123,9 +131,11 @@ def parse_textgrid(text: str, source: str = "TextGrid") -> TextGrid:
     """Parse the text of a TextGrid (long or short format)."""
     if text.lstrip().startswith('File type = "ooBinaryFile"') or text.startswith("ooBinaryFile"):
         raise TextGridError(f"{source}: binary TextGrid; save it from Praat as a text file")
+    if not text.strip():
+        raise TextGridError(f"{source}: empty file, not a TextGrid")
     v = _Values(text, source)
     if not v.items:
-        raise TextGridError(f"{source}, line 1: empty file, not a TextGrid")
+        raise TextGridError(f'{source}, line 1: not a Praat TextGrid (no File type = "ooTextFile" header)')
     file_type, line = v.string("file type")
     if file_type != "ooTextFile":
         raise v.error(line, f'not a Praat text file (file type {file_type!r}, expected "ooTextFile")')
@@ -157,14 +167,14 @@ def _read_tier(v: _Values) -> Tier:
     prev_end = -float("inf")
     for k in range(n):
         if kind == "IntervalTier":
-            start, line = v.number(f"start of interval {k + 1} in tier {name!r}")
+            start, start_line = v.number(f"start of interval {k + 1} in tier {name!r}")
             end, line = v.number(f"end of interval {k + 1} in tier {name!r}")
             text, _ = v.string(f"text of interval {k + 1} in tier {name!r}")
             if end < start:
                 raise v.error(line, f"interval {k + 1} of tier {name!r} ends ({end:g}) before it starts ({start:g})")
             if start < prev_end - _EPS:
-                raise v.error(line, f"interval {k + 1} of tier {name!r} starts at {start:g}, before the previous "
-                                    f"one ends ({prev_end:g})")
+                raise v.error(start_line, f"interval {k + 1} of tier {name!r} starts at {start:g}, before the "
+                                          f"previous one ends ({prev_end:g})")
             prev_end = end
         else:
             start, line = v.number(f"time of point {k + 1} in tier {name!r}")
@@ -204,6 +214,13 @@ def words_from(tg: TextGrid, tier: str | None = None, source: str = "TextGrid") 
 def read_words(path: str | Path, tier: str | None = None) -> list[Word]:
     """Words (non-empty intervals) of a TextGrid file's words tier, in time order."""
     return words_from(read_textgrid(path), tier, Path(path).name)
+
+
+def read_result(path: str | Path, tier: str | None = None) -> AlignmentResult:
+    """A TextGrid upload as an alignment: method "textgrid", confidence 1 (a warning when it has no words)."""
+    words = read_words(path, tier)
+    warning = None if words else f"{Path(path).name} has no words (only silence): using the audio only."
+    return AlignmentResult(words, 1.0 if words else 0.0, "textgrid" if words else "audio-only", warning)
 
 
 def write_textgrid(path: str | Path, words: list[Word], duration: float | None = None, fmt: str = "long",

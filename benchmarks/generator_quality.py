@@ -1,0 +1,91 @@
+"""Does generated motion respond to speech? Held-out audio, every method at equal steps.
+
+    .venv/bin/python benchmarks/generator_quality.py [--checkpoints assets] [--seeds 3]
+
+Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth) and the audio-only takes
+2_scott_0_2_2 and 2_scott_0_3_3, with their TextGrids (all from ../shared). Per method and step count:
+- BC: beat consistency with the speech the motion was generated for (METHOD-FACTS definition, speeds
+  normalised by the ground truth's mean joint speeds on the same body);
+- BC shuffled: the same motion scored against another take's speech beats. Motion that follows its
+  speech scores higher on its own audio than on foreign audio;
+- speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2).
+Numbers are means over clips and seeds; ground truth is shown where it exists.
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import torch
+
+REPO = Path(__file__).resolve().parents[1]
+BEAT2 = REPO.parent / "shared" / "data" / "beat2"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--checkpoints", default=None)
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--steps", type=int, nargs="+", default=[1, 2, 4, 8])
+    ap.add_argument("--cfg", type=float, default=2.0)
+    args = ap.parse_args()
+    from gesturelsm.body import load_body_model
+    from gesturelsm.data.beat2 import Beat2Dataset
+    from gesturelsm.metrics.beat import audio_beats, beat_consistency, joint_speed
+    from gesturelsm.motion.regions import REGIONS
+    from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.align.words import Word
+
+    if not BEAT2.exists():
+        raise SystemExit(f"needs the real BEAT2 sample at {BEAT2}")
+    body = load_body_model()
+    pipe = GesturePipeline.from_pretrained(args.checkpoints)
+    ds = Beat2Dataset(BEAT2)
+    take = ds.load("2_scott_0_1_1")
+    T = take.motion.num_frames
+    cut = int(round(0.8 * T)) // 4 * 4
+    gt_train = body.joints(take.motion.poses[:cut], take.motion.trans[:cut])
+    mean_speed = joint_speed(gt_train).mean(0)                                       # (55,) on this body
+    t0 = cut / 30
+    clips = [("2_scott_0_1_1 last 20%", take.audio[int(round(cut * 16000 / 30)):],
+              [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0],
+              body.joints(take.motion.poses[cut:], take.motion.trans[cut:]))]
+    for name in ds.audio_only_names:
+        t = ds.load(name)
+        clips.append((name, t.audio, t.words, None))
+    beats = [audio_beats(c[1]) for c in clips]
+    upper = list(REGIONS["upper"].joints)
+
+    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float]:
+        bc = beat_consistency(j, beats=beats[i], mean_speed=mean_speed)
+        other = beats[(i + 1) % len(clips)]
+        bc_sh = beat_consistency(j, beats=other, mean_speed=mean_speed)
+        sp = joint_speed(j)[:, upper].mean()
+        acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, upper].mean()
+        return bc, bc_sh, sp, acc
+
+    rows = []
+    gt = stats(clips[0][3], 0)
+    rows.append(("ground truth (clip 1 only)", "-", *gt))
+    plan = [(m, s) for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods for s in args.steps]
+    if "ddim" in pipe.methods:
+        plan.append(("ddim", 20))
+    speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in clips]
+    for method, steps in plan:
+        vals = []
+        for i, sp in enumerate(speech):
+            for seed in range(args.seeds):
+                res = pipe.generate(sp, steps=steps, cfg=args.cfg, seed=seed, method=method)
+                vals.append(stats(body.joints(res.motion.poses, res.motion.trans), i))
+        rows.append((method, steps, *np.mean(vals, axis=0)))
+    print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds; CFG {args.cfg}\n")
+    print("| method | steps | BC (own speech) | BC (other speech) | upper-body speed (m/s) | jitter (m/s^2) |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:.3f} | {r[5]:.2f} |")
+
+
+if __name__ == "__main__":
+    torch.set_num_threads(2)
+    main()
