@@ -121,7 +121,7 @@ def main() -> None:
         bodies = {"mannequin (7,534 v)": load_body_model(),
                   "SMPL-X-sized (10,475 v)": load_body_model(build_10k_body(Path(tmp) / "SMPLX_10K.npz"))}
         print(f"backend {backend}, {cores} cores, load average {os.getloadavg()[0]:.2f}, motion: {source}\n")
-        print(f"| body | bodies | size | fps | cpu ms/frame | fps if idle |")
+        print("| body | bodies | size | fps | cpu ms/frame | fps if idle |")
         print("|---|---|---|---|---|---|")
         for name, body in bodies.items():
             for n in (1, 3):

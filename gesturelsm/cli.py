@@ -16,6 +16,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.align.cli",
     "gesturelsm.tokenizer.cli",
     "gesturelsm.generator.cli",
+    "gesturelsm.render.cli", "gesturelsm.export.cli",
 )
 
 

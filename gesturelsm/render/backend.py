@@ -3,7 +3,7 @@
 PyOpenGL fixes its platform when `OpenGL` is first imported, from the environment variable
 `PYOPENGL_PLATFORM`; pyrender then opens an OSMesa or EGL context from the same variable. So
 `select_platform()` must run before `pyrender`/`OpenGL` are imported; every function of this package
-that renders calls it first (importing `gesturelsm.render` alone imports no OpenGL).
+that renders calls it first, and importing `gesturelsm.render` calls it (without importing OpenGL).
 
 Order of choice:
 1. `PYOPENGL_PLATFORM` already set (egl | osmesa): used as is.
@@ -79,7 +79,10 @@ def _order() -> tuple[str, ...]:
 
 @lru_cache(maxsize=1)
 def select_platform() -> str:
-    """Set PYOPENGL_PLATFORM (and PYGLET_HEADLESS) once per process and return the backend name."""
+    """Set PYOPENGL_PLATFORM (and PYGLET_HEADLESS) once per process and return the backend name.
+
+    Runs when `gesturelsm.render` is imported (errors are kept for the first render) and again, cached,
+    before each renderer is made."""
     os.environ.setdefault("PYGLET_HEADLESS", "true")
     chosen = os.environ.get("PYOPENGL_PLATFORM", "").lower()
     if chosen:
@@ -93,13 +96,21 @@ def select_platform() -> str:
     forced = os.environ.get("GESTURELSM_GL", "").lower()
     if forced and forced not in BACKENDS:
         raise RenderError(f"GESTURELSM_GL={forced!r}: use 'osmesa' or 'egl'")
+    name = choose_backend((forced,) if forced else _order())
+    os.environ["PYOPENGL_PLATFORM"] = name
+    return name
+
+
+def choose_backend(candidates: tuple[str, ...], probes: dict | None = None) -> str:
+    """The first candidate whose probe passes; else a RenderError naming each missing library and package."""
+    probes = probes or _PROBES
     failures = []
-    for name in (forced,) if forced else _order():
+    for name in candidates:
         try:
-            _PROBES[name]()
+            probes[name]()
         except (OSError, AttributeError) as exc:
             failures.append(f"{name}: {LIBRARIES[name]} unusable ({exc}); install: apt-get install {PACKAGES[name]}")
             continue
-        os.environ["PYOPENGL_PLATFORM"] = name
         return name
-    raise RenderError("No offscreen OpenGL backend works on this machine.\n  " + "\n  ".join(failures))
+    raise RenderError("No offscreen OpenGL backend works on this machine (rendering needs OSMesa or EGL "
+                      "from Mesa).\n  " + "\n  ".join(failures))

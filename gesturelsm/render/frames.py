@@ -118,13 +118,22 @@ def _hull(points: np.ndarray) -> np.ndarray:
 
 
 def _layout(seqs: list[MotionSequence], body, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
-    pts, floor_y = [], np.inf
-    for s, v in zip(seqs, _sample_vertices(seqs, body)):
+    samples = _sample_vertices(seqs, body)                        # per motion (k, V, 3)
+    floor_y = min(float(v[..., 1].min()) for v in samples)
+    pts = []
+    for s, v in zip(seqs, samples):
         p = v.reshape(-1, 3).astype(np.float64)
-        floor_y = min(floor_y, float(p[:, 1].min()))
         if style.framing == "upper":
             hips = float(body.joints(s.poses[:1], s.trans[:1], s.betas)[0, 0, 1])
             p = p[p[:, 1] > hips - 0.12]
+        elif style.shadow and style.floor != "none":   # keep each frame's contact shadow around the feet in view
+            feet = v[:, :, [0, 2]] + np.where(v[:, :, 1:2] < floor_y + 0.05, 0.0, np.nan)
+            with warnings.catch_warnings():                         # frames with no foot down: all NaN
+                warnings.simplefilter("ignore", RuntimeWarning)
+                lo, hi = np.nanmin(feet, 1) - 0.12, np.nanmax(feet, 1) + 0.12  # (k, 2)
+            corners = [np.stack([a[:, 0], np.full(len(a), floor_y), b[:, 1]], 1)
+                       for a in (lo, hi) for b in (lo, hi)]
+            p = np.concatenate([p] + [c[np.isfinite(c).all(1)] for c in corners])
         pts.append(_hull(p))
     W, H = style.size
     cam = Camera.fit(np.concatenate(pts), W, H, style.yfov_deg, style.elevation_deg, style.margin,

@@ -79,7 +79,10 @@ def make_label(lines: list[str], tile_width: int, px: int, dark_background: bool
     h = int(sum(heights) + gap * (len(lines) - 1)) + 2 * pad
     img = Image.new("RGBA", (w, h), (0, 0, 0, 0))
     d = ImageDraw.Draw(img)
-    box, ink = ((20, 22, 26, 190), (245, 245, 245, 255)) if dark_background else ((255, 255, 255, 205), (25, 27, 31, 255))
+    if dark_background:
+        box, ink = (20, 22, 26, 190), (245, 245, 245, 255)
+    else:
+        box, ink = (255, 255, 255, 205), (25, 27, 31, 255)
     d.rounded_rectangle((0, 0, w - 1, h - 1), radius=max(2, pad), fill=box)
     y = pad
     for s, f, hh in zip(lines, fonts, heights):

@@ -1,26 +1,26 @@
-"""The offscreen pyrender scene: N posed bodies, a studio floor, contact shadows, two lights, one camera.
+"""The offscreen pyrender scene: N posed bodies, a studio floor, contact shadows, three lights, one camera.
 
 Speed notes (Mesa llvmpipe on 2 cores; pyrender 0.1.45 is pinned, so its internals are relied on here):
 * pyrender uploads a primitive's vertex buffer once; setting `primitive.positions` later does nothing. Each
   frame the body's interleaved [position | normal] buffer (pyrender's layout when a primitive has
   positions and normals only) is re-uploaded with one `glBufferSubData`: no new mesh, no new VAO.
-* Several bodies are drawn as *tiles*: the bodies are N meshes of one scene, all at their own place; for
-  tile i only mesh i (and its shadow) is visible. Each tile is one render pass of width x height through
-  the same camera. A single wide scene (bodies placed side by side, one pass of N*width x height) shades
-  the same number of pixels and vertices (both costs scale with N either way), so it saves only pyrender's
-  per-pass Python work (~2 ms), while tiles give every method the identical view (no perspective
-  difference between a body in the middle and one at the side) and need no re-placement of the motions.
-* The floor is unlit (black base colour + an emissive texture pre-compensated for pyrender's
-  sRGB-decode / gamma-2.2-encode pair), so it shows exactly the style's colours and fades into the
-  background without a visible edge. The contact shadow is a small alpha texture per body (a
-  height-weighted, blurred footprint of its vertices), re-uploaded each frame with `glTexSubImage2D`
-  and drawn as a transparent quad just above the floor; pyrender draws transparent primitives after
-  opaque ones, so it darkens the floor and is hidden behind the feet.
+* Shading is ours (`shaders.py`: Lambert + Blinn-Phong, ~5x cheaper than pyrender's PBR on llvmpipe), and
+  so is the shader-program cache (pyrender's recompiled every program on every draw with OSMesa).
+* Side by side = *tiles*: the N bodies are N meshes of one scene, each at its own place; for tile i only
+  mesh i and its shadow are visible, and each tile is one pass of width x height through the same camera.
+  Measured against one wide scene (bodies moved 1.2 m apart, one pass of N*width x height): 43 ms vs 43 ms
+  CPU per 3-body 512 x 512 frame: llvmpipe's cost is shaded pixels and triangles, equal either way. Tiles
+  win on what they show: every method is seen from the identical viewpoint (in one wide perspective view
+  the outer bodies are seen from the side), the framing does not depend on how far apart bodies are put,
+  and shadows of neighbours cannot overlap.
+* The floor is unlit (black base colour + an emissive texture, which our shader shows as stored), so it
+  shows exactly the style's colours and fades into the background without a visible edge. The contact
+  shadow is a small alpha texture per body (a height-weighted, blurred footprint of its vertices),
+  re-uploaded each frame with `glTexSubImage2D` and drawn as a transparent quad 2 mm above the floor;
+  pyrender draws transparent primitives after opaque ones, so it darkens the floor and hides behind feet.
 * With OSMesa the depth buffer is not read back (pyrender's OffscreenRenderer always reads it).
-* pyrender keys its shader-program cache on `OpenGL.contextdata.getContext()`, which with PyOpenGL 3.1.10's
-  OSMesa returns a new pointer object on every call: every draw call recompiled its shaders (~7 ms each,
-  3 per frame) and the cache grew without bound. `_StableProgramCache` keys on the shaders and defines
-  only (one renderer = one context).
+* Antialiasing: OSMesa has none (EGL's pyrender path has 4x MSAA); `RenderStyle(supersample=2)` renders
+  at twice the size and box-filters down (about 3x the cost) for final-quality videos.
 """
 from __future__ import annotations
 
@@ -31,16 +31,10 @@ import numpy as np
 
 from .backend import RenderError, select_platform
 from .camera import Camera
+from .shaders import program_cache
 from .style import RenderStyle
 
 SHADOW_TEXELS = 64
-
-
-def _encode_unlit(c: np.ndarray) -> np.ndarray:
-    """sRGB value to store in an emissive texture so pyrender outputs exactly `c` (it decodes the texture
-    as sRGB and encodes the output with gamma 1/2.2)."""
-    lin = np.asarray(c, np.float64) ** 2.2
-    return np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
 
 
 def vertex_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -87,7 +81,7 @@ def _floor_texture(style: RenderStyle, size_m: float, texels: int = 1024) -> np.
     fade = np.clip((r - 0.30 * size_m / 2) / (0.62 * size_m / 2), 0.0, 1.0)
     fade = fade * fade * (3 - 2 * fade)                                        # smoothstep to the background
     col = col + fade[..., None] * (np.asarray(style.background) - col)
-    return np.round(_encode_unlit(col) * 255).astype(np.uint8)
+    return np.round(col * 255).astype(np.uint8)
 
 
 class ContactShadow:
@@ -124,29 +118,6 @@ class ContactShadow:
         return out
 
 
-def _stable_program_cache():
-    from pyrender.shader_program import ShaderProgramCache
-
-    class _StableProgramCache(ShaderProgramCache):
-        def __init__(self) -> None:
-            super().__init__()
-            self._stable: dict = {}
-
-        def get_program(self, vertex_shader, fragment_shader, geometry_shader=None, defines=None):
-            key = (vertex_shader, fragment_shader, geometry_shader, tuple(sorted((defines or {}).items())))
-            program = self._stable.get(key)
-            if program is None:
-                program = super().get_program(vertex_shader, fragment_shader, geometry_shader, defines)
-                self._stable[key] = program
-            return program
-
-        def clear(self) -> None:
-            super().clear()
-            self._stable = {}
-
-    return _StableProgramCache()
-
-
 class SceneRenderer:
     """Renders tiles of N bodies (same faces) through one camera. Not thread-safe; one GL context."""
 
@@ -159,10 +130,11 @@ class SceneRenderer:
         self._GL, self._pyrender = GL, pyrender
         self.style, self.camera = style, camera
         self.num_bodies = num_bodies
-        W, H = style.size
+        self.ss = ss = int(style.supersample)
+        W, H = style.width * ss, style.height * ss                    # rendered size (supersampled)
         if (camera.width, camera.height) != (W, H):
             camera = camera.resized(W, H)
-            self.camera = camera
+        self.camera = camera
         try:
             self._r = pyrender.OffscreenRenderer(W, H)
         except Exception as exc:  # context creation: missing driver pieces, no device, ...
@@ -172,7 +144,7 @@ class SceneRenderer:
                               f"({type(exc).__name__}: {exc}); try GESTURELSM_GL="
                               f"{'egl' if self.backend == 'osmesa' else 'osmesa'} or install "
                               f"{PACKAGES[self.backend]}") from None
-        self._r._renderer._program_cache = _stable_program_cache()
+        self._r._renderer._program_cache = program_cache()
         self._faces = np.asarray(faces, np.int64)
         self._normals = NormalComputer(self._faces, num_vertices)
         self.scene = scene = pyrender.Scene(bg_color=[*map(float, style.background), 1.0],
@@ -239,8 +211,8 @@ class SceneRenderer:
         # texture row 0 is the image top = v 1 (pyrender flips on upload): v = 1 at z = -h
         pos = np.array([[-h, 0, -h], [h, 0, -h], [h, 0, h], [-h, 0, h]], np.float32)
         uv = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], np.float32)
-        prim = pr.Primitive(positions=pos, normals=np.tile([0, 1, 0], (4, 1)).astype(np.float32), texcoord_0=uv,
-                            indices=np.array([[0, 2, 1], [0, 3, 2]], np.uint32), material=mat)
+        prim = pr.Primitive(positions=pos, texcoord_0=uv, material=mat,   # no normals: unlit, cheapest path
+                            indices=np.array([[0, 2, 1], [0, 3, 2]], np.uint32))
         pose = np.eye(4)
         pose[:3, 3] = [target[0], floor_y, target[2]]
         self.scene.add(pr.Mesh([prim]), pose=pose)
@@ -293,14 +265,13 @@ class SceneRenderer:
                            GL.GL_UNSIGNED_BYTE, np.ascontiguousarray(img))
         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
 
-    def render(self, vertices: Sequence[np.ndarray], centers_xz: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
+    def render(self, vertices: Sequence[np.ndarray],
+               centers_xz: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
         """vertices: one (V, 3) array per body; centers_xz: where each body's shadow is centred (pelvis x, z).
         Returns one (H, W, 3) uint8 image per body."""
         if len(vertices) != self.num_bodies:
             raise ValueError(f"expected {self.num_bodies} bodies, got {len(vertices)}")
-        pr = self._pyrender
-        r = self._r
-        r._platform.make_current()
+        self._r._platform.make_current()
         for i, v in enumerate(vertices):
             self._upload_body(i, v)
             if self._shadows:
@@ -319,11 +290,17 @@ class SceneRenderer:
         r = self._r
         if r._platform.supports_framebuffers():
             color, _ = r.render(self.scene)
-            return np.ascontiguousarray(color[..., :3])
-        r._platform.make_current()
-        r._renderer.viewport_width, r._renderer.viewport_height = r.viewport_width, r.viewport_height
-        r._renderer.render(self.scene, self._pyrender.RenderFlags.NONE)
-        return r._renderer.read_color_buf()[..., :3].copy()
+            img = color[..., :3]
+        else:
+            r._platform.make_current()
+            r._renderer.viewport_width, r._renderer.viewport_height = r.viewport_width, r.viewport_height
+            r._renderer.render(self.scene, self._pyrender.RenderFlags.NONE)
+            img = r._renderer.read_color_buf()[..., :3]
+        if self.ss > 1:                                               # box-filter down to the tile size
+            k = self.ss
+            h, w = img.shape[0] // k, img.shape[1] // k
+            img = img.reshape(h, k, w, k, 3).mean((1, 3)).round().astype(np.uint8)
+        return np.ascontiguousarray(img)
 
     def close(self) -> None:
         r, self._r = getattr(self, "_r", None), None

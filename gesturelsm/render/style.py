@@ -53,6 +53,7 @@ class RenderStyle:
     margin: float = 0.05                        # free border, fraction of the half-frame
     framing: str = "full"                       # "full" body (feet to raised hands) | "upper" (hips up)
     label_px: int = 0                           # label font size in pixels; 0 = automatic (height / 30)
+    supersample: int = 1                        # render k times larger and average down (antialiasing)
 
     def __post_init__(self) -> None:
         w, h = (int(v) for v in self.size)
@@ -66,6 +67,8 @@ class RenderStyle:
             raise ValueError(f"floor {self.floor!r}: use 'grid', 'plain' or 'none'")
         if self.framing not in ("full", "upper"):
             raise ValueError(f"framing {self.framing!r}: use 'full' or 'upper'")
+        if self.supersample not in (1, 2, 3):
+            raise ValueError(f"supersample {self.supersample}: use 1, 2 or 3")
         if not 5.0 <= self.yfov_deg <= 90.0:
             raise ValueError(f"yfov_deg {self.yfov_deg} out of 5..90")
 
@@ -85,7 +88,7 @@ STYLES: dict[str, RenderStyle] = {
     "default": RenderStyle(),
     "plain": RenderStyle(floor="plain"),
     "dark": RenderStyle(background=(0.12, 0.13, 0.15), floor_color=(0.17, 0.18, 0.20),
-                        grid_color=(0.27, 0.28, 0.31), body_color=(0.78, 0.76, 0.72)),
+                        grid_color=(0.27, 0.28, 0.31), body_color=(0.62, 0.60, 0.56)),
     "upper": RenderStyle(framing="upper"),
 }
 

@@ -1,0 +1,62 @@
+"""`gesturelsm export`: a motion npz -> BVH, animated GLB, OpenPose keypoints, or a clean BEAT2 npz.
+
+    gesturelsm export take.npz --bvh take.bvh --glb take.glb --keypoints take_keypoints/
+    gesturelsm export take.npz --keypoints take_keypoints.json --size 768x512   # one file, all frames
+    gesturelsm export take.npz --npz clean.npz                                    # BEAT2 / Blender add-on npz
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / BEAT2 npz",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("motion", help="BEAT2-layout .npz motion file")
+    p.add_argument("--bvh", help="write a BVH (SMPL-X skeleton, 30 fps)")
+    p.add_argument("--glb", help="write an animated, skinned GLB (glTF 2.0)")
+    p.add_argument("--keypoints", help="write OpenPose 2D keypoints: a folder (one JSON per frame) or FILE.json")
+    p.add_argument("--npz", help="write a checked BEAT2-layout npz")
+    p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
+    p.add_argument("--units", choices=["cm", "m"], default="cm", help="BVH units (default cm)")
+    p.add_argument("--names", choices=["animator", "smplx"], default="animator",
+                   help="joint names: animator (Hips, LeftArm, ...) or smplx (pelvis, left_shoulder, ...)")
+    p.add_argument("--size", default="512x512", help="keypoint image size, as the render's (default 512x512)")
+    p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style` "
+                   "(default | upper ...)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..cli import UserError
+    from ..motion.sequence import MotionSequence
+    from . import export_bvh, export_glb, export_keypoints, export_npz
+
+    if not any((args.bvh, args.glb, args.keypoints, args.npz)):
+        raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --npz")
+    if not Path(args.motion).exists():
+        raise UserError(f"motion file not found: {args.motion}")
+    seq = MotionSequence.load(args.motion)
+    body = None
+    if args.bvh or args.glb or args.keypoints:
+        from ..render.frames import resolve_body
+
+        body = resolve_body(args.model)
+    done = []
+    if args.npz:
+        done.append(export_npz(seq, args.npz))
+    if args.bvh:
+        done.append(export_bvh(seq, args.bvh, body=body, units=args.units, names=args.names))
+    if args.glb:
+        done.append(export_glb(seq, args.glb, body=body, names=args.names))
+    if args.keypoints:
+        from ..render.style import STYLES, parse_size
+
+        if args.style not in STYLES:
+            raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
+        done.append(export_keypoints(seq, args.keypoints, size=parse_size(args.size), body=body,
+                                     style=STYLES[args.style]))
+    for p in done:
+        print(f"wrote {p}")
+    return 0

@@ -1,0 +1,123 @@
+"""`gesturelsm render`: motion npz file(s) + speech -> mp4 (side by side when several).
+
+    gesturelsm render out.npz --audio speech.wav --out out.mp4
+    gesturelsm render lsm.npz rf.npz ddim.npz gt.npz --audio speech.wav --out cmp.mp4 \\
+        --labels "GestureLSM 8 steps" "rectified flow 8" "DDIM 20" "ground truth" --gen-times 0.4 0.4 2.1 -
+    gesturelsm render out.npz --audio speech.wav --out frame.png --frame 120     # one still frame
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser("render", help="render motion(s) with the speech to an mp4 (offscreen, CPU)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("motions", nargs="+", help="BEAT2-layout .npz motion file(s); several are shown side by side")
+    p.add_argument("--audio", help="speech file (wav, flac, mp3, ...) played with the video; omit for silence")
+    p.add_argument("--out", required=True, help="output .mp4 (or .png with --frame)")
+    p.add_argument("--labels", nargs="+", help="one label per motion (default: file names when several)")
+    p.add_argument("--no-labels", action="store_true", help="draw no labels")
+    p.add_argument("--gen-times", nargs="+", metavar="SECONDS",
+                   help="generation time per motion, shown under its label ('-' for none)")
+    p.add_argument("--size", default="512x512", help="one body's tile, WIDTHxHEIGHT (default 512x512)")
+    p.add_argument("--style", default="default", help="default | plain | dark | upper (hips up, larger face)")
+    p.add_argument("--background", help="background colour, e.g. '#ffffff'")
+    p.add_argument("--floor", choices=["grid", "plain", "none"], help="floor look (default grid)")
+    p.add_argument("--supersample", type=int, choices=[1, 2, 3], help="antialiasing: render k x larger and "
+                   "average down (2 = smoother edges, ~3x slower)")
+    p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
+    p.add_argument("--frame", type=int, help="write only this frame as a PNG")
+    p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def _gen_times(values: list[str] | None) -> list[float | None] | None:
+    if values is None:
+        return None
+    out: list[float | None] = []
+    for v in values:
+        if v in ("-", "none", ""):
+            out.append(None)
+            continue
+        try:
+            out.append(float(v.rstrip("s")))
+        except ValueError:
+            raise ValueError(f"--gen-times: {v!r} is not a number of seconds (use '-' for none)") from None
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from ..cli import UserError
+    from . import STYLES, RenderError, parse_size, render_frames, render_video
+    from .frames import RenderWarning
+
+    if args.style not in STYLES:
+        raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
+    style = replace(STYLES[args.style], size=parse_size(args.size))
+    if args.background:
+        style = replace(style, background=args.background)
+    if args.floor:
+        style = replace(style, floor=args.floor)
+    if args.supersample:
+        style = replace(style, supersample=args.supersample)
+    # default labels: file names when several motions are compared; none for a single one (its framing
+    # then equals the keypoint export's camera)
+    labels = None if args.no_labels else (args.labels or ([Path(m).stem for m in args.motions]
+                                                          if len(args.motions) > 1 else None))
+    if labels is not None and len(labels) != len(args.motions):
+        raise UserError(f"{len(labels)} labels for {len(args.motions)} motions: give one --labels entry per motion")
+    gen = _gen_times(args.gen_times)
+    if gen is not None and len(gen) != len(args.motions):
+        raise UserError(f"{len(gen)} --gen-times for {len(args.motions)} motions: give one per motion ('-' for none)")
+    for m in args.motions:
+        if not Path(m).exists():
+            raise UserError(f"motion file not found: {m}")
+    if args.audio is None and args.frame is None:
+        print("note: no --audio given, the video will be silent", file=sys.stderr)
+    out = Path(args.out)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RenderWarning)
+        try:
+            if args.frame is not None:
+                import imageio.v3 as iio
+
+                if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
+                    raise UserError("--frame writes an image: give --out NAME.png")
+                frame = render_frames(args.motions, [args.frame], body=args.model, style=style, labels=labels,
+                                      gen_seconds=gen)[0]
+                out.parent.mkdir(parents=True, exist_ok=True)
+                iio.imwrite(out, frame)
+            else:
+                bar = None
+                if not args.quiet:
+                    from tqdm import tqdm
+
+                    bar = tqdm(total=1000, dynamic_ncols=True, mininterval=0.5,
+                               bar_format="render {percentage:3.0f}%|{bar}| {desc} [{elapsed}<{remaining}]")
+
+                def progress(fraction: float, message: str) -> None:
+                    if bar is not None:
+                        bar.n = int(fraction * 1000)
+                        bar.set_description_str(message, refresh=False)
+                        bar.refresh()
+
+                try:
+                    render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,
+                                 gen_seconds=gen, progress=progress, crf=args.crf)
+                finally:
+                    if bar is not None:
+                        bar.close()
+        except RenderError as exc:
+            raise UserError(str(exc)) from None
+        for w in caught:
+            if issubclass(w.category, RenderWarning):
+                print(f"note: {w.message}", file=sys.stderr)
+    print(f"wrote {out}")
+    return 0
