@@ -65,6 +65,24 @@ def main() -> None:
         acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, upper].mean()
         return bc, bc_sh, sp, acc
 
+    seams: dict[str, list[tuple[float, float, float, float]]] = {}
+
+    def seam_stats(j: np.ndarray, method: str) -> None:
+        """Per-frame max joint speed change (m/s per frame) near window borders vs inside windows."""
+        from gesturelsm.generator.sampling import window_layout
+
+        g = pipe.generators[method].config
+        speed = np.linalg.norm(np.diff(j, axis=0), axis=-1) * 30                        # (T-1, 55)
+        jump = np.abs(np.diff(speed, axis=0)).max(axis=1)                              # (T-2,)
+        borders = [4 * (st + g.seed_latents // 2) for st in window_layout(len(j) // 4, g.window_latents,
+                                                                           g.seed_latents)[1:]]
+        near = np.zeros(len(jump), bool)
+        for b in borders:
+            near[max(0, b - 8):b + 8] = True
+        if near.any() and (~near).any():
+            seams.setdefault(method, []).append((jump[near].max(), jump[~near].max(), jump[near].mean(),
+                                                 jump[~near].mean()))
+
     rows = []
     gt = stats(clips[0][3], 0)
     rows.append(("ground truth (clip 1 only)", "-", *gt))
@@ -77,13 +95,23 @@ def main() -> None:
         for i, sp in enumerate(speech):
             for seed in range(args.seeds):
                 res = pipe.generate(sp, steps=steps, cfg=args.cfg, seed=seed, method=method)
-                vals.append(stats(body.joints(res.motion.poses, res.motion.trans), i))
+                j = body.joints(res.motion.poses, res.motion.trans)
+                vals.append(stats(j, i))
+                if steps == 8 or (method == "ddim" and steps == 20):
+                    seam_stats(j, method)
         rows.append((method, steps, *np.mean(vals, axis=0)))
     print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds; CFG {args.cfg}\n")
     print("| method | steps | BC (own speech) | BC (other speech) | upper-body speed (m/s) | jitter (m/s^2) |")
     print("|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r[0]} | {r[1]} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:.3f} | {r[5]:.2f} |")
+    print("\nWindow seams (frame-to-frame change of joint speed, m/s; +-8 frames around each window border vs the")
+    print("rest; 8 steps, DDIM 20):\n")
+    print("| method | max at borders | max inside | mean at borders | mean inside |")
+    print("|---|---|---|---|---|")
+    for m, v in seams.items():
+        a = np.array(v)
+        print(f"| {m} | {a[:, 0].max():.3f} | {a[:, 1].max():.3f} | {a[:, 2].mean():.3f} | {a[:, 3].mean():.3f} |")
 
 
 if __name__ == "__main__":
