@@ -33,7 +33,7 @@ class GenTrainConfig:
     cond_drop: float = 0.1           # classifier-free guidance dropout
     text_drop: float = 0.2           # transcript dropout (trains audio-only mode)
     neutral_seed_p: float = 0.1      # windows started from the neutral seed
-    ema: float = 0.999               # EMA weights are what gets exported
+    ema: float = 0.999               # EMA weights are what gets exported (decay warms up: see ema_decay)
     ema_teacher: bool = False        # shortcut targets from the EMA network (Shortcut Models) or online
     time_sampler: str = "beta"       # gesturelsm: beta | uniform | logit_normal
     seed: int = 0
@@ -49,6 +49,12 @@ def _dist() -> tuple[int, int]:
     if dist.is_initialized():
         return dist.get_rank(), dist.get_world_size()
     return 0, 1
+
+
+def ema_decay(step: int, target: float) -> float:
+    """EMA decay after `step` updates: (1 + step) / (10 + step), capped at `target`. A fixed 0.999 from the
+    first step would leave 0.999^n of the random initial weights in the average (30 % after 1200 steps)."""
+    return min(target, (1 + step) / (10 + step))
 
 
 @torch.no_grad()
@@ -133,8 +139,9 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
         torch.nn.utils.clip_grad_norm_(model.parameters(), tc.grad_clip)
         opt.step()
         with torch.no_grad():
+            decay = ema_decay(step, tc.ema)
             for pe, pm in zip(ema.parameters(), model.parameters()):
-                pe.lerp_(pm, 1 - tc.ema)
+                pe.lerp_(pm, 1 - decay)
         step += 1
         bar.update(1)
         if step % 10 == 0:

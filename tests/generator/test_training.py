@@ -105,3 +105,13 @@ def test_distributed_training_with_two_cpu_processes(tmp_path, beat2_maker):
     assert proc.returncode == 0, proc.stderr[-3000:]
     model = GestureGenerator.load(tmp_path / "run" / "gesturelsm.safetensors")
     assert model.meta["step"] == "3" or model.meta["step"] == 3
+
+
+def test_ema_forgets_the_initial_weights_in_short_runs():
+    from gesturelsm.generator.train import ema_decay
+
+    assert ema_decay(0, 0.999) == 0.1 and ema_decay(10_000, 0.999) == 0.999
+    w = 1.0  # share of the initial weights left in the average after n updates
+    for step in range(1, 1001):
+        w *= ema_decay(step, 0.999)
+    assert w < 0.01
