@@ -81,7 +81,7 @@ class GesturePipeline:
 
     @classmethod
     def from_pretrained(cls, path: str | Path | None = None, device: str = "cpu", methods: list[str] | None = None,
-                        max_seconds: float = 600.0) -> "GesturePipeline":
+                        max_seconds: float = 600.0, warm_up: bool = True) -> "GesturePipeline":
         """`path`: a folder with tokenizer/<region>.safetensors and generator/<method>.safetensors
         (default: the shipped assets/)."""
         from .generator.model import GestureGenerator
@@ -100,7 +100,19 @@ class GesturePipeline:
                 gens[p.stem] = GestureGenerator.load(p).to(device)
         if not gens:
             raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
-        return cls(tokenizers, gens, device, max_seconds)
+        pipe = cls(tokenizers, gens, device, max_seconds)
+        if warm_up:
+            pipe.warm_up()
+        return pipe
+
+    def warm_up(self) -> None:
+        """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
+        (~3 s) are not counted in the first request's feature time."""
+        from .features.audio import audio_channels
+        from .features.text import TextEmbedder
+
+        TextEmbedder.shared().available  # noqa: B018 (loads the model)
+        audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
 
     @property
     def methods(self) -> list[str]:
