@@ -10,6 +10,10 @@ Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth
   speech scores higher on its own audio than on foreign audio;
 - speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2).
 Numbers are means over clips and seeds; ground truth is shown where it exists.
+
+The paper's metrics (FGD, BC beside ground truth's, L1 diversity, face error, jitter, foot skating, time) over
+methods x steps x CFG are `gesturelsm eval` (gesturelsm/evaluation/); this script keeps the two checks that
+command does not make: BC against foreign speech, and window seams.
 """
 from __future__ import annotations
 

@@ -17,6 +17,8 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.tokenizer.cli",
     "gesturelsm.generator.cli",
     "gesturelsm.render.cli", "gesturelsm.export.cli",
+    "gesturelsm.study.cli",
+    "gesturelsm.evaluation.cli",
 )
 
 

@@ -1,4 +1,20 @@
-"""Evaluation metrics: arrays in, numbers out."""
-from .beat import audio_beats, beat_consistency, motion_beats
+"""Evaluation metrics: arrays in, numbers out.
 
-__all__ = ["audio_beats", "beat_consistency", "motion_beats"]
+| metric | module | unit / convention |
+|---|---|---|
+| beat consistency (BC) | beat.py | 0..1; compare with ground truth's BC |
+| Frechet distance, FGD extractors | frechet.py, fgd.py, motion_features.py, emage_fgd.py | see each |
+| L1 diversity | diversity.py | metres, summed over 55 joints x 3 axes |
+| face error | face.py | expression MSE; vertex MSE m^2 |
+| jitter, foot skating | physics.py | m/s^3; m/s |
+"""
+from .beat import audio_beats, beat_consistency, motion_beats
+from .diversity import l1_diversity
+from .face import expression_mse, face_vertex_mse
+from .fgd import EmageExtractor, GeometricExtractor, KineticExtractor, default_extractors, fgd
+from .frechet import frechet_distance, gaussian_stats
+from .physics import foot_skating, jitter
+
+__all__ = ["audio_beats", "beat_consistency", "motion_beats", "l1_diversity", "expression_mse", "face_vertex_mse",
+           "EmageExtractor", "GeometricExtractor", "KineticExtractor", "default_extractors", "fgd",
+           "frechet_distance", "gaussian_stats", "foot_skating", "jitter"]

@@ -1,0 +1,86 @@
+"""Markdown tables for eval and bench reports, in the paper's layout, with the paper's numbers beside ours."""
+from __future__ import annotations
+
+from . import paper
+
+NAMES = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
+
+
+def _f(v, fmt: str = "{:.3f}") -> str:
+    return "-" if v is None else fmt.format(v)
+
+
+def eval_markdown(rep: dict) -> str:
+    ex = rep["extractors"]
+    gt = rep.get("ground_truth") or {}
+    fgd_cols = {"fgd_k": "FGD_k ↓", "fgd_g": "FGD_g ↓", "fgd_emage": "FGD (EMAGE AE) ↓"}
+    head = ["method", "steps", "CFG", *[fgd_cols.get(e, e) for e in ex], "BC → (GT)", "Div ↑ (GT)",
+            "expr MSE ↓", *(["face vertex MSE ↓"] if rep.get("face_vertices") else []), "jitter m/s³ (GT)",
+            "foot skate m/s (GT)", "s / clip", "RTF", "paper: FGD / BC / Div / AITS"]
+    lines = [f"Held-out clips with ground truth ({sum(c['ground_truth'] for c in rep['clips'])}): "
+             + ", ".join(f"{c['name']} ({c['seconds']} s)" for c in rep["clips"] if c["ground_truth"])
+             + f"; {rep['seeds']} seed(s) each. {rep.get('policy', '')}. BC speeds normalised by "
+             + f"{rep.get('bc_mean_speed', 'the ground truth')}.", "",
+             "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    if gt:
+        cells = ["ground truth", "-", "-", *["-" for _ in ex], _f(gt["bc"]), _f(gt["diversity"], "{:.2f}"), "-",
+                 *(["-"] if rep.get("face_vertices") else []), _f(gt["jitter"], "{:.1f}"),
+                 _f(gt["foot_skate"]), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
+        lines.append("| " + " | ".join(cells) + " |")
+    for r in rep["rows"]:
+        h = r.get("heldout")
+        if not h:
+            continue
+        p = paper.paper_row(r["method"], r["steps"])
+        ptxt = "-" if p is None else " / ".join(_f(p.get(k), "{:.3f}") for k in ("fgd", "bc", "diversity", "aits"))
+        ptxt += " *" if p and p.get("note") else ""
+        cells = [NAMES.get(r["method"], r["method"]), str(r["steps"]), f"{r['cfg']:g}",
+                 *[_f(h.get(e), "{:.4g}") for e in ex],
+                 f"{_f(h['bc'])} ({_f(gt.get('bc'))})", f"{_f(h['diversity'], '{:.2f}')} ({_f(gt.get('diversity'), '{:.2f}')})",
+                 _f(h["expr_mse"], "{:.3f}"), *([_f(h["vertex_mse"], "{:.3g}")] if rep.get("face_vertices") else []),
+                 f"{_f(h['jitter'], '{:.1f}')} ({_f(gt.get('jitter'), '{:.1f}')})",
+                 f"{_f(h['foot_skate'])} ({_f(gt.get('foot_skate'))})",
+                 _f(r["seconds_per_clip"], "{:.2f}"), _f(r["real_time_factor"], "{:.1f}x"), ptxt]
+        lines.append("| " + " | ".join(cells) + " |")
+    ao = [r for r in rep["rows"] if r.get("audio_only")]
+    if ao:
+        names = [c["name"] for c in rep["clips"] if not c["ground_truth"]]
+        lines += ["", f"Audio-only takes ({', '.join(names)}): no ground-truth motion, so BC and diversity only.", "",
+                  "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate m/s |", "|---|---|---|---|---|---|---|"]
+        for r in ao:
+            a = r["audio_only"]
+            lines.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
+                         f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'])} |")
+    lines += ["", "FGD_k / FGD_g: Frechet distances of training-free kinetic / geometric joint features, z-scored by "
+              "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is better. Div: metres, L1 over "
+              "55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, AITS on an A100; * the paper's "
+              "diffusion / rectified-flow rows (its Table 4c) do not state their steps, shown at 20 (DDIM's steps in "
+              "the reference code)."]
+    return "\n".join(lines)
+
+
+def bench_markdown(rep: dict) -> str:
+    lines = [f"Machine: {rep['machine']}; torch threads {rep['threads']}; device {rep['device']}; "
+             f"medians of {rep['repeats']} interleaved rounds. AITS = generation seconds (features + sampling + "
+             f"decoding, transcript alignment excluded) per {rep['clip_seconds']:.2f} s clip "
+             f"({rep['clip_frames']} frames, one window).", ""]
+    head = ["preset", "method", "steps", "ms / step", "AITS (s)", "RTF 10 s", "RTF 60 s", "peak MB (60 s)",
+            "paper AITS (A100)"]
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rep["rows"]:
+        p = paper.paper_row(r["method"], r["steps"])
+        lines.append("| " + " | ".join([
+            r["preset"], NAMES.get(r["method"], r["method"]), str(r["steps"]), _f(r.get("ms_per_step"), "{:.1f}"),
+            _f(r["aits"], "{:.3f}"), _f(r.get("rtf_10s"), "{:.1f}x"), _f(r.get("rtf_60s"), "{:.1f}x"),
+            _f(r.get("peak_mb"), "{:.0f}"), _f(p and p.get("aits"), "{:.3f}")]) + " |")
+    if rep.get("ratios"):
+        lines += ["", "Ratios (same run): " + "; ".join(f"{k}: {v:.2f}x" for k, v in rep["ratios"].items())]
+    e2e = rep.get("end_to_end")
+    if e2e:
+        lines += ["", f"End to end (upload to video), {e2e['seconds_of_speech']:.1f} s of speech, "
+                  f"{e2e['method']} {e2e['steps']} steps: " + ", ".join(f"{k} {v:.2f} s" for k, v in e2e["stages"].items())
+                  + f"; total {e2e['total']:.2f} s (first request after start: {e2e.get('first_request_total', float('nan')):.2f} s)."]
+    if rep.get("process_peak_rss_mb"):
+        lines += ["", f"Peak MB: extra resident memory during one 60 s generation (models loaded); whole process peak "
+                      f"RSS {rep['process_peak_rss_mb']:.0f} MB."]
+    return "\n".join(lines)
