@@ -1,5 +1,5 @@
 # make test  - create .venv, install everything, run the test suite
-# make demo  - create .venv, install everything, start the web demo (added with the app)
+# make demo  - create .venv, install everything, start the web app on http://127.0.0.1:7860
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.setup-done
@@ -7,7 +7,7 @@ export NUMBA_CACHE_DIR ?= $(CURDIR)/$(VENV)/numba-cache
 export GRADIO_ANALYTICS_ENABLED := False
 export HF_HUB_DISABLE_TELEMETRY := 1
 
-.PHONY: setup test clean
+.PHONY: setup test demo clean
 setup: $(STAMP)
 
 $(STAMP): requirements.txt pyproject.toml scripts/setup.sh
@@ -16,6 +16,9 @@ $(STAMP): requirements.txt pyproject.toml scripts/setup.sh
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+demo: $(STAMP)
+	$(PY) -m app
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -9,7 +9,7 @@ PYTHON=${PYTHON:-python3}
 
 # --- system libraries: EGL + OSMesa for offscreen pyrender (Mesa llvmpipe on CPU), eSpeak NG for the
 # transcript aligner (it synthesises the transcript to align it against the speech) ----------------------
-APT_PKGS="libegl1 libegl-mesa0 libgl1-mesa-dri libgl1 libxrender1 libosmesa6 espeak-ng"
+APT_PKGS="libegl1 libegl-mesa0 libgl1-mesa-dri libgl1 libxrender1 libosmesa6 espeak-ng chromium libatomic1"
 have_lib() { ldconfig -p 2>/dev/null | grep -q "$1"; }
 missing=()
 have_lib libEGL.so.1 || missing+=(libegl1 libegl-mesa0)
@@ -17,6 +17,8 @@ have_lib libOSMesa.so || missing+=(libosmesa6)
 have_lib libGL.so.1 || missing+=(libgl1)
 have_lib libXrender.so.1 || missing+=(libxrender1)
 command -v espeak-ng >/dev/null || missing+=(espeak-ng)
+[ -x /usr/lib/chromium/chromium ] || command -v chromium >/dev/null || missing+=(chromium)
+have_lib libatomic.so.1 || missing+=(libatomic1)
 [ -e /usr/lib/x86_64-linux-gnu/dri/swrast_dri.so ] || [ -e /usr/lib/aarch64-linux-gnu/dri/swrast_dri.so ] \
   || ls /usr/lib/*/dri/*swrast* >/dev/null 2>&1 || missing+=(libgl1-mesa-dri)
 if [ ${#missing[@]} -gt 0 ]; then

@@ -1,0 +1,71 @@
+"""`python -m app`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
+
+Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
+GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
+GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
+Hugging Face hub's telemetry are switched off before Gradio is imported.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+os.environ.setdefault("HF_HUB_OFFLINE", "1")
+
+
+def _env(name: str, default=None):
+    v = os.environ.get(name)
+    return v if v not in (None, "") else default
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m app", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--host", default=_env("GESTURELSM_HOST", "127.0.0.1"),
+                   help="address to bind (default 127.0.0.1; 0.0.0.0 serves the network)")
+    p.add_argument("--port", type=int, default=int(_env("GESTURELSM_PORT", 7860)), help="port (default 7860)")
+    p.add_argument("--model", default=_env("GESTURELSM_SMPLX_MODEL"),
+                   help="SMPL-X .npz body model (default: the built-in mannequin)")
+    p.add_argument("--checkpoints", default=_env("GESTURELSM_CHECKPOINTS"),
+                   help="folder with tokenizer/ and generator/ checkpoints (default: shipped assets/)")
+    p.add_argument("--beat2", default=_env("GESTURELSM_BEAT2"),
+                   help="BEAT2-layout folder: offers ground truth when the speech is one of its takes")
+    p.add_argument("--max-seconds", type=float, default=float(_env("GESTURELSM_MAX_SECONDS", 300)),
+                   help="longest speech accepted, seconds (default 300)")
+    p.add_argument("--max-upload-mb", type=float, default=float(_env("GESTURELSM_MAX_UPLOAD_MB", 50)),
+                   help="largest upload, MB (default 50)")
+    p.add_argument("--keep-minutes", type=float, default=float(_env("GESTURELSM_KEEP_MINUTES", 60)),
+                   help="delete generated files after this many minutes (default 60)")
+    p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", 1)),
+                   help="requests processed at once; the rest wait in the queue (default 1)")
+    p.add_argument("--workdir", default=_env("GESTURELSM_WORKDIR"), help="output folder (default <tmp>/gesturelsm-app)")
+    p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
+                               workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
+                               keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency))
+    try:
+        service = GestureService.from_settings(settings)
+    except (FileNotFoundError, ValueError) as exc:
+        print(f"python -m app: error: {exc}", file=sys.stderr)
+        return 2
+    if not args.no_warmup:
+        service.warmup()
+    from .ui import build_demo, launch
+
+    print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
+    launch(build_demo(service), service, host=args.host, port=args.port)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

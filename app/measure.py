@@ -1,0 +1,84 @@
+"""Upload-to-video time of the served app as a visitor sees it: gradio_client uploads the speech and calls
+`/generate_video` (what the page's button does; downloads are prepared after the video), for eSpeak NG
+speech of the given lengths, one method and three side by side, without and with a transcript.
+Prints a markdown table.
+
+    .venv/bin/python -m app.measure --seconds 10 60 [--checkpoints DIR] [--size 384]
+"""
+from __future__ import annotations
+
+import os
+
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+
+import argparse  # noqa: E402
+import socket  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+SENTENCE = ("When we talk about the weather, we often move our hands to show the clouds, the wind and the sun. "
+            "Then we point at the sky and explain why tomorrow will be better than today. ")
+
+
+def speech(seconds: float, out: Path) -> tuple[Path, str, float]:
+    """eSpeak NG speech of about `seconds` (whole words), its text and its duration."""
+    import soundfile as sf
+
+    from gesturelsm.audio import load_audio
+
+    words = (SENTENCE * (int(seconds // 10) + 2)).split()[: max(3, int(seconds * 2.9))]
+    text = " ".join(words)
+    raw = out.with_suffix(".raw.wav")
+    subprocess.run(["espeak-ng", "-s", "150", "-w", str(raw), text], check=True)
+    y = load_audio(raw)
+    sf.write(out, y, 16000)
+    return out, text, len(y) / 16000
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
+    p.add_argument("--checkpoints")
+    p.add_argument("--size", type=int, default=384)
+    p.add_argument("--steps", type=int, default=8)
+    args = p.parse_args(argv)
+    from gradio_client import Client, handle_file
+
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    from .ui import build_demo, launch
+
+    service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
+    service.warmup()
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    demo = build_demo(service)
+    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    client = Client(f"http://127.0.0.1:{port}", verbose=False)
+    sets = [["gesturelsm"], ["gesturelsm", "rectified_flow", "ddim"]]
+    print(f"steps {args.steps} (DDIM 20), CFG 2, tiles {args.size} x {args.size}; times from the upload call")
+    print("| speech | methods | text | upload to video (s) | rendering (s) | generation per method (s) |")
+    print("|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for sec in args.seconds:
+            wav, words, dur = speech(sec, Path(tmp) / f"speech_{int(sec)}.wav")
+            for methods in sets:
+                for text in ("", words):
+                    t0 = time.perf_counter()
+                    video, table, *_ = client.predict(handle_file(str(wav)), text, None, methods, args.steps, 2.0, 0,
+                                                      20, False, "off", args.size, api_name="/generate_video")
+                    dt = time.perf_counter() - t0
+                    rows = table["data"]
+                    gens = ", ".join(f"{r[0]} {r[6]:.2f}" for r in rows[:-1])
+                    print(f"| {dur:.1f} s | {' + '.join(methods)} | {'transcript' if text else 'audio only'} | "
+                          f"{dt:.1f} | {rows[-1][5]:.1f} | {gens} |", flush=True)
+    demo.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,68 @@
+"""A picture of the page after one generation, taken with headless Chromium (Debian's package).
+
+    .venv/bin/python -m app.screenshot --out /tmp/gesturelsm_page.png [--checkpoints DIR] [--example hello]
+"""
+from __future__ import annotations
+
+import os
+
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import socket  # noqa: E402
+import time  # noqa: E402
+
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
+                 "--disable-component-update", "--disable-sync", "--autoplay-policy=no-user-gesture-required",
+                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", default="/tmp/gesturelsm_page.png")
+    p.add_argument("--checkpoints")
+    p.add_argument("--example", default="hello", help="name of a file in app/examples (without .wav)")
+    p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
+    p.add_argument("--seek", type=float, default=2.0, help="show the video at this second")
+    args = p.parse_args(argv)
+    from playwright.sync_api import sync_playwright
+
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    from .ui import EXAMPLES, build_demo, launch
+
+    text = {m["audio"]: m["text"] for m in json.loads((EXAMPLES / "examples.json").read_text())}[f"{args.example}.wav"]
+    service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints))
+    service.warmup()
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    demo = build_demo(service)
+    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 1300})
+        page.goto(f"http://127.0.0.1:{port}")
+        page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / f"{args.example}.wav"))
+        page.locator("#transcript textarea").fill(text)
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        t0 = time.perf_counter()
+        page.locator("#generate").click()
+        page.locator("#video video").wait_for(timeout=300000)
+        print(f"video shown {time.perf_counter() - t0:.1f} s after the click")
+        page.locator("#downloads a").first.wait_for(timeout=120000)
+        page.evaluate("""async (t) => { const v = document.querySelector('#video video');
+            if (v.readyState < 2) await new Promise(r => v.addEventListener('loadeddata', r, {once: true}));
+            v.currentTime = t; await new Promise(r => setTimeout(r, 800)); }""", args.seek)
+        page.wait_for_timeout(1500)
+        page.screenshot(path=args.out, full_page=True)
+        browser.close()
+    demo.close()
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,149 @@
+"""The page: Gradio Blocks over `gesturelsm.app_service.GestureService` (no logic of its own).
+
+`build_demo(service)` builds everything inside the function, so tests can build and drive it. The main
+action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web app").
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gradio as gr
+
+from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
+                                    Request, ServiceError)
+
+EXAMPLES = Path(__file__).resolve().parent / "examples"
+MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
+
+INTRO = """# GestureLSM: speech to gestures
+Record or upload speech, optionally give the transcript, and watch a body gesture with it, next to baselines.
+Runs on a plain CPU; the body is a built-in mannequin (SMPL-X layout) unless a real SMPL-X model is configured."""
+
+HOW_IT_WORKS = """**How it works.** The speech is turned into an amplitude envelope and onset track; if you give a transcript,
+each word is timed against the audio (eSpeak NG synthesis + DTW, no Montreal Forced Aligner), or taken from your
+TextGrid, and embedded with MiniLM; with neither, the model runs **audio-only** (said above the video).
+A spatial-temporal transformer then samples latent codes of four body regions (upper body, hands, lower body,
+face) with **shortcut flow matching** (GestureLSM): a few steps are enough. *Rectified flow* and *DDIM* are the
+baselines trained the same way with their usual objectives. Per-region RVQ-VAE decoders turn the latents into
+SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with your speech.
+*CFG* is classifier-free guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
+*Stand in place* removes horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
+Timings: features and alignment are computed once and shared by all methods; the real-time factor is seconds of
+speech per second of generation (alignment and rendering excluded, as in the paper); the last row is the whole
+request, upload to video."""
+
+
+def _limits() -> str:
+    try:
+        text = MODEL_CARD.read_text()
+    except OSError:
+        return "The model card (assets/MODEL_CARD.md) is missing."
+    i = text.find("## What the models can and cannot do")
+    return text[i:].replace("## ", "**", 1).replace("do\n", "do**\n", 1) if i >= 0 else text
+
+
+def _examples() -> list[list]:
+    try:
+        meta = json.loads((EXAMPLES / "examples.json").read_text())
+    except (OSError, ValueError):
+        return []
+    return [[str(EXAMPLES / m["audio"]), m["text"]] for m in meta if (EXAMPLES / m["audio"]).exists()]
+
+
+def build_demo(service: GestureService) -> gr.Blocks:
+    settings = service.settings
+    choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
+    default_methods = [m for m in ("gesturelsm", "rectified_flow", "ddim") if m in service.methods][:3]
+
+    def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                 exports: bool) -> Request:
+        return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
+                       steps=int(steps), cfg=float(cfg), seed=int(seed), ddim_steps=int(ddim_steps),
+                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports)
+
+    def _run(req: Request, progress):
+        try:
+            return service.run(req, progress=lambda f, m: progress(f, desc=m))
+        except ServiceError as exc:
+            raise gr.Error(str(exc), duration=None) from None
+
+    def _files(out):
+        return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
+
+    def show_video(*args, progress=gr.Progress()):
+        """The page's button: the video, timings and summary first; the downloads follow (`add_exports`)."""
+        out = _run(_request(*args, exports=False), progress)
+        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
+
+    def add_exports(out):
+        if out is None:
+            return None, None, gr.skip()
+        service.export(out)
+        return *_files(out), out.summary
+
+    def generate(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                 progress=gr.Progress()):
+        """The API (`/generate`): everything in one call."""
+        out = _run(_request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                            exports=True), progress)
+        return (str(out.video), out.rows, out.summary, *_files(out))
+
+    with gr.Blocks(title="GestureLSM demo", delete_cache=(600, int(settings.keep_minutes * 60))) as demo:
+        gr.Markdown(INTRO)
+        with gr.Row():
+            with gr.Column(scale=1):
+                audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
+                                 elem_id="speech")
+                text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
+                                  placeholder="Type what is said; leave empty for audio-only", elem_id="transcript")
+                textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
+                                   file_types=[".TextGrid", ".textgrid"], type="filepath")
+                methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
+                                           elem_id="methods")
+                with gr.Row():
+                    steps = gr.Slider(1, settings.max_steps, value=8, step=1, label="Steps (GestureLSM, rectified flow)")
+                    cfg = gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale")
+                with gr.Row():
+                    ddim_steps = gr.Slider(1, 100, value=20, step=1, label="DDIM steps")
+                    seed = gr.Number(value=0, precision=0, label="Seed")
+                with gr.Accordion("Options", open=False):
+                    in_place = gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)")
+                    smoothing = gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing")
+                    size = gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+                                       label="Video size")
+                button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
+                ex = _examples()
+                if ex:
+                    gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
+            with gr.Column(scale=2):
+                video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
+                summary = gr.Markdown(elem_id="summary")
+                table = gr.Dataframe(headers=TIMING_COLUMNS, label="Timing per method and stage (seconds; real-time factor = speech seconds per generation second)",
+                                     interactive=False, elem_id="timings", wrap=True)
+                files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
+                                elem_id="downloads")
+                view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420)
+        with gr.Accordion("How it works, and the model's limits", open=False):
+            gr.Markdown(HOW_IT_WORKS)
+            gr.Markdown(_limits())
+            gr.Markdown(f"Limits of this server: speech up to {settings.max_seconds / 60:g} minutes, uploads up to "
+                        f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
+                        f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
+        inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size]
+        state = gr.State()
+        button.click(show_video, inputs, [video, table, summary, state], api_name="generate_video",
+                     concurrency_limit=settings.concurrency, concurrency_id="generation") \
+            .then(add_exports, state, [files, view, summary], api_visibility="private", concurrency_limit=settings.concurrency,
+                  concurrency_id="generation")
+        api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
+        api_button.click(generate, inputs, [video, table, summary, files, view], api_name="generate",
+                         concurrency_limit=settings.concurrency, concurrency_id="generation")
+    demo.queue(max_size=32, default_concurrency_limit=settings.concurrency)
+    return demo
+
+
+def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
+    """Launch with the upload limit and the output folder allowed; returns what `Blocks.launch` returns."""
+    return demo.launch(server_name=host, server_port=port, max_file_size=f"{int(service.settings.max_upload_mb)}mb",
+                       allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)

@@ -1,0 +1,225 @@
+"""Batch rendering for user studies (`gesturelsm batch`).
+
+Output folder:
+    videos/v_<10 hex>.mp4        one body per video, no labels; the name says nothing about the condition
+    key/conditions.csv           video -> speech file, method, steps, CFG, seed (keep away from raters)
+    key/salt.txt                 the secret that makes the names; reused on reruns so names stay stable
+    raters/rater_NN/order.csv    that rater's randomised presentation order
+    raters/rater_NN/sheet.csv    the same order with empty 1-5 columns: realness, synchrony, smoothness
+    raters/rater_NN/form.html    the videos in that order with 1-5 radio buttons; "Save ratings" downloads
+                                 a filled sheet.csv (works offline from the folder, no server)
+    study.json                   settings used
+Reruns skip videos that exist (videos are written under a temporary name and renamed when complete).
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import html
+import json
+import secrets
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
+SCALES = ("realness", "synchrony", "smoothness")
+SCALE_QUESTIONS = {
+    "realness": "How human-like and natural do the gestures look? (1 = not at all, 5 = completely)",
+    "synchrony": "How well do the gestures match the rhythm of the speech? (1 = not at all, 5 = perfectly)",
+    "smoothness": "How smooth is the motion, free of jitter and jumps? (1 = very jerky, 5 = perfectly smooth)",
+}
+
+
+@dataclass
+class StudyItem:
+    video: str          # file name under videos/
+    audio: str          # speech file name (relative to the audio folder)
+    method: str
+
+
+@dataclass
+class StudyPlan:
+    out: Path
+    salt: str
+    items: list[StudyItem] = field(default_factory=list)
+
+    def order(self, rater: int, seed: int = 0) -> list[StudyItem]:
+        """Rater's presentation order: a permutation drawn from (seed, rater)."""
+        rng = np.random.default_rng([seed, rater])
+        return [self.items[i] for i in rng.permutation(len(self.items))]
+
+
+def blinded_name(salt: str, audio: str, method: str) -> str:
+    return "v_" + hashlib.sha256(f"{salt}|{audio}|{method}".encode()).hexdigest()[:10] + ".mp4"
+
+
+def find_audio(audio_dir: str | Path) -> list[Path]:
+    d = Path(audio_dir)
+    if not d.is_dir():
+        raise FileNotFoundError(f"audio folder not found: {d}")
+    files = sorted(p for p in d.iterdir() if p.suffix.lower() in AUDIO_EXTENSIONS and p.is_file())
+    if not files:
+        raise ValueError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
+    return files
+
+
+def plan_study(audio_files: list[Path], methods: list[str], out: str | Path) -> StudyPlan:
+    """Names for every speech x method; the salt is created once and kept in key/salt.txt."""
+    out = Path(out)
+    salt_file = out / "key" / "salt.txt"
+    if salt_file.exists():
+        salt = salt_file.read_text().strip()
+    else:
+        salt = secrets.token_hex(8)
+        salt_file.parent.mkdir(parents=True, exist_ok=True)
+        salt_file.write_text(salt + "\n")
+    items = [StudyItem(blinded_name(salt, a.name, m), a.name, m) for a in audio_files for m in methods]
+    if len({i.video for i in items}) != len(items):
+        raise ValueError("two speech files share a name; rename them")
+    return StudyPlan(out, salt, items)
+
+
+def _transcript(audio: Path):
+    """(words, text) from <stem>.TextGrid or <stem>.txt beside the audio, else (None, None)."""
+    tg = audio.with_suffix(".TextGrid")
+    if tg.exists():
+        from ..align import read_result
+
+        return read_result(tg).words, None
+    txt = audio.with_suffix(".txt")
+    return None, (txt.read_text().strip() if txt.exists() else None)
+
+
+def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
+               steps: int = 8, ddim_steps: int = 20, cfg: float = 2.0, seed: int = 0, size: int = 512,
+               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = "off",
+               log: Callable[[str], None] = print) -> StudyPlan:
+    """Render what is missing and (re)write key, orders, sheets and forms; returns the plan."""
+    from ..app_service import find_beat2_take, fit_length
+    from ..app_service import smooth as smooth_motion
+    from ..app_service import stand_in_place as in_place
+    from ..audio import SAMPLE_RATE, load_audio
+    from ..render import render_video
+
+    methods = list(dict.fromkeys(methods))
+    for m in methods:
+        if m != "ground_truth" and m not in pipeline.methods:
+            raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
+    if "ground_truth" in methods and not beat2:
+        raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+    if raters < 1:
+        raise ValueError("--raters must be at least 1")
+    audio_files = find_audio(audio_dir)
+    plan = plan_study(audio_files, methods, out)
+    out = Path(out)
+    (out / "videos").mkdir(parents=True, exist_ok=True)
+    by_audio: dict[str, list[StudyItem]] = {}
+    for it in plan.items:
+        by_audio.setdefault(it.audio, []).append(it)
+    done = skipped = 0
+    for a in audio_files:
+        todo = [it for it in by_audio[a.name] if not (out / "videos" / it.video).exists()]
+        skipped += len(by_audio[a.name]) - len(todo)
+        if not todo:
+            continue
+        y = load_audio(a)
+        words, text = _transcript(a)
+        try:
+            speech = pipeline.prepare_speech(y, SAMPLE_RATE, words=words, text=text)
+        except ValueError as exc:  # InputError: too short, silent, too long
+            raise ValueError(f"{a.name}: {exc}") from None
+        for it in todo:
+            if it.method == "ground_truth":
+                name = find_beat2_take(beat2, speech.audio, a.name)
+                if name is None:
+                    log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
+                    continue
+                from ..data.beat2 import Beat2Dataset
+
+                motion = fit_length(Beat2Dataset(beat2).load(name, with_audio=False, with_text=False).motion,
+                                    speech.num_frames)
+            else:
+                n = ddim_steps if it.method == "ddim" else steps
+                motion = pipeline.generate(speech, steps=n, cfg=cfg, seed=seed, method=it.method).motion
+            if stand_in_place:
+                motion = in_place(motion)
+            if smoothing != "off":
+                motion = smooth_motion(motion, smoothing)
+            render_video([motion], speech.audio, out / "videos" / it.video, size=(size, size), body=body)
+            done += 1
+            log(f"  {it.video}  ({done} rendered)")
+    _write_key(plan, dict(steps=steps, ddim_steps=ddim_steps, cfg=cfg, seed=seed))
+    for r in range(1, raters + 1):
+        _write_rater(plan, r, seed)
+    (out / "study.json").write_text(json.dumps(dict(audio_dir=str(audio_dir), methods=methods, raters=raters,
+                                                   steps=steps, ddim_steps=ddim_steps, cfg=cfg, seed=seed, size=size,
+                                                   stand_in_place=stand_in_place, smoothing=smoothing), indent=1))
+    log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
+        f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters)")
+    return plan
+
+
+def _write_key(plan: StudyPlan, settings: dict) -> None:
+    with open(plan.out / "key" / "conditions.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["video", "audio", "method", "steps", "cfg", "seed"])
+        for it in plan.items:
+            n = settings["ddim_steps"] if it.method == "ddim" else settings["steps"]
+            w.writerow([it.video, it.audio, it.method, "" if it.method == "ground_truth" else n,
+                        settings["cfg"], settings["seed"]])
+
+
+def _write_rater(plan: StudyPlan, rater: int, seed: int) -> None:
+    d = plan.out / "raters" / f"rater_{rater:02d}"
+    d.mkdir(parents=True, exist_ok=True)
+    videos = [it.video for it in plan.order(rater, seed) if (plan.out / "videos" / it.video).exists()]
+    with open(d / "order.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["position", "video"])
+        w.writerows((i + 1, v) for i, v in enumerate(videos))
+    with open(d / "sheet.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["rater", "position", "video", *SCALES, "comment"])
+        w.writerows((rater, i + 1, v, *[""] * len(SCALES), "") for i, v in enumerate(videos))
+    (d / "form.html").write_text(_form(rater, videos))
+
+
+def _form(rater: int, videos: list[str]) -> str:
+    blocks = []
+    for i, v in enumerate(videos, 1):
+        scales = "".join(
+            f'<p>{html.escape(SCALE_QUESTIONS[s])}<br>' + " ".join(
+                f'<label><input type="radio" name="{s}_{i}" value="{k}"> {k}</label>' for k in range(1, 6)) + "</p>"
+            for s in SCALES)
+        blocks.append(f'<section data-video="{html.escape(v)}"><h3>Video {i} of {len(videos)}</h3>'
+                      f'<video src="../../videos/{html.escape(v)}" controls preload="none" width="480"></video>'
+                      f'{scales}<p>Comment: <input type="text" name="comment_{i}" size="60"></p></section>')
+    return f"""<!doctype html><html><head><meta charset="utf-8"><title>Gesture rating, rater {rater}</title>
+<style>body{{font-family:sans-serif;max-width:900px;margin:auto}}section{{border-bottom:1px solid #ccc;padding:1em 0}}</style>
+</head><body><h1>Gesture rating (rater {rater})</h1>
+<p>Watch each video with sound, then rate it on the three 1-5 scales. Rate every video in the order shown.
+When done, press <b>Save ratings</b> and send the downloaded file back.</p>
+{''.join(blocks)}
+<button id="save">Save ratings</button>
+<script>
+document.getElementById('save').onclick = () => {{
+  const scales = {json.dumps(list(SCALES))};
+  const rows = [['rater','position','video',...scales,'comment']];
+  document.querySelectorAll('section').forEach((s, j) => {{
+    const i = j + 1, get = n => (s.querySelector(`input[name="${{n}}_${{i}}"]:checked`) || {{value: ''}}).value;
+    const c = s.querySelector(`input[name="comment_${{i}}"]`).value.replaceAll('"', '""');
+    rows.push([{rater}, i, s.dataset.video, ...scales.map(get), `"${{c}}"`]);
+  }});
+  const blob = new Blob([rows.map(r => r.join(',')).join('\\n') + '\\n'], {{type: 'text/csv'}});
+  const a = document.createElement('a'); a.href = URL.createObjectURL(blob);
+  a.download = 'ratings_rater_{rater:02d}.csv'; a.click();
+}};
+</script></body></html>
+"""
+
+
+__all__ = ["AUDIO_EXTENSIONS", "SCALES", "StudyItem", "StudyPlan", "blinded_name", "find_audio", "make_study",
+           "plan_study"]

@@ -1,0 +1,109 @@
+"""Fixtures for the web app tests: tiny checkpoints built in the session (as tests/generator/conftest.py
+does), a GestureService over them, and the app served in this process on a free local port."""
+from __future__ import annotations
+
+import os
+import socket
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+
+
+def build_tiny_assets(root: Path) -> Path:
+    import torch
+
+    from gesturelsm.generator.data import build_take
+    from gesturelsm.generator.train import GenTrainConfig, train_generator
+    from gesturelsm.motion import REGIONS, Normalizer
+    from gesturelsm.motion.regions import GENERATED_REGIONS
+    from gesturelsm.tokenizer import RVQVAE, preset
+
+    from _support import speech_like, synthetic_motion
+
+    torch.manual_seed(0)
+    feats = synthetic_motion().to_features()
+    toks = {}
+    for r in GENERATED_REGIONS:
+        cols = list(REGIONS[r].columns)
+        m = RVQVAE(preset("tiny", len(cols)), r, Normalizer.fit(feats[:, cols]))
+        m.train()
+        m(m.normalizer.normalize(feats[:256, cols])[None])
+        toks[r] = m.eval()
+        m.save(root / "tokenizer" / f"{r}.safetensors", half=True)
+    take = build_take("synthetic", feats, speech_like(len(feats) / 30), None, toks, None)
+    for method in ("gesturelsm", "rectified_flow", "ddim"):
+        tc = GenTrainConfig(method=method, preset="tiny", steps=20, batch_size=8, lr=2e-3, warmup=5,
+                            eval_every=1000, save_every=1000)
+        gen = train_generator([take], [], toks, tc, root / "runs" / f"{method}.safetensors", log=lambda *_: None)
+        gen.save(root / "generator" / f"{method}.safetensors", half=True)
+    return root
+
+
+@pytest.fixture(scope="session")
+def app_assets(tmp_path_factory) -> Path:
+    return build_tiny_assets(tmp_path_factory.mktemp("app_assets"))
+
+
+@pytest.fixture(scope="session")
+def beat2_dir(tmp_path_factory) -> Path:
+    """A BEAT2-layout folder with one 2 s take (motion, a tone as speech, TextGrid)."""
+    import soundfile as sf
+
+    from gesturelsm.motion import MotionSequence
+
+    from _support import speech_like, synthetic_motion
+
+    root = tmp_path_factory.mktemp("beat2")
+    synthetic_motion(frames=60, seed=3).save(root / "smplxflame_30" / "2_scott_0_9_9.npz")
+    (root / "wave16k").mkdir()
+    sf.write(root / "wave16k" / "2_scott_0_9_9.wav", speech_like(2.0, seed=5)[::-1].copy(), 16000)
+    assert isinstance(MotionSequence.load(root / "smplxflame_30" / "2_scott_0_9_9.npz"), MotionSequence)
+    return root
+
+
+@pytest.fixture(scope="session")
+def service(app_assets, beat2_dir, tmp_path_factory):
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    settings = ServiceSettings(checkpoints=str(app_assets), beat2=str(beat2_dir), max_seconds=20,
+                               workdir=str(tmp_path_factory.mktemp("app_work")))
+    return GestureService.from_settings(settings)
+
+
+@pytest.fixture(scope="session")
+def speech_wav(tmp_path_factory) -> Path:
+    """2 s of speech-like sound as a 44.1 kHz stereo wav (the app resamples)."""
+    import soundfile as sf
+
+    from _support import speech_like
+
+    y = speech_like(2.0, sr=44100)
+    path = tmp_path_factory.mktemp("speech") / "speech.wav"
+    sf.write(path, np.stack([y, y], 1), 44100)
+    return path
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="session")
+def app_url(service):
+    """The app served from this process (as `python -m app` serves it) at a local URL."""
+    from app.ui import build_demo, launch
+
+    demo = build_demo(service)
+    port = _free_port()
+    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    yield f"http://127.0.0.1:{port}"
+    demo.close()
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "browser: drives the served page in headless Chromium (runs in CI)")

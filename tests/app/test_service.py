@@ -1,0 +1,179 @@
+"""The app's request logic (gesturelsm.app_service) on tiny checkpoints: outputs, timing rows, post-processing
+invariants, ground truth for a known BEAT2 take, and a clear ServiceError for every bad input."""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from gesturelsm.app_service import (TIMING_COLUMNS, Request, ServiceError, find_beat2_take, fit_length, smooth,
+                                    stand_in_place)
+
+from _support import speech_like, synthetic_motion
+
+
+def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
+    steps = []
+    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps=2, ddim_steps=3, size=256),
+                      progress=lambda f, m: steps.append((f, m)))
+    assert out.video.exists() and out.video.stat().st_size > 1000
+    import imageio
+
+    reader = imageio.get_reader(out.video)
+    w, h = reader.get_meta_data()["size"]
+    reader.close()
+    assert (w, h) == (512, 256)                              # two 256 x 256 tiles side by side
+    assert out.text_mode.startswith("audio-only")
+    assert len(out.rows) == 3 and all(len(r) == len(TIMING_COLUMNS) for r in out.rows)
+    assert out.rows[0][0] == "GestureLSM" and out.rows[1][0] == "DDIM"
+    for r in out.rows[:2]:
+        assert r[3] > 0 and r[4] > 0 and r[5] > 0 and r[7] > 0   # sampling, decoding, rendering, RTF
+    assert out.rows[-1][6] == pytest.approx(out.seconds, abs=1e-3)
+    names = sorted(p.name for p in out.downloads)
+    assert names == ["ddim.bvh", "ddim.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm.npz",
+                     "gesturelsm_keypoints.json"]
+    assert out.glb is not None and out.glb.read_bytes()[:4] == b"glTF"
+    fr = [f for f, _ in steps]
+    assert fr == sorted(fr) and fr[-1] == 1.0 and any("rendering" in m for _, m in steps)
+
+
+def test_same_seed_same_motion_and_transcript_mode(service, speech_wav):
+    a = service.run(Request(str(speech_wav), text="hello there friends", steps=1, size=256, exports=False))
+    b = service.run(Request(str(speech_wav), text="hello there friends", steps=1, size=256, exports=False))
+    assert "aligned automatically" in a.text_mode
+    assert a.rows[0][2] > 0                                 # alignment time shown
+    np.testing.assert_array_equal(a.motions["gesturelsm"].poses, b.motions["gesturelsm"].poses)
+    assert a.downloads == [] and service.export(a).downloads
+
+
+def test_textgrid_upload_gives_word_timings(service, speech_wav, tmp_path):
+    from gesturelsm.align import Word, write_textgrid
+
+    tg = tmp_path / "words.TextGrid"
+    write_textgrid(tg, [Word("hello", 0.2, 0.6), Word("world", 0.7, 1.2)], duration=2.0)
+    out = service.run(Request(str(speech_wav), textgrid_path=str(tg), steps=1, size=256, exports=False))
+    assert out.text_mode == "transcript with given word timings"
+
+
+def test_ground_truth_for_a_known_beat2_take(service, beat2_dir, tmp_path):
+    wav = tmp_path / "upload.wav"                           # renamed upload: found by its samples
+    y, sr = sf.read(beat2_dir / "wave16k" / "2_scott_0_9_9.wav")
+    sf.write(wav, y, sr)
+    assert find_beat2_take(beat2_dir, y.astype(np.float32), "upload.wav") == "2_scott_0_9_9"
+    assert find_beat2_take(beat2_dir, speech_like(2.0), "other.wav") is None
+    out = service.run(Request(str(wav), methods=["gesturelsm", "ground_truth"], steps=1, size=256, exports=False))
+    assert out.ground_truth == "2_scott_0_9_9" and out.rows[1][0] == "Ground truth"
+
+
+def test_ground_truth_missing_is_said(service, speech_wav):
+    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ground_truth"], steps=1, size=256,
+                              exports=False))
+    assert out.ground_truth is None and any("not a take" in w for w in out.warnings)
+
+
+def test_stand_in_place_zeroes_horizontal_translation_only():
+    seq = synthetic_motion(frames=40)
+    seq.trans[:, 0] = np.linspace(0, 1, 40)
+    seq.trans[:, 2] = np.linspace(0, -1, 40)
+    out = stand_in_place(seq)
+    assert np.all(out.trans[:, [0, 2]] == 0)
+    np.testing.assert_array_equal(out.trans[:, 1], seq.trans[:, 1])
+    np.testing.assert_array_equal(out.poses, seq.poses)
+
+
+def test_smoothing_keeps_smooth_motion_and_removes_jitter():
+    seq = synthetic_motion(frames=90)
+    kept = smooth(seq, "light")
+    np.testing.assert_allclose(kept.poses, seq.poses, atol=2e-2)          # slow sines survive
+    rng = np.random.default_rng(0)
+    noisy = fit_length(seq, 90)
+    noisy.poses = seq.poses + rng.normal(scale=0.05, size=seq.poses.shape).astype(np.float32)
+    jitter = lambda p: np.abs(np.diff(p, 2, axis=0)).mean()              # noqa: E731
+    assert jitter(smooth(noisy, "strong").poses) < 0.3 * jitter(noisy.poses)
+    assert smooth(seq, "off") is seq
+    with pytest.raises(ServiceError):
+        smooth(seq, "extreme")
+
+
+def test_fit_length_trims_or_holds_last_frame():
+    seq = synthetic_motion(frames=30)
+    assert fit_length(seq, 20).num_frames == 20
+    long = fit_length(seq, 45)
+    assert long.num_frames == 45 and np.all(long.poses[30:] == seq.poses[-1])
+
+
+def _req(path, **kw):
+    return Request(str(path) if path else None, **{"steps": 1, "size": 256, "exports": False, **kw})
+
+
+@pytest.mark.parametrize("case, message", [
+    ("none", "record or upload"),
+    ("empty", "could not be read"),
+    ("notaudio", "could not be read"),
+    ("silent", "silent"),
+    ("short", "at least"),
+    ("long", "limit"),
+    ("steps", "Steps must be"),
+    ("cfg", "CFG"),
+    ("method", "Unknown method"),
+    ("nomethod", "at least one method"),
+    ("textgrid", "TextGrid"),
+])
+def test_bad_input_gives_a_clear_message(service, speech_wav, tmp_path, case, message):
+    bad = tmp_path / "bad.wav"
+    req = _req(speech_wav)
+    if case == "none":
+        req = _req(None)
+    elif case == "empty":
+        bad.write_bytes(b"")
+        req = _req(bad)
+    elif case == "notaudio":
+        bad.write_text("this is not audio at all")
+        req = _req(bad)
+    elif case == "silent":
+        sf.write(bad, np.zeros(32000, np.float32), 16000)
+        req = _req(bad)
+    elif case == "short":
+        sf.write(bad, speech_like(0.2), 16000)
+        req = _req(bad)
+    elif case == "long":
+        sf.write(bad, speech_like(25.0), 16000)               # the service's limit is 20 s
+        req = _req(bad)
+    elif case == "steps":
+        req = _req(speech_wav, steps=0)
+    elif case == "cfg":
+        req = _req(speech_wav, cfg=float("nan"))
+    elif case == "method":
+        req = _req(speech_wav, methods=["magic"])
+    elif case == "nomethod":
+        req = _req(speech_wav, methods=[])
+    elif case == "textgrid":
+        tg = tmp_path / "x.TextGrid"
+        tg.write_text("not a textgrid")
+        req = _req(speech_wav, textgrid_path=str(tg))
+    with pytest.raises(ServiceError, match=message):
+        service.run(req)
+
+
+def test_upload_size_limit(service, speech_wav):
+    from dataclasses import replace
+
+    from gesturelsm.app_service import GestureService
+
+    small = GestureService(service.pipeline, replace(service.settings, max_upload_mb=1e-4), service.body)
+    with pytest.raises(ServiceError, match="MB"):
+        small.run(_req(speech_wav))
+
+
+def test_cleanup_removes_old_request_folders(service):
+    old = service.workdir / "req-old-test"
+    old.mkdir(exist_ok=True)
+    past = time.time() - 10 * 3600
+    os.utime(old, (past, past))
+    fresh = service.workdir / "req-fresh-test"
+    fresh.mkdir(exist_ok=True)
+    assert service.cleanup() >= 1
+    assert not old.exists() and fresh.exists()

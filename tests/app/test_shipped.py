@@ -1,0 +1,27 @@
+"""One smoke test of the app's service on the shipped checkpoints (skips when they are not in assets/)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from gesturelsm.pipeline import ASSETS
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "app" / "examples"
+
+
+def test_shipped_checkpoints_serve_an_example(tmp_path):
+    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
+        pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
+    from gesturelsm.app_service import GestureService, Request, ServiceSettings
+
+    ex = json.loads((EXAMPLES / "examples.json").read_text())[0]
+    service = GestureService.from_settings(ServiceSettings(workdir=str(tmp_path)))
+    out = service.run(Request(str(EXAMPLES / ex["audio"]), text=ex["text"], methods=["gesturelsm"], steps=4,
+                              size=256, exports=False))
+    assert out.video.stat().st_size > 10_000
+    assert "aligned automatically" in out.text_mode
+    assert out.rows[0][7] > 1.0                               # generation faster than real time
+    poses = out.motions["gesturelsm"].poses
+    assert poses.std(axis=0).max() > 1e-3                     # the body moves

@@ -1,0 +1,133 @@
+"""The page itself: built by build_demo, served, driven through gradio_client and headless Chromium.
+
+The browser tests use Debian's chromium (never `playwright install`); they skip, saying so, only when no
+chromium binary is installed (scripts/setup.sh installs it)."""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from gesturelsm.app_service import TIMING_COLUMNS
+
+CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
+                 if p and os.path.exists(p)), None)
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--autoplay-policy=no-user-gesture-required"]
+
+
+def test_build_demo_has_the_controls(service):
+    from app.ui import build_demo
+
+    demo = build_demo(service)
+    cfg = demo.get_config_file()
+    labels = {c["props"].get("label") for c in cfg["components"]}
+    for want in ("CFG scale", "Seed", "DDIM steps", "Smoothing", "Methods shown side by side"):
+        assert want in labels
+    methods = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
+    assert [v for _, v in methods["props"]["choices"]] == ["gesturelsm", "rectified_flow", "ddim", "ground_truth"]
+    assert {"generate", "generate_video"} <= {d.get("api_name") for d in cfg["dependencies"]}
+
+
+def test_app_entry_flags_and_env(monkeypatch):
+    from app.__main__ import build_parser
+
+    monkeypatch.setenv("GESTURELSM_PORT", "9001")
+    monkeypatch.setenv("GESTURELSM_BEAT2", "/data/beat2")
+    args = build_parser().parse_args(["--checkpoints", "/ckpt"])
+    assert (args.host, args.port, args.beat2, args.checkpoints) == ("127.0.0.1", 9001, "/data/beat2", "/ckpt")
+    assert os.environ["GRADIO_ANALYTICS_ENABLED"] == "False" and os.environ["HF_HUB_DISABLE_TELEMETRY"] == "1"
+
+
+def _client(url):
+    from gradio_client import Client
+
+    return Client(url, verbose=False)
+
+
+def test_gradio_client_generate(app_url, speech_wav):
+    from gradio_client import handle_file
+
+    video, table, summary, files, glb = _client(app_url).predict(
+        handle_file(str(speech_wav)), "hello there", None, ["gesturelsm", "rectified_flow"], 2, 1.5, 3, 20, True,
+        "light", 256, api_name="/generate")
+    assert Path(video).stat().st_size > 1000 and Path(glb).suffix == ".glb"
+    assert table["headers"] == TIMING_COLUMNS and len(table["data"]) == 3
+    assert "aligned automatically" in summary
+    assert {Path(f).suffix for f in files} == {".npz", ".bvh", ".glb", ".json"}
+
+
+def test_gradio_client_bad_input_message(app_url, tmp_path):
+    from gradio_client import handle_file
+
+    silent = tmp_path / "silent.wav"
+    sf.write(silent, np.zeros(16000, np.float32), 16000)
+    with pytest.raises(Exception, match="silent"):
+        _client(app_url).predict(handle_file(str(silent)), "", None, ["gesturelsm"], 2, 2.0, 0, 20, False, "off",
+                                 256, api_name="/generate")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+@pytest.mark.browser
+def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, tmp_path):
+    page = browser.new_page(viewport={"width": 1400, "height": 1400})
+    page.goto(app_url)
+    page.locator("#speech input[type=file]").first.set_input_files(str(speech_wav))
+    page.locator("#transcript textarea").fill("hello there everyone")
+    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)  # uploaded
+    page.locator("#generate").click()
+    page.locator("#video video").wait_for(timeout=60000)
+    played = page.evaluate("""async () => {
+        const v = document.querySelector('#video video');
+        v.muted = false;
+        if (v.readyState < 2) await new Promise(r => v.addEventListener('loadeddata', r, {once: true}));
+        await v.play();
+        await new Promise(r => setTimeout(r, 1200));
+        return {t: v.currentTime, dur: v.duration, audio: v.webkitAudioDecodedByteCount,
+                video: v.webkitVideoDecodedByteCount, w: v.videoWidth, h: v.videoHeight};
+    }""")
+    assert played["t"] > 0.3 and played["dur"] == pytest.approx(2.0, abs=0.15)
+    assert played["audio"] > 0 and played["video"] > 0                    # both streams decode
+    assert played["w"] == 3 * played["h"]                                  # three methods side by side
+    table = page.locator("#timings").inner_text()
+    for want in ("GestureLSM", "Rectified flow", "DDIM", "whole request, 2.0 s"):
+        assert want in table
+    assert "aligned automatically" in page.locator("#summary").inner_text()
+    page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
+    assert ".glb" in page.locator("#downloads").inner_text()
+    page.screenshot(path=str(tmp_path / "page.png"), full_page=True)
+    page.close()
+
+
+@pytest.mark.browser
+def test_browser_bad_input_shows_message(browser, app_url):
+    page = browser.new_page()
+    page.goto(app_url)
+    page.locator("#generate").click()                                      # no speech given
+    page.get_by_text("Please record or upload speech first").first.wait_for(timeout=20000)
+    page.close()
+
+
+def test_queue_serves_two_visitors(app_url, speech_wav):
+    from gradio_client import handle_file
+
+    jobs = [_client(app_url).submit(handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
+                                    "off", 256, api_name="/generate") for seed in (1, 2)]
+    videos = [j.result(timeout=120)[0] for j in jobs]
+    assert all(Path(v).stat().st_size > 1000 for v in videos) and videos[0] != videos[1]
