@@ -22,3 +22,36 @@ def speech_like(seconds: float, sr: int = 16000, seed: int = 0) -> np.ndarray:
     t = np.arange(n) / sr
     env = np.clip(np.sin(2 * np.pi * 3.1 * t), 0, None) ** 2 * (rng.random(n) * 0.2 + 0.8)
     return (0.3 * env * np.sin(2 * np.pi * 180 * t * (1 + 0.1 * np.sin(2 * np.pi * 0.5 * t)))).astype(np.float32)
+
+
+def build_tiny_assets(root, steps: int = 20, batch_size: int = 8, warmup: int = 5):
+    """A complete tiny checkpoint folder (4 tokenizers + 3 generators, `root/tokenizer`, `root/generator`)
+    trained briefly on synthetic motion, so pipeline-level tests need neither ../shared nor assets/."""
+    from pathlib import Path
+
+    import torch
+
+    from gesturelsm.generator.data import build_take
+    from gesturelsm.generator.train import GenTrainConfig, train_generator
+    from gesturelsm.motion import REGIONS, Normalizer
+    from gesturelsm.motion.regions import GENERATED_REGIONS
+    from gesturelsm.tokenizer import RVQVAE, preset
+
+    root = Path(root)
+    torch.manual_seed(0)
+    feats = synthetic_motion().to_features()
+    toks = {}
+    for r in GENERATED_REGIONS:
+        cols = list(REGIONS[r].columns)
+        m = RVQVAE(preset("tiny", len(cols)), r, Normalizer.fit(feats[:, cols]))
+        m.train()
+        m(m.normalizer.normalize(feats[:256, cols])[None])  # initialise codebooks from data
+        toks[r] = m.eval()
+        m.save(root / "tokenizer" / f"{r}.safetensors", half=True)
+    take = build_take("synthetic", feats, speech_like(len(feats) / 30), None, toks, None)
+    for method in ("gesturelsm", "rectified_flow", "ddim"):
+        tc = GenTrainConfig(method=method, preset="tiny", steps=steps, batch_size=batch_size, lr=2e-3,
+                            warmup=warmup, eval_every=10_000, save_every=10_000)
+        gen = train_generator([take], [], toks, tc, root / "runs" / f"{method}.safetensors", log=lambda *_: None)
+        gen.save(root / "generator" / f"{method}.safetensors", half=True)
+    return root

@@ -13,39 +13,11 @@ os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 
-def build_tiny_assets(root: Path) -> Path:
-    import torch
-
-    from gesturelsm.generator.data import build_take
-    from gesturelsm.generator.train import GenTrainConfig, train_generator
-    from gesturelsm.motion import REGIONS, Normalizer
-    from gesturelsm.motion.regions import GENERATED_REGIONS
-    from gesturelsm.tokenizer import RVQVAE, preset
-
-    from _support import speech_like, synthetic_motion
-
-    torch.manual_seed(0)
-    feats = synthetic_motion().to_features()
-    toks = {}
-    for r in GENERATED_REGIONS:
-        cols = list(REGIONS[r].columns)
-        m = RVQVAE(preset("tiny", len(cols)), r, Normalizer.fit(feats[:, cols]))
-        m.train()
-        m(m.normalizer.normalize(feats[:256, cols])[None])
-        toks[r] = m.eval()
-        m.save(root / "tokenizer" / f"{r}.safetensors", half=True)
-    take = build_take("synthetic", feats, speech_like(len(feats) / 30), None, toks, None)
-    for method in ("gesturelsm", "rectified_flow", "ddim"):
-        tc = GenTrainConfig(method=method, preset="tiny", steps=20, batch_size=8, lr=2e-3, warmup=5,
-                            eval_every=1000, save_every=1000)
-        gen = train_generator([take], [], toks, tc, root / "runs" / f"{method}.safetensors", log=lambda *_: None)
-        gen.save(root / "generator" / f"{method}.safetensors", half=True)
-    return root
-
-
 @pytest.fixture(scope="session")
 def app_assets(tmp_path_factory) -> Path:
-    return build_tiny_assets(tmp_path_factory.mktemp("app_assets"))
+    from _support import build_tiny_assets
+
+    return build_tiny_assets(tmp_path_factory.mktemp("app_assets"), steps=20, batch_size=8, warmup=5)
 
 
 @pytest.fixture(scope="session")

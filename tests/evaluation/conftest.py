@@ -3,41 +3,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 import soundfile as sf
-import torch
 
-from _support import speech_like, synthetic_motion
+from _support import build_tiny_assets, speech_like, synthetic_motion
 
 
 @pytest.fixture(scope="session")
 def eval_assets(tmp_path_factory) -> Path:
-    from gesturelsm.generator.data import build_take
-    from gesturelsm.generator.train import GenTrainConfig, train_generator
-    from gesturelsm.motion import REGIONS, Normalizer
-    from gesturelsm.motion.regions import GENERATED_REGIONS
-    from gesturelsm.tokenizer import RVQVAE, preset
-
-    torch.manual_seed(0)
-    root = tmp_path_factory.mktemp("eval_assets")
-    motion = synthetic_motion()
-    feats = motion.to_features()
-    toks = {}
-    for r in GENERATED_REGIONS:
-        cols = list(REGIONS[r].columns)
-        m = RVQVAE(preset("tiny", len(cols)), r, Normalizer.fit(feats[:, cols]))
-        m.train()
-        m(m.normalizer.normalize(feats[:256, cols])[None])
-        toks[r] = m.eval()
-        m.save(root / "tokenizer" / f"{r}.safetensors", half=True)
-    take = build_take("synthetic", feats, speech_like(motion.duration), None, toks, None)
-    for method in ("gesturelsm", "rectified_flow", "ddim"):
-        tc = GenTrainConfig(method=method, preset="tiny", steps=5, batch_size=4, lr=2e-3, warmup=2,
-                            eval_every=1000, save_every=1000)
-        gen = train_generator([take], [], toks, tc, root / "runs" / f"{method}.safetensors", log=lambda *_: None)
-        gen.save(root / "generator" / f"{method}.safetensors", half=True)
-    return root
+    return build_tiny_assets(tmp_path_factory.mktemp("eval_assets"), steps=5, batch_size=4, warmup=2)
 
 
 @pytest.fixture(scope="session")

@@ -9,19 +9,13 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from _support import speech_like
+from _support import build_tiny_assets, speech_like
 
 
 
 @pytest.fixture(scope="module")
 def study_assets(tmp_path_factory):
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("app_tests_conftest",
-                                                  Path(__file__).resolve().parents[1] / "app" / "conftest.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod.build_tiny_assets(tmp_path_factory.mktemp("study_assets"))
+    return build_tiny_assets(tmp_path_factory.mktemp("study_assets"), steps=20, batch_size=8, warmup=5)
 
 
 @pytest.fixture
