@@ -13,7 +13,6 @@ os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 import argparse  # noqa: E402
-import socket  # noqa: E402
 import subprocess  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
@@ -49,16 +48,12 @@ def main(argv: list[str] | None = None) -> int:
 
     from gesturelsm.app_service import GestureService, ServiceSettings
 
-    from .ui import build_demo, launch
+    from .ui import serve_locally
 
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
     service.warmup()
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    demo = build_demo(service)
-    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
-    client = Client(f"http://127.0.0.1:{port}", verbose=False)
+    demo, url = serve_locally(service)
+    client = Client(url, verbose=False)
     sets = [["gesturelsm"], ["gesturelsm", "rectified_flow", "ddim"]]
     print(f"steps {args.steps} (DDIM 20), CFG 2, tiles {args.size} x {args.size}; times from the upload call")
     print("| speech | methods | text | upload to video (s) | rendering (s) | generation per method (s) |")

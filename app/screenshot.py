@@ -11,7 +11,6 @@ os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import socket  # noqa: E402
 import time  # noqa: E402
 
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
@@ -31,20 +30,16 @@ def main(argv: list[str] | None = None) -> int:
 
     from gesturelsm.app_service import GestureService, ServiceSettings
 
-    from .ui import EXAMPLES, build_demo, launch
+    from .ui import EXAMPLES, serve_locally
 
     text = {m["audio"]: m["text"] for m in json.loads((EXAMPLES / "examples.json").read_text())}[f"{args.example}.wav"]
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints))
     service.warmup()
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    demo = build_demo(service)
-    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    demo, url = serve_locally(service)
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": 1400, "height": 1300})
-        page.goto(f"http://127.0.0.1:{port}")
+        page.goto(url)
         page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / f"{args.example}.wav"))
         page.locator("#transcript textarea").fill(text)
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)

@@ -147,3 +147,16 @@ def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", po
     """Launch with the upload limit and the output folder allowed; returns what `Blocks.launch` returns."""
     return demo.launch(server_name=host, server_port=port, max_file_size=f"{int(service.settings.max_upload_mb)}mb",
                        allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)
+
+
+def serve_locally(service: GestureService) -> tuple[gr.Blocks, str]:
+    """Build and serve the app in this process on a free port of 127.0.0.1 (tests and dev tools);
+    returns the Blocks (close it when done) and the URL."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    demo = build_demo(service)
+    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    return demo, f"http://127.0.0.1:{port}"

@@ -3,7 +3,6 @@ does), a GestureService over them, and the app served in this process on a free 
 from __future__ import annotations
 
 import os
-import socket
 from pathlib import Path
 
 import numpy as np
@@ -59,21 +58,13 @@ def speech_wav(tmp_path_factory) -> Path:
     return path
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="session")
 def app_url(service):
     """The app served from this process (as `python -m app` serves it) at a local URL."""
-    from app.ui import build_demo, launch
+    from app.ui import serve_locally
 
-    demo = build_demo(service)
-    port = _free_port()
-    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
-    yield f"http://127.0.0.1:{port}"
+    demo, url = serve_locally(service)
+    yield url
     demo.close()
 
 
