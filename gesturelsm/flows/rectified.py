@@ -1,6 +1,7 @@
 """Baseline: rectified flow (plain flow matching) on the same backbone.
 
-Uniform t, no step-size input (d = 0 always), target x1 - x0; Euler sampling with n steps.
+Uniform t, no step-size input (d = 0 always), target x1 - x0 (loss in velocity or data space, as the shortcut
+model); Euler sampling with n steps.
 Same convention as every method here: t = 0 noise, t = 1 data.
 """
 from __future__ import annotations
@@ -9,13 +10,14 @@ from dataclasses import dataclass
 
 import torch
 
-from .base import LossResult, ModelFn, bcast, drop_mask, guided
+from .base import LossResult, ModelFn, bcast, drop_mask, flow_loss, guided
 from .timesteps import sample_t
 
 
 @dataclass
 class RectifiedFlow:
     time_sampler: str = "uniform"
+    loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
     name: str = "rectified_flow"
     uses_step_size: bool = False
 
@@ -26,7 +28,7 @@ class RectifiedFlow:
         t = sample_t(B, self.time_sampler, device=dev, generator=generator)
         x_t = bcast(t, x1) * x1 + (1 - bcast(t, x1)) * x0
         pred = f(x_t, t, torch.zeros(B, device=dev), drop_mask(B, cond_drop_p, dev, generator))
-        loss = (pred - (x1 - x0)).pow(2).mean()
+        loss = flow_loss(pred, x1 - x0, t, self.loss_space).mean()
         return LossResult(loss, {"flow": loss.item()})
 
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor:

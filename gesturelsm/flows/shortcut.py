@@ -12,6 +12,8 @@ ordinary (instantaneous) flow-matching velocity. One batch mixes two kinds of ro
 Deliberate choices where the reference has bugs (METHOD-FACTS): the loss is a plain mean squared error
 over all rows (no division by t); condition dropout is the same p = 0.1 on every row, and the consistency
 targets use exactly the row's own condition (kept or dropped); targets may come from an EMA teacher.
+`loss_space="data"` measures the same errors on the implied clean sample x_t + (1 - t) v (see base.flow_loss),
+used with networks that predict x1 (GeneratorConfig.prediction = "data"; velocity from base.velocity_from_data).
 Sampling: Euler with n steps, t_k = k / n, d = 1 / n (d = 0 from 128 steps on), CFG when scale != 1.
 """
 from __future__ import annotations
@@ -20,7 +22,7 @@ from dataclasses import dataclass
 
 import torch
 
-from .base import LossResult, ModelFn, bcast, drop_mask, guided
+from .base import LossResult, ModelFn, bcast, drop_mask, flow_loss, guided
 from .timesteps import sample_t
 
 
@@ -31,6 +33,7 @@ class Shortcut:
     time_sampler: str = "beta"             # beta | uniform | logit_normal (ablation)
     consistency_fraction: float = 0.25     # share of rows trained with the self-consistency target
     max_level: int = 7                     # d levels 1/2 ... 1/2^max_level (1/128)
+    loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
     name: str = "gesturelsm"
     uses_step_size: bool = True
 
@@ -72,7 +75,7 @@ class Shortcut:
             target[:n_sc] = self.consistency_target(teacher or f, x_t[:n_sc], t[:n_sc], d[:n_sc] / 2, drop[:n_sc],
                                                     rows=torch.arange(n_sc, device=dev))
         pred = f(x_t, t, d, drop)
-        per_row = (pred - target).pow(2).flatten(1).mean(1)
+        per_row = flow_loss(pred, target, t, self.loss_space)
         loss = per_row.mean()
         logs = {"flow": per_row[n_sc:].mean().item()}
         if n_sc:

@@ -19,6 +19,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--steps", type=int, default=4000)
     p.add_argument("--batch-size", type=int, default=32)
     p.add_argument("--lr", type=float, default=2e-4)
+    p.add_argument("--betas", type=float, nargs=2, default=(0.5, 0.999), metavar=("B1", "B2"), help="Adam betas")
+    p.add_argument("--prediction", default="data", choices=["data", "velocity"],
+                   help="flows: the network predicts clean latents x1 (default) or the velocity (the paper)")
     p.add_argument("--time-sampler", default="beta", choices=["beta", "uniform", "logit_normal"],
                    help="gesturelsm only: training-time distribution of t")
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
@@ -97,7 +100,7 @@ def run_train(args: argparse.Namespace) -> int:
     if not train:
         raise UserError(f"{args.data}: no usable training takes (motion + audio)")
     tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
-                        lr=args.lr, time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
+                        lr=args.lr, betas=tuple(args.betas), prediction=args.prediction, time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
                         eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
     out = Path(args.out) / f"{args.method}.safetensors"
     policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"

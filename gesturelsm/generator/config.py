@@ -24,6 +24,9 @@ class GeneratorConfig:
     text_dim: int = 256
     cond_dim: int = 768            # fused speech feature per latent frame
     uses_step_size: bool = True    # shortcut models take d; baselines do not
+    # what the flow models' network outputs: "velocity" (the paper) or "data", the clean latents x1, turned
+    # into the velocity (x1_hat - x_t) / (1 - t) (flows/base.velocity_from_data). DDIM always predicts data.
+    prediction: str = "velocity"
 
     @property
     def window_frames(self) -> int:

@@ -17,6 +17,7 @@ import torch.nn.functional as F
 
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..features.audio import AudioEncoder
+from ..flows.base import velocity_from_data
 from .config import GeneratorConfig
 from .layers import CrossBlock, STBlock, sinusoidal
 
@@ -128,9 +129,16 @@ class GestureGenerator(nn.Module):
             m = drop.reshape(-1, 1, 1, 1)
             kv = [(torch.where(m, ku[idx], kc[idx]), torch.where(m, vu[idx], vc[idx]))
                   for (kc, vc), (ku, vu) in zip(kv_c, kv_u)]
-            return self.denoiser(x, t, d, seed[idx], kv)
+            return self.output(self.denoiser(x, t, d, seed[idx], kv), x, t)
 
         return f
+
+    def output(self, y: torch.Tensor, x: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+        """The denoiser's output as the method expects it: a flow's velocity (from x1 when the network predicts
+        data, see GeneratorConfig.prediction), DDIM's clean latents."""
+        if self.config.prediction == "data" and self.method != "ddim":
+            return velocity_from_data(y, x, t)
+        return y
 
     def forward(self, x, t, d, cond, seed, drop, speech: tuple | None = None) -> torch.Tensor:
         """Training path (no caching). `speech` = (audio, words, has_word, has_text) computes `cond` inside
@@ -138,7 +146,8 @@ class GestureGenerator(nn.Module):
         if speech is not None:
             cond = self.speech(*speech)
             cond = cond.repeat(x.shape[0] // cond.shape[0], 1, 1)
-        return self.denoiser(x, t, d, seed.repeat(x.shape[0] // seed.shape[0], 1, 1, 1), self.cross_kv(cond, drop))
+        y = self.denoiser(x, t, d, seed.repeat(x.shape[0] // seed.shape[0], 1, 1, 1), self.cross_kv(cond, drop))
+        return self.output(y, x, t)
 
     # ---- files -----------------------------------------------------------------------------------------
     def save(self, path: str | Path, half: bool = False, meta: dict | None = None) -> Path:

@@ -36,6 +36,7 @@ class GenTrainConfig:
     ema: float = 0.999               # EMA weights are what gets exported (decay warms up: see ema_decay)
     ema_teacher: bool = False        # shortcut targets from the EMA network (Shortcut Models) or online
     time_sampler: str = "beta"       # gesturelsm: beta | uniform | logit_normal
+    prediction: str = "data"         # flows: the network predicts x1 ("data", loss on x1) or the velocity (paper)
     seed: int = 0
     eval_every: int = 500
     save_every: int = 500
@@ -80,10 +81,16 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     if device.type == "cuda" and world > 1:
         device = torch.device("cuda", rank % torch.cuda.device_count())
     torch.manual_seed(tc.seed)
-    method = make_method(tc.method, **({"time_sampler": tc.time_sampler} if tc.method == "gesturelsm" else {}))
+    if tc.prediction not in ("data", "velocity"):
+        raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
+    kw = {} if tc.method == "ddim" else {"loss_space": tc.prediction}
+    if tc.method == "gesturelsm":
+        kw["time_sampler"] = tc.time_sampler
+    method = make_method(tc.method, **kw)
     base = config or PRESETS[tc.preset]
     cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
-                             "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size})
+                             "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
+                             "prediction": "data" if tc.method == "ddim" else tc.prediction})
     model = GestureGenerator(cfg, tc.method)
     std, neutral = latent_stats(tokenizers, takes, cfg)
     model.latent_std.copy_(std)

@@ -129,3 +129,31 @@ def test_every_method_learns_a_toy_distribution(name):
     dist = torch.minimum((out - torch.tensor([2.0, 1.0])).norm(dim=1), (out + torch.tensor([2.0, 1.0])).norm(dim=1))
     assert dist.median() < 0.35, dist.median()
     assert 0.25 < (out[:, 0] > 0).float().mean() < 0.75   # both modes, not collapsed
+
+
+def test_data_parametrisation_lands_on_the_prediction_and_its_loss_is_the_x1_error():
+    from gesturelsm.flows.base import flow_loss, velocity_from_data
+
+    torch.manual_seed(0)
+    x1_hat = torch.randn(3, 4, 8, 5)
+    f = lambda x, t, d, drop: velocity_from_data(x1_hat.repeat(x.shape[0] // 3, 1, 1, 1), x, t)  # noqa: E731
+    for method in (Shortcut(), RectifiedFlow()):
+        for steps in (1, 3):  # whatever the noise, the last Euler step lands exactly on the prediction
+            assert torch.allclose(method.sample(f, torch.randn_like(x1_hat), steps, cfg_scale=2.0), x1_hat, atol=1e-5)
+    # loss in data space = squared error of the implied clean sample x_t + (1 - t) v
+    x_t, v, v_star, t = torch.randn(4, 6), torch.randn(4, 6), torch.randn(4, 6), torch.rand(4)
+    x1_from = lambda vel: x_t + (1 - t)[:, None] * vel  # noqa: E731
+    assert torch.allclose(flow_loss(v, v_star, t, "data"), (x1_from(v) - x1_from(v_star)).pow(2).mean(1), atol=1e-6)
+    assert torch.allclose(flow_loss(v, v_star, t, "velocity"), (v - v_star).pow(2).mean(1))
+    with pytest.raises(ValueError, match="loss space"):
+        flow_loss(v, v_star, t, "x0")
+
+
+@pytest.mark.parametrize("method", [Shortcut(loss_space="data"), RectifiedFlow(loss_space="data")])
+def test_data_space_loss_is_zero_for_the_exact_field(method):
+    x1 = torch.randn(4, 2, 8, 3)
+
+    def f(x, t, d, drop, rows=None):   # the straight-path velocity to this batch's own data
+        target = x1 if rows is None else x1[rows]
+        return (target - x) / (1 - t).clamp_min(1e-6).reshape(-1, 1, 1, 1)
+    assert method.loss(f, x1, 0.0).loss.item() < 1e-8
