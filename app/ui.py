@@ -123,7 +123,8 @@ def build_demo(service: GestureService) -> gr.Blocks:
                                      interactive=False, elem_id="timings", wrap=True)
                 files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
                                 elem_id="downloads")
-                view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420)
+                view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
+                                  elem_id="view3d")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())

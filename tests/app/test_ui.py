@@ -16,9 +16,18 @@ from gesturelsm.app_service import TIMING_COLUMNS
 
 CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
                  if p and os.path.exists(p)), None)
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--autoplay-policy=no-user-gesture-required"]
+from app.screenshot import CHROMIUM_ARGS  # noqa: E402  (WebGL through SwiftShader: the 3D view draws)
+
+
+def body_pixels(png: bytes) -> float:
+    """Share of pixels in a screenshot that are the mannequin's skin colour (warm: red well above blue),
+    not the page's white/grey background or Gradio's UI."""
+    import io
+
+    from PIL import Image
+
+    a = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    return float(((a[..., 0] - a[..., 2] > 25) & (a[..., 0] > 120)).mean())
 
 
 def test_build_demo_has_the_controls(service):
@@ -111,6 +120,13 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert "aligned automatically" in page.locator("#summary").inner_text()
     page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
     assert ".glb" in page.locator("#downloads").inner_text()
+    canvas = page.locator("#view3d canvas")                                # the interactive 3D view draws
+    canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
+    for _ in range(20):
+        page.wait_for_timeout(500)
+        if body_pixels(canvas.screenshot()) > 0.005:
+            break
+    assert body_pixels(canvas.screenshot()) > 0.005
     page.screenshot(path=str(tmp_path / "page.png"), full_page=True)
     page.close()
 
