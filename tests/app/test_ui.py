@@ -82,15 +82,20 @@ def test_gradio_client_bad_input_message(app_url, tmp_path):
 
 
 @pytest.fixture(scope="module")
-def browser():
+def playwright():
     if CHROMIUM is None:
         pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
     from playwright.sync_api import sync_playwright
 
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        yield b
-        b.close()
+    with sync_playwright() as p:      # one per module: the sync API cannot be started twice at once
+        yield p
+
+
+@pytest.fixture(scope="module")
+def browser(playwright):
+    b = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    yield b
+    b.close()
 
 
 @pytest.mark.browser
@@ -129,6 +134,33 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert body_pixels(canvas.screenshot()) > 0.005
     page.screenshot(path=str(tmp_path / "page.png"), full_page=True)
     page.close()
+
+
+@pytest.mark.browser
+def test_browser_microphone_recording_generates(playwright, app_url):
+    """The microphone path: Chromium's fake capture device plays a shipped example into the page's recorder."""
+    from app.ui import EXAMPLES
+
+    args = CHROMIUM_ARGS + ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
+                            f"--use-file-for-fake-audio-capture={EXAMPLES / 'hello.wav'}"]
+    b = playwright.chromium.launch(executable_path=CHROMIUM, args=args)
+    try:
+        page = b.new_context(permissions=["microphone"]).new_page()
+        page.goto(app_url)
+        page.locator("#speech button[aria-label='Record audio']").first.click()
+        page.get_by_role("button", name="Record", exact=True).click()
+        page.wait_for_timeout(2500)
+        page.locator("#speech button.stop-button").first.click()
+        page.locator("#speech [aria-label='Play']").wait_for(timeout=20000)     # the recording is in the player
+        page.locator("#generate").click()
+        page.locator("#video video").wait_for(timeout=120000)
+        duration = page.evaluate("""async () => { const v = document.querySelector('#video video');
+            if (v.readyState < 1) await new Promise(r => v.addEventListener('loadedmetadata', r, {once: true}));
+            return v.duration; }""")
+        assert 2.0 < duration < 6.0                      # as long as the recording (~2.5 s + start-up)
+        assert "audio-only" in page.locator("#summary").inner_text()
+    finally:
+        b.close()
 
 
 @pytest.mark.browser
