@@ -25,8 +25,8 @@ class QuantizedResult:
     quantized: torch.Tensor       # (N, D) sum of codes, straight-through in training
     codes: torch.Tensor           # (N, L, G) int64 code per layer and group; -1 for layers dropped
     commit_loss: torch.Tensor     # scalar, mean over the used layers
-    perplexity: torch.Tensor      # (L,) per layer, mean over groups (0 for dropped layers)
-    usage: torch.Tensor           # (L,) fraction of codes used in this batch, mean over groups
+    perplexity: torch.Tensor      # (L,) per layer, mean over groups (0 for dropped layers; training mode only)
+    usage: torch.Tensor           # (L,) fraction of codes used in this batch, mean over groups (training only)
     num_layers: int               # layers actually used
 
 
@@ -63,8 +63,9 @@ class EMAQuantizer(nn.Module):
     def assign(self, x: torch.Tensor) -> torch.Tensor:
         """(N, G, d) -> (N, G) index of the nearest code per group (squared Euclidean)."""
         xg = x.transpose(0, 1)                                                  # (G, N, d)
-        d = (xg.pow(2).sum(-1, keepdim=True) - 2 * xg @ self.codebook.transpose(1, 2)
-             + self.codebook.pow(2).sum(-1)[:, None])                          # (G, N, K)
+        # ||x - c||^2 = ||x||^2 - 2 x.c + ||c||^2; ||x||^2 is the same for every code, so it is left out
+        d = torch.baddbmm(self.codebook.pow(2).sum(-1)[:, None], xg, self.codebook.transpose(1, 2),
+                          alpha=-2.0)                                           # (G, N, K)
         return d.argmin(-1).t()
 
     def lookup(self, codes: torch.Tensor) -> torch.Tensor:
@@ -135,6 +136,8 @@ class ResidualVQ(nn.Module):
             commit = commit + F.mse_loss(residual, q.detach())
             residual = residual - q.detach()
             total = total + q
+            if not self.training:          # batch statistics are for the training progress bar only
+                continue
             counts = F.one_hot(c.t(), layer.codebook_size).sum(1).float()      # (G, K)
             p = counts / counts.sum(-1, keepdim=True)
             perplexity[i] = torch.exp(-(p * torch.log(p + 1e-10)).sum(-1)).mean()
