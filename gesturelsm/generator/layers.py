@@ -1,6 +1,7 @@
 """Transformer building blocks: embeddings, attention with rotary positions, cross/spatial-temporal blocks."""
 from __future__ import annotations
 
+import functools
 import math
 
 import torch
@@ -16,16 +17,20 @@ def sinusoidal(t: torch.Tensor, dim: int, max_period: float = 1e4) -> torch.Tens
     return torch.cat([torch.cos(args), torch.sin(args)], dim=-1)
 
 
-def rotary_cache(n: int, head_dim: int, device, base: float = 1e4) -> tuple[torch.Tensor, torch.Tensor]:
+@functools.lru_cache(maxsize=32)
+def rotary_freqs(n: int, head_dim: int, device: torch.device, base: float = 1e4) -> torch.Tensor:
+    """(n, head_dim / 2) complex rotations e^{i pos * base^(-2k / head_dim)}; cached (inference calls the same
+    shapes at every step). Read-only: never modify the returned tensor in place."""
     inv = 1.0 / base ** (torch.arange(0, head_dim, 2, device=device, dtype=torch.float32) / head_dim)
     ang = torch.arange(n, device=device, dtype=torch.float32)[:, None] * inv[None]   # (n, hd/2)
-    return ang.cos(), ang.sin()
+    return torch.polar(torch.ones_like(ang), ang)
 
 
-def apply_rotary(x: torch.Tensor, cos: torch.Tensor, sin: torch.Tensor) -> torch.Tensor:
-    """x: (..., n, hd) rotated pairwise by position."""
-    x1, x2 = x[..., 0::2], x[..., 1::2]
-    return torch.stack([x1 * cos - x2 * sin, x1 * sin + x2 * cos], dim=-1).flatten(-2)
+def apply_rotary(x: torch.Tensor, freqs: torch.Tensor) -> torch.Tensor:
+    """x: (..., n, hd); rotates each interleaved pair (x[2k], x[2k+1]) by its position's angle, as one complex
+    product: (x1 + i x2) e^{i a} = (x1 cos a - x2 sin a) + i (x1 sin a + x2 cos a)."""
+    xc = torch.view_as_complex(x.float().reshape(*x.shape[:-1], -1, 2).contiguous())
+    return torch.view_as_real(xc * freqs).flatten(-2).type_as(x)
 
 
 class DropPath(nn.Module):
@@ -51,8 +56,8 @@ class SelfAttention(nn.Module):
         N, L, C = x.shape
         q, k, v = self.qkv(x).reshape(N, L, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)  # (N, h, L, hd)
         if self.rotary:
-            cos, sin = rotary_cache(L, C // self.heads, x.device)
-            q, k = apply_rotary(q, cos, sin), apply_rotary(k, cos, sin)
+            freqs = rotary_freqs(L, C // self.heads, x.device)
+            q, k = apply_rotary(q, freqs), apply_rotary(k, freqs)
         y = F.scaled_dot_product_attention(q, k, v)
         return self.out(y.transpose(1, 2).reshape(N, L, C))
 
