@@ -100,7 +100,8 @@ def run_train(args: argparse.Namespace) -> int:
     if not train:
         raise UserError(f"{args.data}: no usable training takes (motion + audio)")
     tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
-                        lr=args.lr, betas=tuple(args.betas), prediction=args.prediction, time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
+                        lr=args.lr, betas=tuple(args.betas), prediction=args.prediction,
+                        time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
                         eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
     out = Path(args.out) / f"{args.method}.safetensors"
     policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"
