@@ -115,12 +115,19 @@ class GestureGenerator(nn.Module):
         c = torch.where(drop[:, None, None], null, cond)
         return [blk.kv(c) for blk in self.denoiser.cross]
 
-    def bind(self, cond: torch.Tensor, seed: torch.Tensor):
+    def condition_kv(self, cond: torch.Tensor) -> tuple[list, list]:
+        """(conditional, null) K/V per cross block for a (B, t, C) condition; the null half has batch 1 (the null
+        condition is the same for every row) and broadcasts in `bind`."""
+        no = torch.zeros(cond.shape[0], dtype=torch.bool, device=cond.device)
+        return self.cross_kv(cond, no), self.cross_kv(cond[:1], ~no[:1])
+
+    def bind(self, cond: torch.Tensor, seed: torch.Tensor, kv: tuple[list, list] | None = None):
         """A model function f(x, t, d, drop) for the samplers (see flows/base.py), with the conditional and
-        null K/V computed once, not at every step. Accepts batches that are multiples of cond's batch."""
+        null K/V computed once, not at every step (`kv`: `condition_kv(cond)` when the caller already has it).
+        Accepts batches that are multiples of cond's batch."""
         B = cond.shape[0]
-        no = torch.zeros(B, dtype=torch.bool, device=cond.device)
-        kv_c, kv_u = self.cross_kv(cond, no), self.cross_kv(cond, ~no)
+        kv_c, kv_u = kv if kv is not None else self.condition_kv(cond)
+        kv_u = [(k.expand(B, -1, -1, -1), v.expand(B, -1, -1, -1)) for k, v in kv_u]
 
         def f(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor,
               rows: torch.Tensor | None = None) -> torch.Tensor:

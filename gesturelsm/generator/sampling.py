@@ -32,8 +32,10 @@ def window_layout(num_latents: int, t: int, s: int) -> list[int]:
 @torch.no_grad()
 def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
                      has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
-                     progress: Progress | None = None, batch_windows: int = 1) -> torch.Tensor:
-    """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents."""
+                     progress: Progress | None = None, cond_batch: int = 16) -> torch.Tensor:
+    """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents.
+    The speech condition and its K/V are computed for `cond_batch` windows at a time (one batched call instead
+    of one per window; the windows' denoising stays sequential because each seeds the next)."""
     c = model.config
     t, s = c.window_latents, c.seed_latents
     method = make_method(model.method)
@@ -50,12 +52,19 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     out = torch.zeros(R, total, D)
     seed_lat = model.neutral_seed.to(dev)[None]                # (1, R, s, D), scaled
     ramp = torch.arange(1, s + 1, dtype=torch.float32) / (s + 1)   # weight of the new window in the overlap
+    n_a = samples_for(4 * t)
     for i, st in enumerate(starts):
-        a0 = samples_for(4 * st)
-        cond = model.speech(audio_ch[None, :, a0:a0 + samples_for(4 * t)].to(dev), words[None, 4 * st:4 * (st + t)].to(dev),
-                            has_word[None, 4 * st:4 * (st + t)].to(dev), torch.tensor([has_text], device=dev))
+        j = i % cond_batch
+        if j == 0:                                             # speech condition of the next cond_batch windows
+            chunk = starts[i:i + cond_batch]
+            a = torch.stack([audio_ch[:, samples_for(4 * c0):samples_for(4 * c0) + n_a] for c0 in chunk])
+            w = torch.stack([words[4 * c0:4 * (c0 + t)] for c0 in chunk])
+            hw = torch.stack([has_word[4 * c0:4 * (c0 + t)] for c0 in chunk])
+            conds = model.speech(a.to(dev), w.to(dev), hw.to(dev), torch.full((len(chunk),), has_text, device=dev))
+            kv_c, kv_u = model.condition_kv(conds)              # (n, h, t, hd) each; null part (1, ...)
+        kv = ([(k[j:j + 1], v[j:j + 1]) for k, v in kv_c], kv_u)
         noise = torch.randn(1, R, t, D, generator=g).to(dev)
-        x = method.sample(model.bind(cond, seed_lat), noise, steps, cfg_scale)[0].cpu()   # (R, t, D) scaled
+        x = method.sample(model.bind(conds[j:j + 1], seed_lat, kv), noise, steps, cfg_scale)[0].cpu()   # (R, t, D)
         if i == 0:
             out[:, st:st + t] = x
         else:

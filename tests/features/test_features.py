@@ -25,6 +25,28 @@ def test_envelope_is_the_forward_window_maximum():
     np.testing.assert_allclose(env[::97], brute)
 
 
+@pytest.mark.parametrize("n", [0, 1, 5, 1023, 1024, 1025, 4099])
+@pytest.mark.parametrize("window", [1, 2, 3, 64, 1024])
+def test_envelope_doubling_equals_the_sliding_window_filter(n, window):
+    from scipy.ndimage import maximum_filter1d
+
+    y = np.random.default_rng(n).normal(size=n).astype(np.float32)
+    ref = maximum_filter1d(np.abs(y), size=window, origin=-(window // 2), mode="constant") if n else np.abs(y)
+    np.testing.assert_array_equal(envelope(y, window), ref)
+
+
+def test_onsets_equal_librosas_detector_on_real_speech(beat2_root):
+    """The torch STFT inside `log_mel` must not move a single onset of librosa's own detector."""
+    import librosa
+
+    from gesturelsm.data.beat2 import Beat2Dataset
+
+    y = Beat2Dataset(beat2_root).load("2_scott_0_1_1").audio.astype(np.float32)
+    ref = librosa.onset.onset_detect(y=y, sr=16000, hop_length=512, units="frames") * 512
+    assert len(ref) > 300
+    np.testing.assert_array_equal(onset_samples(y), ref)
+
+
 def test_onsets_land_at_their_sample_positions():
     """Clicks at known times: impulses within one hop (512 samples) of each click, not at frame indices."""
     sr = 16000

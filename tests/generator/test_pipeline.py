@@ -73,6 +73,24 @@ def test_bad_audio_is_refused_with_a_message(tiny_pipeline):
         long.generate(speech_like(6.0), 16000)
 
 
+@pytest.mark.parametrize("has_text", [False, True])
+def test_batched_speech_conditions_equal_one_window_at_a_time(tiny_pipeline, has_text):
+    """generate_latents computes the speech condition for several windows in one call; every window must get
+    exactly what a call for that window alone gives (tiny windows: 30 s is many of them, across 3 batches)."""
+    from gesturelsm.generator.sampling import generate_latents
+
+    gen = tiny_pipeline.generators["gesturelsm"]
+    sp = tiny_pipeline.prepare_speech(speech_like(30.0), 16000)
+    T = sp.num_frames
+    words = torch.randn(T, sp.word_features.shape[1]) if has_text else sp.word_features
+    has_word = torch.rand(T) < 0.6 if has_text else sp.has_word
+    n_windows = len(window_layout(-(-T // 4), gen.config.window_latents, gen.config.seed_latents))
+    assert n_windows > 16
+    one, many = (generate_latents(gen, sp.channels, words, has_word, has_text, T, 2, 2.0, 0, cond_batch=b)
+                 for b in (1, 7))
+    torch.testing.assert_close(many, one, rtol=1e-4, atol=1e-5)
+
+
 def GesturePipelineWithLimit(pipe, seconds):
     from gesturelsm.pipeline import GesturePipeline
 
