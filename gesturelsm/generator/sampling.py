@@ -43,7 +43,8 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     L = math.ceil(num_frames / 4)
     starts = window_layout(L, t, s)
     total = starts[-1] + t                                     # latents covered incl. padding
-    n_samp = samples_for(4 * total)
+    n_a = samples_for(4 * t)                                   # samples per window (all windows equal)
+    n_samp = samples_for(4 * starts[-1]) + n_a                 # >= samples_for(4 * total): rounding
     audio_ch = F.pad(audio_ch, (0, max(0, n_samp - audio_ch.shape[1])))
     words = F.pad(words, (0, 0, 0, max(0, 4 * total - words.shape[0])))
     has_word = F.pad(has_word, (0, max(0, 4 * total - has_word.shape[0])))
@@ -52,7 +53,6 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     out = torch.zeros(R, total, D)
     seed_lat = model.neutral_seed.to(dev)[None]                # (1, R, s, D), scaled
     ramp = torch.arange(1, s + 1, dtype=torch.float32) / (s + 1)   # weight of the new window in the overlap
-    n_a = samples_for(4 * t)
     for i, st in enumerate(starts):
         j = i % cond_batch
         if j == 0:                                             # speech condition of the next cond_batch windows

@@ -91,6 +91,24 @@ def test_batched_speech_conditions_equal_one_window_at_a_time(tiny_pipeline, has
     torch.testing.assert_close(many, one, rtol=1e-4, atol=1e-5)
 
 
+def test_every_length_fits_the_shipped_window_size():
+    """With 128-frame windows a window is 68,266.7 samples: rounding must never leave a window short."""
+    from dataclasses import replace
+
+    from gesturelsm.generator.config import PRESETS
+    from gesturelsm.generator.data import samples_for
+    from gesturelsm.generator.model import GestureGenerator
+    from gesturelsm.generator.sampling import generate_latents
+
+    torch.manual_seed(0)
+    gen = GestureGenerator(replace(PRESETS["tiny"], window_latents=32, seed_latents=4)).eval()
+    for frames in (244, 245, 246, 247, 300, 1801):                 # 61+ latents: the 3rd window's rounding
+        audio = torch.rand(2, samples_for(frames))
+        lat = generate_latents(gen, audio, torch.zeros(frames, 384), torch.zeros(frames, dtype=torch.bool), False,
+                               frames, 1, 2.0, 0)
+        assert lat.shape[1] == -(-frames // 4) and torch.isfinite(lat).all()
+
+
 def GesturePipelineWithLimit(pipe, seconds):
     from gesturelsm.pipeline import GesturePipeline
 
