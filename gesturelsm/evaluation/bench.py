@@ -6,10 +6,11 @@ tokenizers, for timing only) x method x steps:
 - ms / step: one denoiser call on a CFG pair (batch 2) of one 128-frame window, speech K/V cached.
 - AITS: generation seconds for one clip of one window (128 frames, 4.27 s): audio features + sampling +
   decoding, transcript alignment excluded (the paper's convention).
-- RTF 10 s / 60 s: seconds of speech per second of generation for 10 s and 60 s of speech (60 s is timed
-  once per configuration, after the rounds, with the peak resident memory during that call above the
-  process's level before it (models loaded and warm); on CUDA the peak allocated GPU memory). The process's
-  overall peak RSS is in the JSON.
+- RTF 10 s / 60 s: seconds of speech per second of generation for 10 s and 60 s of speech (60 s only for
+  `long_presets`, in the same interleaved rounds). Peak memory: one more 60 s call per configuration after
+  the rounds, the peak resident memory during it above the process's level before it (models loaded and
+  warm); on CUDA the peak allocated GPU memory. The process's overall peak RSS is in the JSON.
+- Ratios: GestureLSM 8 steps against the baselines, per clip (AITS) and for 60 s of speech.
 - End to end: an uploaded file to a finished video (decode audio, align the transcript if any, generate,
   render) for the shipped GestureLSM at 8 steps; run twice, the second (a warm app) is reported and the
   first request's total beside it.
@@ -141,11 +142,11 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
     shipped.prepare_speech(speech_clip(2.0, speech), 16000)       # warm-up: lazy imports, first-call costs
     inputs = {k: shipped.prepare_speech(speech_clip(s, speech), 16000) for k, s in lengths.items()}
     plan = [(p, m, s) for p, pipe in pipes.items() for m in pipe.methods for s in steps]
-    times: dict[tuple, dict[str, list[float]]] = {k: {"clip": [], "10s": []} for k in plan}
+    times: dict[tuple, dict[str, list[float]]] = {k: {"clip": [], "10s": [], "long": []} for k in plan}
     for rnd in range(repeats + 1):                              # round 0 warms up and is discarded
         for key in plan:
             p, m, s = key
-            for which in ("clip", "10s"):
+            for which in ("clip", "10s") + (("long",) if long_seconds and p in long_presets and rnd else ()):
                 _sync(device)
                 res = pipes[p].generate(inputs[which], steps=s, cfg=cfg, method=m)
                 if rnd:
@@ -164,18 +165,22 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
             if torch.device(device).type == "cuda":
                 torch.cuda.reset_peak_memory_stats()
             with PeakRSS() as mem:
-                res = pipe.generate(inputs["long"], steps=s, cfg=cfg, method=m)
-            row["rtf_60s"] = lengths["long"] / res.generation_seconds
+                pipe.generate(inputs["long"], steps=s, cfg=cfg, method=m)
+            row["long_seconds"] = statistics.median(times[key]["long"])
+            row["rtf_60s"] = lengths["long"] / row["long_seconds"]
             row["peak_mb"] = (torch.cuda.max_memory_allocated() / 2 ** 20 if torch.device(device).type == "cuda"
                               else mem.megabytes)
         rows.append(row)
         log(f"{p} {m} {s} steps: AITS {row['aits']:.3f} s")
     by = {(r["preset"], r["method"], r["steps"]): r["aits"] for r in rows}
+    by_long = {(r["preset"], r["method"], r["steps"]): r["long_seconds"] for r in rows if "long_seconds" in r}
     ratios = {}
     for p in pipes:
         for base, bs in (("ddim", 20), ("rectified_flow", 20), ("ddim", 8), ("rectified_flow", 8)):
-            if (p, "gesturelsm", 8) in by and (p, base, bs) in by:
-                ratios[f"{p}: {base} {bs} steps / GestureLSM 8 steps (AITS)"] = by[(p, base, bs)] / by[(p, "gesturelsm", 8)]
+            for what, table in (("AITS", by), (f"{long_seconds:g} s of speech", by_long)):
+                if (p, "gesturelsm", 8) in table and (p, base, bs) in table:
+                    ratios[f"{p}: {base} {bs} steps / GestureLSM 8 steps ({what})"] = (table[(p, base, bs)]
+                                                                                   / table[(p, "gesturelsm", 8)])
         if (p, "gesturelsm", 1) in by and (p, "gesturelsm", 8) in by:
             ratios[f"{p}: GestureLSM 8 / 1 steps (AITS)"] = by[(p, "gesturelsm", 8)] / by[(p, "gesturelsm", 1)]
     rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, torch {torch.__version__}"

@@ -14,6 +14,9 @@ def test_bench_rows_ratios_and_plot(eval_assets, tmp_path):
         assert r["aits"] > 0 and r["ms_per_step"] > 0 and r["rtf_10s"] > 0 and r["rtf_60s"] > 0
     assert rows[("gesturelsm", 8)]["aits"] > rows[("gesturelsm", 1)]["aits"]      # more steps cost more time
     assert "shipped: GestureLSM 8 / 1 steps (AITS)" in rep["ratios"]
+    long_ratio = rep["ratios"]["shipped: ddim 8 steps / GestureLSM 8 steps (6 s of speech)"]
+    assert long_ratio == rows[("ddim", 8)]["long_seconds"] / rows[("gesturelsm", 8)]["long_seconds"]
+    assert rows[("gesturelsm", 8)]["rtf_60s"] == 6.0 / rows[("gesturelsm", 8)]["long_seconds"]
     ev = {"rows": [{"method": "gesturelsm", "steps": s, "heldout": {"fgd_k": 1.0 / s}} for s in (1, 8)]}
     png = quality_time_plot(rep, tmp_path / "q.png", ev)
     assert png.stat().st_size > 5000 and png.read_bytes()[:4] == b"\x89PNG"
