@@ -25,6 +25,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--time-sampler", default="beta", choices=["beta", "uniform", "logit_normal"],
                    help="gesturelsm only: training-time distribution of t")
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
+    p.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
+                   help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8)
     p.add_argument("--speakers", nargs="*")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
@@ -99,18 +101,50 @@ def run_train(args: argparse.Namespace) -> int:
         held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
     if not train:
         raise UserError(f"{args.data}: no usable training takes (motion + audio)")
+    config = preset_with(args.preset, args.set)
     tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
                         lr=args.lr, betas=tuple(args.betas), prediction=args.prediction,
                         time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
                         eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
     out = Path(args.out) / f"{args.method}.safetensors"
     policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"
-    model = train_generator(train, held, tokenizers, tc, out, meta={"data": policy, "takes": ds.names})
+    model = train_generator(train, held, tokenizers, tc, out, config=config, meta={"data": policy, "takes": ds.names})
     if args.ship and (not torch.distributed.is_initialized() or torch.distributed.get_rank() == 0):
         path = model.save(Path(args.ship) / f"{args.method}.safetensors", half=True,
                           meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
         print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0
+
+
+def preset_with(preset: str, overrides: list[str]):
+    """A named GeneratorConfig preset with FIELD=VALUE overrides (values parsed as the field's type)."""
+    import dataclasses
+
+    from ..cli import UserError
+    from .config import PRESETS
+
+    if preset not in PRESETS:
+        raise UserError(f"unknown preset {preset!r}; choose from {', '.join(PRESETS)}")
+    base = PRESETS[preset]
+    fields = {f.name: type(getattr(base, f.name)) for f in dataclasses.fields(base)}
+    changes = {}
+    for item in overrides:
+        key, sep, val = item.partition("=")
+        if not sep or key not in fields:
+            raise UserError(f"--set {item!r}: expected FIELD=VALUE with FIELD one of {', '.join(fields)}")
+        kind = fields[key]
+        try:
+            if kind is bool:
+                if val.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                    raise ValueError(val)
+                changes[key] = val.lower() in ("true", "1", "yes")
+            elif kind is tuple:
+                changes[key] = tuple(int(v) for v in val.split(","))
+            else:
+                changes[key] = kind(val)
+        except ValueError:
+            raise UserError(f"--set {item!r}: {val!r} is not a valid {kind.__name__}") from None
+    return dataclasses.replace(base, **changes)
 
 
 def run_generate(args: argparse.Namespace) -> int:

@@ -27,6 +27,10 @@ class GeneratorConfig:
     # what the flow models' network outputs: "velocity" (the paper) or "data", the clean latents x1, turned
     # into the velocity (x1_hat - x_t) / (1 - t) (flows/base.velocity_from_data). DDIM always predicts data.
     prediction: str = "velocity"
+    # frame-aligned speech: besides the cross-attention, add each latent frame's (LayerNorm + linear projected)
+    # speech feature to that frame's tokens. Cross-attention alone must learn which speech frame belongs to
+    # which gesture frame from learned absolute positions, which one speaker's minute of data does not teach.
+    speech_add: bool = False
 
     @property
     def window_frames(self) -> int:

@@ -10,6 +10,7 @@ Shapes (B batch, R regions, t = 32 latent frames per 128-frame window, D latent 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import torch
 import torch.nn as nn
@@ -51,6 +52,23 @@ class SpeechEncoder(nn.Module):
         return h + self.pos[: h.shape[1]]
 
 
+class SpeechContext(NamedTuple):
+    """What the denoiser reads of the speech condition, computed once per window (not at every step)."""
+    kv: list[tuple[torch.Tensor, torch.Tensor]]   # per cross block: K, V (B, heads, t, head_dim)
+    frames: torch.Tensor | None                   # (B, t, dim) frame-aligned speech term (config.speech_add)
+
+    def rows(self, idx) -> "SpeechContext":
+        """The same context for a subset of rows (an index tensor or a slice)."""
+        return SpeechContext([(k[idx], v[idx]) for k, v in self.kv], None if self.frames is None else self.frames[idx])
+
+    def select(self, drop: torch.Tensor, null: "SpeechContext") -> "SpeechContext":
+        """Row-wise: `null` where drop (B,), else self (null may have batch 1 and broadcasts)."""
+        m = drop.reshape(-1, 1, 1, 1)
+        kv = [(torch.where(m, ku, kc), torch.where(m, vu, vc)) for (kc, vc), (ku, vu) in zip(self.kv, null.kv)]
+        frames = None if self.frames is None else torch.where(drop.reshape(-1, 1, 1), null.frames, self.frames)
+        return SpeechContext(kv, frames)
+
+
 class Denoiser(nn.Module):
     def __init__(self, c: GeneratorConfig):
         super().__init__()
@@ -66,6 +84,7 @@ class Denoiser(nn.Module):
         self.merge = nn.Linear(2 * C, C)
         self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn, c.drop_path) for _ in range(c.cross_layers))
         self.st = nn.ModuleList(STBlock(C, c.heads, c.ffn, c.drop_path) for _ in range(c.st_layers))
+        self.speech_in = nn.Sequential(nn.LayerNorm(c.cond_dim), nn.Linear(c.cond_dim, C)) if c.speech_add else None
         self.out_norm = nn.LayerNorm(C)
         self.out = nn.Linear(C, D)
         nn.init.zeros_(self.d_embed.weight)   # d enters through a zero-initialised layer (METHOD-FACTS)
@@ -80,14 +99,21 @@ class Denoiser(nn.Module):
             e = e + self.d_embed(sinusoidal(d, C))
         return self.emb_mlp(e) + self.seed_proj(seed.flatten(1))       # (B, C)
 
+    def context(self, cond: torch.Tensor) -> SpeechContext:
+        """(B, t, cond_dim) speech features -> what forward() reads of them."""
+        return SpeechContext([blk.kv(cond) for blk in self.cross],
+                             self.speech_in(cond) if self.speech_in is not None else None)
+
     def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, seed: torch.Tensor,
-                kv: list[tuple[torch.Tensor, torch.Tensor]]) -> torch.Tensor:
+                ctx: SpeechContext) -> torch.Tensor:
         B, R, tt, _ = x.shape
         h = self.in_proj(x) + self.region_emb[None, :, None] + self.frame_emb[None, None, :tt]   # (B, R, t, C)
         e = self.embed(t, d, seed)[:, None, None].expand(-1, R, tt, -1)
         h = self.merge(torch.cat([h, e], dim=-1))
+        if ctx.frames is not None:
+            h = h + ctx.frames[:, None, :tt]                               # every region of frame i gets speech i
         h = h.reshape(B, R * tt, -1)
-        for block, kv_i in zip(self.cross, kv):
+        for block, kv_i in zip(self.cross, ctx.kv):
             h = block(h, kv_i)
         h = h.reshape(B, R, tt, -1)
         for block in self.st:
@@ -109,34 +135,31 @@ class GestureGenerator(nn.Module):
         self.register_buffer("neutral_seed", torch.zeros(R, s, D))
 
     # ---- conditioning ---------------------------------------------------------------------------------
-    def cross_kv(self, cond: torch.Tensor, drop: torch.Tensor) -> list[tuple[torch.Tensor, torch.Tensor]]:
-        """Per cross block, K/V of the speech condition, with the null condition where `drop`."""
+    def context(self, cond: torch.Tensor, drop: torch.Tensor) -> SpeechContext:
+        """The denoiser's speech context, with the null condition where `drop` (B,)."""
         null = self.null_cond[None, : cond.shape[1]].expand_as(cond)
-        c = torch.where(drop[:, None, None], null, cond)
-        return [blk.kv(c) for blk in self.denoiser.cross]
+        return self.denoiser.context(torch.where(drop[:, None, None], null, cond))
 
-    def condition_kv(self, cond: torch.Tensor) -> tuple[list, list]:
-        """(conditional, null) K/V per cross block for a (B, t, C) condition; the null half has batch 1 (the null
-        condition is the same for every row) and broadcasts in `bind`."""
+    def contexts(self, cond: torch.Tensor) -> tuple[SpeechContext, SpeechContext]:
+        """(conditional, null) contexts for a (B, t, C) condition; the null one has batch 1 (the null condition
+        is the same for every row) and broadcasts in `bind`."""
         no = torch.zeros(cond.shape[0], dtype=torch.bool, device=cond.device)
-        return self.cross_kv(cond, no), self.cross_kv(cond[:1], ~no[:1])
+        return self.context(cond, no), self.context(cond[:1], ~no[:1])
 
-    def bind(self, cond: torch.Tensor, seed: torch.Tensor, kv: tuple[list, list] | None = None):
+    def bind(self, cond: torch.Tensor, seed: torch.Tensor,
+             ctx: tuple[SpeechContext, SpeechContext] | None = None):
         """A model function f(x, t, d, drop) for the samplers (see flows/base.py), with the conditional and
-        null K/V computed once, not at every step (`kv`: `condition_kv(cond)` when the caller already has it).
-        Accepts batches that are multiples of cond's batch."""
+        null contexts computed once, not at every step (`ctx`: `contexts(cond)` when the caller already has
+        them). Accepts batches that are multiples of cond's batch."""
         B = cond.shape[0]
-        kv_c, kv_u = kv if kv is not None else self.condition_kv(cond)
-        kv_u = [(k.expand(B, -1, -1, -1), v.expand(B, -1, -1, -1)) for k, v in kv_u]
+        ctx_c, ctx_u = ctx if ctx is not None else self.contexts(cond)
 
         def f(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor,
               rows: torch.Tensor | None = None) -> torch.Tensor:
             idx = torch.arange(B, device=x.device) if rows is None else rows
             idx = idx.repeat(x.shape[0] // len(idx))                  # CFG stacks both halves
-            m = drop.reshape(-1, 1, 1, 1)
-            kv = [(torch.where(m, ku[idx], kc[idx]), torch.where(m, vu[idx], vc[idx]))
-                  for (kc, vc), (ku, vu) in zip(kv_c, kv_u)]
-            return self.output(self.denoiser(x, t, d, seed[idx], kv), x, t)
+            c = ctx_c.rows(idx).select(drop, ctx_u)
+            return self.output(self.denoiser(x, t, d, seed[idx], c), x, t)
 
         return f
 
@@ -153,7 +176,7 @@ class GestureGenerator(nn.Module):
         if speech is not None:
             cond = self.speech(*speech)
             cond = cond.repeat(x.shape[0] // cond.shape[0], 1, 1)
-        y = self.denoiser(x, t, d, seed.repeat(x.shape[0] // seed.shape[0], 1, 1, 1), self.cross_kv(cond, drop))
+        y = self.denoiser(x, t, d, seed.repeat(x.shape[0] // seed.shape[0], 1, 1, 1), self.context(cond, drop))
         return self.output(y, x, t)
 
     # ---- files -----------------------------------------------------------------------------------------

@@ -34,7 +34,7 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
                      has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
                      progress: Progress | None = None, cond_batch: int = 16) -> torch.Tensor:
     """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents.
-    The speech condition and its K/V are computed for `cond_batch` windows at a time (one batched call instead
+    The speech condition and its contexts are computed for `cond_batch` windows at a time (one batched call instead
     of one per window; the windows' denoising stays sequential because each seeds the next)."""
     c = model.config
     t, s = c.window_latents, c.seed_latents
@@ -61,10 +61,10 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
             w = torch.stack([words[4 * c0:4 * (c0 + t)] for c0 in chunk])
             hw = torch.stack([has_word[4 * c0:4 * (c0 + t)] for c0 in chunk])
             conds = model.speech(a.to(dev), w.to(dev), hw.to(dev), torch.full((len(chunk),), has_text, device=dev))
-            kv_c, kv_u = model.condition_kv(conds)              # (n, h, t, hd) each; null part (1, ...)
-        kv = ([(k[j:j + 1], v[j:j + 1]) for k, v in kv_c], kv_u)
+            ctx_c, ctx_u = model.contexts(conds)                # batch n; the null context batch 1
         noise = torch.randn(1, R, t, D, generator=g).to(dev)
-        x = method.sample(model.bind(conds[j:j + 1], seed_lat, kv), noise, steps, cfg_scale)[0].cpu()   # (R, t, D)
+        f = model.bind(conds[j:j + 1], seed_lat, (ctx_c.rows(slice(j, j + 1)), ctx_u))
+        x = method.sample(f, noise, steps, cfg_scale)[0].cpu()                              # (R, t, D) scaled
         if i == 0:
             out[:, st:st + t] = x
         else:

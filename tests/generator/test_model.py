@@ -15,7 +15,7 @@ def _bound(prediction: str, method: str = "gesturelsm"):
     B, c = 2, cfg
     cond = torch.randn(B, c.window_latents, c.cond_dim)
     seed = torch.randn(B, c.num_regions, c.seed_latents, c.latent_dim)
-    kv = model.cross_kv(cond, torch.zeros(B, dtype=torch.bool))
+    kv = model.context(cond, torch.zeros(B, dtype=torch.bool))
     return model, model.bind(cond, seed), seed, kv, torch.randn(B, c.num_regions, c.window_latents, c.latent_dim)
 
 
@@ -45,4 +45,43 @@ def test_velocity_prediction_and_ddim_pass_the_network_output_through():
 def test_checkpoints_without_a_prediction_field_load_as_velocity_models():
     d = dict(PRESETS["tiny"].__dict__)
     d.pop("prediction")
-    assert config_from_dict(GeneratorConfig, d).prediction == "velocity"
+    d.pop("speech_add")
+    c = config_from_dict(GeneratorConfig, d)
+    assert c.prediction == "velocity" and c.speech_add is False       # the first releases' checkpoints
+
+
+def test_frame_aligned_speech_reaches_only_its_own_frame():
+    """speech_add: with no attention layers to mix frames, changing the speech at latent frame 5 changes the
+    prediction at frame 5 only (every region of it), for the conditional rows and not for the null ones."""
+    from dataclasses import replace
+
+    torch.manual_seed(0)
+    cfg = replace(PRESETS["tiny"], speech_add=True, cross_layers=0, st_layers=0, prediction="data")
+    model = GestureGenerator(cfg).eval()
+    torch.nn.init.normal_(model.denoiser.out.weight, std=0.3)
+    c = cfg
+    cond = torch.randn(1, c.window_latents, c.cond_dim)
+    seed = torch.randn(1, c.num_regions, c.seed_latents, c.latent_dim)
+    x = torch.randn(2, c.num_regions, c.window_latents, c.latent_dim)
+    t, d, drop = torch.full((2,), 0.3), torch.zeros(2), torch.tensor([False, True])
+    cond2 = cond.clone()
+    cond2[:, 5] += 1.0
+    with torch.no_grad():
+        a, b = model.bind(cond, seed)(x, t, d, drop), model.bind(cond2, seed)(x, t, d, drop)
+    changed = (a - b).abs().amax(dim=-1) > 1e-6                   # (2, R, t)
+    assert changed[0, :, 5].all() and changed[0].sum() == c.num_regions
+    assert not changed[1].any()                                     # the null condition ignores the speech
+
+
+def test_preset_overrides_parse_types_and_refuse_bad_values():
+    import pytest
+
+    from gesturelsm.cli import UserError
+    from gesturelsm.generator.cli import preset_with
+
+    c = preset_with("small", ["speech_add=true", "st_layers=6", "audio_channels=8,8,8,16,16,16", "prediction=data"])
+    assert c.speech_add is True and c.st_layers == 6 and c.audio_channels == (8, 8, 8, 16, 16, 16)
+    assert c.prediction == "data" and c.dim == PRESETS["small"].dim
+    for bad in (["speech_add=maybe"], ["st_layers=six"], ["nonsense=1"], ["st_layers"]):
+        with pytest.raises(UserError):
+            preset_with("small", bad)
