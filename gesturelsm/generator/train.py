@@ -149,6 +149,11 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
             decay = ema_decay(step, tc.ema)
             for pe, pm in zip(ema.parameters(), model.parameters()):
                 pe.lerp_(pm, 1 - decay)
+            # buffers are not averaged but must follow: the speech encoder's BatchNorm running statistics.
+            # (Until this release they stayed at their initial mean 0 / variance 1 in the exported EMA network,
+            # so at inference the speech features were mis-scaled and the models learned to ignore speech.)
+            for be, bm in zip(ema.buffers(), model.buffers()):
+                be.copy_(bm)
         step += 1
         bar.update(1)
         if step % 10 == 0:

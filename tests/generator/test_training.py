@@ -62,6 +62,10 @@ def test_tiny_model_overfits_one_real_clip(real_motion, beat2_root):
     untrained.neutral_seed.copy_(model.neutral_seed)
     err_untrained, err_trained = error(untrained.eval()), error(model)
     assert err_trained < 0.2 and err_trained < 0.25 * err_untrained, (err_trained, err_untrained)
+    # the exported (EMA) network carries the BatchNorm statistics of training, not the initial 0 / 1
+    bn = [m for m in model.speech.modules() if isinstance(m, torch.nn.BatchNorm1d)]
+    assert bn and all(m.num_batches_tracked == tc.steps for m in bn)
+    assert min((m.running_var - 1).abs().max().item() for m in bn) > 1e-3
 
 
 def test_train_cli_resumes_and_ships(tmp_path, beat2_maker, capsys):
