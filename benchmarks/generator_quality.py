@@ -8,6 +8,12 @@ Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth
   normalised by the ground truth's mean joint speeds on the same body);
 - BC shuffled: the same motion scored against another take's speech beats. Motion that follows its
   speech scores higher on its own audio than on foreign audio;
+- BC gain over shifted speech: BC against its own speech beats minus the mean BC against the same beats
+  shifted by +-1, +-1.5 and +-2 s (same beat statistics, wrong timing). Ground truth on the whole real take:
+  about +0.02 (its motion beats follow speech only loosely); motion that ignores speech timing: ~0;
+- speed in silence: 4 s gaps are cut into the speech every 12 s (audio zeroed, words inside dropped) and
+  the same seeds generate again; the upper-body speed inside the gaps (from 1 s after the gap starts) over
+  the speed in the same spans with speech. 1 means the motion does not notice that the speaker stopped;
 - speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2).
 Numbers are means over clips and seeds; ground truth is shown where it exists.
 
@@ -61,13 +67,25 @@ def main() -> None:
     beats = [audio_beats(c[1]) for c in clips]
     upper = list(REGIONS["upper"].joints)
 
-    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float]:
+    shifts = (-2.0, -1.5, -1.0, 1.0, 1.5, 2.0)
+
+    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float, float]:
         bc = beat_consistency(j, beats=beats[i], mean_speed=mean_speed)
         other = beats[(i + 1) % len(clips)]
         bc_sh = beat_consistency(j, beats=other, mean_speed=mean_speed)
+        gain = bc - np.mean([beat_consistency(j, beats=beats[i] + s, mean_speed=mean_speed) for s in shifts])
         sp = joint_speed(j)[:, upper].mean()
         acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, upper].mean()
-        return bc, bc_sh, sp, acc
+        return bc, bc_sh, gain, sp, acc
+
+    def with_gaps(audio: np.ndarray, words) -> tuple[np.ndarray, list, list[tuple[float, float]]]:
+        dur = len(audio) / 16000
+        gaps = [(a, a + 4.0) for a in np.arange(6.0, dur - 6.0, 12.0)]
+        y = audio.copy()
+        for a, b in gaps:
+            y[int(a * 16000):int(b * 16000)] = 0
+        kept = [w for w in words if not any(w.end > a and w.start < b for a, b in gaps)] if words else words
+        return y, kept, gaps
 
     seams: dict[str, list[tuple[float, float, float, float]]] = {}
 
@@ -88,27 +106,50 @@ def main() -> None:
                                                  jump[~near].mean()))
 
     rows = []
+    gt_whole = body.joints(take.motion.poses, take.motion.trans)
+    whole_beats = audio_beats(take.audio)
+    gt_gain = beat_consistency(gt_whole, beats=whole_beats, mean_speed=mean_speed) - np.mean(
+        [beat_consistency(gt_whole, beats=whole_beats + s, mean_speed=mean_speed) for s in shifts])
     gt = stats(clips[0][3], 0)
-    rows.append(("ground truth (clip 1 only)", "-", *gt))
+    rows.append(("ground truth (clip 1 only)", "-", *gt, float("nan")))
+    gapped = [(i, *with_gaps(c[1], c[2])) for i, c in enumerate(clips) if len(c[1]) > 20 * 16000]
+    gapped_speech = [(i, pipe.prepare_speech(y, 16000, words=w), gaps) for i, y, w, gaps in gapped]
     plan = [(m, s) for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods for s in args.steps]
     if "ddim" in pipe.methods:
         plan.append(("ddim", 20))
     speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in clips]
+    def upper_speed(res) -> np.ndarray:
+        return joint_speed(body.joints(res.motion.poses, res.motion.trans))[:, upper].mean(1)
+
     for method, steps in plan:
-        vals = []
+        vals, in_gap, with_speech = [], [], []
+        main_setting = steps == 8 or (method == "ddim" and steps == 20)
         for i, sp in enumerate(speech):
             for seed in range(args.seeds):
                 res = pipe.generate(sp, steps=steps, cfg=args.cfg, seed=seed, method=method)
                 j = body.joints(res.motion.poses, res.motion.trans)
                 vals.append(stats(j, i))
-                if steps == 8 or (method == "ddim" and steps == 20):
+                if main_setting:
                     seam_stats(j, method)
-        rows.append((method, steps, *np.mean(vals, axis=0)))
+        if main_setting:
+            for i, gsp, gaps in gapped_speech:
+                for seed in range(args.seeds):
+                    v0 = upper_speed(pipe.generate(speech[i], steps=steps, cfg=args.cfg, seed=seed, method=method))
+                    v1 = upper_speed(pipe.generate(gsp, steps=steps, cfg=args.cfg, seed=seed, method=method))
+                    for a, b in gaps:
+                        sl = slice(int((a + 1) * 30), int(b * 30))
+                        in_gap.append(v1[sl].mean())
+                        with_speech.append(v0[sl].mean())
+        silence = np.mean(in_gap) / np.mean(with_speech) if in_gap else float("nan")
+        rows.append((method, steps, *np.mean(vals, axis=0), silence))
     print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds; CFG {args.cfg}\n")
-    print("| method | steps | BC (own speech) | BC (other speech) | upper-body speed (m/s) | jitter (m/s^2) |")
-    print("|---|---|---|---|---|---|")
+    print("| method | steps | BC (own speech) | BC (other speech) | BC gain over shifted speech | upper-body speed "
+          "(m/s) | jitter (m/s^2) | speed in silence / with speech |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r[0]} | {r[1]} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:.3f} | {r[5]:.2f} |")
+        sil = "-" if np.isnan(r[7]) else f"{r[7]:.2f}"
+        print(f"| {r[0]} | {r[1]} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:+.3f} | {r[5]:.3f} | {r[6]:.2f} | {sil} |")
+    print(f"\nGround truth's BC gain over shifted speech on the whole real take: {gt_gain:+.3f}")
     print("\nWindow seams (frame-to-frame change of joint speed, m/s; +-8 frames around each window border vs the")
     print("rest; 8 steps, DDIM 20):\n")
     print("| method | max at borders | max inside | mean at borders | mean inside |")

@@ -45,3 +45,55 @@ def test_shipped_flow_models_move_like_the_speaker_without_jitter(heldout, metho
     speed, acc = upper_speed_and_acc(body.joints(res.motion.poses, res.motion.trans))
     assert 0.5 * gt_speed < speed < 2.5 * gt_speed, (speed, gt_speed)     # neither static nor frantic
     assert acc < 3.0 * gt_acc, (acc, gt_acc)                               # smooth (old release: ~8x)
+
+
+@pytest.mark.parametrize("method", ["gesturelsm", "rectified_flow", "ddim"])
+def test_shipped_models_use_the_speech(beat2_root, method):
+    """On windows of the training speech, from nearly pure noise (t = 0.05), each shipped network's clean-latent
+    estimate must be better with the window's own speech than with another window's speech or with the null
+    condition. The first releases failed this (their exported BatchNorm statistics were the initial 0 / 1: the
+    null condition predicted better than the real speech) and their motion ignored speech timing."""
+    import torch
+
+    from gesturelsm.data.beat2 import Beat2Dataset
+    from gesturelsm.features.text import TextEmbedder
+    from gesturelsm.generator.data import LatentWindowSampler, build_take, samples_for
+    from gesturelsm.generator.model import GestureGenerator
+    from gesturelsm.motion.regions import GENERATED_REGIONS
+    from gesturelsm.tokenizer.model import RVQVAE
+
+    path = ASSETS / "generator" / f"{method}.safetensors"
+    if not path.exists():
+        pytest.skip(f"{path} not found")
+    gen = GestureGenerator.load(path)
+    toks = {r: RVQVAE.load(ASSETS / "tokenizer" / f"{r}.safetensors") for r in GENERATED_REGIONS}
+    take = Beat2Dataset(beat2_root).load("2_scott_0_1_1")
+    cut = int(round(0.8 * take.motion.num_frames)) // 4 * 4
+    words = [w for w in take.words if w.end <= cut / 30]
+    tr = build_take("train", take.motion.to_features()[:cut], take.audio[:samples_for(cut)], words, toks,
+                    TextEmbedder.shared())
+    c = gen.config
+    b = LatentWindowSampler([tr], c.window_latents, c.seed_latents, gen.latent_std, gen.neutral_seed, 0.0, 0.0,
+                            seed=1).sample(64)
+    g = torch.Generator().manual_seed(0)
+    x0 = torch.randn(b.x1.shape, generator=g)
+    with torch.no_grad():
+        cond = gen.speech(b.audio, b.words, b.has_word, b.has_text)
+        if method == "ddim":                                         # noise level of t = 0.05 on its schedule
+            from gesturelsm.flows.ddim import cosine_alpha_bar, model_time
+
+            k = torch.full((64,), 949)
+            ab = cosine_alpha_bar()[k].reshape(-1, 1, 1, 1)
+            x, t = ab.sqrt() * b.x1 + (1 - ab).sqrt() * x0, model_time(k)
+        else:
+            x, t = 0.05 * b.x1 + 0.95 * x0, torch.full((64,), 0.05)
+        no = torch.zeros(64, dtype=torch.bool)
+
+        def err(cnd, drop):
+            y = gen.denoiser(x, t, torch.zeros(64), b.seed, gen.context(cnd, drop))
+            if c.prediction != "data" and method != "ddim":
+                y = x + (1 - t.reshape(-1, 1, 1, 1)) * y                 # velocity -> clean estimate
+            return (y - b.x1).pow(2).mean().item()
+
+        own, other, null = err(cond, no), err(cond.roll(1, 0), no), err(cond, ~no)
+    assert own < 0.97 * other and own < 0.97 * null, (own, other, null)
