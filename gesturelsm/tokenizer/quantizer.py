@@ -24,7 +24,7 @@ import torch.nn.functional as F
 class QuantizedResult:
     quantized: torch.Tensor       # (N, D) sum of codes, straight-through in training
     codes: torch.Tensor           # (N, L, G) int64 code per layer and group; -1 for layers dropped
-    commit_loss: torch.Tensor     # scalar, mean over the used layers
+    commit_loss: torch.Tensor     # scalar, mean over the used layers (0 when computed without gradients)
     perplexity: torch.Tensor      # (L,) per layer, mean over groups (0 for dropped layers; training mode only)
     usage: torch.Tensor           # (L,) fraction of codes used in this batch, mean over groups (training only)
     num_layers: int               # layers actually used
@@ -65,7 +65,7 @@ class EMAQuantizer(nn.Module):
         # ||x - c||^2 = ||x||^2 - 2 x.c + ||c||^2; ||x||^2 is the same for every code, so it is left out, and
         # ||c||^2 rides along as an extra coordinate: [x, 1] . [-2c, ||c||^2], one bmm with nothing to broadcast
         G, K = self.groups, self.codebook_size
-        xa = torch.cat([x, x.new_ones(x.shape[0], G, 1)], -1).transpose(0, 1)            # (G, N, d + 1)
+        xa = torch.cat([x.transpose(0, 1), x.new_ones(G, x.shape[0], 1)], -1)             # (G, N, d + 1)
         ca = torch.cat([-2 * self.codebook, self.codebook.pow(2).sum(-1, keepdim=True)], -1)   # (G, K, d + 1)
         d = torch.bmm(xa, ca.transpose(1, 2))                                   # (G, N, K)
         return d.min(-1).indices.t()                # min(): about twice as fast as argmin on CPU, same index
@@ -135,7 +135,8 @@ class ResidualVQ(nn.Module):
         for i, layer in enumerate(self.layers[:k]):
             c, q = layer(residual)
             codes[:, i] = c
-            commit = commit + F.mse_loss(residual, q.detach())
+            if torch.is_grad_enabled():    # the commitment loss only matters for training
+                commit = commit + F.mse_loss(residual, q.detach())
             residual = residual - q.detach()
             total = total + q
             if not self.training:          # batch statistics are for the training progress bar only
