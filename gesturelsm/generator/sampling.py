@@ -4,8 +4,8 @@ Window i covers latent frames [i * stride, i * stride + t) with stride = t - s (
 s = 4 seed latents = 16 frames of overlap). Window 0 starts from the neutral seed (no ground truth needed);
 window i's seed is the last s latents window i-1 generated, i.e. exactly the overlap, which window i
 generates again in context: the two versions are cross-faded linearly, so there is no jump at borders.
-Speech features are computed per window (bounded memory), and the conditional and unconditional CFG
-passes run as one batch. The last window is padded with silence and cropped.
+Speech features are computed for up to 16 windows per call (bounded memory), and the conditional and
+unconditional CFG passes run as one batch. The last window is padded with silence and cropped.
 """
 from __future__ import annotations
 
