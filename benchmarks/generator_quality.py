@@ -118,24 +118,26 @@ def main() -> None:
     if "ddim" in pipe.methods:
         plan.append(("ddim", 20))
     speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in clips]
-    def upper_speed(res) -> np.ndarray:
-        return joint_speed(body.joints(res.motion.poses, res.motion.trans))[:, upper].mean(1)
+    def upper_speed(j: np.ndarray) -> np.ndarray:
+        return joint_speed(j)[:, upper].mean(1)
 
     for method, steps in plan:
         vals, in_gap, with_speech = [], [], []
         main_setting = steps == 8 or (method == "ddim" and steps == 20)
+        speeds = {}                                                      # (clip, seed) -> upper-body speed
         for i, sp in enumerate(speech):
             for seed in range(args.seeds):
                 res = pipe.generate(sp, steps=steps, cfg=args.cfg, seed=seed, method=method)
                 j = body.joints(res.motion.poses, res.motion.trans)
                 vals.append(stats(j, i))
+                speeds[i, seed] = upper_speed(j)
                 if main_setting:
                     seam_stats(j, method)
         if main_setting:
             for i, gsp, gaps in gapped_speech:
                 for seed in range(args.seeds):
-                    v0 = upper_speed(pipe.generate(speech[i], steps=steps, cfg=args.cfg, seed=seed, method=method))
-                    v1 = upper_speed(pipe.generate(gsp, steps=steps, cfg=args.cfg, seed=seed, method=method))
+                    res = pipe.generate(gsp, steps=steps, cfg=args.cfg, seed=seed, method=method)
+                    v0, v1 = speeds[i, seed], upper_speed(body.joints(res.motion.poses, res.motion.trans))
                     for a, b in gaps:
                         sl = slice(int((a + 1) * 30), int(b * 30))
                         in_gap.append(v1[sl].mean())

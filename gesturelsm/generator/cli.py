@@ -126,7 +126,8 @@ def preset_with(preset: str, overrides: list[str]):
     if preset not in PRESETS:
         raise UserError(f"unknown preset {preset!r}; choose from {', '.join(PRESETS)}")
     base = PRESETS[preset]
-    fields = {f.name: type(getattr(base, f.name)) for f in dataclasses.fields(base)}
+    defaults = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
+    fields = {k: type(v) for k, v in defaults.items()}
     changes = {}
     for item in overrides:
         key, sep, val = item.partition("=")
@@ -138,8 +139,9 @@ def preset_with(preset: str, overrides: list[str]):
                 if val.lower() not in ("true", "false", "1", "0", "yes", "no"):
                     raise ValueError(val)
                 changes[key] = val.lower() in ("true", "1", "yes")
-            elif kind is tuple:
-                changes[key] = tuple(int(v) for v in val.split(","))
+            elif kind is tuple:                                       # elements typed like the default's
+                item_kind = type(defaults[key][0]) if defaults[key] else str
+                changes[key] = tuple(item_kind(v) for v in val.split(","))
             else:
                 changes[key] = kind(val)
         except ValueError:

@@ -79,9 +79,11 @@ def test_preset_overrides_parse_types_and_refuse_bad_values():
     from gesturelsm.cli import UserError
     from gesturelsm.generator.cli import preset_with
 
-    c = preset_with("small", ["speech_add=true", "st_layers=6", "audio_channels=8,8,8,16,16,16", "prediction=data"])
+    c = preset_with("small", ["speech_add=true", "st_layers=6", "audio_channels=8,8,8,16,16,16", "prediction=data",
+                              "regions=upper,hands"])
     assert c.speech_add is True and c.st_layers == 6 and c.audio_channels == (8, 8, 8, 16, 16, 16)
+    assert c.regions == ("upper", "hands")
     assert c.prediction == "data" and c.dim == PRESETS["small"].dim
-    for bad in (["speech_add=maybe"], ["st_layers=six"], ["nonsense=1"], ["st_layers"]):
+    for bad in (["speech_add=maybe"], ["st_layers=six"], ["nonsense=1"], ["st_layers"], ["audio_channels=8,x"]):
         with pytest.raises(UserError):
             preset_with("small", bad)
