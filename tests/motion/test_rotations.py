@@ -32,6 +32,18 @@ def test_axis_angle_round_trip(max_angle):
     aa = random_axis_angle(1000, max_angle)
     back = R.matrix_to_axis_angle(R.axis_angle_to_matrix(aa))
     assert torch.allclose(back, aa, atol=1e-9)
+    back32 = R.matrix_to_axis_angle(R.axis_angle_to_matrix(aa.float()))
+    assert torch.allclose(back32.double(), aa, atol=2e-5)
+
+
+def test_axis_angle_both_routes_agree_across_the_switch():
+    """Angles just below and above 2.69 rad (where the skew-part route hands over to quaternions)."""
+    g = torch.Generator().manual_seed(1)
+    axis = torch.nn.functional.normalize(torch.randn(400, 3, generator=g, dtype=torch.float64), dim=-1)
+    angle = torch.linspace(2.5, 2.9, 400, dtype=torch.float64)[:, None]
+    M = R.axis_angle_to_matrix(axis * angle)
+    assert torch.allclose(R.matrix_to_axis_angle(M), axis * angle, atol=1e-12)
+    assert torch.allclose(R.matrix_to_axis_angle(M), R.quaternion_to_axis_angle(R.matrix_to_quaternion(M)), atol=1e-12)
 
 
 def test_6d_round_trip_and_row_layout():
