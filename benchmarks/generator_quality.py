@@ -8,9 +8,14 @@ Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth
   normalised by the ground truth's mean joint speeds on the same body);
 - BC shuffled: the same motion scored against another take's speech beats. Motion that follows its
   speech scores higher on its own audio than on foreign audio;
-- BC gain over shifted speech: BC against its own speech beats minus the mean BC against the same beats
-  shifted by +-1, +-1.5 and +-2 s (same beat statistics, wrong timing). Ground truth on the whole real take:
-  about +0.02 (its motion beats follow speech only loosely); motion that ignores speech timing: ~0;
+- BC gain over shifted speech (metrics.speech_response.beat_timing): BC against its own speech beats minus the
+  mean BC against the same beats circularly shifted by 1 s .. (span - 1 s) inside the scored span (same beats,
+  wrong timing; motion that ignores speech timing gains 0 on average);
+- loudness-following gain (metrics.speech_response.energy_following): correlation of upper-body speed with
+  the speech's loudness (1 s averages) minus its mean over the loudness shifted by >= 2 s;
+  both gains are shown as mean +- standard error over clips x seeds, with how many clips x seeds gain > 0;
+- the speaker's own motion gets both tests on the whole real take (gain and z = gain / spread over shifts):
+  what the training data itself shows of these relations;
 - speed in silence: 4 s gaps are cut into the speech every 12 s (audio zeroed, words inside dropped) and
   the same seeds generate again; the upper-body speed inside the gaps (from 1 s after the gap starts) over
   the speed in the same spans with speech. 1 means the motion does not notice that the speaker stopped;
@@ -38,11 +43,12 @@ def main() -> None:
     ap.add_argument("--checkpoints", default=None)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--steps", type=int, nargs="+", default=[1, 2, 4, 8])
-    ap.add_argument("--cfg", type=float, default=2.0)
+    ap.add_argument("--cfg", type=float, nargs="+", default=[2.0], help="one or more CFG scales")
     args = ap.parse_args()
     from gesturelsm.body import load_body_model
     from gesturelsm.data.beat2 import Beat2Dataset
     from gesturelsm.metrics.beat import audio_beats, beat_consistency, joint_speed
+    from gesturelsm.metrics.speech_response import beat_timing, energy_following
     from gesturelsm.motion.regions import REGIONS
     from gesturelsm.pipeline import GesturePipeline
     from gesturelsm.align.words import Word
@@ -67,16 +73,15 @@ def main() -> None:
     beats = [audio_beats(c[1]) for c in clips]
     upper = list(REGIONS["upper"].joints)
 
-    shifts = (-2.0, -1.5, -1.0, 1.0, 1.5, 2.0)
-
-    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float, float]:
+    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float, float, float]:
         bc = beat_consistency(j, beats=beats[i], mean_speed=mean_speed)
         other = beats[(i + 1) % len(clips)]
         bc_sh = beat_consistency(j, beats=other, mean_speed=mean_speed)
-        gain = bc - np.mean([beat_consistency(j, beats=beats[i] + s, mean_speed=mean_speed) for s in shifts])
+        gain = beat_timing(j, beats[i], mean_speed=mean_speed).gain
+        loud = energy_following(j, clips[i][1]).gain
         sp = joint_speed(j)[:, upper].mean()
         acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, upper].mean()
-        return bc, bc_sh, gain, sp, acc
+        return bc, bc_sh, gain, loud, sp, acc
 
     def with_gaps(audio: np.ndarray, words) -> tuple[np.ndarray, list, list[tuple[float, float]]]:
         dur = len(audio) / 16000
@@ -108,26 +113,28 @@ def main() -> None:
     rows = []
     gt_whole = body.joints(take.motion.poses, take.motion.trans)
     whole_beats = audio_beats(take.audio)
-    gt_gain = beat_consistency(gt_whole, beats=whole_beats, mean_speed=mean_speed) - np.mean(
-        [beat_consistency(gt_whole, beats=whole_beats + s, mean_speed=mean_speed) for s in shifts])
+    gt_tests = {"beat timing (BC)": beat_timing(gt_whole, whole_beats, mean_speed=mean_speed),
+                "loudness following (correlation)": energy_following(gt_whole, take.audio)}
     gt = stats(clips[0][3], 0)
-    rows.append(("ground truth (clip 1 only)", "-", *gt, float("nan")))
+    rows.append(("ground truth (clip 1 only)", "-", "-", *gt[:2], f"{gt[2]:+.3f}", f"{gt[3]:+.3f}", *gt[4:],
+                 float("nan")))
     gapped = [(i, *with_gaps(c[1], c[2])) for i, c in enumerate(clips) if len(c[1]) > 20 * 16000]
     gapped_speech = [(i, pipe.prepare_speech(y, 16000, words=w), gaps) for i, y, w, gaps in gapped]
-    plan = [(m, s) for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods for s in args.steps]
+    plan = [(m, s, c) for c in args.cfg for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods
+            for s in args.steps]
     if "ddim" in pipe.methods:
-        plan.append(("ddim", 20))
+        plan += [("ddim", 20, c) for c in args.cfg]
     speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in clips]
     def upper_speed(j: np.ndarray) -> np.ndarray:
         return joint_speed(j)[:, upper].mean(1)
 
-    for method, steps in plan:
+    for method, steps, cfg in plan:
         vals, in_gap, with_speech = [], [], []
-        main_setting = steps == 8 or (method == "ddim" and steps == 20)
+        main_setting = (steps == 8 or (method == "ddim" and steps == 20)) and cfg == args.cfg[0]
         speeds = {}                                                      # (clip, seed) -> upper-body speed
         for i, sp in enumerate(speech):
             for seed in range(args.seeds):
-                res = pipe.generate(sp, steps=steps, cfg=args.cfg, seed=seed, method=method)
+                res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method)
                 j = body.joints(res.motion.poses, res.motion.trans)
                 vals.append(stats(j, i))
                 speeds[i, seed] = upper_speed(j)
@@ -136,24 +143,32 @@ def main() -> None:
         if main_setting:
             for i, gsp, gaps in gapped_speech:
                 for seed in range(args.seeds):
-                    res = pipe.generate(gsp, steps=steps, cfg=args.cfg, seed=seed, method=method)
+                    res = pipe.generate(gsp, steps=steps, cfg=cfg, seed=seed, method=method)
                     v0, v1 = speeds[i, seed], upper_speed(body.joints(res.motion.poses, res.motion.trans))
                     for a, b in gaps:
                         sl = slice(int((a + 1) * 30), int(b * 30))
                         in_gap.append(v1[sl].mean())
                         with_speech.append(v0[sl].mean())
         silence = np.mean(in_gap) / np.mean(with_speech) if in_gap else float("nan")
-        rows.append((method, steps, *np.mean(vals, axis=0), silence))
-    print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds; CFG {args.cfg}\n")
-    print("| method | steps | BC (own speech) | BC (other speech) | BC gain over shifted speech | upper-body speed "
-          "(m/s) | jitter (m/s^2) | speed in silence / with speech |")
-    print("|---|---|---|---|---|---|---|---|")
+        v = np.array(vals)
+        gains = [f"{g.mean():+.3f} +- {g.std(ddof=1) / np.sqrt(len(g)):.3f} ({(g > 0).sum()}/{len(g)} > 0)"
+                 for g in (v[:, 2], v[:, 3])]
+        rows.append((method, steps, cfg, *v[:, :2].mean(0), *gains, *v[:, 4:].mean(0), silence))
+    print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds\n")
+    print("| method | steps | CFG | BC (own speech) | BC (other speech) | BC gain over shifted speech | "
+          "loudness-following gain | upper-body speed (m/s) | jitter (m/s^2) | speed in silence / with speech |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        sil = "-" if np.isnan(r[7]) else f"{r[7]:.2f}"
-        print(f"| {r[0]} | {r[1]} | {r[2]:.3f} | {r[3]:.3f} | {r[4]:+.3f} | {r[5]:.3f} | {r[6]:.2f} | {sil} |")
-    print(f"\nGround truth's BC gain over shifted speech on the whole real take: {gt_gain:+.3f}")
+        sil = "-" if np.isnan(r[9]) else f"{r[9]:.2f}"
+        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]:.3f} | {r[4]:.3f} | {r[5]} | {r[6]} | {r[7]:.3f} | {r[8]:.2f} "
+              f"| {sil} |")
+    print("\nThe speaker's own motion on the whole real take (63 s), the same tests:\n")
+    print("| test | own speech | shifted speech (mean +- sd) | gain | z |")
+    print("|---|---|---|---|---|")
+    for name, t in gt_tests.items():
+        print(f"| {name} | {t.own:.3f} | {t.shifted_mean:.3f} +- {t.shifted_std:.3f} | {t.gain:+.3f} | {t.z:.1f} |")
     print("\nWindow seams (frame-to-frame change of joint speed, m/s; +-8 frames around each window border vs the")
-    print("rest; 8 steps, DDIM 20):\n")
+    print(f"rest; 8 steps, DDIM 20; CFG {args.cfg[0]}):\n")
     print("| method | max at borders | max inside | mean at borders | mean inside |")
     print("|---|---|---|---|---|")
     for m, v in seams.items():

@@ -24,6 +24,18 @@ def speech_like(seconds: float, sr: int = 16000, seed: int = 0) -> np.ndarray:
     return (0.3 * env * np.sin(2 * np.pi * 180 * t * (1 + 0.1 * np.sin(2 * np.pi * 0.5 * t)))).astype(np.float32)
 
 
+def joints_with_pauses(pause_frames: list[int], T: int = 600) -> np.ndarray:
+    """Upper-body joints swinging with speed dips (but not stops) exactly at the given frames."""
+    t = np.arange(T)
+    speed = np.ones(T)
+    for p in pause_frames:
+        speed -= 0.6 * np.exp(-((t - p) ** 2) / (2 * 3.0 ** 2))
+    pos = np.cumsum(speed) / 30.0
+    joints = np.zeros((T, 55, 3))
+    joints[:, :, 0] = pos[:, None] * 0.5
+    return joints
+
+
 def build_tiny_assets(root, steps: int = 20, batch_size: int = 8, warmup: int = 5):
     """A complete tiny checkpoint folder (4 tokenizers + 3 generators, `root/tokenizer`, `root/generator`)
     trained briefly on synthetic motion, so pipeline-level tests need neither ../shared nor assets/."""

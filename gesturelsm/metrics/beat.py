@@ -60,8 +60,17 @@ def beat_consistency(joints: np.ndarray, audio: np.ndarray | None = None, sr: in
     audio onsets (seconds)."""
     a = audio_beats(audio, sr) if beats is None else np.asarray(beats, float)
     a = a[a < joints.shape[0] / fps]
+    return score_beats(a, joint_beats(joints, fps, mean_speed, joint_ids))
+
+
+def joint_beats(joints: np.ndarray, fps: int = 30, mean_speed: np.ndarray | None = None,
+                joint_ids: tuple[int, ...] = REGIONS["upper"].joints) -> list[np.ndarray]:
+    """(T, 55, 3) -> motion beat times (s) of each joint in `joint_ids` (speeds normalised as in BC)."""
     speed = joint_speed(joints, fps)[:, list(joint_ids)]                         # (T-1, J)
     ref = (np.asarray(mean_speed)[list(joint_ids)] if mean_speed is not None else speed.mean(0))
     speed = speed / np.maximum(ref, 1e-6)
-    scores = [beat_score(a, motion_beats(speed[:, j], fps)) for j in range(speed.shape[1])]
-    return float(np.nanmean(scores)) if len(a) else float("nan")
+    return [motion_beats(speed[:, j], fps) for j in range(speed.shape[1])]
+
+
+def score_beats(a_beats: np.ndarray, m_beats: list[np.ndarray]) -> float:
+    return float(np.nanmean([beat_score(a_beats, m) for m in m_beats])) if len(a_beats) else float("nan")

@@ -1,18 +1,8 @@
 import numpy as np
 
+from _support import joints_with_pauses
+
 from gesturelsm.metrics.beat import beat_consistency, beat_score, motion_beats
-
-
-def joints_with_pauses(pause_frames: list[int], T: int = 600) -> np.ndarray:
-    """Upper-body joints swinging with speed dips (but not stops) exactly at the given frames."""
-    t = np.arange(T)
-    speed = np.ones(T)
-    for p in pause_frames:
-        speed -= 0.6 * np.exp(-((t - p) ** 2) / (2 * 3.0 ** 2))
-    pos = np.cumsum(speed) / 30.0
-    joints = np.zeros((T, 55, 3))
-    joints[:, :, 0] = pos[:, None] * 0.5
-    return joints
 
 
 def test_beats_on_audio_onsets_score_near_one_and_drop_when_shifted():
@@ -66,3 +56,4 @@ def test_bc_normalised_by_given_mean_speed_is_scale_free():
     ms = np.linalg.norm(np.diff(j, axis=0), axis=-1).mean(0) * 30
     a = beat_consistency(j, beats=beats_s, mean_speed=ms)
     assert a == beat_consistency(3 * j, beats=beats_s, mean_speed=3 * ms) > 0.95
+
