@@ -4,7 +4,7 @@ import pytest
 from gesturelsm.motion import REGIONS, Normalizer
 from gesturelsm.tokenizer import RVQVAE, preset
 from gesturelsm.tokenizer.evaluate import reconstruct, rotation_errors_deg
-from gesturelsm.tokenizer.quantizer import EMAQuantizer, ResidualVQ
+from gesturelsm.tokenizer.quantizer import EMAQuantizer, ResidualVQ, quantize_stacked
 
 
 def tiny(in_dim: int = 78, **kw) -> RVQVAE:
@@ -48,6 +48,25 @@ def test_residual_layers_reduce_error_monotonically(groups):
     rvq.eval()
     errs = [(rvq(x, num_layers=k).quantized - x).pow(2).mean().item() for k in range(1, 5)]
     assert all(a > b for a, b in zip(errs, errs[1:])), errs
+
+
+def test_stacked_quantizers_equal_each_on_its_own():
+    """Decoding quantises all regions in one stacked pass; it must pick the codes each quantizer picks alone."""
+    torch.manual_seed(0)
+    rvqs = [ResidualVQ(3, 16, 8, groups=4) for _ in range(3)]
+    for r in rvqs:
+        r.train()
+        for _ in range(5):
+            r(torch.randn(300, 8) * (1 + len(rvqs)))
+        r.eval()
+    xs = [torch.randn(40, 8) * 2 for _ in rvqs]
+    got = quantize_stacked(rvqs, xs)
+    for r, x, g in zip(rvqs, xs, got):
+        ref = r(x)
+        assert torch.allclose(g, ref.quantized, atol=1e-6)
+        assert torch.equal(r.codes_to_quantized(ref.codes), g)          # the same codes, summed the same way
+    with pytest.raises(ValueError, match="different shapes"):
+        quantize_stacked([rvqs[0], ResidualVQ(2, 16, 8, groups=4)], xs[:2])
 
 
 def test_dead_code_reset_revives_unused_codes():
