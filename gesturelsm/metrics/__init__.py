@@ -7,6 +7,7 @@
 | L1 diversity | diversity.py | metres, summed over 55 joints x 3 axes |
 | face error | face.py | expression MSE; vertex MSE m^2 |
 | jitter, foot skating | physics.py | m/s^3; m/s |
+| speech response: beat timing, loudness following | speech_response.py | gain over time-shifted speech, z |
 """
 from .beat import audio_beats, beat_consistency, motion_beats
 from .diversity import l1_diversity
@@ -14,7 +15,9 @@ from .face import expression_mse, face_vertex_mse
 from .fgd import EmageExtractor, GeometricExtractor, KineticExtractor, default_extractors, fgd
 from .frechet import frechet_distance, gaussian_stats
 from .physics import foot_skating, jitter
+from .speech_response import ShiftTest, beat_timing, energy_following
 
 __all__ = ["audio_beats", "beat_consistency", "motion_beats", "l1_diversity", "expression_mse", "face_vertex_mse",
            "EmageExtractor", "GeometricExtractor", "KineticExtractor", "default_extractors", "fgd",
-           "frechet_distance", "gaussian_stats", "foot_skating", "jitter"]
+           "frechet_distance", "gaussian_stats", "foot_skating", "jitter", "ShiftTest", "beat_timing",
+           "energy_following"]
