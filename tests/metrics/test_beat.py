@@ -56,4 +56,3 @@ def test_bc_normalised_by_given_mean_speed_is_scale_free():
     ms = np.linalg.norm(np.diff(j, axis=0), axis=-1).mean(0) * 30
     a = beat_consistency(j, beats=beats_s, mean_speed=ms)
     assert a == beat_consistency(3 * j, beats=beats_s, mean_speed=3 * ms) > 0.95
-
