@@ -52,7 +52,11 @@ def test_checkpoints_without_a_prediction_field_load_as_velocity_models():
 
 def test_frame_aligned_speech_reaches_only_its_own_frame():
     """speech_add: with no attention layers to mix frames, changing the speech at latent frame 5 changes the
-    prediction at frame 5 only (every region of it), for the conditional rows and not for the null ones."""
+    prediction at frame 5 only (every region of it), for the conditional rows and not for the null ones.
+
+    The edit must be a random direction, not a constant: the speech term starts with a LayerNorm, which removes
+    a constant shift of a frame's features exactly, so `+= 1.0` left only float rounding (~1e-6, machine
+    dependent) to detect. Thresholds are relative to the output's scale."""
     from dataclasses import replace
 
     torch.manual_seed(0)
@@ -65,12 +69,15 @@ def test_frame_aligned_speech_reaches_only_its_own_frame():
     x = torch.randn(2, c.num_regions, c.window_latents, c.latent_dim)
     t, d, drop = torch.full((2,), 0.3), torch.zeros(2), torch.tensor([False, True])
     cond2 = cond.clone()
-    cond2[:, 5] += 1.0
+    cond2[:, 5] += torch.randn(c.cond_dim)
     with torch.no_grad():
         a, b = model.bind(cond, seed)(x, t, d, drop), model.bind(cond2, seed)(x, t, d, drop)
-    changed = (a - b).abs().amax(dim=-1) > 1e-6                   # (2, R, t)
-    assert changed[0, :, 5].all() and changed[0].sum() == c.num_regions
-    assert not changed[1].any()                                     # the null condition ignores the speech
+    scale = a.abs().amax()
+    diff = (a - b).abs().amax(dim=-1) / scale                       # (2, R, t), relative to the output's scale
+    assert (diff[0, :, 5] > 0.05).all(), diff[0, :, 5]              # every region of the edited frame moves
+    others = torch.cat([diff[0, :, :5], diff[0, :, 6:]], dim=1)
+    assert others.max() <= 1e-6                                     # other frames: unchanged to float precision
+    assert diff[1].max() <= 1e-6                                    # the null condition ignores the speech
 
 
 def test_preset_overrides_parse_types_and_refuse_bad_values():
