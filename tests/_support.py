@@ -6,6 +6,17 @@ import numpy as np
 from gesturelsm.motion import MotionSequence
 
 
+def assert_close_rel(got, want, rel: float = 1e-5) -> None:
+    """max |got - want| <= rel * max |want|: two float computations of the same quantity agree to a tolerance
+    relative to the tensor's scale. Element-wise tolerances fail on elements near zero, whose rounding error is
+    set by the size of the terms that cancelled there, which depends on the machine's summation order."""
+    g = got.detach().cpu().double().numpy() if hasattr(got, "detach") else np.asarray(got, np.float64)
+    w = want.detach().cpu().double().numpy() if hasattr(want, "detach") else np.asarray(want, np.float64)
+    assert g.shape == w.shape, (g.shape, w.shape)
+    err, scale = float(np.abs(g - w).max(initial=0.0)), float(np.abs(w).max(initial=0.0))
+    assert err <= rel * max(scale, 1e-12), f"max abs diff {err:.3g} > {rel:g} x scale {scale:.3g}"
+
+
 def synthetic_motion(frames: int = 480, seed: int = 0) -> MotionSequence:
     """Smooth random motion: sums of slow sines per pose channel."""
     rng = np.random.default_rng(seed)

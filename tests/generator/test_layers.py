@@ -2,6 +2,8 @@ import torch
 
 from gesturelsm.generator.layers import apply_rotary, rotary_freqs
 
+from _support import assert_close_rel
+
 
 def test_rotary_rotates_interleaved_pairs_by_position():
     torch.manual_seed(0)
@@ -11,7 +13,7 @@ def test_rotary_rotates_interleaved_pairs_by_position():
     ang = pos * (1.0 / 1e4 ** (torch.arange(0, 8, 2, dtype=torch.float32) / 8))[None]   # (7, 4)
     x1, x2 = x[..., 0::2], x[..., 1::2]
     want = torch.stack([x1 * ang.cos() - x2 * ang.sin(), x1 * ang.sin() + x2 * ang.cos()], -1).flatten(-2)
-    assert torch.allclose(got, want, atol=1e-5)
+    assert_close_rel(got, want)
     assert torch.allclose(got[..., 0, :], x[..., 0, :])             # position 0 is not rotated
     # relative positions: <R_m q, R_n k> depends only on m - n
     q, k = torch.randn(8), torch.randn(8)

@@ -46,10 +46,33 @@ def test_every_method_and_any_sample_rate(tiny_pipeline):
 
 
 def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
-    y = speech_like(4.0)
-    a = tiny_pipeline.generate(y, 16000, steps=2, cfg=1.0, seed=0).motion.poses
-    b = tiny_pipeline.generate(y, 16000, steps=2, cfg=3.0, seed=0).motion.poses
-    assert not np.allclose(a, b)
+    """CFG 1 is the conditional prediction alone: replacing the learned null condition by a wild one leaves the
+    sampled latents bit-identical, while at CFG 3 the null branch is used (the wild null changes them) and the
+    motion differs from CFG 1. Compared on latents, before decoding re-quantises them to the nearest codes (which
+    would hide small differences)."""
+    from gesturelsm.generator.sampling import generate_latents
+
+    sp = tiny_pipeline.prepare_speech(speech_like(4.0), 16000)
+    gen = tiny_pipeline.generators["gesturelsm"]
+
+    def latents(cfg: float) -> torch.Tensor:
+        return generate_latents(gen, sp.channels, sp.word_features, sp.has_word, sp.words is not None,
+                                sp.num_frames, steps=2, cfg_scale=cfg, seed=0)
+
+    a, b = latents(1.0), latents(3.0)
+    assert (a - b).abs().max() > 1e-2 * a.abs().max()
+    assert not np.allclose(tiny_pipeline.generate(sp, steps=2, cfg=1.0).motion.poses,
+                           tiny_pipeline.generate(sp, steps=2, cfg=3.0).motion.poses)
+    saved = gen.null_cond.detach().clone()
+    try:
+        with torch.no_grad():
+            gen.null_cond.normal_(0.0, 30.0, generator=torch.Generator().manual_seed(1))   # a wild null condition
+        a_wild, b_wild = latents(1.0), latents(3.0)
+    finally:
+        with torch.no_grad():
+            gen.null_cond.copy_(saved)
+    assert torch.equal(a_wild, a)
+    assert (b_wild - b).abs().max() > 1e-2 * b.abs().max()
 
 
 @pytest.mark.parametrize("kwargs,msg", [

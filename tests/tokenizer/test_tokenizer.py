@@ -6,6 +6,8 @@ from gesturelsm.tokenizer import RVQVAE, preset
 from gesturelsm.tokenizer.evaluate import reconstruct, rotation_errors_deg
 from gesturelsm.tokenizer.quantizer import EMAQuantizer, ResidualVQ, quantize_stacked
 
+from _support import assert_close_rel
+
 
 def tiny(in_dim: int = 78, **kw) -> RVQVAE:
     torch.manual_seed(0)
@@ -20,11 +22,11 @@ def test_codes_to_quantized_equals_forward_quantized():
     z = m.encode(torch.randn(3, 32, 78))
     q = m.quantize(z)
     assert q.codes.shape == (24, 3, 2)  # (B*t, layers, groups)
-    assert torch.allclose(m.codes_to_quantized(q.codes.reshape(3, 8, 3, 2)), q.quantized.reshape(z.shape), atol=1e-6)
+    assert_close_rel(m.codes_to_quantized(q.codes.reshape(3, 8, 3, 2)), q.quantized.reshape(z.shape))
     # first k layers only: unused layers are marked -1 and contribute nothing
     q2 = m.quantize(z, num_layers=2)
     assert (q2.codes[:, 2:] == -1).all() and (q2.codes[:, :2] == q.codes[:, :2]).all()
-    assert torch.allclose(m.rvq.codes_to_quantized(q2.codes), q2.quantized, atol=1e-6)
+    assert_close_rel(m.rvq.codes_to_quantized(q2.codes), q2.quantized)
 
 
 def test_decode_encode_equals_forward_in_eval():
@@ -34,7 +36,7 @@ def test_decode_encode_equals_forward_in_eval():
     m.eval()
     x = torch.randn(2, 32, 78)
     out = m(x)
-    assert torch.allclose(m.decode_latents(m.encode(x)), out.recon, atol=1e-6)
+    assert_close_rel(m.decode_latents(m.encode(x)), out.recon)
     assert out.latents.shape == (2, 8, 16)
 
 
@@ -63,7 +65,7 @@ def test_stacked_quantizers_equal_each_on_its_own():
     got = quantize_stacked(rvqs, xs)
     for r, x, g in zip(rvqs, xs, got):
         ref = r(x)
-        assert torch.allclose(g, ref.quantized, atol=1e-6)
+        assert_close_rel(g, ref.quantized)
         assert torch.equal(r.codes_to_quantized(ref.codes), g)          # the same codes, summed the same way
     with pytest.raises(ValueError, match="different shapes"):
         quantize_stacked([rvqs[0], ResidualVQ(2, 16, 8, groups=4)], xs[:2])
@@ -128,7 +130,7 @@ def test_save_load_round_trip_fp32_and_shipped_fp16(tmp_path):
     x = torch.randn(2, 32, 78)
     ref = m(x).recon
     full = RVQVAE.load(m.save(tmp_path / "a.safetensors"))
-    assert torch.allclose(full(x).recon, ref, atol=1e-6)
+    assert_close_rel(full(x).recon, ref)
     assert torch.equal(full.normalizer.std, m.normalizer.std)
     small = RVQVAE.load(m.save(tmp_path / "b.safetensors", half=True))
     assert (tmp_path / "b.safetensors").stat().st_size < (tmp_path / "a.safetensors").stat().st_size * 0.6
