@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import UserError
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / BEAT2 npz",
@@ -29,7 +31,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cli import UserError
     from ..motion.sequence import MotionSequence
     from . import export_bvh, export_glb, export_keypoints, export_npz
 
