@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..body.model import resolve_body
 from ..errors import UserError
 
 
@@ -41,8 +42,6 @@ def run(args: argparse.Namespace) -> int:
     seq = MotionSequence.load(args.motion)
     body = None
     if args.bvh or args.glb or args.keypoints:
-        from ..render.frames import resolve_body
-
         body = resolve_body(args.model)
     done = []
     if args.npz:
