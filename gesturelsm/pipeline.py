@@ -215,7 +215,7 @@ class GesturePipeline:
             raise InputError(f"unknown method {method!r}; available: {', '.join(self.generators)}")
         hi = FACTS[method].max_steps
         if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
-            raise InputError(f"Steps must be a whole number from 1 to {hi} for {method} (got {steps})")
+            raise InputError(f"The number of steps must be a whole number from 1 to {hi} for {method} (got {steps})")
         if not np.isfinite(cfg) or not 0.0 <= cfg <= MAX_CFG:
             raise InputError(f"CFG scale must be between 0 and {MAX_CFG:g} (got {cfg})")
 

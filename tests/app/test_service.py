@@ -116,7 +116,7 @@ def _req(path, **kw):
     ("silent", "silent"),
     ("short", "at least"),
     ("long", "limit"),
-    ("steps", "Steps must be"),
+    ("steps", "steps must be"),
     ("cfg", "CFG"),
     ("method", "Unknown method"),
     ("nomethod", "at least one method"),
