@@ -11,7 +11,9 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
-                                    Request, ServiceError)
+                                    Request)
+from gesturelsm.errors import GestureError
+from gesturelsm.flows import FACTS, steps_from_flags
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
 MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
@@ -54,18 +56,18 @@ def _examples() -> list[list]:
 def build_demo(service: GestureService) -> gr.Blocks:
     settings = service.settings
     choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
-    default_methods = [m for m in ("gesturelsm", "rectified_flow", "ddim") if m in service.methods][:3]
+    default_methods = [m for m in FACTS if m in service.methods][:3]
 
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  exports: bool) -> Request:
         return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
-                       steps=int(steps), cfg=float(cfg), seed=int(seed), ddim_steps=int(ddim_steps),
+                       steps=steps_from_flags(steps, ddim_steps), cfg=float(cfg), seed=int(seed),
                        stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports)
 
     def _run(req: Request, progress):
         try:
             return service.run(req, progress=lambda f, m: progress(f, desc=m))
-        except ServiceError as exc:
+        except GestureError as exc:                  # the one place the page turns errors into messages
             raise gr.Error(str(exc), duration=None) from None
 
     def _files(out):
@@ -102,10 +104,13 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
                                            elem_id="methods")
                 with gr.Row():
-                    steps = gr.Slider(1, settings.max_steps, value=8, step=1, label="Steps (GestureLSM, rectified flow)")
+                    steps = gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
+                                      value=FACTS["gesturelsm"].default_steps, step=1,
+                                      label="Steps (GestureLSM, rectified flow)")
                     cfg = gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale")
                 with gr.Row():
-                    ddim_steps = gr.Slider(1, 100, value=20, step=1, label="DDIM steps")
+                    ddim_steps = gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
+                                           value=FACTS["ddim"].default_steps, step=1, label="DDIM steps")
                     seed = gr.Number(value=0, precision=0, label="Seed")
                 with gr.Accordion("Options", open=False):
                     in_place = gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)")

@@ -8,14 +8,10 @@ batch mode call this.
 
 One request = load the upload -> prepare the speech once (features, word timings) -> generate per method ->
 post-process (stand in place, smoothing) -> render all methods side by side with the speech -> exports ->
-one timing row per method and stage. Every problem a visitor can fix raises `ServiceError` with a message
-meant for the page.
-
-Post-processing (both optional, applied to every shown motion, ground truth included):
-- stand in place: the root's horizontal translation (x, z) is set to 0 on every frame; height (y) is kept.
-- smoothing: a Savitzky-Golay filter (polynomial order 2) along time on the 6D rotation features of all
-  joints (re-orthonormalised when decoded back to axis-angle), window 5 / 9 / 15 frames for
-  light / medium / strong (0.17 / 0.3 / 0.5 s at 30 fps); root height and expressions are filtered too.
+one timing row per method and stage. Generation and post-processing are the library's one request flow
+(`pipeline.generate_all`, `motion/postprocess.py`); this module adds the upload checks, rendering, exports and
+the timing table. Every problem a visitor can fix raises an `errors.GestureError` (`ServiceError` is its old
+name here) with a message meant for the page.
 """
 from __future__ import annotations
 
@@ -24,28 +20,34 @@ import shutil
 import tempfile
 import time
 import uuid
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from .audio import SAMPLE_RATE, AudioError, load_audio
+from .align import Word, read_result
+from .audio import SAMPLE_RATE, load_audio
+from .body import load_body_model
+from .body.model import resolve_model_path
+from .data.lookup import find_beat2_take
+from .errors import AudioError, GestureError, InputError, RenderError, TextGridError
+from .export import export_bvh, export_glb, export_keypoints, export_npz
+from .flows import DEFAULT_STEPS, FACTS
+from .motion.postprocess import SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
+from .pipeline import GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
+from .render import render_video
 
 Progress = Callable[[float, str], None]
 
-METHOD_LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM",
-                 "ground_truth": "Ground truth"}
-SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}
+METHOD_LABELS = {**{k: f.label for k, f in FACTS.items()}, GROUND_TRUTH: "Ground truth"}
 VIDEO_SIZES = (256, 384, 512, 640)
 TIMING_COLUMNS = ["method", "features", "alignment", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
 
 
-class ServiceError(ValueError):
-    """A problem with the request that the visitor can fix; the message is shown on the page."""
-
+ServiceError = GestureError      # the old name: a problem with the request that the visitor can fix
 
 @dataclass(frozen=True)
 class ServiceSettings:
@@ -57,7 +59,8 @@ class ServiceSettings:
     max_upload_mb: float = 50.0             # largest upload accepted
     keep_minutes: float = 60.0              # outputs older than this are deleted
     concurrency: int = 1                    # requests generated at the same time (the rest queue)
-    max_steps: int = 32                     # slider range in the page
+    max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
+    max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
 
 
 @dataclass
@@ -66,14 +69,19 @@ class Request:
     text: str = ""
     textgrid_path: str | None = None
     methods: Sequence[str] = ("gesturelsm",)
-    steps: int = 8
-    cfg: float = 2.0
+    steps: Mapping[str, int] | int = field(default_factory=lambda: dict(DEFAULT_STEPS))   # per method; an int:
+    cfg: float = 2.0                                                                      # the same for all
     seed: int = 0
-    ddim_steps: int = 20
     stand_in_place: bool = False
     smoothing: str = "off"
     size: int = 384
     exports: bool = True
+
+    def plan(self, beat2: str | None = None) -> Plan:
+        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
+        return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
+                    bool(self.stand_in_place), str(self.smoothing), beat2,
+                    Path(self.audio_path).name if self.audio_path else None)
 
 
 @dataclass
@@ -98,82 +106,6 @@ class Outcome:
         return "\n\n".join(lines)
 
 
-# ---- post-processing ------------------------------------------------------------------------------------
-def stand_in_place(seq: MotionSequence) -> MotionSequence:
-    """Zero the root's horizontal (x, z) translation on every frame; keep its height."""
-    trans = seq.trans.copy()
-    trans[:, [0, 2]] = 0.0
-    return replace(seq, trans=trans)
-
-
-def smooth(seq: MotionSequence, strength: str = "medium") -> MotionSequence:
-    """Savitzky-Golay (order 2) along time on the 6D rotations, root height and expressions."""
-    from scipy.signal import savgol_filter
-
-    from .motion.rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
-    import torch
-
-    if strength not in SMOOTHING_WINDOWS:
-        raise ServiceError(f"smoothing must be one of {', '.join(SMOOTHING_WINDOWS)} (got {strength!r})")
-    win = SMOOTHING_WINDOWS[strength]
-    T = seq.num_frames
-    if win == 0 or T < 4:
-        return seq
-    win = min(win, T if T % 2 else T - 1)
-    poly = min(2, win - 1)
-    r6 = axis_angle_to_rot6d(torch.from_numpy(seq.poses.reshape(T, -1, 3))).numpy()      # (T, 55, 6)
-    r6 = savgol_filter(r6, win, poly, axis=0)
-    poses = rot6d_to_axis_angle(torch.from_numpy(np.ascontiguousarray(r6, np.float32))).numpy().reshape(T, -1)
-    trans = seq.trans.copy()
-    trans[:, 1] = savgol_filter(trans[:, 1], win, poly)
-    expr = savgol_filter(seq.expressions, win, poly, axis=0)
-    return replace(seq, poses=poses, trans=trans, expressions=expr)
-
-
-def fit_length(seq: MotionSequence, num_frames: int) -> MotionSequence:
-    """Trim, or hold the last frame, so a motion lasts exactly num_frames."""
-    if seq.num_frames >= num_frames:
-        return seq.slice(0, num_frames)
-    pad = num_frames - seq.num_frames
-    rep = lambda a: np.concatenate([a, np.repeat(a[-1:], pad, axis=0)])  # noqa: E731
-    return replace(seq, poses=rep(seq.poses), trans=rep(seq.trans), expressions=rep(seq.expressions))
-
-
-# ---- ground truth for known BEAT2 takes --------------------------------------------------------------------
-def find_beat2_take(root: str | Path | None, audio: np.ndarray, filename: str | None = None) -> str | None:
-    """Name of the BEAT2 take whose speech the upload is (same file name, or same length and samples)."""
-    if not root:
-        return None
-    import soundfile as sf
-
-    from .data.beat2 import Beat2Dataset, DatasetError
-
-    try:
-        ds = Beat2Dataset(root)
-    except DatasetError:
-        return None
-    stem = Path(filename).stem if filename else None
-    if stem and stem in ds.names:
-        return stem
-    n = len(audio)
-    for name in ds.names:
-        wav = ds.wave_dir / f"{name}.wav"
-        if not wav.exists():
-            continue
-        try:
-            info = sf.info(str(wav))
-        except Exception:
-            continue
-        if abs(info.frames / info.samplerate - n / SAMPLE_RATE) > 0.05:
-            continue
-        ref = load_audio(wav)
-        k = min(len(ref), n, SAMPLE_RATE * 5)
-        a, b = audio[:k], ref[:k]
-        if k > 0 and np.corrcoef(a, b)[0, 1] > 0.98:
-            return name
-    return None
-
-
 # ---- the service -------------------------------------------------------------------------------------------
 class GestureService:
     def __init__(self, pipeline, settings: ServiceSettings = ServiceSettings(), body=None):
@@ -185,10 +117,6 @@ class GestureService:
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
-        from .body import load_body_model
-        from .body.model import resolve_model_path
-        from .pipeline import GesturePipeline
-
         pipe = GesturePipeline.from_pretrained(settings.checkpoints, max_seconds=settings.max_seconds)
         body = load_body_model(str(resolve_model_path(settings.body_model)))
         return cls(pipe, settings, body)
@@ -225,7 +153,8 @@ class GestureService:
         return removed
 
     # ---- checks ----------------------------------------------------------------------------------------
-    def _check(self, req: Request, need_file: bool = True) -> None:
+    def _check(self, req: Request, need_file: bool = True) -> Plan:
+        """The upload and the page's own choices; the generation settings are the pipeline's to check."""
         if need_file:
             if not req.audio_path:
                 raise ServiceError("Please record or upload speech first (any common audio format).")
@@ -235,122 +164,71 @@ class GestureService:
             mb = p.stat().st_size / 2 ** 20
             if mb > self.settings.max_upload_mb:
                 raise ServiceError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
-        methods = list(dict.fromkeys(req.methods or ()))
-        if not methods:
+        plan = req.plan(self.settings.beat2)
+        if not plan.methods:
             raise ServiceError("Choose at least one method to show.")
-        unknown = [m for m in methods if m not in self.methods]
+        unknown = [m for m in plan.methods if m not in self.methods]
         if unknown:
             raise ServiceError(f"Unknown method {unknown[0]!r}; available: {', '.join(self.methods)}.")
-        if not 1 <= int(req.steps) <= self.settings.max_steps:
-            raise ServiceError(f"Steps must be from 1 to {self.settings.max_steps} (got {req.steps}).")
-        if not 1 <= int(req.ddim_steps) <= 1000:
-            raise ServiceError(f"DDIM steps must be from 1 to 1000 (got {req.ddim_steps}).")
-        if not (np.isfinite(req.cfg) and 0 <= req.cfg <= 10):
-            raise ServiceError(f"CFG scale must be between 0 and 10 (got {req.cfg}).")
-        if req.smoothing not in SMOOTHING_WINDOWS:
-            raise ServiceError(f"Smoothing must be one of {', '.join(SMOOTHING_WINDOWS)}.")
         if int(req.size) not in VIDEO_SIZES:
             raise ServiceError(f"Video size must be one of {', '.join(map(str, VIDEO_SIZES))}.")
+        self.pipeline.check_plan(plan)
+        return plan
 
     def _words(self, req: Request):
         if not req.textgrid_path:
             return None
-        from .align import TextGridError, read_result
-
         try:
             return read_result(req.textgrid_path).words
         except TextGridError as exc:
-            raise ServiceError(f"The TextGrid could not be read: {exc}") from None
+            raise TextGridError(f"The TextGrid could not be read: {exc}") from None
+
+    def _speech(self, req: Request, audio: np.ndarray | None, prog: Progress) -> tuple[Plan, SpeechInput]:
+        """Checks, then the speech prepared once for every method."""
+        if audio is None:
+            plan = self._check(req)
+            try:
+                audio = load_audio(req.audio_path)
+            except AudioError as exc:
+                raise AudioError(f"The audio could not be read: {exc}") from None
+        else:
+            plan = self._check(req, need_file=False)
+        words = self._words(req)
+        prog(0.02, "reading speech")
+        speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
+                                              progress=lambda f, m: prog(0.02 + 0.1 * f, m))
+        return plan, speech
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Outcome:
         """Serve one request (see the module docstring). `audio` (16 kHz) skips reading req.audio_path."""
-        from .pipeline import InputError
-        from .render import RenderError, render_video
-
         t_start = time.perf_counter()
         prog = progress or (lambda f, m: None)
         self.cleanup()
-        if audio is None:
-            self._check(req)
-            try:
-                audio = load_audio(req.audio_path)
-            except AudioError as exc:
-                raise ServiceError(f"The audio could not be read: {exc}") from None
-        else:
-            self._check(req, need_file=False)
-        words = self._words(req)
+        plan, speech = self._speech(req, audio, prog)
         out = self.workdir / f"req-{time.strftime('%H%M%S')}-{uuid.uuid4().hex[:8]}"
         out.mkdir(parents=True)
-        methods = list(dict.fromkeys(req.methods))
-        gen_methods = [m for m in methods if m != "ground_truth"]
-        prog(0.02, "reading speech")
-        try:
-            speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m))
-        except InputError as exc:
-            raise ServiceError(str(exc)) from None
-        T = speech.num_frames
-        motions, labels, gen_s, rows, timings = [], [], [], [], {}
-        warnings = list(speech.warnings)
-        n_gen = max(1, len(gen_methods))
-        for i, m in enumerate(gen_methods):
-            steps = int(req.ddim_steps if m == "ddim" else req.steps)
-            lo, hi = 0.12 + 0.5 * i / n_gen, 0.12 + 0.5 * (i + 1) / n_gen
-            try:
-                res = self.pipeline.generate(speech, steps=steps, cfg=float(req.cfg), seed=int(req.seed), method=m,
-                                             progress=lambda f, msg, lo=lo, hi=hi: prog(lo + (hi - lo) * f, msg))
-            except InputError as exc:
-                raise ServiceError(str(exc)) from None
-            motions.append(res.motion)
-            labels.append(f"{METHOD_LABELS.get(m, m)} {steps} steps CFG {req.cfg:g}")
-            gen_s.append(res.generation_seconds)
-            timings[m] = dict(res.timings)
-        gt_name = None
-        if "ground_truth" in methods:
-            gt_name = find_beat2_take(self.settings.beat2, speech.audio, req.audio_path and Path(req.audio_path).name)
-            if gt_name is None:
-                warnings.append("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; "
-                                "it is left out.")
-            else:
-                from .data.beat2 import Beat2Dataset
-
-                gt = Beat2Dataset(self.settings.beat2).load(gt_name, with_audio=False, with_text=False).motion
-                motions.append(fit_length(gt, T))
-                labels.append("Ground truth (BEAT2)")
-                gen_s.append(None)
-        if not motions:
+        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m))
+        if not gen.motions:
             raise ServiceError("Nothing to show: choose a generator method.")
-        motions = [m.slice(0, T) for m in motions]
-        if req.stand_in_place:
-            motions = [stand_in_place(m) for m in motions]
-        if req.smoothing != "off":
-            motions = [smooth(m, req.smoothing) for m in motions]
         prog(0.62, "rendering video")
         t_r = time.perf_counter()
         video = out / "gestures.mp4"
+        labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
+        labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
+        gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
         try:
-            render_video(motions, speech.audio, video, labels=labels, size=(int(req.size), int(req.size)),
-                         body=self.body, gen_seconds=gen_s,
+            render_video(list(gen.motions.values()), speech.audio, video, labels=labels,
+                         size=(int(req.size), int(req.size)), body=self.body, gen_seconds=gen_s,
                          progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
         except RenderError as exc:
-            raise ServiceError(f"Rendering failed on the server: {exc}") from None
+            raise RenderError(f"Rendering failed on the server: {exc}") from None
         render_s = time.perf_counter() - t_r
         ready = time.perf_counter() - t_start
-        shown = gen_methods + (["ground_truth"] if gt_name else [])
-        for m in gen_methods:
-            t = timings[m]
-            t["rendering"] = render_s / len(motions)
-            gen = sum(v for k, v in t.items() if k not in ("alignment", "rendering"))
-            rows.append([METHOD_LABELS[m], *(round(t.get(k, 0.0), 3) for k in
-                                              ("features", "alignment", "sampling", "decoding", "rendering")),
-                         round(gen, 3), round(speech.duration / max(gen, 1e-9), 1)])
-        if gt_name:
-            rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, round(render_s / len(motions), 3), 0.0, None])
-        rows.append([f"whole request, {speech.duration:.1f} s of speech", None, None, None, None,
-                     round(render_s, 3), round(ready, 3), round(speech.duration / max(ready, 1e-9), 2)])
-        outcome = Outcome(video, rows, [], None, speech.text_mode, warnings, gt_name, ready, timings,
-                          dict(zip(shown, motions)))
+        timings = {m: dict(r.timings) for m, r in gen.results.items()}
+        rows = timing_rows(gen, timings, speech.duration, render_s, ready)
+        outcome = Outcome(video, rows, [], None, speech.text_mode, gen.warnings, gen.ground_truth, ready, timings,
+                          dict(gen.motions))
         if req.exports:
             prog(0.93, "exports")
             self.export(outcome)
@@ -366,8 +244,6 @@ class GestureService:
 
     def _exports(self, motions: list[MotionSequence], names: list[str], out: Path) -> tuple[list[Path], Path | None]:
         """npz + BVH per method, GLB + keypoints for the first one (the interactive view shows that GLB)."""
-        from .export import export_bvh, export_glb, export_keypoints, export_npz
-
         files: list[Path] = []
         glb = None
         for i, (seq, name) in enumerate(zip(motions, names)):
@@ -380,9 +256,27 @@ class GestureService:
         return [Path(f) for f in files], glb
 
 
-def _warmup_words() -> list:
-    from .align import Word
+def timing_rows(gen: Generated, timings: dict[str, dict[str, float]], duration: float, render_s: float,
+                ready: float) -> list[list]:
+    """TIMING_COLUMNS per generator (rendering shared evenly by the shown motions), ground truth, then the whole
+    request. Adds each generator's share of the rendering to `timings`."""
+    rows = []
+    n = len(gen.motions)
+    for m in gen.results:
+        t = timings[m]
+        t["rendering"] = render_s / n
+        g = sum(v for k, v in t.items() if k not in ("alignment", "rendering"))
+        rows.append([METHOD_LABELS[m], *(round(t.get(k, 0.0), 3) for k in
+                                          ("features", "alignment", "sampling", "decoding", "rendering")),
+                     round(g, 3), round(duration / max(g, 1e-9), 1)])
+    if gen.ground_truth:
+        rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None])
+    rows.append([f"whole request, {duration:.1f} s of speech", None, None, None, None,
+                 round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)])
+    return rows
 
+
+def _warmup_words() -> list:
     return [Word("hello", 0.1, 0.5), Word("there", 0.5, 0.9)]
 
 
@@ -392,5 +286,5 @@ def duration_seconds(path: str | os.PathLike) -> float:
 
 
 __all__ = ["GestureService", "Outcome", "Request", "ServiceError", "ServiceSettings", "METHOD_LABELS",
-           "SMOOTHING_WINDOWS", "TIMING_COLUMNS", "VIDEO_SIZES", "find_beat2_take", "fit_length", "smooth",
-           "stand_in_place"]
+           "SMOOTHING_WINDOWS", "TIMING_COLUMNS", "VIDEO_SIZES", "find_beat2_take", "fit_length",
+           "smooth", "stand_in_place", "timing_rows", "InputError"]

@@ -9,11 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-SAMPLE_RATE = 16_000
+from .constants import SAMPLE_RATE
+from .errors import AudioError
 
-
-class AudioError(ValueError):
-    """Audio that cannot be used; the message is meant for the user."""
 
 
 def resample(y: np.ndarray, sr_in: int, sr_out: int = SAMPLE_RATE) -> np.ndarray:

@@ -15,9 +15,7 @@ import torch
 from safetensors import safe_open
 from safetensors.torch import save_file
 
-
-class CheckpointError(ValueError):
-    """A model file that cannot be used; the message names the file and the problem."""
+from .errors import CheckpointError
 
 
 def save_checkpoint(path: str | Path, tensors: dict[str, torch.Tensor], kind: str, config: Any,

@@ -1,7 +1,7 @@
 """The `gesturelsm` command line. Each subcommand lives next to the code it drives and registers here.
 
 A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`.
-User errors (bad files, bad settings) are printed as one clear line and exit with status 2.
+User errors (`errors.GestureError`: bad files, bad settings) are printed as one clear line and exit with status 2.
 """
 from __future__ import annotations
 
@@ -9,21 +9,19 @@ import argparse
 import importlib
 import sys
 
+from .errors import GestureError, UserError  # noqa: F401 (UserError: importable from here as before)
+
 # module paths of subcommands; each has add_parser(subparsers)
 SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.body.cli",
     "gesturelsm.data.cli",
     "gesturelsm.align.cli",
     "gesturelsm.tokenizer.cli",
-    "gesturelsm.generator.cli",
+    "gesturelsm.generator.cli", "gesturelsm.pipeline_cli",
     "gesturelsm.render.cli", "gesturelsm.export.cli",
     "gesturelsm.study.cli",
     "gesturelsm.evaluation.cli",
 )
-
-
-class UserError(Exception):
-    """An error caused by input or settings; printed without a traceback."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -46,12 +44,9 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
-    from .audio import AudioError
-    from .motion.sequence import MotionFileError
-
     try:
         result = args.func(args)
-    except (UserError, AudioError, MotionFileError, FileNotFoundError, ValueError) as exc:
+    except (GestureError, FileNotFoundError, ValueError) as exc:   # ValueError: argument checks of library code
         print(f"gesturelsm {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -10,23 +10,24 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 import torch
 
-from .audio import SAMPLE_RATE, AudioError, resample, to_mono
+from .audio import SAMPLE_RATE, resample, to_mono
+from .errors import AudioError, InputError
+from .data.lookup import find_beat2_take, take_motion
+from .flows import FACTS
+from .motion.postprocess import check_smoothing, fit_length, postprocess
 from .motion.regions import join_regions
 from .motion.sequence import FPS, MotionSequence
 
 ASSETS = Path(__file__).resolve().parents[1] / "assets"
 MIN_SECONDS = 0.5
-MAX_STEPS = {"gesturelsm": 128, "rectified_flow": 128, "ddim": 1000}
+MAX_CFG = 10.0
+GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
 Progress = Callable[[float, str], None]
-
-
-class InputError(ValueError):
-    """Input or settings a person must change; the message says what and how."""
 
 
 @dataclass
@@ -66,6 +67,35 @@ class GenerationResult:
     @property
     def real_time_factor(self) -> float:
         return self.motion.duration / max(self.generation_seconds, 1e-9)
+
+
+@dataclass
+class Plan:
+    """What to make from one prepared speech: which methods, with which settings, post-processed how."""
+    methods: Sequence[str]                     # generator keys and/or GROUND_TRUTH, in the order shown
+    steps: Mapping[str, int] = field(default_factory=dict)   # per method; missing: the method's default_steps
+    cfg: float = 2.0
+    seed: int = 0
+    stand_in_place: bool = False
+    smoothing: str = "off"                     # motion.postprocess.SMOOTHING_WINDOWS
+    beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
+    filename: str | None = None                # the speech file's name (a take is recognised by it first)
+
+    def steps_for(self, method: str) -> int:
+        return int(self.steps.get(method, FACTS[method].default_steps))
+
+    @property
+    def generators(self) -> list[str]:
+        return [m for m in dict.fromkeys(self.methods) if m != GROUND_TRUTH]
+
+
+@dataclass
+class Generated:
+    """The motions of one plan, each exactly as long as the speech and post-processed."""
+    motions: dict[str, MotionSequence]         # method (or GROUND_TRUTH) -> motion, in the plan's order
+    results: dict[str, GenerationResult]       # generator methods: timings and settings
+    ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
+    warnings: list[str]
 
 
 class GesturePipeline:
@@ -179,13 +209,47 @@ class GesturePipeline:
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
+        """The one place settings are checked: the method is loaded, steps within the method's registered
+        bounds (flows.FACTS), 0 <= CFG <= MAX_CFG."""
         if method not in self.generators:
             raise InputError(f"unknown method {method!r}; available: {', '.join(self.generators)}")
-        hi = MAX_STEPS.get(method, 128)
+        hi = FACTS[method].max_steps
         if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
-            raise InputError(f"steps must be a whole number from 1 to {hi} for {method} (got {steps})")
-        if not np.isfinite(cfg) or not 0.0 <= cfg <= 10.0:
-            raise InputError(f"CFG scale must be between 0 and 10 (got {cfg})")
+            raise InputError(f"The number of steps must be a whole number from 1 to {hi} for {method} (got {steps})")
+        if not np.isfinite(cfg) or not 0.0 <= cfg <= MAX_CFG:
+            raise InputError(f"CFG scale must be between 0 and {MAX_CFG:g} (got {cfg})")
+
+    def check_plan(self, plan: Plan) -> None:
+        """All of a plan's settings, before any work is done."""
+        for m in plan.generators:
+            self.check_settings(m, plan.steps_for(m), plan.cfg)
+        check_smoothing(plan.smoothing)
+
+    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
+        """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
+        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing)."""
+        self.check_plan(plan)
+        T = speech.num_frames
+        gens = plan.generators
+        motions: dict[str, MotionSequence] = {}
+        results: dict[str, GenerationResult] = {}
+        warnings = list(speech.warnings)
+        for i, m in enumerate(gens):
+            lo, hi = i / max(1, len(gens)), (i + 1) / max(1, len(gens))
+            prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
+            res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed), method=m,
+                                progress=prog)
+            results[m], motions[m] = res, res.motion
+        gt_name = None
+        if GROUND_TRUTH in plan.methods:
+            gt_name = find_beat2_take(plan.beat2, speech.audio, plan.filename)
+            if gt_name is None:
+                warnings.append("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; "
+                                "it is left out.")
+            else:
+                motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
+        motions = {k: postprocess(v.slice(0, T), plan.stand_in_place, plan.smoothing) for k, v in motions.items()}
+        return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
@@ -213,4 +277,5 @@ class GesturePipeline:
                                 list(speech.warnings))
 
 
-__all__ = ["GesturePipeline", "GenerationResult", "SpeechInput", "InputError", "AudioError", "ASSETS"]
+__all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
+           "ASSETS", "GROUND_TRUTH", "MAX_CFG"]

@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _support import build_tiny_assets
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared"))
 BEAT2 = SHARED / "data" / "beat2"
@@ -84,3 +86,17 @@ def make_take(root: Path, name: str, frames: int, sr: int = 16000, dtype: str = 
 def beat2_maker():
     """make(root, name, frames, ...) writes one synthetic take in BEAT2 layout (see make_take)."""
     return make_take
+
+
+# A tiny but complete set of checkpoints (4 tokenizers + 3 generators) built from synthetic motion, so the whole
+# pipeline runs in tests without ../shared or the shipped assets (tests/app and tests/evaluation build their own).
+@pytest.fixture(scope="session")
+def tiny_assets(tmp_path_factory) -> Path:
+    return build_tiny_assets(tmp_path_factory.mktemp("assets"), steps=40, batch_size=8, warmup=5)
+
+
+@pytest.fixture(scope="session")
+def tiny_pipeline(tiny_assets):
+    from gesturelsm.pipeline import GesturePipeline
+
+    return GesturePipeline.from_pretrained(tiny_assets)

@@ -20,12 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import tts
+from ..constants import SAMPLE_RATE
 from .dtw import downsample, multiscale_dtw
 from .features import FRAME_RATE, Activity, flip_short_runs, frame_time, mfcc_rows, voice_activity
 from .normalize import Token, tokenize
 from .words import AlignmentResult, Word
 
-SAMPLE_RATE = 16_000
 MIN_AUDIO_S = 0.3
 CONFIDENCE_SCALE = 0.12  # relative distance gain over the word-reversed baseline that counts as certain
 SNAP_EDGE_S = 0.1        # an onset this close before a long pause belongs after it

@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import UserError
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("align", help="word timings for a transcript (TextGrid out), no forced aligner needed",
@@ -28,7 +30,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..audio import SAMPLE_RATE, load_audio
-    from ..cli import UserError
     from .aligner import AlignConfig, align_words
     from .metrics import onset_errors_ms, onset_stats
     from .normalize import tokenize

@@ -10,6 +10,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..constants import SAMPLE_RATE
+
 FRAME_RATE = 50    # frames per second (20 ms hop)
 WIN_S = 0.025      # analysis window
 N_MFCC = 13
@@ -57,7 +59,7 @@ def _dct_matrix(n_in: int, n_out: int) -> np.ndarray:
     return d.astype(np.float32)
 
 
-def mfcc_rows(y: np.ndarray, sr: int = 16_000, n_mfcc: int = N_MFCC) -> np.ndarray:
+def mfcc_rows(y: np.ndarray, sr: int = SAMPLE_RATE, n_mfcc: int = N_MFCC) -> np.ndarray:
     """(T, n_mfcc) MFCCs (40 mel bands, 50-7600 Hz) with per-utterance mean/variance normalisation, rows
     scaled to unit length (so a dot product is a cosine similarity)."""
     logmel = []
@@ -70,7 +72,7 @@ def mfcc_rows(y: np.ndarray, sr: int = 16_000, n_mfcc: int = N_MFCC) -> np.ndarr
     return (m / np.maximum(np.linalg.norm(m, axis=1, keepdims=True), 1e-8)).astype(np.float32)
 
 
-def frame_db(y: np.ndarray, sr: int = 16_000) -> np.ndarray:
+def frame_db(y: np.ndarray, sr: int = SAMPLE_RATE) -> np.ndarray:
     """(T,) frame energy in dB re full scale (same frames as `mfcc_rows`)."""
     power = [np.mean(fr.astype(np.float64) ** 2, axis=1) for fr in _frame_blocks(y, sr)]
     return 10.0 * np.log10(np.concatenate(power) * 8.0 / 3.0 + 1e-14)  # 8/3: Hann power loss
@@ -91,7 +93,7 @@ class Activity:
         return list(zip(np.nonzero(d == 1)[0].tolist(), np.nonzero(d == -1)[0].tolist()))
 
 
-def voice_activity(y: np.ndarray, sr: int = 16_000, min_gap_s: float = 0.0, min_run_s: float = 0.06,
+def voice_activity(y: np.ndarray, sr: int = SAMPLE_RATE, min_gap_s: float = 0.0, min_run_s: float = 0.06,
                    ) -> Activity:
     """Energy detector with an adaptive threshold: 35 % of the way from the noise floor (10th percentile)
     to the speech level (95th percentile); bursts up to `min_run_s` are dropped, dips up to `min_gap_s`

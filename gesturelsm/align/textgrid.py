@@ -16,15 +16,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .words import AlignmentResult, Word
+from ..errors import TextGridError
 
 _TOKEN = re.compile(r'"(?:[^"]|"")*"?|![^\n]*|<[A-Za-z]+>|[^\s"]+')  # strings may span lines
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 _LABEL = re.compile(r"^(?:[A-Za-z_][\w?]*(?:\[\d*\])?:?|=|\[\d*\]:?|:)$")  # skipped: keys, '=', '[3]:'
 _EPS = 1e-6
-
-
-class TextGridError(ValueError):
-    """A TextGrid that cannot be read or written; the message names the file and the line."""
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@
 from __future__ import annotations
 
 from .fk import forward_kinematics, forward_kinematics_aa, skinning_transforms
-from .model import BodyModel, BodyModelError, BodyOutput, load_body_model, resolve_model_path
+from .model import BodyModel, BodyModelError, BodyOutput, load_body_model, resolve_body, resolve_model_path
 
 __all__ = ["BodyModel", "BodyModelError", "BodyOutput", "forward_kinematics", "forward_kinematics_aa",
-           "load_body_model", "resolve_model_path", "skinning_transforms"]
+           "load_body_model", "resolve_body", "resolve_model_path", "skinning_transforms"]

@@ -24,6 +24,7 @@ right eye 72:75, left hand 75:120, right hand 120:165. Units: metres, y up, the 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -35,7 +36,7 @@ from ..motion.skeleton import NUM_JOINTS
 from .fk import forward_kinematics, forward_kinematics_aa, skinning_transforms
 from .model_file import HINT, BodyModelError, resolve_model_path, used_dims, validate_model_file
 
-__all__ = ["BodyModel", "BodyModelError", "BodyOutput", "load_body_model", "resolve_model_path"]
+__all__ = ["BodyModel", "BodyModelError", "BodyOutput", "load_body_model", "resolve_body", "resolve_model_path"]
 
 
 @dataclass
@@ -198,3 +199,16 @@ def load_body_model(path: str | Path | None = None, *, num_betas: int | None = N
                 raise BodyModelError(f"{p}: 'vertex_id_names' lacks {exc} (smplx needs nose, eyes, ears, "
                                      "toes, heels and finger tips)") from None
     return BodyModel(module, p, flat_hand_mean)
+
+
+@lru_cache(maxsize=4)
+def _load_cached(path: str) -> BodyModel:
+    return load_body_model(path)
+
+
+def resolve_body(body: BodyModel | str | Path | None = None) -> BodyModel:
+    """A BodyModel, a path to an SMPL-X npz, or None ($GESTURELSM_SMPLX_MODEL or the mannequin); loaded models
+    are cached by path (rendering and every export of a request share one)."""
+    if body is None or isinstance(body, (str, Path)):
+        return _load_cached(str(resolve_model_path(body)))
+    return body

@@ -15,15 +15,12 @@ from pathlib import Path
 import numpy as np
 
 from ..motion.skeleton import NUM_JOINTS
+from ..errors import BodyModelError
 
 ENV_VAR = "GESTURELSM_SMPLX_MODEL"
 SMPLX_FILE_NAMES = ("SMPLX_NEUTRAL_2020.npz", "SMPLX_NEUTRAL.npz")
 HINT = "expected an SMPL-X model file such as SMPLX_NEUTRAL_2020.npz"
 _MIN_VERTICES_DEFAULT_IDS = 9930   # smplx's default extra-joint vertex ids go up to 9929
-
-
-class BodyModelError(ValueError):
-    """A body model file that cannot be used; the message names the file and the problem."""
 
 
 def default_model_path() -> Path:

@@ -21,14 +21,11 @@ import numpy as np
 import torch
 
 from ..audio import SAMPLE_RATE, AudioError, load_audio
+from ..errors import DatasetError
 from ..motion.sequence import FPS, MotionFileError, MotionSequence
 from .windows import window_starts
 
 CACHE_VERSION = 1
-
-
-class DatasetError(ValueError):
-    """A dataset folder or file that cannot be used; the message names it."""
 
 
 @dataclass

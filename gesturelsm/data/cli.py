@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..constants import SAMPLE_RATE
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("data", help="inspect a BEAT2-layout dataset folder")
@@ -21,7 +23,7 @@ def run_info(args: argparse.Namespace) -> int:
     print(f"{'take':<28}{'frames':>8}{'seconds':>9}{'audio s':>9}{'words':>7}  split")
     for name in ds.names + ds.audio_only_names:
         take = ds.load(name)
-        audio_s = f"{len(take.audio) / 16000:.2f}" if take.audio is not None else "-"
+        audio_s = f"{len(take.audio) / SAMPLE_RATE:.2f}" if take.audio is not None else "-"
         words = str(len([w for w in take.words if w.text])) if take.words is not None else "-"
         frames = take.motion.num_frames if take.motion is not None else "-"
         secs = f"{take.motion.duration:.2f}" if take.motion is not None else "-"

@@ -29,7 +29,7 @@ from typing import Callable
 import numpy as np
 import torch
 
-from ..motion.sequence import FPS
+from ..constants import FPS, SAMPLE_RATE
 
 Log = Callable[[str], None]
 DEFAULT_STEPS = (1, 2, 4, 8, 20)
@@ -72,12 +72,12 @@ class PeakRSS:
 
 def speech_clip(seconds: float, source: np.ndarray | None = None) -> np.ndarray:
     """`seconds` of speech: the start of `source` when long enough (looped otherwise), else synthetic."""
-    n = int(round(seconds * 16000))
+    n = int(round(seconds * SAMPLE_RATE))
     if source is not None and len(source):
         reps = int(np.ceil(n / len(source)))
         return np.tile(source, reps)[:n].astype(np.float32)
     rng = np.random.default_rng(0)
-    t = np.arange(n) / 16000
+    t = np.arange(n) / SAMPLE_RATE
     env = np.clip(np.sin(2 * np.pi * 3.1 * t), 0, None) ** 2 * (0.8 + 0.2 * rng.random(n))
     return (0.3 * env * np.sin(2 * np.pi * 180 * t)).astype(np.float32)
 
@@ -139,8 +139,8 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
     pipes = {k: v for k, v in pipes.items() if k in presets}
     clip_frames = shipped.generators[next(iter(shipped.generators))].config.window_frames
     lengths = {"clip": clip_frames / FPS, "10s": 10.0, **({"long": long_seconds} if long_seconds else {})}
-    shipped.prepare_speech(speech_clip(2.0, speech), 16000)       # warm-up: lazy imports, first-call costs
-    inputs = {k: shipped.prepare_speech(speech_clip(s, speech), 16000) for k, s in lengths.items()}
+    shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE)       # warm-up: lazy imports, first-call costs
+    inputs = {k: shipped.prepare_speech(speech_clip(s, speech), SAMPLE_RATE) for k, s in lengths.items()}
     plan = [(p, m, s) for p, pipe in pipes.items() for m in pipe.methods for s in steps]
     times: dict[tuple, dict[str, list[float]]] = {k: {"clip": [], "10s": [], "long": []} for k in plan}
     for rnd in range(repeats + 1):                              # round 0 warms up and is discarded
@@ -207,12 +207,12 @@ def time_end_to_end(pipe, audio: str | Path, out: str | Path, text: str | None =
     t0 = time.perf_counter()
     y = load_audio(audio)
     if seconds:
-        y = y[: int(seconds * 16000)]
+        y = y[: int(seconds * SAMPLE_RATE)]
     stages["decode audio"] = time.perf_counter() - t0
-    res = pipe.generate(y, 16000, text=text, steps=steps, cfg=cfg, method=method)
+    res = pipe.generate(y, SAMPLE_RATE, text=text, steps=steps, cfg=cfg, method=method)
     stages.update({k: v for k, v in res.timings.items()})
     t1 = time.perf_counter()
     render_video([res.motion], y, out)
     stages["render video"] = time.perf_counter() - t1
-    return {"method": method, "steps": steps, "seconds_of_speech": len(y) / 16000, "stages": stages,
+    return {"method": method, "steps": steps, "seconds_of_speech": len(y) / SAMPLE_RATE, "stages": stages,
             "total": sum(stages.values()), "video": str(out)}

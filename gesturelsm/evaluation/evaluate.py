@@ -21,6 +21,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..constants import SAMPLE_RATE
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
 from ..metrics.face import expression_mse, face_vertex_mse
@@ -119,7 +120,7 @@ def evaluate(pipe, clips: list[EvalClip], plan: list[EvalPlanItem], seeds: int =
         "ground_truth": summarise(gt_stats, None, extractors) if gt_stats else None,
         "rows": [], "seeds": seeds, "extractors": [e.name for e in extractors],
     }
-    speech = {c.name: pipe.prepare_speech(c.audio, 16000, words=c.words) for c in clips}
+    speech = {c.name: pipe.prepare_speech(c.audio, SAMPLE_RATE, words=c.words) for c in clips}
     for item in plan:
         t0 = time.perf_counter()
         st_m, st_a, gen_s, dur = [], [], [], []

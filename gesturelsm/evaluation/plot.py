@@ -3,9 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..flows import FACTS
 from .tables import NAMES
 
-COLORS = {"gesturelsm": "#d62728", "rectified_flow": "#1f77b4", "ddim": "#2ca02c"}
+COLORS = {k: f.color for k, f in FACTS.items()}
 
 
 def quality_time_plot(bench: dict, out: str | Path, evaluation: dict | None = None, metric: str = "fgd_k",

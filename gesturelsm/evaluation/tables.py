@@ -1,9 +1,10 @@
 """Markdown tables for eval and bench reports, in the paper's layout, with the paper's numbers beside ours."""
 from __future__ import annotations
 
+from ..flows import FACTS
 from . import paper
 
-NAMES = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
+NAMES = {k: f.label for k, f in FACTS.items()}
 
 
 def _f(v, fmt: str = "{:.3f}") -> str:

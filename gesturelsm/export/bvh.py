@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ..body.model import resolve_body
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
@@ -89,8 +90,6 @@ def continuous_euler(e: np.ndarray) -> np.ndarray:
 def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "cm",
                names: str = "animator") -> Path:
     """Write `seq` as BVH (see the module docstring); returns the path. body: BodyModel / path / None."""
-    from ..render.frames import resolve_body
-
     if units not in UNITS:
         raise ValueError(f"units={units!r}: use 'cm' or 'm'")
     label = joint_names(names)

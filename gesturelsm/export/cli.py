@@ -9,6 +9,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..body.model import resolve_body
+from ..errors import UserError
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / BEAT2 npz",
@@ -29,7 +32,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cli import UserError
     from ..motion.sequence import MotionSequence
     from . import export_bvh, export_glb, export_keypoints, export_npz
 
@@ -40,8 +42,6 @@ def run(args: argparse.Namespace) -> int:
     seq = MotionSequence.load(args.motion)
     body = None
     if args.bvh or args.glb or args.keypoints:
-        from ..render.frames import resolve_body
-
         body = resolve_body(args.model)
     done = []
     if args.npz:

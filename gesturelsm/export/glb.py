@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ..body.model import resolve_body
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
@@ -107,8 +108,6 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
 def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "animator",
                max_expressions: int = 10, color: tuple[float, float, float] = (0.78, 0.69, 0.60)) -> Path:
     """Write `seq` as an animated skinned GLB (see the module docstring); returns the path."""
-    from ..render.frames import resolve_body
-
     label = joint_names(names)
     body = resolve_body(body)
     path = Path(path)

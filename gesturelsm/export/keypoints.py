@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS
 from .skeleton import EXTRA_NAMES, extra_vertex_ids
@@ -57,8 +58,6 @@ assert len(BODY_25) == 25 and len(HAND_LEFT) == 21
 def keypoints_3d(seq: MotionSequence, body=None, chunk: int = 128) -> dict[str, np.ndarray]:
     """World-space keypoints (T, K, 3) in the OpenPose layouts: body (25), hand_left / hand_right (21),
     face (70; NaN where SMPL-X has no point)."""
-    from ..render.frames import resolve_body
-
     body = resolve_body(body)
     ids = extra_vertex_ids(body)
     lmk_f = body.module.lmk_faces_idx.cpu().numpy().astype(np.int64)

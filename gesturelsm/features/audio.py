@@ -16,7 +16,9 @@ import torch.nn as nn
 import torch.nn.functional as F
 from scipy.ndimage import maximum_filter1d
 
-SR = 16_000
+from ..constants import SAMPLE_RATE
+
+SR = SAMPLE_RATE
 ENVELOPE_WINDOW = 1024
 ONSET_HOP = 512
 

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from ..constants import FPS
+
 TEXT_DIM = 384
-FPS = 30
 
 
 class TextModelUnavailable(RuntimeError):

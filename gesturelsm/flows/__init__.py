@@ -1,20 +1,50 @@
 """Generative methods behind one interface (see base.py): GestureLSM's shortcut flow matching and the
-baselines it is compared with, on the same backbone. Convention: t = 0 noise, t = 1 data."""
-from .base import LossResult, Method, ModelFn, guided
+baselines it is compared with, on the same backbone. Convention: t = 0 noise, t = 1 data.
+
+The registry: `METHODS` maps each method's key to its class; every fact about a method (label, default and
+maximum steps, what it predicts, whether it takes a step size, plot colour) is its class's `facts`, and the
+rest of the package reads them from here. A new method = a new module in this folder + one line below.
+"""
+from .base import LossResult, Method, MethodFacts, ModelFn, euler_sample, guided
 from .ddim import DDIM
 from .rectified import RectifiedFlow
 from .shortcut import Shortcut
 from .timesteps import sample_t
 
-METHODS = {"gesturelsm": Shortcut, "rectified_flow": RectifiedFlow, "ddim": DDIM}
-DEFAULT_STEPS = {"gesturelsm": 8, "rectified_flow": 8, "ddim": 20}
+METHODS: dict[str, type] = {m.facts.key: m for m in (
+    Shortcut, RectifiedFlow, DDIM,
+)}
+FACTS: dict[str, MethodFacts] = {k: m.facts for k, m in METHODS.items()}
+DEFAULT_STEPS = {k: f.default_steps for k, f in FACTS.items()}
+MAX_STEPS = {k: f.max_steps for k, f in FACTS.items()}
+
+
+def method_facts(name: str) -> MethodFacts:
+    if name not in FACTS:
+        raise ValueError(f"unknown method {name!r}; choose from {', '.join(FACTS)}")
+    return FACTS[name]
 
 
 def make_method(name: str, **kwargs) -> Method:
-    if name not in METHODS:
-        raise ValueError(f"unknown method {name!r}; choose from {', '.join(METHODS)}")
-    return METHODS[name](**kwargs)
+    return METHODS[method_facts(name).key](**kwargs)
 
 
-__all__ = ["LossResult", "Method", "ModelFn", "guided", "DDIM", "RectifiedFlow", "Shortcut", "sample_t",
-           "METHODS", "DEFAULT_STEPS", "make_method"]
+def training_method(name: str, prediction: str = "data", time_sampler: str = "beta") -> Method:
+    """The method `name` configured as `gesturelsm train` trains it."""
+    return METHODS[method_facts(name).key].for_training(prediction, time_sampler)
+
+
+def steps_from_flags(steps: int, ddim_steps: int) -> dict[str, int]:
+    """The CLI's and the page's two step settings as steps per method: `--ddim-steps` / the DDIM slider for
+    DDIM, `--steps` / the steps slider for every other method (the interface the README documents)."""
+    return {k: int(ddim_steps if k == DDIM.facts.key else steps) for k in FACTS}
+
+
+def label(name: str) -> str:
+    """A method's label for people; other keys (e.g. "ground_truth") are returned as they are."""
+    return FACTS[name].label if name in FACTS else name
+
+
+__all__ = ["LossResult", "Method", "MethodFacts", "ModelFn", "euler_sample", "guided", "DDIM", "RectifiedFlow",
+           "Shortcut", "sample_t", "METHODS", "FACTS", "DEFAULT_STEPS", "MAX_STEPS", "method_facts", "make_method",
+           "training_method", "steps_from_flags", "label"]

@@ -11,7 +11,7 @@ on a subset of the rows of the batch it was bound to (the shortcut targets need 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Protocol
+from typing import Callable, ClassVar, Protocol
 
 import torch
 
@@ -24,14 +24,59 @@ class LossResult:
     logs: dict[str, float]           # parts of the loss for progress bars
 
 
-class Method(Protocol):
-    name: str
+@dataclass(frozen=True)
+class MethodFacts:
+    """What the rest of the package needs to know about a method, written once, beside the method."""
+    key: str                         # the name in checkpoints, the CLI and the API, e.g. "gesturelsm"
+    label: str                       # shown to people (page, tables, plots)
+    default_steps: int               # sampling steps when none are given
+    max_steps: int                   # the largest step count accepted (settings are checked against it)
+    predicts: str                    # what the model function returns to the sampler: "velocity" | "data" (x1)
     uses_step_size: bool             # whether the network's d input is meaningful
+    color: str                       # line colour in plots
+
+
+class Method(Protocol):
+    facts: ClassVar[MethodFacts]
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def uses_step_size(self) -> bool: ...
+
+    @classmethod
+    def for_training(cls, prediction: str = "data", time_sampler: str = "beta") -> "Method":
+        """The method as `gesturelsm train` configures it (options a method does not have are ignored)."""
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,
-             generator: torch.Generator | None = None) -> LossResult: ...
+             generator: torch.Generator | None = None, teacher: ModelFn | None = None) -> LossResult: ...
 
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor: ...
+
+
+class FactsMixin:
+    """`name` and `uses_step_size` read from the class's `facts`."""
+    facts: ClassVar[MethodFacts]
+
+    @property
+    def name(self) -> str:
+        return self.facts.key
+
+    @property
+    def uses_step_size(self) -> bool:
+        return self.facts.uses_step_size
+
+
+def euler_sample(f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float, d: float) -> torch.Tensor:
+    """The flows' sampler: n Euler steps t_k = k / n from noise (t = 0) to data (t = 1), step-size input `d`
+    on every call (0 = instantaneous velocity), classifier-free guidance when cfg_scale != 1."""
+    B, x = noise.shape[0], noise
+    dd = torch.full((B,), d, device=x.device)
+    for k in range(steps):
+        t = torch.full((B,), k / steps, device=x.device)
+        x = x + (1.0 / steps) * guided(f, x, t, dd, cfg_scale)
+    return x
 
 
 def guided(f: ModelFn, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, scale: float) -> torch.Tensor:

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import torch
 
-from .base import LossResult, ModelFn, bcast, drop_mask, guided
+from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, guided
 
 NUM_TRAIN_STEPS = 1000
 
@@ -29,9 +30,10 @@ def model_time(k: torch.Tensor) -> torch.Tensor:
 
 
 @dataclass
-class DDIM:
-    name: str = "ddim"
-    uses_step_size: bool = False
+class DDIM(FactsMixin):
+    facts: ClassVar[MethodFacts] = MethodFacts(
+        key="ddim", label="DDIM", default_steps=20, max_steps=NUM_TRAIN_STEPS, predicts="data",
+        uses_step_size=False, color="#2ca02c")
     alpha_bar: torch.Tensor = field(default_factory=cosine_alpha_bar)
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,
@@ -45,9 +47,11 @@ class DDIM:
         loss = (pred - x1).pow(2).mean()
         return LossResult(loss, {"x0": loss.item()})
 
+    @classmethod
+    def for_training(cls, prediction: str = "data", time_sampler: str = "beta") -> "DDIM":
+        return cls()                        # always x0 prediction, its own noise schedule
+
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor:
-        if not 1 <= steps <= NUM_TRAIN_STEPS:
-            raise ValueError(f"steps must be between 1 and {NUM_TRAIN_STEPS} (got {steps})")
         B, x, dev = noise.shape[0], noise, noise.device
         ab = self.alpha_bar.to(dev)
         ks = torch.linspace(NUM_TRAIN_STEPS - 1, 0, steps).round().long().tolist()

@@ -7,19 +7,25 @@ Same convention as every method here: t = 0 noise, t = 1 data.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import torch
 
-from .base import LossResult, ModelFn, bcast, drop_mask, flow_loss, guided
+from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, euler_sample, flow_loss
 from .timesteps import sample_t
 
 
 @dataclass
-class RectifiedFlow:
+class RectifiedFlow(FactsMixin):
+    facts: ClassVar[MethodFacts] = MethodFacts(
+        key="rectified_flow", label="Rectified flow", default_steps=8, max_steps=128, predicts="velocity",
+        uses_step_size=False, color="#1f77b4")
     time_sampler: str = "uniform"
     loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
-    name: str = "rectified_flow"
-    uses_step_size: bool = False
+
+    @classmethod
+    def for_training(cls, prediction: str = "data", time_sampler: str = "beta") -> "RectifiedFlow":
+        return cls(loss_space=prediction)   # uniform t: the baseline as published
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,
              generator: torch.Generator | None = None, teacher: ModelFn | None = None) -> LossResult:
@@ -32,11 +38,4 @@ class RectifiedFlow:
         return LossResult(loss, {"flow": loss.item()})
 
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor:
-        if not 1 <= steps <= 1024:
-            raise ValueError(f"steps must be between 1 and 1024 (got {steps})")
-        B, x = noise.shape[0], noise
-        d = torch.zeros(B, device=x.device)
-        for k in range(steps):
-            t = torch.full((B,), k / steps, device=x.device)
-            x = x + (1.0 / steps) * guided(f, x, t, d, cfg_scale)
-        return x
+        return euler_sample(f, noise, steps, cfg_scale, d=0.0)

@@ -19,23 +19,29 @@ Sampling: Euler with n steps, t_k = k / n, d = 1 / n (d = 0 from 128 steps on), 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import torch
 
-from .base import LossResult, ModelFn, bcast, drop_mask, flow_loss, guided
+from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, euler_sample, flow_loss
 from .timesteps import sample_t
 
 
 @dataclass
-class Shortcut:
+class Shortcut(FactsMixin):
+    facts: ClassVar[MethodFacts] = MethodFacts(
+        key="gesturelsm", label="GestureLSM", default_steps=8, max_steps=128, predicts="velocity",
+        uses_step_size=True, color="#d62728")
     alpha: float = 2.0
     beta: float = 1.2
     time_sampler: str = "beta"             # beta | uniform | logit_normal (ablation)
     consistency_fraction: float = 0.25     # share of rows trained with the self-consistency target
     max_level: int = 7                     # d levels 1/2 ... 1/2^max_level (1/128)
     loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
-    name: str = "gesturelsm"
-    uses_step_size: bool = True
+
+    @classmethod
+    def for_training(cls, prediction: str = "data", time_sampler: str = "beta") -> "Shortcut":
+        return cls(loss_space=prediction, time_sampler=time_sampler)
 
     @property
     def min_d(self) -> float:
@@ -83,12 +89,4 @@ class Shortcut:
         return LossResult(loss, logs)
 
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor:
-        if not 1 <= steps <= 1024:
-            raise ValueError(f"steps must be between 1 and 1024 (got {steps})")
-        B, x = noise.shape[0], noise
-        d_val = 0.0 if steps >= 2 ** self.max_level else 1.0 / steps
-        d = torch.full((B,), d_val, device=x.device)
-        for k in range(steps):
-            t = torch.full((B,), k / steps, device=x.device)
-            x = x + (1.0 / steps) * guided(f, x, t, d, cfg_scale)
-        return x
+        return euler_sample(f, noise, steps, cfg_scale, d=0.0 if steps >= 2 ** self.max_level else 1.0 / steps)

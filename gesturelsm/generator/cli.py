@@ -1,10 +1,12 @@
-"""`gesturelsm train` (generator) and `gesturelsm generate` (speech -> motion npz)."""
+"""`gesturelsm train` (generator). `gesturelsm generate` is the pipeline's command: pipeline_cli.py."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from ..flows import DEFAULT_STEPS, METHODS
+from ..constants import FPS, SAMPLE_RATE
+from ..errors import UserError
+from ..flows import METHODS
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 
@@ -36,24 +38,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ship", metavar="DIR", help="also write an fp16 copy as DIR/<method>.safetensors")
     p.set_defaults(func=run_train)
 
-    g = sub.add_parser("generate", help="generate SMPL-X gestures for a speech file")
-    g.add_argument("audio", help="speech file (wav, flac, mp3, ogg, m4a ...)")
-    src = g.add_mutually_exclusive_group()
-    src.add_argument("--text", help="transcript; word timings are aligned automatically")
-    src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
-    g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
-    g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
-    g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--method", default="gesturelsm", choices=list(METHODS))
-    g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
-    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
-    g.set_defaults(func=run_generate)
-
 
 def run_train(args: argparse.Namespace) -> int:
     import torch
 
-    from ..cli import UserError
     from ..data.beat2 import Beat2Dataset
     from ..features.text import TextEmbedder
     from ..motion.regions import GENERATED_REGIONS
@@ -88,7 +76,7 @@ def run_train(args: argparse.Namespace) -> int:
                 train.append(build_take(name, feats, take.audio, take.words, tokenizers, emb, mirror=True))
             continue
         cut = int(round(args.train_fraction * feats.shape[0])) // 4 * 4
-        a_cut = int(round(cut * 16000 / 30))
+        a_cut = int(round(cut * SAMPLE_RATE / FPS))
         words_tr = take.words
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb))
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
@@ -96,7 +84,7 @@ def run_train(args: argparse.Namespace) -> int:
         if take.words is not None:
             from ..align.words import Word
 
-            t0 = cut / 30
+            t0 = cut / FPS
             held_words = [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0]
         held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
     if not train:
@@ -120,7 +108,6 @@ def preset_with(preset: str, overrides: list[str]):
     """A named GeneratorConfig preset with FIELD=VALUE overrides (values parsed as the field's type)."""
     import dataclasses
 
-    from ..cli import UserError
     from .config import PRESETS
 
     if preset not in PRESETS:
@@ -147,30 +134,3 @@ def preset_with(preset: str, overrides: list[str]):
         except ValueError:
             raise UserError(f"--set {item!r}: {val!r} is not a valid {kind.__name__}") from None
     return dataclasses.replace(base, **changes)
-
-
-def run_generate(args: argparse.Namespace) -> int:
-    import time
-
-    from ..audio import load_audio
-    from ..pipeline import GesturePipeline
-
-    t0 = time.perf_counter()
-    audio = load_audio(args.audio)
-    words = None
-    if args.textgrid:
-        from ..align.textgrid import read_words
-
-        words = read_words(args.textgrid)
-    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[args.method])
-    steps = args.steps or DEFAULT_STEPS[args.method]
-    res = pipe.generate(audio, 16000, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
-                        method=args.method)
-    path = res.motion.save(args.out)
-    for w in res.warnings:
-        print(f"warning: {w}")
-    stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
-    print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {args.method}, {steps} steps, "
-          f"CFG {args.cfg}, seed {args.seed}; {res.text_mode}")
-    print(f"timings: {stages}; real-time factor {res.real_time_factor:.1f}x; total {time.perf_counter() - t0:.1f}s")
-    return 0

@@ -18,6 +18,7 @@ import torch.nn.functional as F
 
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..features.audio import AudioEncoder
+from ..flows import method_facts
 from ..flows.base import velocity_from_data
 from .config import GeneratorConfig
 from .layers import CrossBlock, STBlock, sinusoidal
@@ -166,7 +167,7 @@ class GestureGenerator(nn.Module):
     def output(self, y: torch.Tensor, x: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """The denoiser's output as the method expects it: a flow's velocity (from x1 when the network predicts
         data, see GeneratorConfig.prediction), DDIM's clean latents."""
-        if self.config.prediction == "data" and self.method != "ddim":
+        if self.config.prediction == "data" and method_facts(self.method).predicts == "velocity":
             return velocity_from_data(y, x, t)
         return y
 

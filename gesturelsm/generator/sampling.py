@@ -16,7 +16,7 @@ import torch
 import torch.nn.functional as F
 
 from ..flows import make_method
-from ..tokenizer.quantizer import quantize_stacked, same_shape
+from ..tokenizer.model import quantize_regions
 from .data import samples_for
 from .model import GestureGenerator
 
@@ -85,16 +85,12 @@ def decode_latents(tokenizers: dict, latents: torch.Tensor, num_frames: int, chu
     latents of context each side (cropped), so memory is bounded for any length. Re-quantises first, all regions in one
     stacked pass when their quantizers have the same shape (`quantize_stacked`)."""
     toks = list(tokenizers.values())
-    stack = same_shape([t.rvq for t in toks])
     pieces: list[list[torch.Tensor]] = [[] for _ in toks]
     L = latents.shape[1]
     for a in range(0, L, chunk):
         lo, hi = max(0, a - margin), min(L, a + chunk + margin)
         z = latents[:, lo:hi]                                             # (R, n, D)
-        if stack:                                                         # all regions' RVQs in one pass
-            qs = quantize_stacked([t.rvq for t in toks], list(z))
-        else:
-            qs = [t.quantize(z[r:r + 1]).quantized for r, t in enumerate(toks)]
+        qs = quantize_regions(toks, z)
         for r, (t, q) in enumerate(zip(toks, qs)):
             y = t.decode(q.reshape(1, hi - lo, -1))[0]                    # (4 (hi - lo), C) normalised
             pieces[r].append(y[4 * (a - lo):4 * (a - lo) + 4 * min(chunk, L - a)])

@@ -13,7 +13,7 @@ import torch
 import torch.distributed as dist
 from tqdm import tqdm
 
-from ..flows import make_method
+from ..flows import training_method
 from ..tokenizer.model import RVQVAE
 from .config import PRESETS, GeneratorConfig
 from .data import LatentWindowSampler, TakeTensors, encode_regions
@@ -22,7 +22,7 @@ from .model import GestureGenerator
 
 @dataclass(frozen=True)
 class GenTrainConfig:
-    method: str = "gesturelsm"       # gesturelsm | rectified_flow | ddim
+    method: str = "gesturelsm"       # a key of flows.METHODS
     preset: str = "small"
     steps: int = 4000
     batch_size: int = 32
@@ -83,14 +83,11 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     torch.manual_seed(tc.seed)
     if tc.prediction not in ("data", "velocity"):
         raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
-    kw = {} if tc.method == "ddim" else {"loss_space": tc.prediction}
-    if tc.method == "gesturelsm":
-        kw["time_sampler"] = tc.time_sampler
-    method = make_method(tc.method, **kw)
+    method = training_method(tc.method, tc.prediction, tc.time_sampler)
     base = config or PRESETS[tc.preset]
     cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
                              "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
-                             "prediction": "data" if tc.method == "ddim" else tc.prediction})
+                             "prediction": tc.prediction if method.facts.predicts == "velocity" else "data"})
     model = GestureGenerator(cfg, tc.method)
     std, neutral = latent_stats(tokenizers, takes, cfg)
     model.latent_std.copy_(std)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import argrelextrema
 
+from ..constants import FPS, SAMPLE_RATE
 from ..motion.regions import REGIONS
 
 SIGMA = 0.3
@@ -22,7 +23,7 @@ IGNORE_FRAMES = 60
 SKIP_AUDIO_S = 2.0
 
 
-def audio_beats(audio: np.ndarray, sr: int = 16000, hop: int = 512, skip_s: float = SKIP_AUDIO_S) -> np.ndarray:
+def audio_beats(audio: np.ndarray, sr: int = SAMPLE_RATE, hop: int = 512, skip_s: float = SKIP_AUDIO_S) -> np.ndarray:
     """Onset times in seconds (librosa), those before `skip_s` dropped."""
     import librosa
 
@@ -30,12 +31,12 @@ def audio_beats(audio: np.ndarray, sr: int = 16000, hop: int = 512, skip_s: floa
     return t[t >= skip_s]
 
 
-def joint_speed(joints: np.ndarray, fps: int = 30) -> np.ndarray:
+def joint_speed(joints: np.ndarray, fps: int = FPS) -> np.ndarray:
     """(T, J, 3) positions (m) -> (T-1, J) speeds (m/s)."""
     return np.linalg.norm(np.diff(joints, axis=0), axis=-1) * fps
 
 
-def motion_beats(speed: np.ndarray, fps: int = 30, order: int = ORDER, threshold: float = THRESHOLD,
+def motion_beats(speed: np.ndarray, fps: int = FPS, order: int = ORDER, threshold: float = THRESHOLD,
                  ignore: int = IGNORE_FRAMES) -> np.ndarray:
     """(T,) normalised speed of one joint -> beat times (s)."""
     idx = argrelextrema(speed, np.less, order=order)[0]
@@ -52,7 +53,7 @@ def beat_score(a_beats: np.ndarray, m_beats: np.ndarray, sigma: float = SIGMA) -
     return float(np.exp(-d ** 2 / (2 * sigma ** 2)).mean())
 
 
-def beat_consistency(joints: np.ndarray, audio: np.ndarray | None = None, sr: int = 16000, fps: int = 30,
+def beat_consistency(joints: np.ndarray, audio: np.ndarray | None = None, sr: int = SAMPLE_RATE, fps: int = FPS,
                      mean_speed: np.ndarray | None = None, beats: np.ndarray | None = None,
                      joint_ids: tuple[int, ...] = REGIONS["upper"].joints) -> float:
     """joints: (T, 55, 3) positions in metres. `mean_speed` (55,) m/s normalises speeds (BEAT2's
@@ -63,7 +64,7 @@ def beat_consistency(joints: np.ndarray, audio: np.ndarray | None = None, sr: in
     return score_beats(a, joint_beats(joints, fps, mean_speed, joint_ids))
 
 
-def joint_beats(joints: np.ndarray, fps: int = 30, mean_speed: np.ndarray | None = None,
+def joint_beats(joints: np.ndarray, fps: int = FPS, mean_speed: np.ndarray | None = None,
                 joint_ids: tuple[int, ...] = REGIONS["upper"].joints) -> list[np.ndarray]:
     """(T, 55, 3) -> motion beat times (s) of each joint in `joint_ids` (speeds normalised as in BC)."""
     speed = joint_speed(joints, fps)[:, list(joint_ids)]                         # (T-1, J)

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constants import FPS, SAMPLE_RATE
 from .beat import IGNORE_FRAMES, joint_beats, joint_speed, score_beats
 from ..motion.regions import REGIONS
 
@@ -35,7 +36,7 @@ class ShiftTest:
         return self.gain / max(self.shifted_std, 1e-12)
 
 
-def beat_timing(joints: np.ndarray, beats: np.ndarray, fps: int = 30, mean_speed: np.ndarray | None = None,
+def beat_timing(joints: np.ndarray, beats: np.ndarray, fps: int = FPS, mean_speed: np.ndarray | None = None,
                 min_shift: float = 1.0, step: float = 0.25, joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
     """BC with the audio beats (s) as they are vs circularly shifted by `min_shift` .. span - `min_shift` seconds
     (every `step`) within the span where motion beats can occur (IGNORE_FRAMES from either end); the own score
@@ -56,7 +57,7 @@ def beat_timing(joints: np.ndarray, beats: np.ndarray, fps: int = 30, mean_speed
     return ShiftTest(score_beats(a, m), float(null.mean()), float(null.std()), len(shifts))
 
 
-def loudness(audio: np.ndarray, num_frames: int, sr: int = 16000, fps: int = 30) -> np.ndarray:
+def loudness(audio: np.ndarray, num_frames: int, sr: int = SAMPLE_RATE, fps: int = FPS) -> np.ndarray:
     """(N,) -> (num_frames,) RMS of the samples of each frame (0 past the end of the audio)."""
     hop = sr / fps
     edges = np.round(np.arange(num_frames + 1) * hop).astype(int)
@@ -75,7 +76,7 @@ def _corr(x: np.ndarray, y: np.ndarray) -> float:
     return float((x * y).sum() / max(np.sqrt((x * x).sum() * (y * y).sum()), 1e-12))
 
 
-def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = 16000, fps: int = 30, smooth_s: float = 1.0,
+def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = SAMPLE_RATE, fps: int = FPS, smooth_s: float = 1.0,
                      min_shift: float = 2.0, step: float = 0.25, joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
     """Pearson correlation of upper-body speed with speech loudness, both averaged over `smooth_s`, vs the same with
     the loudness circularly shifted by `min_shift` .. length - `min_shift` seconds (every `step`)."""

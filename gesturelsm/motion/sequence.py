@@ -11,17 +11,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ..constants import FPS
+from ..errors import MotionFileError
 from .regions import EXPR_OFFSET, FEATURE_DIM, NUM_EXPRESSIONS, ROT_DIM, TRANS_OFFSET
 from .rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
 from .skeleton import MIRROR_PERM, NUM_JOINTS
 from .translation import trans_to_velocity, velocity_to_trans
 
-FPS = 30
 NUM_BETAS = 300
-
-
-class MotionFileError(ValueError):
-    """A motion file that cannot be read as BEAT2/SMPL-X; the message names the file and the problem."""
 
 
 @dataclass

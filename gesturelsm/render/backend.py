@@ -22,13 +22,11 @@ import os
 import sys
 from functools import lru_cache
 
+from ..errors import RenderError
+
 BACKENDS = ("osmesa", "egl")
 PACKAGES = {"osmesa": "libosmesa6", "egl": "libegl1 libegl-mesa0 libgl1-mesa-dri"}
 LIBRARIES = {"osmesa": "libOSMesa.so (OSMesa)", "egl": "libEGL.so.1 (EGL)"}
-
-
-class RenderError(RuntimeError):
-    """Rendering cannot run here (no OpenGL backend, context creation failed); the message says why."""
 
 
 def _load(names: tuple[str, ...]) -> ctypes.CDLL:

@@ -12,6 +12,8 @@ import sys
 import warnings
 from pathlib import Path
 
+from ..errors import UserError
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("render", help="render motion(s) with the speech to an mp4 (offscreen, CPU)",
@@ -54,7 +56,6 @@ def _gen_times(values: list[str] | None) -> list[float | None] | None:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from ..cli import UserError
     from . import STYLES, RenderError, parse_size, render_frames, render_video
     from .frames import RenderWarning
 

@@ -9,12 +9,12 @@ side-by-side are padded with their last frame (a `RenderWarning` says so).
 from __future__ import annotations
 
 import warnings
-from functools import lru_cache
 from pathlib import Path
 from typing import Iterator, Sequence
 
 import numpy as np
 
+from ..body.model import resolve_body
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera
 from .labels import LabelPatch, label_lines, make_label
@@ -27,22 +27,6 @@ MAX_BODIES = 8
 
 class RenderWarning(UserWarning):
     """Something the user should know about a render (padding, trimmed audio); the render went on."""
-
-
-@lru_cache(maxsize=4)
-def _load_body(path: str | None):
-    from ..body.model import load_body_model
-
-    return load_body_model(path)
-
-
-def resolve_body(body=None):
-    """A BodyModel, a path to an SMPL-X npz, or None ($GESTURELSM_SMPLX_MODEL or the mannequin)."""
-    if body is None or isinstance(body, (str, Path)):
-        from ..body.model import resolve_model_path
-
-        return _load_body(str(resolve_model_path(body)))
-    return body
 
 
 def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSequence]:

@@ -20,9 +20,15 @@ import json
 import secrets
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
+
+from ..align import read_result
+from ..audio import SAMPLE_RATE, load_audio
+from ..flows import FACTS
+from ..pipeline import GROUND_TRUTH, Plan
+from ..render import render_video
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
 SCALES = ("realness", "synchrony", "smoothness")
@@ -86,29 +92,23 @@ def _transcript(audio: Path):
     """(words, text) from <stem>.TextGrid or <stem>.txt beside the audio, else (None, None)."""
     tg = audio.with_suffix(".TextGrid")
     if tg.exists():
-        from ..align import read_result
-
         return read_result(tg).words, None
     txt = audio.with_suffix(".txt")
     return None, (txt.read_text().strip() if txt.exists() else None)
 
 
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
-               steps: int = 8, ddim_steps: int = 20, cfg: float = 2.0, seed: int = 0, size: int = 512,
+               steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = "off",
                log: Callable[[str], None] = print) -> StudyPlan:
-    """Render what is missing and (re)write key, orders, sheets and forms; returns the plan."""
-    from ..app_service import find_beat2_take, fit_length
-    from ..app_service import smooth as smooth_motion
-    from ..app_service import stand_in_place as in_place
-    from ..audio import SAMPLE_RATE, load_audio
-    from ..render import render_video
-
+    """Render what is missing and (re)write key, orders, sheets and forms; returns the plan.
+    `steps`: per method (missing: the method's default)."""
     methods = list(dict.fromkeys(methods))
+    steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
-        if m != "ground_truth" and m not in pipeline.methods:
+        if m != GROUND_TRUTH and m not in pipeline.methods:
             raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
-    if "ground_truth" in methods and not beat2:
+    if GROUND_TRUTH in methods and not beat2:
         raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
         raise ValueError("--raters must be at least 1")
@@ -125,37 +125,26 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         skipped += len(by_audio[a.name]) - len(todo)
         if not todo:
             continue
-        y = load_audio(a)
         words, text = _transcript(a)
         try:
-            speech = pipeline.prepare_speech(y, SAMPLE_RATE, words=words, text=text)
+            speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
         except ValueError as exc:  # InputError: too short, silent, too long
             raise ValueError(f"{a.name}: {exc}") from None
-        for it in todo:
-            if it.method == "ground_truth":
-                name = find_beat2_take(beat2, speech.audio, a.name)
-                if name is None:
-                    log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
-                    continue
-                from ..data.beat2 import Beat2Dataset
-
-                motion = fit_length(Beat2Dataset(beat2).load(name, with_audio=False, with_text=False).motion,
-                                    speech.num_frames)
-            else:
-                n = ddim_steps if it.method == "ddim" else steps
-                motion = pipeline.generate(speech, steps=n, cfg=cfg, seed=seed, method=it.method).motion
-            if stand_in_place:
-                motion = in_place(motion)
-            if smoothing != "off":
-                motion = smooth_motion(motion, smoothing)
-            render_video([motion], speech.audio, out / "videos" / it.video, size=(size, size), body=body)
+        for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
+            gen = pipeline.generate_all(speech, Plan([it.method], steps, cfg, seed, stand_in_place, smoothing,
+                                                     beat2, a.name))
+            if it.method not in gen.motions:
+                log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
+                continue
+            render_video([gen.motions[it.method]], speech.audio, out / "videos" / it.video, size=(size, size),
+                         body=body)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
-    _write_key(plan, dict(steps=steps, ddim_steps=ddim_steps, cfg=cfg, seed=seed))
+    _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))
     for r in range(1, raters + 1):
         _write_rater(plan, r, seed)
     (out / "study.json").write_text(json.dumps(dict(audio_dir=str(audio_dir), methods=methods, raters=raters,
-                                                   steps=steps, ddim_steps=ddim_steps, cfg=cfg, seed=seed, size=size,
+                                                   steps=steps, cfg=cfg, seed=seed, size=size,
                                                    stand_in_place=stand_in_place, smoothing=smoothing), indent=1))
     log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
         f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters)")
@@ -167,8 +156,7 @@ def _write_key(plan: StudyPlan, settings: dict) -> None:
         w = csv.writer(fh)
         w.writerow(["video", "audio", "method", "steps", "cfg", "seed"])
         for it in plan.items:
-            n = settings["ddim_steps"] if it.method == "ddim" else settings["steps"]
-            w.writerow([it.video, it.audio, it.method, "" if it.method == "ground_truth" else n,
+            w.writerow([it.video, it.audio, it.method, "" if it.method == GROUND_TRUTH else settings["steps"][it.method],
                         settings["cfg"], settings["seed"]])
 
 

@@ -8,6 +8,13 @@ from __future__ import annotations
 
 import argparse
 
+from ..body import load_body_model
+from ..body.model import resolve_model_path
+from ..errors import UserError
+from ..flows import steps_from_flags
+from ..pipeline import GROUND_TRUTH, GesturePipeline
+from .batch import make_study
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("batch", help="render blinded user-study videos, key and rating sheets (resumable)",
@@ -31,21 +38,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..body import load_body_model
-    from ..body.model import resolve_model_path
-    from ..cli import UserError
-    from ..pipeline import GesturePipeline, InputError
-    from . import make_study
-
     if args.size % 16 or not 128 <= args.size <= 1024:
         raise UserError("--size must be a multiple of 16 from 128 to 1024")
-    gens = [m for m in args.methods if m != "ground_truth"]
+    gens = [m for m in args.methods if m != GROUND_TRUTH]
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=gens or None)
     body = load_body_model(str(resolve_model_path(args.model)))
-    try:
-        make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters, steps=args.steps,
-                   ddim_steps=args.ddim_steps, cfg=args.cfg, seed=args.seed, size=args.size, body=body,
-                   beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing)
-    except InputError as exc:
-        raise UserError(str(exc)) from None
+    make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
+               steps=steps_from_flags(args.steps, args.ddim_steps), cfg=args.cfg, seed=args.seed, size=args.size,
+               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing)
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
 
 ASSETS = Path(__file__).resolve().parents[2] / "assets" / "tokenizer"
@@ -38,7 +39,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    from ..cli import UserError
     from ..data.split import split_features
     from .train import TrainConfig, train_region
 

@@ -17,7 +17,7 @@ import torch.nn.functional as F
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..motion.normalize import Normalizer
 from .config import TokenizerConfig
-from .quantizer import QuantizedResult, ResidualVQ
+from .quantizer import QuantizedResult, ResidualVQ, quantize_stacked, same_shape
 
 KIND = "gesturelsm.tokenizer"
 
@@ -156,6 +156,14 @@ class RVQVAE(nn.Module):
         for layer in model.rvq.layers:  # a shipped (inference-only) file has no EMA state
             layer.initted.fill_(True)
         return model.eval()
+
+
+def quantize_regions(tokenizers: list[RVQVAE], z: torch.Tensor) -> list[torch.Tensor]:
+    """(R, n, D) latents of R regions -> R re-quantised latents (reshape each to (1, n, D)), all regions in one
+    stacked pass when their quantizers have the same shape (`quantize_stacked`: the same codes as each alone)."""
+    if same_shape([t.rvq for t in tokenizers]):
+        return quantize_stacked([t.rvq for t in tokenizers], list(z))
+    return [t.quantize(z[r:r + 1]).quantized for r, t in enumerate(tokenizers)]
 
 
 def _is_training_buffer(name: str) -> bool:

@@ -17,7 +17,7 @@ from _support import speech_like, synthetic_motion
 
 def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     steps = []
-    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps=2, ddim_steps=3, size=256),
+    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps={"gesturelsm": 2, "ddim": 3}, size=256),
                       progress=lambda f, m: steps.append((f, m)))
     assert out.video.exists() and out.video.stat().st_size > 1000
     import imageio
@@ -116,7 +116,7 @@ def _req(path, **kw):
     ("silent", "silent"),
     ("short", "at least"),
     ("long", "limit"),
-    ("steps", "Steps must be"),
+    ("steps", "steps must be"),
     ("cfg", "CFG"),
     ("method", "Unknown method"),
     ("nomethod", "at least one method"),

@@ -72,7 +72,7 @@ def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_pat
     from gesturelsm.study import make_study
 
     pipe = GesturePipeline.from_pretrained(study_assets)
-    make_study(pipe, audio_dir, ["gesturelsm", "ddim"], out, raters=3, steps=1, ddim_steps=2, size=128,
+    make_study(pipe, audio_dir, ["gesturelsm", "ddim"], out, raters=3, steps={"gesturelsm": 1, "ddim": 2}, size=128,
                log=logs.append)
     assert sorted(p.name for p in (out / "videos").iterdir()) == videos
     assert "1 videos rendered, 3 already there" in logs[-1]
