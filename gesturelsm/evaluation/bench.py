@@ -5,7 +5,10 @@ Per preset ("shipped": the checkpoints; "paper": the paper's generator size with
 tokenizers, for timing only) x method x steps:
 - ms / step: one denoiser call on a CFG pair (batch 2) of one 128-frame window, speech K/V cached.
 - AITS: generation seconds for one clip of one window (128 frames, 4.27 s): audio features + sampling +
-  decoding, transcript alignment excluded (the paper's convention).
+  decoding, transcript alignment excluded (the paper's convention). Features are computed once per input;
+  sampling + decoding is the wall time of the generate call with the device synchronised before and after
+  (timing.timed), so GPU figures do not depend on a copy to the CPU to wait for the kernels.
+- Every row and report names its hardware (the GPU's name, or "cpu: <model name>"; timing.hardware_name).
 - RTF 10 s / 60 s: seconds of speech per second of generation for 10 s and 60 s of speech (60 s only for
   `long_presets`, in the same interleaved rounds). Peak memory: one more 60 s call per configuration after
   the rounds, the peak resident memory during it above the process's level before it (models loaded and
@@ -30,6 +33,7 @@ import numpy as np
 import torch
 
 from ..constants import FPS, SAMPLE_RATE
+from .timing import hardware_name, synchronize, timed
 
 Log = Callable[[str], None]
 DEFAULT_STEPS = (1, 2, 4, 8, 20)
@@ -109,19 +113,8 @@ def ms_per_step(gen, repeats: int = 20) -> float:
     with torch.inference_mode():
         f = gen.bind(cond, seed)
         f(x, t, t, drop)
-        ts = []
-        for _ in range(repeats):
-            _sync(dev)
-            t0 = time.perf_counter()
-            f(x, t, t, drop)
-            _sync(dev)
-            ts.append(time.perf_counter() - t0)
+        ts = [timed(lambda: f(x, t, t, drop), dev)[1] for _ in range(repeats)]
     return statistics.median(ts) * 1000
-
-
-def _sync(dev) -> None:
-    if torch.device(dev).type == "cuda":
-        torch.cuda.synchronize()
 
 
 def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str] | None = None,
@@ -147,16 +140,16 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
         for key in plan:
             p, m, s = key
             for which in ("clip", "10s") + (("long",) if long_seconds and p in long_presets and rnd else ()):
-                _sync(device)
-                res = pipes[p].generate(inputs[which], steps=s, cfg=cfg, method=m)
-                if rnd:
-                    times[key][which].append(res.generation_seconds)
+                _, wall = timed(lambda: pipes[p].generate(inputs[which], steps=s, cfg=cfg, method=m), device)
+                if rnd:                                         # + the input's (once-per-speech) feature time
+                    times[key][which].append(inputs[which].timings.get("features", 0.0) + wall)
         log(f"round {rnd}/{repeats} done")
     rows = []
+    hardware = hardware_name(device)
     for key in plan:
         p, m, s = key
         pipe = pipes[p]
-        row = {"preset": p, "method": m, "steps": s, "cfg": cfg,
+        row = {"preset": p, "method": m, "steps": s, "cfg": cfg, "hardware": hardware,
                "denoiser_params_m": sum(x.numel() for x in pipe.generators[m].denoiser.parameters()) / 1e6,
                "ms_per_step": ms_per_step(pipe.generators[m]),
                "aits": statistics.median(times[key]["clip"]),
@@ -166,6 +159,7 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
                 torch.cuda.reset_peak_memory_stats()
             with PeakRSS() as mem:
                 pipe.generate(inputs["long"], steps=s, cfg=cfg, method=m)
+                synchronize(device)
             row["long_seconds"] = statistics.median(times[key]["long"])
             row["rtf_60s"] = lengths["long"] / row["long_seconds"]
             row["peak_mb"] = (torch.cuda.max_memory_allocated() / 2 ** 20 if torch.device(device).type == "cuda"
@@ -185,7 +179,7 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
             ratios[f"{p}: GestureLSM 8 / 1 steps (AITS)"] = by[(p, "gesturelsm", 8)] / by[(p, "gesturelsm", 1)]
     rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, torch {torch.__version__}"
            + (f", {torch.cuda.get_device_name()}" if torch.device(device).type == "cuda" else ""),
-           "threads": torch.get_num_threads(), "device": str(device), "repeats": repeats,
+           "threads": torch.get_num_threads(), "device": str(device), "hardware": hardware, "repeats": repeats,
            "clip_frames": clip_frames, "clip_seconds": clip_frames / FPS, "rows": rows, "ratios": ratios}
     import resource
 

@@ -115,10 +115,13 @@ def run_bench_cli(args: argparse.Namespace) -> int:
     from .bench import run_bench
     from .plot import quality_time_plot
     from .tables import bench_markdown
+    from .timing import check_device
 
     if args.threads:
         torch.set_num_threads(args.threads)
     devices = ["cpu"] + (["cuda"] if torch.cuda.is_available() else []) if args.device == "auto" else [args.device]
+    for dev in devices:
+        check_device(dev)                      # a clear line (exit 2) instead of a torch error mid-run
     speech, e2e = None, None
     out = Path(args.out)
     if args.data:

@@ -46,7 +46,7 @@ def quality_time_plot(bench: dict, out: str | Path, evaluation: dict | None = No
 
     ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel(f"inference time per clip, s (AITS, {bench['device']}, log scale)")
+    ax.set_xlabel(f"inference time per clip, s (AITS, {bench.get('hardware', bench['device'])}, log scale)")
     ax.set_ylabel({"fgd_k": "FGD_k (kinetic features) ↓", "fgd_g": "FGD_g (geometric features) ↓",
                    "fgd_emage": "FGD (EMAGE AE) ↓"}.get(metric, metric) if quality else "sampling steps")
     ax.set_title("quality vs speed (labels: sampling steps)" if quality else "speed (labels: sampling steps)")

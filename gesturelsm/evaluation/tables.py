@@ -66,14 +66,15 @@ def bench_markdown(rep: dict) -> str:
              f"decoding, transcript alignment excluded) per {rep['clip_seconds']:.2f} s clip "
              f"({rep['clip_frames']} frames, one window).", ""]
     head = ["preset", "method", "steps", "ms / step", "AITS (s)", "RTF 10 s", "RTF 60 s", "peak MB (60 s)",
-            "paper AITS (A100)"]
+            "measured on", "paper AITS (A100)"]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rep["rows"]:
         p = paper.paper_row(r["method"], r["steps"])
         lines.append("| " + " | ".join([
             r["preset"], NAMES.get(r["method"], r["method"]), str(r["steps"]), _f(r.get("ms_per_step"), "{:.1f}"),
             _f(r["aits"], "{:.3f}"), _f(r.get("rtf_10s"), "{:.1f}x"), _f(r.get("rtf_60s"), "{:.1f}x"),
-            _f(r.get("peak_mb"), "{:.0f}"), _f(p and p.get("aits"), "{:.3f}")]) + " |")
+            _f(r.get("peak_mb"), "{:.0f}"), r.get("hardware", rep.get("hardware", "-")),
+            _f(p and p.get("aits"), "{:.3f}")]) + " |")
     if rep.get("ratios"):
         lines += ["", "Ratios (same run): " + "; ".join(f"{k}: {v:.2f}x" for k, v in rep["ratios"].items())]
     e2e = rep.get("end_to_end")

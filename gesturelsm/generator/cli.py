@@ -33,7 +33,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--speakers", nargs="*")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--device", default="auto")
+    p.add_argument("--device", default="auto", help="auto | cpu | cuda | cuda:N; several processes (torchrun): "
+                   "cpu trains with gloo, cuda with nccl and one GPU per process")
     p.add_argument("--eval-every", type=int, default=500)
     p.add_argument("--ship", metavar="DIR", help="also write an fp16 copy as DIR/<method>.safetensors")
     p.set_defaults(func=run_train)
@@ -47,8 +48,10 @@ def run_train(args: argparse.Namespace) -> int:
     from ..motion.regions import GENERATED_REGIONS
     from ..tokenizer.model import RVQVAE
     from .data import build_take
+    from .distributed import check_launch
     from .train import GenTrainConfig, train_generator
 
+    check_launch(args.device)              # refuse e.g. more torchrun processes than GPUs before loading anything
     tok_dir = Path(args.tokenizers)
     missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
     if missing:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import math
-import os
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -17,6 +16,7 @@ from ..flows import training_method
 from ..tokenizer.model import RVQVAE
 from .config import PRESETS, GeneratorConfig
 from .data import LatentWindowSampler, TakeTensors, encode_regions
+from .distributed import setup_processes
 from .model import GestureGenerator
 
 
@@ -43,15 +43,6 @@ class GenTrainConfig:
     device: str = "auto"
 
 
-def _dist() -> tuple[int, int]:
-    if int(os.environ.get("WORLD_SIZE", "1")) > 1 and not dist.is_initialized():
-        backend = "nccl" if torch.cuda.is_available() else "gloo"
-        dist.init_process_group(backend)
-    if dist.is_initialized():
-        return dist.get_rank(), dist.get_world_size()
-    return 0, 1
-
-
 def ema_decay(step: int, target: float) -> float:
     """EMA decay after `step` updates: (1 + step) / (10 + step), capped at `target`. A fixed 0.999 from the
     first step would leave 0.999^n of the random initial weights in the average (30 % after 1200 steps)."""
@@ -76,10 +67,7 @@ def latent_stats(tokenizers: dict[str, RVQVAE], takes: list[TakeTensors], cfg: G
 def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokenizers: dict[str, RVQVAE],
                     tc: GenTrainConfig, out_path: Path, config: GeneratorConfig | None = None, meta: dict | None = None,
                     log=print) -> GestureGenerator:
-    rank, world = _dist()
-    device = torch.device(("cuda" if torch.cuda.is_available() else "cpu") if tc.device == "auto" else tc.device)
-    if device.type == "cuda" and world > 1:
-        device = torch.device("cuda", rank % torch.cuda.device_count())
+    rank, world, device = setup_processes(tc.device)   # process group (gloo/nccl from tc.device), one GPU each
     torch.manual_seed(tc.seed)
     if tc.prediction not in ("data", "velocity"):
         raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")

@@ -53,7 +53,11 @@ def test_bench_cli(eval_assets, tmp_path):
     assert rc == 0
     rep = json.loads((out / "bench.json").read_text())
     assert [r["steps"] for r in rep["rows"]] == [1, 2]
+    from gesturelsm.evaluation.timing import hardware_name
+
+    assert rep["hardware"] == hardware_name("cpu") and {r["hardware"] for r in rep["rows"]} == {rep["hardware"]}
     md = (out / "bench.md").read_text()
+    assert f"| {rep['hardware']} |" in md                                # beside every figure
     assert "| shipped | GestureLSM | 1 |" in md and "0.015" in md       # paper's 1-step AITS beside ours
     assert (out / "bench.png").exists()
 
