@@ -15,6 +15,11 @@ Stages (--stages, any of):
   cfg         GestureLSM at 8 steps over CFG scales --cfg-scan
   seed        GestureLSM at 8 steps: neutral first-window seed vs seeds from the speaker's rest moments
   interval    GestureLSM at 8 steps: CFG only for t in an interval (t = 0 noise, t = 1 data)
+  respread    diagnostic, not a fix: GestureLSM's generated latents with their deviation from the training mean
+              stretched so each region's spread equals the training latents' (then re-quantised and decoded):
+              does the lost amplitude come back when only the latent spread is restored?
+  latents     spread of the generated latents (before re-quantisation) against the real motion's, per region:
+              std over frames and seeds in the generator's scaled space (the training latents have std 1)
 """
 from __future__ import annotations
 
@@ -25,7 +30,7 @@ import torch
 
 REPO = Path(__file__).resolve().parents[1]
 BEAT2 = REPO.parent / "shared" / "data" / "beat2"
-STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "interval")
+STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "interval", "latents", "respread")
 
 
 def main() -> None:
@@ -37,6 +42,7 @@ def main() -> None:
     ap.add_argument("--cfg", type=float, default=2.0)
     ap.add_argument("--cfg-scan", type=float, nargs="+", default=[1.0, 2.0, 3.0, 4.0])
     ap.add_argument("--stages", nargs="+", default=list(STAGES), choices=STAGES)
+    ap.add_argument("--methods", nargs="+", default=None, help="methods of the latents stage (default: all)")
     ap.add_argument("--text", choices=["both", "audio", "transcript"], default="both")
     args = ap.parse_args()
     from gesturelsm.evaluation.amplitude import AmplitudeData, format_rows, rest_seeds
@@ -97,6 +103,79 @@ def main() -> None:
                 rows.append(data.generated(pipe, "gesturelsm", 8, args.cfg, text, seeds,
                                            f"CFG for t in [{iv[0]:g}, {iv[1]:g}), {mode}", guidance_interval=iv))
         show(f"GestureLSM 8 steps CFG {args.cfg:g}: guidance interval")
+    if "respread" in args.stages:
+        for text in modes:
+            rows.append(respread(pipe, data, seeds, 8, args.cfg, text))
+        show(f"GestureLSM 8 steps CFG {args.cfg:g}, latent spread restored (diagnostic)")
+    if "latents" in args.stages:
+        latent_spread(pipe, data, seeds, args.steps, args.cfg, args.methods or pipe.methods)
+
+
+def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, methods: list[str]) -> None:
+    """Per-region std (over frames, dims) of latents: real training / held-out motion encoded, and generated."""
+    from gesturelsm.generator.data import encode_regions
+    from gesturelsm.generator.sampling import generate_latents
+
+    regions = list(pipe.tokenizers)
+    print("\n### latent spread (scaled by the training latent std; real training latents = 1)\n")
+    print("| latents | " + " | ".join(regions) + " | distance of the mean from the training mean |")
+    print("|---|" + "---|" * (len(regions) + 1))
+    model = pipe.generators["gesturelsm"]
+    std = model.latent_std.cpu()[:, None, None]
+    mirrored = [x for m in data.train for x in (m, m.mirrored())]                # training used both
+    train = torch.cat([encode_regions(pipe.tokenizers, m.to_features()) for m in mirrored], 1) / std
+    mu = train.mean(1, keepdim=True)                                             # (R, 1, D)
+
+    def line(name: str, lat: torch.Tensor) -> None:                              # lat (R, L, D) scaled
+        sd = lat.std(dim=(1, 2))
+        gap = (lat.mean(1, keepdim=True) - mu).norm(dim=-1).squeeze(1) / mu.shape[-1] ** 0.5
+        print(f"| {name} | " + " | ".join(f"{v:.2f}" for v in sd) + " | "
+              + " / ".join(f"{v:.2f}" for v in gap) + " |", flush=True)
+
+    line("real, training 80 % and its mirror image", train)
+    line("neutral first-window seed", model.neutral_seed.cpu())
+    held = [c for c in data.clips if c.motion is not None]
+    line("real, held-out 20 %", torch.cat([encode_regions(pipe.tokenizers, c.motion.to_features()) for c in held], 1) / std)
+    for method in methods:
+        for n in steps:
+            for text in (False, True):
+                lats = []
+                for c in data.clips:
+                    sp = pipe.prepare_speech(c.audio, 16000, words=c.words if text else None)
+                    for k in seeds:
+                        lats.append(generate_latents(pipe.generators[method], sp.channels, sp.word_features,
+                                                     sp.has_word, text, sp.num_frames, n, cfg, k) / std)
+                line(f"{method} {n} steps CFG {cfg:g} {'transcript' if text else 'audio-only'}", torch.cat(lats, 1))
+
+
+def training_latents(pipe, data) -> torch.Tensor:
+    """(R, L, D) scaled latents of the training motion and its mirror image (as the generator trained)."""
+    from gesturelsm.generator.data import encode_regions
+
+    std = pipe.generators["gesturelsm"].latent_std.cpu()[:, None, None]
+    mirrored = [x for m in data.train for x in (m, m.mirrored())]
+    return torch.cat([encode_regions(pipe.tokenizers, m.to_features()) for m in mirrored], 1) / std
+
+
+def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
+    from gesturelsm.generator.sampling import decode_latents, generate_latents
+    from gesturelsm.motion.regions import join_regions
+    from gesturelsm.motion.sequence import MotionSequence
+
+    model = pipe.generators["gesturelsm"]
+    std = model.latent_std.cpu()[:, None, None]
+    train = training_latents(pipe, data)
+    mu, sd = train.mean(1, keepdim=True), train.std(dim=(1, 2))[:, None, None]
+    motions = []
+    for c in data.clips:
+        sp = pipe.prepare_speech(c.audio, 16000, words=c.words if text else None)
+        for k in seeds:
+            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames, steps, cfg, k)
+            z = lat / std
+            z = mu + (z - mu) * sd / z.std(dim=(1, 2), keepdim=True)                # each region at training spread
+            feats = join_regions(decode_latents(pipe.tokenizers, z * std, sp.num_frames))
+            motions.append(data.joints(MotionSequence.from_features(feats)))
+    return data.row(f"spread restored, {'transcript' if text else 'audio-only'}", motions)
 
 
 if __name__ == "__main__":
