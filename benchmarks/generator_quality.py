@@ -19,7 +19,11 @@ Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth
 - speed in silence: 4 s gaps are cut into the speech every 12 s (audio zeroed, words inside dropped) and
   the same seeds generate again; the upper-body speed inside the gaps (from 1 s after the gap starts) over
   the speed in the same spans with speech. 1 means the motion does not notice that the speaker stopped;
-- speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2).
+- speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2);
+- amplitude (metrics.amplitude, issue 16): raised share (a wrist above pelvis + 0.25 m), wrist height p50/p95,
+  wrist speed, hand spread, upper-body jerk, pooled over clips x seeds (with the transcript), beside the
+  speaker's whole take, and the replay guard (novelty of 1 s windows against the training motion, over the
+  speaker's held-out motion's; copies of training clips score ~0). Audio-only: benchmarks/amplitude_stages.py.
 Numbers are means over clips and seeds; ground truth is shown where it exists.
 
 The paper's metrics (FGD, BC beside ground truth's, L1 diversity, face error, jitter, foot skating, time) over
@@ -47,6 +51,8 @@ def main() -> None:
     args = ap.parse_args()
     from gesturelsm.body import load_body_model
     from gesturelsm.data.beat2 import Beat2Dataset
+    from gesturelsm.evaluation.amplitude import AmplitudeRow, format_rows
+    from gesturelsm.metrics.amplitude import pooled_stats, replay_novelty, training_bank
     from gesturelsm.metrics.beat import audio_beats, beat_consistency, joint_speed
     from gesturelsm.metrics.speech_response import beat_timing, energy_following
     from gesturelsm.motion.regions import REGIONS
@@ -112,6 +118,10 @@ def main() -> None:
 
     rows = []
     gt_whole = body.joints(take.motion.poses, take.motion.trans)
+    bank = training_bank([gt_train])
+    amp_rows = [AmplitudeRow("speaker, whole take", pooled_stats([gt_whole]), None),
+                AmplitudeRow("speaker, held-out 20 %", pooled_stats([clips[0][3]]),
+                             replay_novelty([clips[0][3]], bank, [clips[0][3]]))]
     whole_beats = audio_beats(take.audio)
     gt_tests = {"beat timing (BC)": beat_timing(gt_whole, whole_beats, mean_speed=mean_speed),
                 "loudness following (correlation)": energy_following(gt_whole, take.audio)}
@@ -129,7 +139,7 @@ def main() -> None:
         return joint_speed(j)[:, upper].mean(1)
 
     for method, steps, cfg in plan:
-        vals, in_gap, with_speech = [], [], []
+        vals, in_gap, with_speech, motions = [], [], [], []
         main_setting = (steps == 8 or (method == "ddim" and steps == 20)) and cfg == args.cfg[0]
         speeds = {}                                                      # (clip, seed) -> upper-body speed
         for i, sp in enumerate(speech):
@@ -137,6 +147,7 @@ def main() -> None:
                 res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method)
                 j = body.joints(res.motion.poses, res.motion.trans)
                 vals.append(stats(j, i))
+                motions.append(j)
                 speeds[i, seed] = upper_speed(j)
                 if main_setting:
                     seam_stats(j, method)
@@ -149,6 +160,8 @@ def main() -> None:
                         sl = slice(int((a + 1) * 30), int(b * 30))
                         in_gap.append(v1[sl].mean())
                         with_speech.append(v0[sl].mean())
+        amp_rows.append(AmplitudeRow(f"{method} {steps} steps CFG {cfg:g}", pooled_stats(motions),
+                                     replay_novelty(motions, bank, [clips[0][3]])))
         silence = np.mean(in_gap) / np.mean(with_speech) if in_gap else float("nan")
         v = np.array(vals)
         gains = [f"{g.mean():+.3f} +- {g.std(ddof=1) / np.sqrt(len(g)):.3f} ({(g > 0).sum()}/{len(g)} > 0)"
@@ -167,6 +180,8 @@ def main() -> None:
     print("|---|---|---|---|---|")
     for name, t in gt_tests.items():
         print(f"| {name} | {t.own:.3f} | {t.shifted_mean:.3f} +- {t.shifted_std:.3f} | {t.gain:+.3f} | {t.z:.1f} |")
+    print("\nAmplitude (with the transcript; in brackets the ratio to the speaker's whole take):\n")
+    print(format_rows(amp_rows, amp_rows[0].stats))
     print("\nWindow seams (frame-to-frame change of joint speed, m/s; +-8 frames around each window border vs the")
     print(f"rest; 8 steps, DDIM 20; CFG {args.cfg[0]}):\n")
     print("| method | max at borders | max inside | mean at borders | mean inside |")

@@ -1,5 +1,5 @@
 """Paper-style evaluation of generators on held-out clips: FGD, BC beside ground truth's BC, L1 diversity,
-face error, jitter, foot skating and generation time, for every (method, steps, CFG) of a plan.
+face error, jitter, foot skating, wrist amplitude (metrics/amplitude.py) and generation time, for every (method, steps, CFG) of a plan.
 
     clips, policy = heldout_clips("../shared/data/beat2")
     report = evaluate(GesturePipeline.from_pretrained(), clips, plan_grid(["gesturelsm"], [1, 2, 4, 8], [2.0]))
@@ -22,6 +22,7 @@ from typing import Callable
 import numpy as np
 
 from ..constants import SAMPLE_RATE
+from ..metrics.amplitude import amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
 from ..metrics.face import expression_mse, face_vertex_mse
@@ -43,6 +44,9 @@ class EvalPlanItem:
         return f"{self.method} {self.steps} steps, CFG {self.cfg:g}"
 
 
+AMPLITUDE_KEYS = ("raised_share", "height_p95", "wrist_speed", "hand_spread")   # means over clips x seeds
+
+
 def plan_grid(methods: list[str], steps: list[int], cfgs: list[float]) -> list[EvalPlanItem]:
     return [EvalPlanItem(m, int(s), float(c)) for m in methods for s in steps for c in cfgs]
 
@@ -57,6 +61,7 @@ class MotionStats:
     features: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     expr_mse: float | None = None
     vertex_mse: float | None = None
+    amplitude: dict[str, float] = field(default_factory=dict)   # metrics.amplitude.AmplitudeStats fields
 
 
 def motion_stats(motion, body, beats: np.ndarray, mean_speed: np.ndarray, extractors, gt=None,
@@ -65,7 +70,7 @@ def motion_stats(motion, body, beats: np.ndarray, mean_speed: np.ndarray, extrac
     world = body.joints(motion.poses, motion.trans)                             # (T, 55, 3)
     local = body.joints(motion.poses, zero)                                     # translation removed
     s = MotionStats(beat_consistency(world, beats=beats, mean_speed=mean_speed), l1_diversity(local),
-                    jitter(world), foot_skating(world).speed)
+                    jitter(world), foot_skating(world).speed, amplitude=amplitude_stats(world).as_dict())
     for ex in extractors:
         if len(local) >= 32:
             s.features[ex.name] = ex(motion, local)
@@ -84,7 +89,8 @@ def _mean(vals) -> float | None:
 def summarise(stats: list[MotionStats], gt_stats: list[MotionStats] | None, extractors) -> dict:
     out = {"bc": _mean(s.bc for s in stats), "diversity": _mean(s.diversity for s in stats),
            "jitter": _mean(s.jitter for s in stats), "foot_skate": _mean(s.foot_skate for s in stats),
-           "expr_mse": _mean(s.expr_mse for s in stats), "vertex_mse": _mean(s.vertex_mse for s in stats)}
+           "expr_mse": _mean(s.expr_mse for s in stats), "vertex_mse": _mean(s.vertex_mse for s in stats),
+           **{k: _mean(s.amplitude.get(k) for s in stats) for k in AMPLITUDE_KEYS}}
     if gt_stats:
         for ex in extractors:
             real = [g.features[ex.name] for g in gt_stats if ex.name in g.features]

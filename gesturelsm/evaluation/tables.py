@@ -52,12 +52,34 @@ def eval_markdown(rep: dict) -> str:
             a = r["audio_only"]
             lines.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
                          f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'])} |")
+    lines += amplitude_lines(rep)
     lines += ["", "FGD_k / FGD_g: Frechet distances of training-free kinetic / geometric joint features, z-scored by "
               "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is better. Div: metres, L1 over "
               "55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, AITS on an A100; * the paper's "
               "diffusion / rectified-flow rows (its Table 4c) do not state their steps, shown at 20 (DDIM's steps in "
               "the reference code)."]
     return "\n".join(lines)
+
+
+def amplitude_lines(rep: dict) -> list[str]:
+    """Wrist amplitude (metrics/amplitude.py: wrists relative to the pelvis, y up), held-out clips with ground
+    truth and audio-only takes, ground truth beside."""
+    gt = rep.get("ground_truth") or {}
+
+    def cells(d: dict | None) -> str:
+        if not d or d.get("raised_share") is None:
+            return "- | - | - | -"
+        return (f"{100 * d['raised_share']:.1f} % | {d['height_p95']:.2f} | {d['wrist_speed']:.2f} | "
+                f"{d['hand_spread']:.2f}")
+
+    out = ["", "Wrist amplitude (raised: a wrist above pelvis + 0.25 m; p95 wrist height above the pelvis, m; mean "
+           "wrist speed, m/s; hand spread, m; means over clips x seeds):", "",
+           "| method | steps | CFG | held-out: raised | p95 | speed | spread | audio-only: raised | p95 | speed | spread |",
+           "|" + "---|" * 11, f"| ground truth | - | - | {cells(gt)} | - | - | - | - |"]
+    for r in rep["rows"]:
+        out.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {cells(r.get('heldout'))} "
+                   f"| {cells(r.get('audio_only'))} |")
+    return out
 
 
 def bench_markdown(rep: dict) -> str:

@@ -49,6 +49,9 @@ def test_evaluating_ground_truth_against_itself(tiny_beat2):
     assert gt["bc"] is not None and h["bc"] == pytest.approx(gt["bc"])
     assert gt["diversity"] > 0 and h["diversity"] == pytest.approx(gt["diversity"])
     assert h["expr_mse"] == 0.0
+    for k in ("raised_share", "height_p95", "wrist_speed", "hand_spread"):       # wrist amplitude (issue 16)
+        assert gt[k] is not None and h[k] == pytest.approx(gt[k])
+    assert row["audio_only"]["wrist_speed"] == 0.0 and gt["hand_spread"] > 0
     assert row["audio_only"]["diversity"] == 0.0                   # the still pose of the audio-only take
     assert row["seconds_per_clip"] == 0.5
 
@@ -69,6 +72,7 @@ def test_eval_cli_on_tiny_checkpoints(eval_assets, tiny_beat2, tmp_path):
         assert r["heldout"]["vertex_mse"] > 0
     md = (out / "eval.md").read_text()
     assert "face vertex MSE" in md and "| ground truth |" in md and "| GestureLSM | 1 | 2 |" in md and "Audio-only takes" in md
+    assert "Wrist amplitude" in md and "| GestureLSM | 2 | 2 | " in md
     assert "4.988" in md                                            # the paper's 2-step FGD beside ours
 
 
