@@ -18,7 +18,9 @@ Audio features (features/audio.py) per window, from the audio of the window plus
 Decoding: the RVQ-VAE decoder is convolutional with a wide receptive field (a latent moves frames up to ~22 latents
 away, the far ones by little). Frames of the finalised latents are decoded with `decode_context` final latents on the
 left and the window's own not-yet-final latents on the right (so no waiting); `decode_lag` > 0 instead waits for that
-many final latents on the right. Root translation is integrated across chunks (motion/translation.py convention).
+many final latents on the right. The next decode sees final values there and differs a little near the seam, so the
+first `blend_frames` frames of each chunk fade (in feature space, linearly) from the previous decode of those frames
+into the new one: no jump at seams and no extra latency. Root translation is integrated across chunks (motion/translation.py convention).
 Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
 offline frame count floor(N * 30 / 16000).
 """
@@ -54,12 +56,13 @@ class LiveConfig:
     context_s: float = 6.0         # audio before a window that onset detection sees
     decode_context: int = 16       # final latents left of the emitted span given to the decoder
     decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
+    blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
 
     def check(self, t: int, s: int) -> None:
         if not s <= self.commit <= t - s:
             raise ValueError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
-        if self.lookahead < 0 or self.decode_lag < 0 or self.decode_context < 0:
-            raise ValueError("lookahead, decode_lag and decode_context must be >= 0")
+        if min(self.lookahead, self.decode_lag, self.decode_context, self.blend_frames) < 0:
+            raise ValueError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
 
 
 @dataclass
@@ -103,6 +106,7 @@ class StreamingGenerator:
         self.arrivals: deque[tuple[int, float]] = deque()   # (end sample, arrival time) of unanswered chunks
         self.finished = False
         self.compute_s = 0.0
+        self.tail = torch.zeros(0, 1)          # (<= blend_frames, 433) last decode of the frames after the emitted ones
 
     # ---- input -----------------------------------------------------------------------------------------------
     def feed(self, chunk: np.ndarray, arrival: float | None = None) -> list[MotionChunk]:
@@ -143,10 +147,10 @@ class StreamingGenerator:
         yield from self.finish()
 
     # ---- one window --------------------------------------------------------------------------------------
-    def _channels(self, a: int, b: int) -> torch.Tensor:
-        """(2, b - a) channels of samples [a, b) from the audio up to now (zeros past it), see module docstring."""
+    def _channels(self, a: int, b: int, avail: int) -> torch.Tensor:
+        """(2, b - a) channels of samples [a, b) from the audio before sample `avail` (zeros past it)."""
         lo = max(self.a0, a - int(self.cfg.context_s * SR))
-        hi = min(self.n_in, b)
+        hi = min(avail, b)
         ch = np.zeros((2, b - a), np.float32)
         if hi > a:
             y = self.audio[lo - self.a0:hi - self.a0]
@@ -159,7 +163,10 @@ class StreamingGenerator:
         m, c, t, s = self.model, self.cfg.commit, self.t, self.s
         st = self.window * c
         a = samples_for(4 * st)
-        ch = self._channels(a, a + self.n_a)[None]                                        # (1, 2, n_a)
+        # the window sees exactly the audio its trigger asked for (not what else has arrived): results do not
+        # depend on how the audio was chunked
+        avail = self.n_in if end is not None else samples_for(4 * (st + c + self.cfg.lookahead))
+        ch = self._channels(a, a + self.n_a, avail)[None]                                 # (1, 2, n_a)
         w, hw = torch.zeros(1, 4 * t, TEXT_DIM), torch.zeros(1, 4 * t, dtype=torch.bool)
         cond = m.speech(ch, w, hw, torch.zeros(1, dtype=torch.bool))
         R, D = self.lat.shape[0], self.lat.shape[2]
@@ -194,7 +201,13 @@ class StreamingGenerator:
         hi = self.lat0 + self.lat.shape[1] if not final_all else -(-T // 4)
         z = self.lat[:, lo - self.lat0:hi - self.lat0] * self.std                          # (R, n, D) un-scaled
         parts = decode_latents(self.tokenizers, z, 4 * (hi - lo))
-        feats = join_regions({k: v.cpu() for k, v in parts.items()})[self.emitted - 4 * lo:stop - 4 * lo]
+        every = join_regions({k: v.cpu() for k, v in parts.items()})                        # (4 (hi - lo), 433)
+        feats = every[self.emitted - 4 * lo:stop - 4 * lo].clone()
+        n = min(len(self.tail), len(feats))
+        if n:                                    # fade from the previous decode of these frames into this one
+            w = torch.arange(1, n + 1, dtype=torch.float32)[:, None] / (n + 1)
+            feats[:n] = self.tail[:n] * (1 - w) + feats[:n] * w
+        self.tail = every[stop - 4 * lo:stop - 4 * lo + self.cfg.blend_frames].clone()
         dx, dz = float(feats[0, TRANS_OFFSET]), float(feats[0, TRANS_OFFSET + 2])
         start_xz = (0.0, 0.0) if self.emitted == 0 else (self.xz[0] + dx, self.xz[1] + dz)
         motion = MotionSequence.from_features(feats, start_xz=start_xz)

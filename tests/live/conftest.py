@@ -1,0 +1,15 @@
+"""The shipped checkpoints (assets/) for live-mode tests: the streaming logic is checked on the real network."""
+from __future__ import annotations
+
+import pytest
+import torch
+
+
+@pytest.fixture(scope="session")
+def shipped_pipe():
+    from gesturelsm.pipeline import ASSETS, GesturePipeline
+
+    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
+        pytest.skip("shipped checkpoints not found in assets/")
+    torch.set_num_threads(1)
+    return GesturePipeline.from_pretrained(methods=["gesturelsm"], warm_up=False)
