@@ -11,8 +11,8 @@ sampled each chunk (first minute vs the end). Drift: motion frames available vs 
 
 Quality (as fast as possible, same seed): the held-out audio-only takes streamed with the live settings vs the
 offline pipeline at the same steps: speech-response tests (metrics.speech_response), upper-body speed and jitter,
-and jerk (|third difference| of joint positions) at chunk seams (the 3 frames before each chunk start... its first)
-vs inside chunks.
+and upper-body jerk (|third difference| of joint positions) at chunk seams (the jerk values whose 4-frame stencil
+spans a chunk start) over the jerk inside chunks; offline motion is scored at the same positions as a reference.
 """
 from __future__ import annotations
 

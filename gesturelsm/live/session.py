@@ -42,6 +42,7 @@ class LiveSession:
         self.latencies: deque[float] = deque(maxlen=LATENCY_KEEP)
         self.idle_timeout = idle_timeout
         self.dropped = 0
+        self.delivered = 0                     # frames handed out by poll() so far
         self.error: str | None = None
         self._stop = threading.Event()
         self._lock = threading.Lock()
@@ -87,6 +88,8 @@ class LiveSession:
         with self._lock:
             while self.outbox:
                 out.append(self.outbox.popleft())
+        if out:
+            self.delivered = out[-1].stop
         return out
 
     def stats(self) -> dict:

@@ -69,7 +69,7 @@ def test_incremental_features_stay_close_to_offline(shipped_pipe):
 
 @pytest.mark.parametrize("n", [1234, 6400])
 def test_chunk_size_does_not_change_the_motion(shipped_pipe, n):
-    y = speech_like(6.0, seed=3)
+    y = speech_like(4.0, seed=3)
     cfg = LiveConfig(steps=1)
     out_a, pa, ta = streamed(shipped_pipe, y, cfg, 3200)
     out_b, pb, tb = streamed(shipped_pipe, y, cfg, n)
@@ -78,7 +78,7 @@ def test_chunk_size_does_not_change_the_motion(shipped_pipe, n):
 
 
 def test_time_locked_and_translation_continuous(shipped_pipe):
-    y = speech_like(7.3, seed=4)
+    y = speech_like(5.3, seed=4)
     out, poses, trans = streamed(shipped_pipe, y, LiveConfig(steps=1), 3200)
     assert len(poses) == int(len(y) * 30 // SR)                         # offline frame count: no drift
     for c in out[:-1]:
@@ -90,8 +90,8 @@ def test_time_locked_and_translation_continuous(shipped_pipe):
 
 def test_seams_are_no_rougher_than_inside(shipped_pipe):
     """Jerk of the pose at chunk seams vs inside chunks (default live settings), relative."""
-    y = speech_like(12.0, seed=5)
-    out, poses, _ = streamed(shipped_pipe, y, LiveConfig(steps=2), 3200)
+    y = speech_like(9.0, seed=5)
+    out, poses, _ = streamed(shipped_pipe, y, LiveConfig(steps=1), 3200)
     jerk = np.abs(np.diff(poses, n=3, axis=0)).mean(1)                 # (T-3,) frame f covers f .. f+3
     seam = np.zeros(len(jerk), bool)
     for c in out[1:]:
@@ -104,14 +104,14 @@ def test_memory_is_bounded_on_long_streams(shipped_pipe):
     g = StreamingGenerator(shipped_pipe, cfg)
     y = speech_like(4.0, seed=6)
     sizes = []
-    for _ in range(6):
+    for _ in range(3):
         for ch in chunks(y, 4000):
             g.feed(ch)
         sizes.append((len(g.audio), g.lat.shape[1]))
     t = g.t
     assert max(s[0] for s in sizes) <= int((cfg.context_s + 2 * t * 4 / 30) * SR)
     assert max(s[1] for s in sizes) <= t + cfg.decode_context + cfg.commit
-    assert g.emitted > 600
+    assert g.emitted > 300
 
 
 def test_bad_settings_and_input_are_refused(shipped_pipe):
