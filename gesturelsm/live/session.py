@@ -18,6 +18,7 @@ import time
 from collections import deque
 
 import numpy as np
+import torch
 
 from .stream import SR, LiveConfig, MotionChunk, StreamingGenerator
 
@@ -49,6 +50,7 @@ class LiveSession:
         self._on_close = on_close
         self._closed = False
         self._started = time.perf_counter()
+        self._threads = torch.get_num_threads()  # the creator's setting: a new thread would get torch's default
         self._thread = threading.Thread(target=self._work, name="gesturelsm-live", daemon=True)
 
     # ---- control ---------------------------------------------------------------------------------------------
@@ -105,6 +107,7 @@ class LiveSession:
 
     # ---- worker ----------------------------------------------------------------------------------------------
     def _work(self) -> None:
+        torch.set_num_threads(self._threads)
         last = time.perf_counter()
         try:
             while not self._stop.is_set():
