@@ -67,6 +67,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--commit", type=int, default=LiveConfig.commit, help="latents finalised per window (4 frames each)")
     p.add_argument("--lookahead", type=int, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--threads", type=int, default=1,
+                   help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
     p.set_defaults(func=run)
 
@@ -79,7 +81,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--chunk-ms must be positive")
     cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed)
     audio = load_audio(args.audio)
+    import torch
+
     from ..features.audio import audio_channels
+
+    torch.set_num_threads(max(1, args.threads))
 
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[cfg.method], warm_up=False)   # audio only
     audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SR).astype(np.float32))  # JIT outside the timing
