@@ -21,6 +21,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.render.cli", "gesturelsm.export.cli",
     "gesturelsm.study.cli",
     "gesturelsm.evaluation.cli",
+    "gesturelsm.live.cli",
 )
 
 

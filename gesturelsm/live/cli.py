@@ -1,0 +1,102 @@
+"""`gesturelsm live FILE`: read a speech file as if it came from a microphone, stream motion out, print latency.
+
+    gesturelsm live speech.wav --chunk-ms 200 --out motion.npz            # as fast as possible
+    gesturelsm live speech.wav --realtime                                 # chunks arrive at the pace of speech
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .stream import SR, LiveConfig, MotionChunk, StreamingGenerator
+
+
+@dataclass
+class LiveRun:
+    chunks: list[MotionChunk]
+    latencies: np.ndarray          # (n_audio_chunks,) s: motion available - chunk arrival
+    audio_seconds: float
+    wall_seconds: float
+    compute_seconds: float
+
+    @property
+    def real_time_factor(self) -> float:
+        """Audio seconds per second of generation work (> 1: faster than real time)."""
+        return self.audio_seconds / max(self.compute_seconds, 1e-9)
+
+    def motion(self):
+        from ..motion.sequence import MotionSequence
+
+        ms = [c.motion for c in self.chunks]
+        return MotionSequence(np.concatenate([m.poses for m in ms]), np.concatenate([m.trans for m in ms]),
+                              np.concatenate([m.expressions for m in ms]))
+
+
+def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_ms: float = 200.0,
+             realtime: bool = False) -> LiveRun:
+    """Feed `audio` (N,) 16 kHz in chunks of `chunk_ms`; with `realtime` chunk k arrives (and is fed) when its last
+    sample would have been spoken, else all as fast as possible (then latency is compute only)."""
+    n = max(1, int(round(chunk_ms * SR / 1000)))
+    gen = StreamingGenerator(pipe, config)
+    out: list[MotionChunk] = []
+    t0 = time.perf_counter()
+    for a in range(0, len(audio), n):
+        chunk = audio[a:a + n]
+        arrival = None
+        if realtime:
+            arrival = t0 + (a + len(chunk)) / SR
+            time.sleep(max(0.0, arrival - time.perf_counter()))
+        out += gen.feed(chunk, arrival)
+    out += gen.finish()
+    lat = np.array([x for c in out for x in c.latencies])
+    return LiveRun(out, lat, len(audio) / SR, time.perf_counter() - t0, gen.compute_s)
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("live", help="stream a speech file through the live generator (as if from a microphone)",
+                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("audio", help="speech file (any common format and rate)")
+    p.add_argument("--chunk-ms", type=float, default=200.0, help="audio chunk size")
+    p.add_argument("--realtime", action="store_true", help="feed chunks at the pace of speech (else as fast as possible)")
+    p.add_argument("--out", default=None, help="write the streamed motion as BEAT2 npz")
+    p.add_argument("--steps", type=int, default=LiveConfig.steps)
+    p.add_argument("--cfg", type=float, default=LiveConfig.cfg)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--commit", type=int, default=LiveConfig.commit, help="latents finalised per window (4 frames each)")
+    p.add_argument("--lookahead", type=int, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--threads", type=int, default=1,
+                   help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
+    p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..audio import load_audio
+    from ..pipeline import GesturePipeline
+
+    if args.chunk_ms <= 0:
+        raise ValueError("--chunk-ms must be positive")
+    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed)
+    audio = load_audio(args.audio)
+    import torch
+
+    from ..features.audio import audio_channels
+
+    torch.set_num_threads(max(1, args.threads))
+
+    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[cfg.method], warm_up=False)   # audio only
+    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SR).astype(np.float32))  # JIT outside the timing
+    if not 1 <= cfg.steps <= 128:
+        raise ValueError(f"--steps must be from 1 to 128 (got {cfg.steps})")
+    res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)
+    look = (cfg.commit + cfg.lookahead) * 4 / 30
+    print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {args.chunk_ms:.0f} ms "
+          f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s")
+    print(f"latency median {np.median(res.latencies) * 1000:.0f} ms, p90 {np.percentile(res.latencies, 90) * 1000:.0f}"
+          f" ms; real-time factor {res.real_time_factor:.2f}x; {sum(c.motion.num_frames for c in res.chunks)} frames")
+    if args.out:
+        print(f"wrote {res.motion().save(args.out)}")
+    return 0

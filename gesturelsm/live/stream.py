@@ -1,0 +1,233 @@
+"""The generator in streaming form: 16 kHz audio chunks in (any size), 30 fps motion chunks out.
+
+Windows (t = 32 latents = 128 frames, seed s = 4 latents, as offline in generator/sampling.py) start every
+`commit` latents: window i covers latents [i c, i c + t), is seeded with the s latents there that window i - 1
+generated, cross-fades them exactly as offline, and *finalises* latents [i c, (i + 1) c) (4 <= c <= t - s; offline
+is c = t - s = 28). Window i runs as soon as the audio reaches latent (i + 1) c + `lookahead`; the rest of its span
+is silence (zero channels, as offline pads the last window). So the motion of a moment needs at most
+c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 4, lookahead = 2 that is
+0.8 s at worst, 0.53 s on average, plus compute. With lookahead >= t - c every window sees its whole span and the
+windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
+
+Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
+- envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of
+  the newest sample it is computed from what has arrived (as offline at the end of a file);
+- onsets: librosa's detector normalises by the maximum over the audio it sees (offline: the whole file), so onsets
+  are detected on the context + window span: nearly the offline onsets, not bit-identical (tests/live measure it).
+
+Decoding: the RVQ-VAE decoder is convolutional with a wide receptive field (a latent moves frames up to ~22 latents
+away, the far ones by little). Frames of the finalised latents are decoded with `decode_context` final latents on the
+left and the window's own not-yet-final latents on the right (so no waiting); `decode_lag` > 0 instead waits for that
+many final latents on the right. The next decode sees final values there and differs a little near the seam, so the
+first `blend_frames` frames of each chunk fade (in feature space, linearly) from the previous decode of those frames
+into the new one: no jump at seams and no extra latency. Root translation is integrated across chunks (motion/translation.py convention).
+Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
+offline frame count floor(N * 30 / 16000).
+"""
+from __future__ import annotations
+
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Iterable, Iterator
+
+import numpy as np
+import torch
+
+from ..features.audio import audio_channels
+from ..features.text import TEXT_DIM
+from ..flows import make_method
+from ..generator.data import samples_for
+from ..generator.sampling import decode_latents
+from ..motion.regions import TRANS_OFFSET, join_regions
+from ..motion.sequence import FPS, MotionSequence
+
+SR = 16_000
+
+
+@dataclass(frozen=True)
+class LiveConfig:
+    commit: int = 4                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
+    lookahead: int = 2             # latents of real audio past the finalised span before a window runs
+    steps: int = 4                 # sampler steps per window
+    cfg: float = 2.0
+    seed: int = 0
+    method: str = "gesturelsm"
+    context_s: float = 6.0         # audio before a window that onset detection sees
+    decode_context: int = 16       # final latents left of the emitted span given to the decoder
+    decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
+    blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
+
+    def check(self, t: int, s: int) -> None:
+        if not s <= self.commit <= t - s:
+            raise ValueError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
+        if min(self.lookahead, self.decode_lag, self.decode_context, self.blend_frames) < 0:
+            raise ValueError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
+
+
+@dataclass
+class MotionChunk:
+    motion: MotionSequence         # frames [start, start + len) of the stream, 30 fps
+    start: int                     # first frame index
+    produced: float                # perf_counter() when it became available
+    latencies: list[float] = field(default_factory=list)  # s, per audio chunk completed by it: produced - arrival
+    audio_ahead_s: float = 0.0     # audio that had arrived beyond this chunk's last frame (algorithmic look-ahead)
+
+    @property
+    def stop(self) -> int:
+        return self.start + self.motion.num_frames
+
+
+class StreamingGenerator:
+    """feed(chunk) -> motion chunks available now; finish() -> the rest. One stream per object (not thread-safe)."""
+
+    def __init__(self, pipe, config: LiveConfig = LiveConfig()):
+        self.model = pipe.generators[config.method]
+        self.tokenizers = pipe.tokenizers
+        c = self.model.config
+        self.t, self.s = c.window_latents, c.seed_latents
+        config.check(self.t, self.s)
+        self.cfg = config
+        self.method = make_method(self.model.method)
+        self.n_a = samples_for(4 * self.t)                             # samples per window
+        self.gen = torch.Generator(device="cpu").manual_seed(int(config.seed))
+        R, D = c.num_regions, c.latent_dim
+        self.ramp = torch.arange(1, self.s + 1, dtype=torch.float32) / (self.s + 1)
+        self.std = self.model.latent_std.cpu()[:, None, None]
+        self.lat = torch.zeros(R, 0, D)        # scaled latents [lat0, lat0 + len): final < final_end, then provisional
+        self.lat0 = 0
+        self.final_end = 0                     # latents finalised so far
+        self.window = 0                        # next window index
+        self.audio = np.zeros(0, np.float32)   # samples [a0, a0 + len)
+        self.a0 = 0
+        self.n_in = 0                          # samples received
+        self.emitted = 0                       # frames emitted
+        self.xz = (0.0, 0.0)                   # root x, z of the last emitted frame
+        self.arrivals: deque[tuple[int, float]] = deque()   # (end sample, arrival time) of unanswered chunks
+        self.finished = False
+        self.compute_s = 0.0
+        self.tail = torch.zeros(0, 1)          # (<= blend_frames, 433) last decode of the frames after the emitted ones
+
+    # ---- input -----------------------------------------------------------------------------------------------
+    def feed(self, chunk: np.ndarray, arrival: float | None = None) -> list[MotionChunk]:
+        """chunk: (n,) float32 16 kHz mono; arrival: perf_counter() time it arrived (default: now)."""
+        if self.finished:
+            raise RuntimeError("this stream has finished; start a new one")
+        y = np.asarray(chunk, np.float32).reshape(-1)
+        if not np.isfinite(y).all():
+            raise ValueError("the audio chunk contains invalid samples (NaN or infinity)")
+        self.audio = np.concatenate([self.audio, y])
+        self.n_in += len(y)
+        self.arrivals.append((self.n_in, time.perf_counter() if arrival is None else arrival))
+        out = []
+        while self.n_in >= samples_for(4 * ((self.window + 1) * self.cfg.commit + self.cfg.lookahead)):
+            out += self._run_window(end=None)
+        return out
+
+    def finish(self) -> list[MotionChunk]:
+        """The audio has ended: generate and emit everything up to the last whole frame."""
+        if self.finished:
+            return []
+        self.finished = True
+        T = self.n_in * FPS // SR
+        keep = samples_for(T) - self.a0                                 # offline trims the audio to T frames
+        self.audio, self.n_in = self.audio[:max(keep, 0)], samples_for(T)
+        L = -(-T // 4)
+        out = []
+        while self.window == 0 or (self.window - 1) * self.cfg.commit + self.t < L:
+            out += self._run_window(end=L)
+        if self.emitted < T:
+            out += self._emit(L, T, final_all=True)
+        return out
+
+    def stream(self, chunks: Iterable[np.ndarray]) -> Iterator[MotionChunk]:
+        """The Python API: iterate over audio chunks, get motion chunks as soon as they exist."""
+        for ch in chunks:
+            yield from self.feed(ch)
+        yield from self.finish()
+
+    # ---- one window --------------------------------------------------------------------------------------
+    def _channels(self, a: int, b: int, avail: int) -> torch.Tensor:
+        """(2, b - a) channels of samples [a, b) from the audio before sample `avail` (zeros past it)."""
+        lo = max(self.a0, a - int(self.cfg.context_s * SR))
+        hi = min(avail, b)
+        ch = np.zeros((2, b - a), np.float32)
+        if hi > a:
+            y = self.audio[lo - self.a0:hi - self.a0]
+            ch[:, :hi - a] = audio_channels(y)[:, a - lo:]
+        return torch.from_numpy(ch)
+
+    @torch.no_grad()
+    def _run_window(self, end: int | None) -> list[MotionChunk]:
+        t0 = time.perf_counter()
+        m, c, t, s = self.model, self.cfg.commit, self.t, self.s
+        st = self.window * c
+        a = samples_for(4 * st)
+        # the window sees exactly the audio its trigger asked for (not what else has arrived): results do not
+        # depend on how the audio was chunked
+        avail = self.n_in if end is not None else samples_for(4 * (st + c + self.cfg.lookahead))
+        ch = self._channels(a, a + self.n_a, avail)[None]                                 # (1, 2, n_a)
+        w, hw = torch.zeros(1, 4 * t, TEXT_DIM), torch.zeros(1, 4 * t, dtype=torch.bool)
+        cond = m.speech(ch, w, hw, torch.zeros(1, dtype=torch.bool))
+        R, D = self.lat.shape[0], self.lat.shape[2]
+        noise = torch.randn(1, R, t, D, generator=self.gen)
+        if self.window == 0:
+            seed = m.neutral_seed[None]
+        else:
+            seed = self.lat[:, st - self.lat0:st - self.lat0 + s][None]
+        x = self.method.sample(m.bind(cond, seed), noise, self.cfg.steps, self.cfg.cfg)[0]    # (R, t, D) scaled
+        k = st - self.lat0
+        if self.window > 0:
+            ov = self.lat[:, k:k + s]
+            x = torch.cat([ov * (1 - self.ramp)[None, :, None] + x[:, :s] * self.ramp[None, :, None], x[:, s:]], 1)
+        self.lat = torch.cat([self.lat[:, :k], x], 1)
+        self.window += 1
+        self.final_end = st + c
+        self.compute_s += time.perf_counter() - t0
+        if end is not None and st + t >= end:
+            self.final_end = end
+            return []                                            # finish() emits the rest with everything final
+        return self._emit(self.final_end - self.cfg.decode_lag, None)
+
+    # ---- decoding and output ----------------------------------------------------------------------------
+    def _emit(self, upto: int, T: int | None, final_all: bool = False) -> list[MotionChunk]:
+        """Decode and emit frames up to latent `upto` (or frame T at the end)."""
+        t0 = time.perf_counter()
+        e = self.emitted // 4
+        stop = 4 * upto if T is None else T
+        if stop <= self.emitted:
+            return []
+        lo = max(0, e - self.cfg.decode_context)
+        hi = self.lat0 + self.lat.shape[1] if not final_all else -(-T // 4)
+        z = self.lat[:, lo - self.lat0:hi - self.lat0] * self.std                          # (R, n, D) un-scaled
+        parts = decode_latents(self.tokenizers, z, 4 * (hi - lo))
+        every = join_regions({k: v.cpu() for k, v in parts.items()})                        # (4 (hi - lo), 433)
+        feats = every[self.emitted - 4 * lo:stop - 4 * lo].clone()
+        n = min(len(self.tail), len(feats))
+        if n:                                    # fade from the previous decode of these frames into this one
+            w = torch.arange(1, n + 1, dtype=torch.float32)[:, None] / (n + 1)
+            feats[:n] = self.tail[:n] * (1 - w) + feats[:n] * w
+        self.tail = every[stop - 4 * lo:stop - 4 * lo + self.cfg.blend_frames].clone()
+        dx, dz = float(feats[0, TRANS_OFFSET]), float(feats[0, TRANS_OFFSET + 2])
+        start_xz = (0.0, 0.0) if self.emitted == 0 else (self.xz[0] + dx, self.xz[1] + dz)
+        motion = MotionSequence.from_features(feats, start_xz=start_xz)
+        self.xz = (float(motion.trans[-1, 0]), float(motion.trans[-1, 2]))
+        now = time.perf_counter()
+        chunk = MotionChunk(motion, self.emitted, now, audio_ahead_s=(self.n_in - samples_for(stop)) / SR)
+        while self.arrivals and (self.arrivals[0][0] <= samples_for(stop) or T is not None):
+            chunk.latencies.append(now - self.arrivals.popleft()[1])
+        self.emitted = stop
+        self._trim()
+        self.compute_s += time.perf_counter() - t0
+        return [chunk]
+
+    def _trim(self) -> None:
+        """Drop latents and audio no later window or decode needs (memory stays flat on endless streams)."""
+        keep_lat = min(self.window * self.cfg.commit, self.emitted // 4 - self.cfg.decode_context)
+        if keep_lat > self.lat0:
+            self.lat = self.lat[:, keep_lat - self.lat0:]
+            self.lat0 = keep_lat
+        keep_a = samples_for(4 * self.window * self.cfg.commit) - int(self.cfg.context_s * SR)
+        if keep_a > self.a0:
+            self.audio = self.audio[keep_a - self.a0:]
+            self.a0 = keep_a

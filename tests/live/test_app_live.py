@@ -1,0 +1,61 @@
+"""The Live tab's server side: the tab builds inside a Blocks; microphone chunks (int16, 48 kHz) stream motion JSON
+and the median latency out; the stop button ends the stream; a busy message past the limit; a closed tab stops it."""
+from __future__ import annotations
+
+import json
+import threading
+
+import numpy as np
+import pytest
+
+from gesturelsm.live import LiveConfig
+from gesturelsm.live.session import LiveManager
+
+from _support import speech_like
+
+gr = pytest.importorskip("gradio")
+live = pytest.importorskip("app.live")
+
+
+def mic_chunks(seconds: float, sr: int = 48000, every: float = 0.2):
+    import scipy.signal
+
+    y = scipy.signal.resample_poly(speech_like(seconds, seed=7), 3, 1)
+    n = int(sr * every)
+    return [(sr, (y[a:a + n] * 32767).astype(np.int16)) for a in range(0, len(y), n)]
+
+
+def test_tab_builds_with_the_latency_element(shipped_pipe):
+    with gr.Blocks() as demo:
+        live.add_live_tab(LiveManager(shipped_pipe, config=LiveConfig(steps=1)))
+    ids = [getattr(b, "elem_id", None) for b in demo.blocks.values()]
+    assert "live-latency" in ids and "live-motion" in ids
+
+
+def test_stream_then_stop_gives_all_frames_and_latency(shipped_pipe):
+    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+    state, frames, seen = None, [], []
+    for ch in mic_chunks(3.0):
+        state, js, lat, status = live.on_chunk(mgr, ch, state)
+        d = json.loads(js)
+        assert d["start"] == sum(len(f) for f in frames)              # chunks continue where the last ended
+        frames.append(d["poses"])
+        seen.append(lat)
+    state, js, lat, status = live.on_stop(state)
+    d = json.loads(js)
+    frames.append(d["poses"])
+    total = sum(len(f) for f in frames)
+    assert total == 90 and all(len(p) == 165 for f in frames for p in f)     # 3 s at 30 fps
+    assert float(lat) > 0 and d["median_latency_ms"] == pytest.approx(float(lat), abs=1)
+    assert state is None and mgr.active == 0
+    assert not [t for t in threading.enumerate() if t.name == "gesturelsm-live"]
+
+
+def test_busy_message_and_closed_tab(shipped_pipe):
+    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+    ch = mic_chunks(0.4)[0]
+    s1, *_ = live.on_chunk(mgr, ch, None)
+    s2, js, lat, status = live.on_chunk(mgr, ch, None)
+    assert s2 is None and "in use" in status and "in use" in json.loads(js)["status"]
+    live._delete(s1)                                                   # what Gradio calls when the tab closes
+    assert mgr.active == 0 and not s1.running
