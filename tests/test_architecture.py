@@ -17,7 +17,7 @@ FLOORS: list[set[str]] = [
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
     {"generator", "export"},                                   # the denoiser; BVH / GLB / keypoints (render's camera)
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"app_service", "study", "evaluation", "pipeline_cli"},    # what uses the pipeline
+    {"app_service", "study", "evaluation", "pipeline_cli", "live"},   # what uses the pipeline (live: streaming)
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm
 ]
