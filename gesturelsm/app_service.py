@@ -39,7 +39,7 @@ METHOD_LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow",
                  "ground_truth": "Ground truth"}
 SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}
 VIDEO_SIZES = (256, 384, 512, 640)
-TIMING_COLUMNS = ["method", "features", "alignment", "sampling", "decoding", "rendering", "generation",
+TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
 
 
@@ -74,6 +74,7 @@ class Request:
     smoothing: str = "off"
     size: int = 384
     exports: bool = True
+    transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
 
 
 @dataclass
@@ -88,6 +89,7 @@ class Outcome:
     seconds: float                           # request start to video ready
     timings: dict[str, dict[str, float]] = field(default_factory=dict)
     motions: dict[str, MotionSequence] = field(default_factory=dict, repr=False)   # shown, post-processed
+    transcript: str | None = None            # the automatic transcript used (shown in the transcript box)
 
     @property
     def summary(self) -> str:
@@ -287,7 +289,8 @@ class GestureService:
         prog(0.02, "reading speech")
         try:
             speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m))
+                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m),
+                                                  transcribe=bool(req.transcribe))
         except InputError as exc:
             raise ServiceError(str(exc)) from None
         T = speech.num_frames
@@ -341,16 +344,16 @@ class GestureService:
         for m in gen_methods:
             t = timings[m]
             t["rendering"] = render_s / len(motions)
-            gen = sum(v for k, v in t.items() if k not in ("alignment", "rendering"))
+            gen = sum(v for k, v in t.items() if k not in ("alignment", "transcription", "rendering"))
             rows.append([METHOD_LABELS[m], *(round(t.get(k, 0.0), 3) for k in
-                                              ("features", "alignment", "sampling", "decoding", "rendering")),
+                                              ("features", "alignment", "transcription", "sampling", "decoding", "rendering")),
                          round(gen, 3), round(speech.duration / max(gen, 1e-9), 1)])
         if gt_name:
-            rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, round(render_s / len(motions), 3), 0.0, None])
-        rows.append([f"whole request, {speech.duration:.1f} s of speech", None, None, None, None,
+            rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / len(motions), 3), 0.0, None])
+        rows.append([f"whole request, {speech.duration:.1f} s of speech", None, None, None, None, None,
                      round(render_s, 3), round(ready, 3), round(speech.duration / max(ready, 1e-9), 2)])
         outcome = Outcome(video, rows, [], None, speech.text_mode, warnings, gt_name, ready, timings,
-                          dict(zip(shown, motions)))
+                          dict(zip(shown, motions)), speech.transcript)
         if req.exports:
             prog(0.93, "exports")
             self.export(outcome)

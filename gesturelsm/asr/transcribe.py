@@ -31,6 +31,7 @@ SAMPLE_RATE = 16_000
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
 MIN_SECONDS = 0.3
 TIMINGS = ("auto", "dtw", "whisper")
+AUDIO_ONLY_NOTE = " Generating from the audio only; type the transcript to use the text-conditioned model."
 
 
 @dataclass(frozen=True)
@@ -82,19 +83,17 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = 5) -> T
         raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
     y = np.asarray(audio, np.float32).reshape(-1)
     if len(y) < MIN_SECONDS * SAMPLE_RATE or not np.isfinite(y).all() or np.abs(y).max() < 1e-4:
-        return _rejected("The audio is too short, silent or invalid: no speech to recognise; using the audio only.")
+        return _rejected("The audio is too short, silent or invalid: there is no speech to recognise.")
     words, avg, details = recognize(y, beam_size)
     heard = " ".join(w.text for w in words)
     conf = math.exp(avg) if words else 0.0
     details["avg_logprob"] = avg
     if not words:
-        return _rejected("No speech was recognised (silence, noise or music?): generating from the audio only.",
-                         details=details)
+        return _rejected("No speech was recognised (silence, noise or music?).", details=details)
     if avg < MIN_AVG_LOGPROB:
         return _rejected(f"Automatic transcription was rejected: the English speech recogniser is unsure of what it "
                          f"heard (confidence {conf:.2f}; it heard \"{_clip(heard)}\"). The speech may not be English, "
-                         "or it is noise or music. Generating from the audio only; type the transcript to use the "
-                         "text-conditioned model.", heard, conf, details)
+                         "or it is noise or music.", heard, conf, details)
     timed, method, warnings = _timed(y, words, heard, timing)
     return Transcript(timed, heard, "en", None, method, warnings, True, conf, heard, details)
 
@@ -110,7 +109,7 @@ def _timed(y: np.ndarray, words: list[Word], text: str, timing: str) -> tuple[li
 
 
 def _rejected(message: str, heard: str = "", conf: float = 0.0, details: dict | None = None) -> Transcript:
-    return Transcript([], "", "unknown", None, "none", [message], False, conf, heard, details or {})
+    return Transcript([], "", "unknown", None, "none", [message + AUDIO_ONLY_NOTE], False, conf, heard, details or {})
 
 
 def _clip(text: str, n: int = 60) -> str:
