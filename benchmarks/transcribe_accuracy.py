@@ -6,8 +6,8 @@ Per take: word recovery (recognised words paired in order with the MFA words by 
 word-onset error against MFA (mean, p90, share within 100 ms) for each timing option ("whisper": Whisper's
 own word times; "dtw": our eSpeak+DTW aligner on the recognised text; "auto": what `transcribe` uses, dtw
 unless the aligner falls back), seconds of compute per minute of speech (wall clock and process CPU time,
-recognition alone and with alignment) and peak memory of recognition, measured in a fresh subprocess
-(ru_maxrss after loading audio and numpy, after loading the model, after transcribing all takes).
+recognition alone and with alignment) and the memory of recognition, measured in a fresh subprocess (resident size
+before and after loading the model, peak while transcribing).
 The machine is shared: wall-clock seconds include waiting for the CPU; CPU seconds do not.
 """
 from __future__ import annotations
@@ -77,29 +77,38 @@ def accuracy(data: Path) -> list[str]:
     return rows
 
 
-def memory_child(data: Path) -> None:
-    """Run in a fresh interpreter: print peak RSS (MB) at three points as JSON."""
-    def peak() -> float:
-        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # Linux: KiB
+def _status_mb(key: str) -> float:
+    """VmRSS (resident now) or VmHWM (peak resident since start or the last reset) of this process, MB."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(key + ":"):
+            return int(line.split()[1]) / 1024.0
+    return float("nan")
 
+
+def memory_child(data: Path) -> None:
+    """Run in a fresh interpreter: resident memory before / after loading the model and peak while transcribing
+    (the peak is reset after loading via /proc/self/clear_refs, Linux), printed as JSON."""
     audio = [load_audio(data / "wave16k" / f"{t}.wav") for t in TAKES]
-    base = peak()
+    base = _status_mb("VmRSS")
     from gesturelsm.asr.model import load_model
 
     load_model()
-    loaded = peak()
+    loaded = _status_mb("VmRSS")
+    Path("/proc/self/clear_refs").write_text("5")   # reset the peak to the current resident size
     for y in audio:
         recognize(y)
-    print(json.dumps({"baseline": base, "model loaded": loaded, "after transcribing": peak()}))
+    print(json.dumps({"baseline": base, "model loaded": loaded, "peak transcribing": _status_mb("VmHWM"),
+                      "ru_maxrss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
 
 
 def memory(data: Path) -> str:
     out = subprocess.run([sys.executable, __file__, "--data", str(data), "--memory-child"], capture_output=True,
                          text=True, check=True)
     m = json.loads(out.stdout.strip().splitlines()[-1])
-    return (f"Peak resident memory of recognition (fresh process): {m['baseline']:.0f} MB with numpy, audio and the "
-            f"package imported; {m['model loaded']:.0f} MB with the model loaded; {m['after transcribing']:.0f} MB "
-            f"after transcribing the three takes (+{m['after transcribing'] - m['baseline']:.0f} MB for recognition).")
+    return (f"Resident memory of recognition (fresh process, /proc/self/status): {m['baseline']:.0f} MB with the "
+            f"package and audio loaded; {m['model loaded']:.0f} MB with the model loaded "
+            f"(+{m['model loaded'] - m['baseline']:.0f} MB); peak {m['peak transcribing']:.0f} MB while transcribing "
+            f"the three takes (+{m['peak transcribing'] - m['baseline']:.0f} MB over the baseline).")
 
 
 def main() -> int:
