@@ -22,6 +22,6 @@ def test_shipped_checkpoints_serve_an_example(tmp_path):
                               size=256, exports=False))
     assert out.video.stat().st_size > 10_000
     assert "aligned automatically" in out.text_mode
-    assert out.rows[0][7] > 1.0                               # generation faster than real time
+    assert out.rows[0][8] > 1.0                               # generation faster than real time
     poses = out.motions["gesturelsm"].poses
     assert poses.std(axis=0).max() > 1e-3                     # the body moves
