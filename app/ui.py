@@ -24,15 +24,18 @@ Runs on a plain CPU; the body is a built-in mannequin (SMPL-X layout) unless a r
 
 HOW_IT_WORKS = """**How it works.** The speech is turned into an amplitude envelope and onset track; if you give a transcript,
 each word is timed against the audio (eSpeak NG synthesis + DTW, no Montreal Forced Aligner), or taken from your
-TextGrid, and embedded with MiniLM; with neither, the model runs **audio-only** (said above the video).
+TextGrid, and embedded with MiniLM; with neither, the speech is **transcribed automatically** (Whisper tiny.en,
+offline, English only) and the recognised words appear in the transcript box, where you can correct them and
+run again; untick *Transcribe automatically*, or give non-English speech, and the model runs **audio-only**
+(the summary above the video says which transcript source was used).
 A spatial-temporal transformer then samples latent codes of four body regions (upper body, hands, lower body,
 face) with **shortcut flow matching** (GestureLSM): a few steps are enough. *Rectified flow* and *DDIM* are the
 baselines trained the same way with their usual objectives. Per-region RVQ-VAE decoders turn the latents into
 SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with your speech.
 *CFG* is classifier-free guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
 *Stand in place* removes horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
-Timings: features and alignment are computed once and shared by all methods; the real-time factor is seconds of
-speech per second of generation (alignment and rendering excluded, as in the paper); the last row is the whole
+Timings: features, alignment and transcription are computed once and shared by all methods; the real-time factor is seconds of
+speech per second of generation (alignment, transcription and rendering excluded, as in the paper); the last row is the whole
 request, upload to video."""
 
 
@@ -59,10 +62,11 @@ def build_demo(service: GestureService) -> gr.Blocks:
     default_methods = [m for m in FACTS if m in service.methods][:3]
 
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 exports: bool) -> Request:
+                 auto_text=True, *, exports: bool) -> Request:
         return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
                        steps=steps_from_flags(steps, ddim_steps), cfg=float(cfg), seed=int(seed),
-                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports)
+                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports,
+                       transcribe=bool(auto_text))
 
     def _run(req: Request, progress):
         try:
@@ -76,7 +80,8 @@ def build_demo(service: GestureService) -> gr.Blocks:
     def show_video(*args, progress=gr.Progress()):
         """The page's button: the video, timings and summary first; the downloads follow (`add_exports`)."""
         out = _run(_request(*args, exports=False), progress)
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
+        recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
+        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out, recognised
 
     def add_exports(out):
         if out is None:
@@ -85,10 +90,10 @@ def build_demo(service: GestureService) -> gr.Blocks:
         return *_files(out), out.summary
 
     def generate(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 progress=gr.Progress()):
+                 auto_text=True, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = _run(_request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                            exports=True), progress)
+                            auto_text, exports=True), progress)
         return (str(out.video), out.rows, out.summary, *_files(out))
 
     with gr.Blocks(title="GestureLSM demo", delete_cache=(600, int(settings.keep_minutes * 60))) as demo:
@@ -98,7 +103,10 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                                  elem_id="speech")
                 text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
-                                  placeholder="Type what is said; leave empty for audio-only", elem_id="transcript")
+                                  placeholder="Type what is said, or leave empty to transcribe the speech automatically",
+                                  elem_id="transcript")
+                auto_text = gr.Checkbox(value=True, elem_id="auto-transcribe",
+                                        label="Transcribe automatically when no transcript is given (English)")
                 textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                                    file_types=[".TextGrid", ".textgrid"], type="filepath")
                 methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
@@ -136,9 +144,9 @@ def build_demo(service: GestureService) -> gr.Blocks:
             gr.Markdown(f"Limits of this server: speech up to {settings.max_seconds / 60:g} minutes, uploads up to "
                         f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
-        inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size]
+        inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text]
         state = gr.State()
-        button.click(show_video, inputs, [video, table, summary, state], api_name="generate_video",
+        button.click(show_video, inputs, [video, table, summary, state, text], api_name="generate_video",
                      concurrency_limit=settings.concurrency, concurrency_id="generation") \
             .then(add_exports, state, [files, view, summary], api_visibility="private", concurrency_limit=settings.concurrency,
                   concurrency_id="generation")

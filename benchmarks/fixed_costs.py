@@ -42,7 +42,7 @@ def main() -> None:
         raise SystemExit(f"needs the real BEAT2 sample at {WAV}")
     pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"], device=args.device)
     y = load_audio(WAV)[: int(args.seconds * 16000)]
-    sp = pipe.prepare_speech(y, 16000)
+    sp = pipe.prepare_speech(y, 16000, transcribe=False)            # audio-only, as measured before
     gen = pipe.generators["gesturelsm"]
     c = gen.config
     lat = generate_latents(gen, sp.channels, sp.word_features, sp.has_word, False, sp.num_frames, 8, 2.0, 0).to(dev)

@@ -43,7 +43,7 @@ Progress = Callable[[float, str], None]
 
 METHOD_LABELS = {**{k: f.label for k, f in FACTS.items()}, GROUND_TRUTH: "Ground truth"}
 VIDEO_SIZES = (256, 384, 512, 640)
-TIMING_COLUMNS = ["method", "features", "alignment", "sampling", "decoding", "rendering", "generation",
+TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
 
 
@@ -76,6 +76,7 @@ class Request:
     smoothing: str = "off"
     size: int = 384
     exports: bool = True
+    transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
 
     def plan(self, beat2: str | None = None) -> Plan:
         steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
@@ -96,6 +97,7 @@ class Outcome:
     seconds: float                           # request start to video ready
     timings: dict[str, dict[str, float]] = field(default_factory=dict)
     motions: dict[str, MotionSequence] = field(default_factory=dict, repr=False)   # shown, post-processed
+    transcript: str | None = None            # the automatic transcript used (shown in the transcript box)
 
     @property
     def summary(self) -> str:
@@ -196,7 +198,8 @@ class GestureService:
         words = self._words(req)
         prog(0.02, "reading speech")
         speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                              progress=lambda f, m: prog(0.02 + 0.1 * f, m))
+                                              progress=lambda f, m: prog(0.02 + 0.1 * f, m),
+                                              transcribe=bool(req.transcribe))
         return plan, speech
 
     # ---- one request -----------------------------------------------------------------------------------
@@ -228,7 +231,7 @@ class GestureService:
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows = timing_rows(gen, timings, speech.duration, render_s, ready)
         outcome = Outcome(video, rows, [], None, speech.text_mode, gen.warnings, gen.ground_truth, ready, timings,
-                          dict(gen.motions))
+                          dict(gen.motions), speech.transcript)
         if req.exports:
             prog(0.93, "exports")
             self.export(outcome)
@@ -265,13 +268,14 @@ def timing_rows(gen: Generated, timings: dict[str, dict[str, float]], duration: 
     for m in gen.results:
         t = timings[m]
         t["rendering"] = render_s / n
-        g = sum(v for k, v in t.items() if k not in ("alignment", "rendering"))
+        g = sum(v for k, v in t.items() if k not in ("alignment", "transcription", "rendering"))
         rows.append([METHOD_LABELS[m], *(round(t.get(k, 0.0), 3) for k in
-                                          ("features", "alignment", "sampling", "decoding", "rendering")),
+                                          ("features", "alignment", "transcription", "sampling", "decoding",
+                                           "rendering")),
                      round(g, 3), round(duration / max(g, 1e-9), 1)])
     if gen.ground_truth:
-        rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None])
-    rows.append([f"whole request, {duration:.1f} s of speech", None, None, None, None,
+        rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None])
+    rows.append([f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
                  round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)])
     return rows
 

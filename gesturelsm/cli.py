@@ -16,6 +16,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.body.cli",
     "gesturelsm.data.cli",
     "gesturelsm.align.cli",
+    "gesturelsm.asr.cli",
     "gesturelsm.tokenizer.cli",
     "gesturelsm.generator.cli", "gesturelsm.pipeline_cli",
     "gesturelsm.render.cli", "gesturelsm.export.cli",

@@ -42,6 +42,7 @@ class SpeechInput:
     text_mode: str                      # how the transcript was used, said to the user
     timings: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    transcript: str | None = None       # the automatic transcript's text when one was recognised and used
 
     @property
     def duration(self) -> float:
@@ -62,7 +63,7 @@ class GenerationResult:
     @property
     def generation_seconds(self) -> float:
         """Inference time without transcript alignment (the paper's AITS convention)."""
-        return sum(v for k, v in self.timings.items() if k != "alignment")
+        return sum(v for k, v in self.timings.items() if k not in ("alignment", "transcription"))
 
     @property
     def real_time_factor(self) -> float:
@@ -150,9 +151,11 @@ class GesturePipeline:
 
     # ---- speech ------------------------------------------------------------------------------------------
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
-                       text: str | None = None, progress: Progress | None = None) -> SpeechInput:
-        """Validate and resample audio; word timings from `words` (e.g. a TextGrid), else from aligning
-        `text`, else audio-only. Features that do not depend on the method are computed here once."""
+                       text: str | None = None, progress: Progress | None = None,
+                       transcribe: bool = True) -> SpeechInput:
+        """Validate and resample audio; word timings from aligning a typed `text`, else from `words` (e.g. a
+        TextGrid), else from automatic transcription (`transcribe`), else audio-only. Features that do not
+        depend on the method are computed here once."""
         from .features.audio import audio_channels
         from .features.text import TEXT_DIM, TextEmbedder
 
@@ -179,8 +182,8 @@ class GesturePipeline:
         timings["features"] = time.perf_counter() - t0
         if progress:
             progress(0.1, "audio features")
-        mode = "audio-only (no transcript given)"
-        if words is None and text and text.strip():
+        mode, transcript = "audio-only (no transcript given)", None
+        if text and text.strip():
             from .align import align_words
 
             t1 = time.perf_counter()
@@ -194,6 +197,17 @@ class GesturePipeline:
                 progress(0.2, "transcript aligned")
         elif words is not None:
             mode = "transcript with given word timings"
+        elif transcribe:
+            from .asr.source import automatic_words
+
+            t1 = time.perf_counter()
+            auto = automatic_words(y)
+            timings["transcription"] = time.perf_counter() - t1
+            words, mode, transcript = auto.words, auto.text_mode, auto.transcript
+            transcript = transcript.text if transcript is not None and auto.words else None
+            warnings += auto.warnings
+            if progress:
+                progress(0.2, "speech transcribed")
         wf, hw = torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool)
         if words:
             t2 = time.perf_counter()
@@ -205,7 +219,8 @@ class GesturePipeline:
                 warnings.append(f"{emb.error}; generating from audio only")
                 words, mode = None, "audio-only (text encoder unavailable)"
             timings["features"] += time.perf_counter() - t2
-        return SpeechInput(y, T, channels, words or None, wf, hw, mode, timings, warnings)
+        return SpeechInput(y, T, channels, words or None, wf, hw, mode, timings, warnings,
+                           transcript if words else None)
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
@@ -254,11 +269,13 @@ class GesturePipeline:
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
                  text: str | None = None, steps: int = 8, cfg: float = 2.0, seed: int = 0,
-                 method: str = "gesturelsm", progress: Progress | None = None) -> GenerationResult:
+                 method: str = "gesturelsm", progress: Progress | None = None,
+                 transcribe: bool = True) -> GenerationResult:
         from .generator.sampling import decode_latents, generate_latents
 
         self.check_settings(method, steps, cfg)
-        speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress)
+        speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
+                                                                                       transcribe)
         gen = self.generators[method]
         timings = dict(speech.timings)
         t0 = time.perf_counter()

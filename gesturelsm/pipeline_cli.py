@@ -17,6 +17,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = g.add_mutually_exclusive_group()
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
+    src.add_argument("--no-transcribe", action="store_true",
+                     help="audio-only: do not transcribe the speech when neither --text nor --textgrid is given")
     g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
     g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
     g.add_argument("--seed", type=int, default=0)
@@ -35,7 +37,7 @@ def run_generate(args: argparse.Namespace) -> int:
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[args.method])
     steps = args.steps or FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
-                        method=args.method)
+                        method=args.method, transcribe=not args.no_transcribe)
     path = res.motion.save(args.out)
     for w in res.warnings:
         print(f"warning: {w}")

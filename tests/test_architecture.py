@@ -13,6 +13,7 @@ FLOORS: list[set[str]] = [
     {"constants", "errors"},                                   # conventions, the error family
     {"motion", "audio", "checkpoint", "flows"},                # motion data, speech loading, files, the methods
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
+    {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
     {"generator", "export"},                                   # the denoiser; BVH / GLB / keypoints (render's camera)

@@ -132,8 +132,9 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
     pipes = {k: v for k, v in pipes.items() if k in presets}
     clip_frames = shipped.generators[next(iter(shipped.generators))].config.window_frames
     lengths = {"clip": clip_frames / FPS, "10s": 10.0, **({"long": long_seconds} if long_seconds else {})}
-    shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE)       # warm-up: lazy imports, first-call costs
-    inputs = {k: shipped.prepare_speech(speech_clip(s, speech), SAMPLE_RATE) for k, s in lengths.items()}
+    shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE, transcribe=False)  # warm-up: lazy imports, first calls
+    inputs = {k: shipped.prepare_speech(speech_clip(s, speech), SAMPLE_RATE, transcribe=False)   # audio-only inputs
+              for k, s in lengths.items()}
     plan = [(p, m, s) for p, pipe in pipes.items() for m in pipe.methods for s in steps]
     times: dict[tuple, dict[str, list[float]]] = {k: {"clip": [], "10s": [], "long": []} for k in plan}
     for rnd in range(repeats + 1):                              # round 0 warms up and is discarded

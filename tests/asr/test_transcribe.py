@@ -1,0 +1,76 @@
+"""gesturelsm.asr.transcribe: recognised words in order with sensible times; honest rejection otherwise."""
+from __future__ import annotations
+
+import difflib
+
+import numpy as np
+import pytest
+
+from gesturelsm.align import read_words
+from gesturelsm.align.normalize import speak as spoken
+from gesturelsm.asr import transcribe
+from gesturelsm.asr.transcribe import AUDIO_ONLY_NOTE
+from gesturelsm.audio import load_audio
+
+from _asr_support import ENGLISH, SR
+
+
+def _matched(pred: list[str], ref: list[str]) -> int:
+    sm = difflib.SequenceMatcher(a=[spoken(w) for w in pred], b=[spoken(w) for w in ref], autojunk=False)
+    return sum(b.size for b in sm.get_matching_blocks())
+
+
+def test_synthetic_english_comes_back_in_order_with_increasing_times(recognizer, english):
+    tr = transcribe(english)
+    ref = ENGLISH.split()
+    got = [w.text for w in tr.words]
+    assert tr.accepted and tr.language == "en" and tr.timing_method == "dtw"
+    assert _matched(got, ref) >= len(ref) - 2                         # at most two words misheard, order kept
+    starts = np.array([w.start for w in tr.words])
+    assert np.all(np.diff(starts) > 0) and all(w.end > w.start for w in tr.words)
+    assert 0.3 < starts[0] < 1.0 and tr.words[-1].end <= len(english) / SR  # speech starts after the 0.5 s lead
+    assert " ".join(got) == tr.text
+
+
+def test_whisper_and_aligner_timings_agree_roughly(recognizer, english):
+    a, b = transcribe(english, timing="whisper"), transcribe(english, timing="dtw")
+    assert a.timing_method == "whisper" and b.timing_method == "dtw"
+    assert [w.text for w in a.words] == [w.text for w in b.words]     # same words, two timing options
+    diff = np.abs([x.start - y.start for x, y in zip(a.words, b.words)])
+    assert np.median(diff) < 0.15 and not np.allclose(diff, 0)
+
+
+def test_real_speech_finds_the_mfa_words(recognizer, beat2):
+    y = load_audio(beat2 / "wave16k" / "2_scott_0_2_2.wav")[: 20 * SR]
+    ref = [w for w in read_words(beat2 / "textgrid" / "2_scott_0_2_2.TextGrid") if w.end < 19.5]
+    tr = transcribe(y)
+    assert tr.accepted and _matched([w.text for w in tr.words], [w.text for w in ref]) >= 0.9 * len(ref)
+
+
+def _music(seconds: float = 4.0) -> np.ndarray:
+    t = np.arange(int(seconds * SR)) / SR
+    chord = sum(np.sin(2 * np.pi * f * h * t + k) / h for k, f in enumerate((220, 277, 330, 440)) for h in (1, 2, 3))
+    beat = (np.sin(2 * np.pi * 2 * t) > 0.95) * np.random.default_rng(1).normal(size=len(t))
+    return (0.03 * chord + 0.05 * beat).astype(np.float32)
+
+
+@pytest.mark.parametrize("name", ["silence", "white noise", "music"])
+def test_no_speech_gives_no_words_and_a_message(recognizer, name):
+    y = {"silence": np.zeros(3 * SR, np.float32),
+         "white noise": (0.05 * np.random.default_rng(0).standard_normal(3 * SR)).astype(np.float32),
+         "music": _music()}[name]
+    tr = transcribe(y)
+    assert not tr.accepted and tr.words == [] and tr.text == "" and tr.language == "unknown"
+    assert len(tr.warnings) == 1 and tr.warnings[0].endswith(AUDIO_ONLY_NOTE)
+
+
+def test_german_speech_is_rejected_not_fed_as_english(recognizer, german):
+    tr = transcribe(german)
+    assert not tr.accepted and tr.words == [] and tr.timing_method == "none"
+    assert "may not be English" in tr.warnings[0] and tr.heard                 # it says what it heard
+    assert tr.details["avg_logprob"] < -0.6
+
+
+def test_bad_timing_option_is_refused():
+    with pytest.raises(ValueError, match="timing must be one of"):
+        transcribe(np.zeros(SR, np.float32), timing="mfa")
