@@ -19,6 +19,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.render.cli", "gesturelsm.export.cli",
     "gesturelsm.study.cli",
     "gesturelsm.evaluation.cli",
+    "gesturelsm.reference.cli",
 )
 
 
