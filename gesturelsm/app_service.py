@@ -36,6 +36,9 @@ from .motion.sequence import MotionSequence
 Progress = Callable[[float, str], None]
 
 METHOD_LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM",
+                 # the authors' released weights, after `gesturelsm import-reference` (gesturelsm/reference)
+                 "gesturelsm_authors": "GestureLSM (authors' weights)", "meanflow_authors": "MeanFlow (authors' weights)",
+                 "diffusion_authors": "Diffusion (authors' weights)",
                  "ground_truth": "Ground truth"}
 SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}
 VIDEO_SIZES = (256, 384, 512, 640)
@@ -295,7 +298,7 @@ class GestureService:
         warnings = list(speech.warnings)
         n_gen = max(1, len(gen_methods))
         for i, m in enumerate(gen_methods):
-            steps = int(req.ddim_steps if m == "ddim" else req.steps)
+            steps = int(req.ddim_steps if m in ("ddim", "diffusion_authors") else req.steps)
             lo, hi = 0.12 + 0.5 * i / n_gen, 0.12 + 0.5 * (i + 1) / n_gen
             try:
                 res = self.pipeline.generate(speech, steps=steps, cfg=float(req.cfg), seed=int(req.seed), method=m,
@@ -306,6 +309,7 @@ class GestureService:
             labels.append(f"{METHOD_LABELS.get(m, m)} {steps} steps CFG {req.cfg:g}")
             gen_s.append(res.generation_seconds)
             timings[m] = dict(res.timings)
+            warnings += [w for w in res.warnings if w not in warnings]  # e.g. the authors' models: face neutral
         gt_name = None
         if "ground_truth" in methods:
             gt_name = find_beat2_take(self.settings.beat2, speech.audio, req.audio_path and Path(req.audio_path).name)

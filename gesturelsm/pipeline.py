@@ -89,6 +89,9 @@ class GesturePipeline:
         from .tokenizer.model import RVQVAE
 
         root = Path(path) if path else ASSETS
+        ref_root = root if (root / "reference_rvq.safetensors").exists() else None  # authors' weights (import-reference)
+        if ref_root is not None and not (root / "tokenizer").exists():
+            root = ASSETS                                                           # ours beside theirs
         tok_dir, gen_dir = root / "tokenizer", root / "generator"
         missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
         if missing:
@@ -101,6 +104,9 @@ class GesturePipeline:
         if not gens:
             raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
         pipe = cls(tokenizers, gens, device, max_seconds)
+        from .reference.runner import attach_reference
+
+        attach_reference(pipe, ref_root)
         if warm_up:
             pipe.warm_up()
         return pipe
@@ -116,7 +122,7 @@ class GesturePipeline:
 
     @property
     def methods(self) -> list[str]:
-        return list(self.generators)
+        return list(self.generators) + list(getattr(self, "reference_methods", {}))
 
     # ---- speech ------------------------------------------------------------------------------------------
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
@@ -179,9 +185,11 @@ class GesturePipeline:
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
-        if method not in self.generators:
-            raise InputError(f"unknown method {method!r}; available: {', '.join(self.generators)}")
-        hi = MAX_STEPS.get(method, 128)
+        if method not in self.methods:
+            raise InputError(f"unknown method {method!r}; available: {', '.join(self.methods)}")
+        from .reference.runner import REFERENCE_MAX_STEPS
+
+        hi = {**MAX_STEPS, **REFERENCE_MAX_STEPS}.get(method, 128)
         if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
             raise InputError(f"steps must be a whole number from 1 to {hi} for {method} (got {steps})")
         if not np.isfinite(cfg) or not 0.0 <= cfg <= 10.0:
@@ -195,6 +203,12 @@ class GesturePipeline:
 
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress)
+        if method in getattr(self, "reference_methods", {}):   # the authors' released weights (reference/)
+            from .reference.runner import generate_for_pipeline
+
+            motion, t, warn = generate_for_pipeline(self, speech, method, steps, cfg, seed)
+            return GenerationResult(motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **t},
+                                    speech.text_mode, list(speech.warnings) + warn)
         gen = self.generators[method]
         timings = dict(speech.timings)
         t0 = time.perf_counter()
