@@ -19,6 +19,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from ..features.audio import envelope
 from .config import GeneratorConfig
 
 ENVELOPE_WINDOW = 1024
@@ -31,13 +32,10 @@ def speech_features(y: np.ndarray, sr: int = 16000) -> np.ndarray:
 
     y = np.ascontiguousarray(y, dtype=np.float32)
     n = y.shape[0]
-    env = np.empty(n, dtype=np.float32)
-    if n >= ENVELOPE_WINDOW:
-        win = np.lib.stride_tricks.sliding_window_view(np.abs(y), ENVELOPE_WINDOW)   # (T-1023, 1024)
-        env[: n - ENVELOPE_WINDOW + 1] = win.max(axis=1)
-        env[n - ENVELOPE_WINDOW + 1:] = env[n - ENVELOPE_WINDOW]
-    else:
+    if n < ENVELOPE_WINDOW:
         raise ValueError(f"speech shorter than {ENVELOPE_WINDOW} samples ({n / sr:.3f} s)")
+    env = envelope(y, ENVELOPE_WINDOW)                      # exact forward-window maxima (doubling passes)
+    env[n - ENVELOPE_WINDOW + 1:] = env[n - ENVELOPE_WINDOW]  # the reference repeats the last full window
     onset = np.zeros(n, dtype=np.float64)
     onset[librosa.onset.onset_detect(y=y, sr=sr, units="frames")] = 1.0  # frame indices as sample indices
     return np.stack([env.astype(np.float64), onset], axis=1)
