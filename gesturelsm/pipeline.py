@@ -101,7 +101,7 @@ class GesturePipeline:
         for p in sorted(gen_dir.glob("*.safetensors")):
             if methods is None or p.stem in methods:
                 gens[p.stem] = GestureGenerator.load(p).to(device)
-        if not gens:
+        if not gens and ref_root is None:
             raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
         pipe = cls(tokenizers, gens, device, max_seconds)
         from .reference.runner import attach_reference

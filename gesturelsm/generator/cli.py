@@ -6,6 +6,8 @@ from pathlib import Path
 
 from ..flows import DEFAULT_STEPS, METHODS
 
+AUTHORS_STEPS = {"gesturelsm_authors": 2, "meanflow_authors": 1, "diffusion_authors": 20}  # released configs
+
 ASSETS = Path(__file__).resolve().parents[2] / "assets"
 
 
@@ -44,7 +46,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
     g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
     g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--method", default="gesturelsm", choices=list(METHODS))
+    g.add_argument("--method", default="gesturelsm", choices=list(METHODS) + list(AUTHORS_STEPS),
+                   help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
     g.set_defaults(func=run_generate)
@@ -163,7 +166,7 @@ def run_generate(args: argparse.Namespace) -> int:
 
         words = read_words(args.textgrid)
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[args.method])
-    steps = args.steps or DEFAULT_STEPS[args.method]
+    steps = args.steps or {**DEFAULT_STEPS, **AUTHORS_STEPS}[args.method]
     res = pipe.generate(audio, 16000, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method)
     path = res.motion.save(args.out)

@@ -78,3 +78,14 @@ def test_neutral_seed_is_the_mean_pose_encoding():
     x[..., -3], x[..., -1] = -0.5, 0.5
     z = rvqs["lower"].encode(x)
     assert torch.allclose(seed[..., 16:] * 5, z[:, 14:18])
+
+
+def test_cli_generate_with_authors_method(ckpt_dir, tmp_path, capsys):
+    from gesturelsm.cli import main
+    from gesturelsm.motion import MotionSequence
+
+    out = tmp_path / "m.npz"
+    assert main(["generate", str(FIX / "speech.wav"), "--method", "meanflow_authors", "--cfg", "1",
+                 "--checkpoints", str(ckpt_dir), "--out", str(out)]) == 0
+    assert MotionSequence.load(out).num_frames == 30
+    assert "face neutral" in capsys.readouterr().out
