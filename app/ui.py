@@ -100,7 +100,11 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                                    file_types=[".TextGrid", ".textgrid"], type="filepath")
                 methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
-                                           elem_id="methods")
+                                           elem_id="methods",
+                                           info=("Authors' weights: their released models; they generate no face, "
+                                                 "so the face stays neutral; long speech uses our windowing with a "
+                                                 "neutral first seed." if any(m.endswith("_authors") for m in service.methods)
+                                                 else None))
                 with gr.Row():
                     steps = gr.Slider(1, settings.max_steps, value=8, step=1, label="Steps (GestureLSM, rectified flow)")
                     cfg = gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale")
