@@ -14,6 +14,7 @@ from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COL
                                     Request)
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
+from gesturelsm.pipeline import ALL_FACTS
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
 MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
@@ -64,7 +65,7 @@ def build_demo(service: GestureService) -> gr.Blocks:
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=True, *, exports: bool) -> Request:
         return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
-                       steps=steps_from_flags(steps, ddim_steps), cfg=float(cfg), seed=int(seed),
+                       steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=float(cfg), seed=int(seed),
                        stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports,
                        transcribe=bool(auto_text))
 
@@ -110,7 +111,11 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                                    file_types=[".TextGrid", ".textgrid"], type="filepath")
                 methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
-                                           elem_id="methods")
+                                           elem_id="methods",
+                                           info=("Authors' weights: their released models; they generate no face, "
+                                                 "so the face stays neutral; long speech uses our windowing with a "
+                                                 "neutral first seed." if any(m.endswith("_authors") for m in service.methods)
+                                                 else None))
                 with gr.Row():
                     steps = gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
                                       value=FACTS["gesturelsm"].default_steps, step=1,

@@ -36,12 +36,12 @@ from .export import export_bvh, export_glb, export_keypoints, export_npz
 from .flows import DEFAULT_STEPS, FACTS
 from .motion.postprocess import SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
-from .pipeline import GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
+from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
 from .render import render_video
 
 Progress = Callable[[float, str], None]
 
-METHOD_LABELS = {**{k: f.label for k, f in FACTS.items()}, GROUND_TRUTH: "Ground truth"}
+METHOD_LABELS = {**{k: f.label for k, f in ALL_FACTS.items()}, GROUND_TRUTH: "Ground truth"}
 VIDEO_SIZES = (256, 384, 512, 640)
 TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
@@ -79,7 +79,7 @@ class Request:
     transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
 
     def plan(self, beat2: str | None = None) -> Plan:
-        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
+        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in ALL_FACTS}
         return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
                     bool(self.stand_in_place), str(self.smoothing), beat2,
                     Path(self.audio_path).name if self.audio_path else None)

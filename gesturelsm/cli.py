@@ -23,6 +23,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.study.cli",
     "gesturelsm.evaluation.cli",
     "gesturelsm.live.cli",
+    "gesturelsm.reference.cli",
 )
 
 

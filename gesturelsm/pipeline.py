@@ -22,6 +22,10 @@ from .flows import FACTS
 from .motion.postprocess import check_smoothing, fit_length, postprocess
 from .motion.regions import join_regions
 from .motion.sequence import FPS, MotionSequence
+from .reference.runner import REFERENCE_FACTS
+
+# every method a pipeline can run: ours (flows registry) and the authors' released weights (reference/)
+ALL_FACTS = {**FACTS, **REFERENCE_FACTS}
 
 ASSETS = Path(__file__).resolve().parents[1] / "assets"
 MIN_SECONDS = 0.5
@@ -83,7 +87,7 @@ class Plan:
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
 
     def steps_for(self, method: str) -> int:
-        return int(self.steps.get(method, FACTS[method].default_steps))
+        return int(self.steps.get(method, ALL_FACTS[method].default_steps))
 
     @property
     def generators(self) -> list[str]:
@@ -120,6 +124,9 @@ class GesturePipeline:
         from .tokenizer.model import RVQVAE
 
         root = Path(path) if path else ASSETS
+        ref_root = root if (root / "reference_rvq.safetensors").exists() else None  # authors' weights (import-reference)
+        if ref_root is not None and not (root / "tokenizer").exists():
+            root = ASSETS                                                           # ours beside theirs
         tok_dir, gen_dir = root / "tokenizer", root / "generator"
         missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
         if missing:
@@ -129,9 +136,12 @@ class GesturePipeline:
         for p in sorted(gen_dir.glob("*.safetensors")):
             if methods is None or p.stem in methods:
                 gens[p.stem] = GestureGenerator.load(p).to(device)
-        if not gens:
+        if not gens and ref_root is None:
             raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
         pipe = cls(tokenizers, gens, device, max_seconds)
+        from .reference.runner import attach_reference
+
+        attach_reference(pipe, ref_root)
         if warm_up:
             pipe.warm_up()
         return pipe
@@ -147,7 +157,7 @@ class GesturePipeline:
 
     @property
     def methods(self) -> list[str]:
-        return list(self.generators)
+        return list(self.generators) + list(getattr(self, "reference_methods", {}))
 
     # ---- speech ------------------------------------------------------------------------------------------
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
@@ -226,9 +236,9 @@ class GesturePipeline:
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
         """The one place settings are checked: the method is loaded, steps within the method's registered
         bounds (flows.FACTS), 0 <= CFG <= MAX_CFG."""
-        if method not in self.generators:
-            raise InputError(f"unknown method {method!r}; available: {', '.join(self.generators)}")
-        hi = FACTS[method].max_steps
+        if method not in self.methods:
+            raise InputError(f"unknown method {method!r}; available: {', '.join(self.methods)}")
+        hi = ALL_FACTS[method].max_steps
         if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
             raise InputError(f"The number of steps must be a whole number from 1 to {hi} for {method} (got {steps})")
         if not np.isfinite(cfg) or not 0.0 <= cfg <= MAX_CFG:
@@ -255,6 +265,7 @@ class GesturePipeline:
             res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed), method=m,
                                 progress=prog)
             results[m], motions[m] = res, res.motion
+            warnings += [w for w in res.warnings if w not in warnings]   # e.g. the authors' models: face neutral
         gt_name = None
         if GROUND_TRUTH in plan.methods:
             gt_name = find_beat2_take(plan.beat2, speech.audio, plan.filename)
@@ -276,6 +287,12 @@ class GesturePipeline:
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe)
+        if method in getattr(self, "reference_methods", {}):   # the authors' released weights (reference/)
+            from .reference.runner import generate_for_pipeline
+
+            motion, t, warn = generate_for_pipeline(self, speech, method, steps, cfg, seed)
+            return GenerationResult(motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **t},
+                                    speech.text_mode, list(speech.warnings) + warn)
         gen = self.generators[method]
         timings = dict(speech.timings)
         t0 = time.perf_counter()

@@ -7,8 +7,7 @@ import time
 from .align.textgrid import read_words
 from .audio import load_audio
 from .constants import SAMPLE_RATE
-from .flows import FACTS, METHODS
-from .pipeline import GesturePipeline
+from .pipeline import ALL_FACTS, GesturePipeline
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -22,7 +21,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
     g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
     g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--method", default="gesturelsm", choices=list(METHODS))
+    g.add_argument("--method", default="gesturelsm", choices=list(ALL_FACTS),
+                   help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
     g.set_defaults(func=run_generate)
@@ -35,7 +35,7 @@ def run_generate(args: argparse.Namespace) -> int:
     if args.textgrid:
         words = read_words(args.textgrid)
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[args.method])
-    steps = args.steps or FACTS[args.method].default_steps
+    steps = args.steps or ALL_FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method, transcribe=not args.no_transcribe)
     path = res.motion.save(args.out)

@@ -16,7 +16,7 @@ FLOORS: list[set[str]] = [
     {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
-    {"generator", "export"},                                   # the denoiser; BVH / GLB / keypoints (render's camera)
+    {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
     {"pipeline"},                                              # speech -> motion, one request flow
     {"app_service", "study", "evaluation", "pipeline_cli", "live"},   # what uses the pipeline (live: streaming)
     {"cli"},                                                   # the command line registry

@@ -5,6 +5,8 @@ The registry: `METHODS` maps each method's key to its class; every fact about a 
 maximum steps, what it predicts, whether it takes a step size, plot colour) is its class's `facts`, and the
 rest of the package reads them from here. A new method = a new module in this folder + one line below.
 """
+from typing import Mapping
+
 from .base import LossResult, Method, MethodFacts, ModelFn, euler_sample, guided
 from .ddim import DDIM
 from .rectified import RectifiedFlow
@@ -34,10 +36,11 @@ def training_method(name: str, prediction: str = "data", time_sampler: str = "be
     return METHODS[method_facts(name).key].for_training(prediction, time_sampler)
 
 
-def steps_from_flags(steps: int, ddim_steps: int) -> dict[str, int]:
+def steps_from_flags(steps: int, ddim_steps: int, facts: Mapping[str, MethodFacts] | None = None) -> dict[str, int]:
     """The CLI's and the page's two step settings as steps per method: `--ddim-steps` / the DDIM slider for
-    DDIM, `--steps` / the steps slider for every other method (the interface the README documents)."""
-    return {k: int(ddim_steps if k == DDIM.facts.key else steps) for k in FACTS}
+    diffusion methods (facts.steps_setting), `--steps` / the steps slider for every other method (the interface the
+    README documents). `facts`: the methods to cover (default: this registry)."""
+    return {k: int(ddim_steps if f.steps_setting == "ddim_steps" else steps) for k, f in (facts or FACTS).items()}
 
 
 def label(name: str) -> str:

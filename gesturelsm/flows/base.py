@@ -34,6 +34,7 @@ class MethodFacts:
     predicts: str                    # what the model function returns to the sampler: "velocity" | "data" (x1)
     uses_step_size: bool             # whether the network's d input is meaningful
     color: str                       # line colour in plots
+    steps_setting: str = "steps"     # which of the page's / CLI's two step settings drives it: "steps" | "ddim_steps"
 
 
 class Method(Protocol):

@@ -1,0 +1,31 @@
+"""A released generator (speech encoder + denoiser + its sampler settings) and the three RVQ-VAEs."""
+from __future__ import annotations
+
+import torch
+import torch.nn as nn
+
+from .config import GeneratorConfig
+from .denoiser import ReferenceDenoiser
+from .samplers import SAMPLERS
+from .speech import ReferenceSpeechEncoder
+
+
+class ReferenceGenerator(nn.Module):
+    def __init__(self, cfg: GeneratorConfig):
+        super().__init__()
+        self.cfg = cfg
+        self.speech = ReferenceSpeechEncoder(cfg)
+        self.denoiser = ReferenceDenoiser(cfg)
+
+    @torch.no_grad()
+    def sample(self, audio: torch.Tensor, words: torch.Tensor, seed: torch.Tensor, noise: torch.Tensor,
+               steps: int | None = None, cfg_scale: float | None = None) -> torch.Tensor:
+        """One window: audio (B, S, 2), words (B, frames), seed (B, 4, R*Cin), noise (B, R*Cin, N) -> latents."""
+        cfg = self.cfg
+        steps = cfg.steps if steps is None else steps
+        scale = cfg.cfg_scale if cfg_scale is None else cfg_scale
+        speech = self.speech(audio, words)                                       # (B, N, R*C)
+        fn = SAMPLERS[cfg.method]
+        if cfg.method == "diffusion":
+            return fn(self.denoiser, noise, speech, seed, steps, scale, cfg.train_steps)
+        return fn(self.denoiser, noise, speech, seed, steps, scale)

@@ -1,0 +1,95 @@
+"""Reading the released files without executing anything they contain.
+
+Tensors: torch.load(weights_only=True) (torch's own allow-list: tensors, dicts, lists, numbers, strings).
+Vocabulary pickle: a restricted unpickler that builds only numpy arrays, plain containers and the
+reference's `Vocab` class (as an inert attribute bag); any other global (os.system, builtins.eval, ...)
+is refused before it is called.
+"""
+from __future__ import annotations
+
+import io
+import pickle
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+
+class ReferenceFileError(ValueError):
+    """A released file that cannot be read safely or is not what it should be; the message says which."""
+
+
+VOCAB_CLASS_MODULES = {"dataloaders.build_vocab", "models.utils.build_vocab", "utils.build_vocab", "build_vocab",
+                       "__main__"}
+NUMPY_GLOBALS = {
+    ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
+    ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
+    ("numpy", "ndarray"), ("numpy", "dtype"),
+    ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer"),
+}
+BUILTINS = {("collections", "OrderedDict"), ("collections", "defaultdict"), ("builtins", "set"),
+            ("builtins", "frozenset"), ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple")}
+
+
+class VocabRecord:
+    """What a pickled Vocab becomes: its attributes, nothing callable."""
+
+    def __setstate__(self, state: dict) -> None:
+        if not isinstance(state, dict):
+            raise pickle.UnpicklingError("Vocab state is not a dict")
+        self.__dict__.update(state)
+
+
+class _RestrictedUnpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) in NUMPY_GLOBALS or (module, name) in BUILTINS:
+            return super().find_class(module, name)
+        if name == "Vocab" and module in VOCAB_CLASS_MODULES:
+            return VocabRecord
+        raise pickle.UnpicklingError(f"refers to {module}.{name}, which is not allowed")
+
+
+def load_vocab(path: str | Path) -> tuple[dict[str, int], np.ndarray | None]:
+    """-> (word2index, initial 300-d embedding or None) from the reference's vocab.pkl."""
+    path = Path(path)
+    try:
+        obj = _RestrictedUnpickler(io.BytesIO(path.read_bytes())).load()
+    except FileNotFoundError:
+        raise ReferenceFileError(f"vocabulary file not found: {path}") from None
+    except Exception as exc:  # noqa: BLE001 - any failure of an untrusted file is a refusal
+        raise ReferenceFileError(f"{path}: refused: not a plain vocabulary pickle ({exc})") from None
+    w2i = getattr(obj, "word2index", None)
+    if not isinstance(w2i, dict) or not all(isinstance(k, str) and isinstance(v, int) for k, v in w2i.items()):
+        raise ReferenceFileError(f"{path}: no word2index (str -> int) in the vocabulary")
+    emb = getattr(obj, "word_embedding_weights", None)
+    return w2i, (np.asarray(emb, dtype=np.float32) if isinstance(emb, np.ndarray) else None)
+
+
+def load_state(path: str | Path, keys: tuple[str, ...]) -> dict[str, torch.Tensor]:
+    """torch.load(weights_only=True), then the first of `keys` present (e.g. 'net', 'model_state');
+    DataParallel's 'module.' prefix is removed."""
+    path = Path(path)
+    if not path.exists():
+        raise ReferenceFileError(f"file not found: {path}")
+    try:
+        obj = torch.load(str(path), map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001
+        raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({str(exc).splitlines()[0]})") from None
+    if isinstance(obj, dict):
+        for k in keys:
+            if isinstance(obj.get(k), dict):
+                obj = obj[k]
+                break
+    if not isinstance(obj, dict) or not all(isinstance(v, torch.Tensor) for v in obj.values()):
+        raise ReferenceFileError(f"{path}: no state dict under any of {list(keys)}")
+    return {(k[7:] if k.startswith("module.") else k): v for k, v in obj.items()}
+
+
+def load_npy(path: str | Path) -> np.ndarray:
+    try:
+        return np.load(str(path), allow_pickle=False).astype(np.float32)
+    except FileNotFoundError:
+        raise ReferenceFileError(f"statistics file not found: {path}") from None
+    except ValueError as exc:
+        raise ReferenceFileError(f"{path}: refused ({exc})") from None

@@ -1,0 +1,87 @@
+"""Samplers of the released configs, each computing what the reference's forward() computes for one window.
+
+- shortcut (GestureLSM): Euler over t_k = linspace(1e-8, 1 - 1e-8, n + 1), step-size input d = 1/n,
+  x += (t_{k+1} - t_k) v; t = 0 noise -> t = 1 data.
+- meanflow: t = 1 noise -> t = 0 data; one step: x - u(x, t=1, r=0); n steps over linspace(1 - 1e-8, 0, n + 1)
+  with the second time input r = t_{k+1}: x -= (t_k - r) u.
+- diffusion: DDIM (eta 0) on the 1000-step squared-cosine schedule, x0 prediction, 'leading' spacing
+  (steps 950, 900, ..., 0 for 20), final alpha 1; the first latent is sqrt(1 - abar_950) * noise.
+Guidance whenever scale > 1: u + s (c - u) with the learned null condition, both halves in one batch.
+"""
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import torch
+
+from .denoiser import ReferenceDenoiser
+
+KV = list[tuple[torch.Tensor, torch.Tensor]]
+
+
+def guided_kv(model: ReferenceDenoiser, speech: torch.Tensor, scale: float) -> KV:
+    """Keys/values for the conditional batch, with the null condition stacked after it when scale > 1."""
+    if scale > 1.0:
+        speech = torch.cat([speech, model.null_cond[None].expand_as(speech)], 0)
+    return model.speech_kv(speech)
+
+
+def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float) -> Callable:
+    def f(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor | None) -> torch.Tensor:
+        B = x.shape[0]
+        if scale <= 1.0:
+            return model(x, t.expand(B), d, seed, kv)
+        out = model(torch.cat([x, x]), t.expand(2 * B), d, torch.cat([seed, seed]), kv)
+        c, u = out.chunk(2)
+        return u + scale * (c - u)
+    return f
+
+
+def shortcut(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
+             steps: int, scale: float) -> torch.Tensor:
+    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    ts = torch.linspace(1e-8, 1 - 1e-8, steps + 1)
+    d = torch.tensor([1.0 / steps])
+    x = noise
+    for k in range(steps):
+        x = x + (ts[k + 1] - ts[k]) * f(x, ts[k:k + 1], d)
+    return x
+
+
+def meanflow(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
+             steps: int, scale: float) -> torch.Tensor:
+    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    if steps == 1:
+        return noise - f(noise, torch.ones(1), torch.zeros(1))
+    ts = torch.linspace(1 - 1e-8, 0, steps + 1)
+    x = noise
+    for k in range(steps):
+        x = x - (ts[k:k + 1] - ts[k + 1:k + 2]) * f(x, ts[k:k + 1], ts[k + 1:k + 2])
+    return x
+
+
+def cosine_alphas_cumprod(n: int = 1000, max_beta: float = 0.999) -> torch.Tensor:
+    """(n,) float32 cumulative products of 1 - beta_i for the squared-cosine schedule (as diffusers builds it)."""
+    f = lambda u: math.cos((u + 0.008) / 1.008 * math.pi / 2) ** 2  # noqa: E731
+    betas = torch.tensor([min(1 - f((i + 1) / n) / f(i / n), max_beta) for i in range(n)], dtype=torch.float32)
+    return torch.cumprod(1.0 - betas, dim=0)
+
+
+def diffusion(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
+              steps: int, scale: float, train_steps: int = 1000) -> torch.Tensor:
+    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    ac = cosine_alphas_cumprod(train_steps)
+    ratio = train_steps // steps
+    ks = [k * ratio for k in reversed(range(steps))]
+    x = (1 - ac[ks[0]]) ** 0.5 * noise
+    for k in ks:
+        x0 = f(x, torch.tensor([float(k)]), None)
+        a_t = ac[k]
+        a_prev = ac[k - ratio] if k - ratio >= 0 else torch.tensor(1.0)
+        eps = (x - a_t ** 0.5 * x0) / (1 - a_t) ** 0.5
+        x = a_prev ** 0.5 * x0 + (1 - a_prev) ** 0.5 * eps
+    return x
+
+
+SAMPLERS = {"shortcut": shortcut, "meanflow": meanflow, "diffusion": diffusion}

@@ -1,0 +1,114 @@
+"""The reference's speech condition: features as the released models were trained on, and their encoder.
+
+Features (per 16 kHz sample, 2 channels), as the reference's data cache computed them:
+  0: amplitude envelope = max |y| over the next 1024 samples (the last 1023 samples repeat the last value);
+  1: onset "impulses" = librosa onset-detector *frame indices* (hop 512) written as if they were sample
+     indices, so the ones sit in the first ~1/512 of the clip (METHOD-FACTS.md marks this as a bug; the
+     released weights were trained on it, so it is reproduced here; our own models use real positions).
+The reference computes them after loading the file at 22.05 kHz and resampling to 16 kHz (librosa's
+defaults); `features_from_file` does the same, `speech_features` starts from 16 kHz samples.
+Encoder: 6 strided residual conv blocks (k15, BatchNorm, LeakyReLU 0.01) -> exactly `frames` steps;
+words: trained embedding (300-d) -> linear; concat -> linear to 3C -> average pool x4 -> (B, 32, 3C).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+from ..features.audio import envelope
+from .config import GeneratorConfig
+
+ENVELOPE_WINDOW = 1024
+PAD_TOKEN, UNK_TOKEN = 0, 3
+
+
+def speech_features(y: np.ndarray, sr: int = 16000) -> np.ndarray:
+    """16 kHz mono (T,) -> (T, 2) float [envelope, onset channel as trained]."""
+    import librosa
+
+    y = np.ascontiguousarray(y, dtype=np.float32)
+    n = y.shape[0]
+    if n < ENVELOPE_WINDOW:
+        raise ValueError(f"speech shorter than {ENVELOPE_WINDOW} samples ({n / sr:.3f} s)")
+    env = envelope(y, ENVELOPE_WINDOW)                      # exact forward-window maxima (doubling passes)
+    env[n - ENVELOPE_WINDOW + 1:] = env[n - ENVELOPE_WINDOW]  # the reference repeats the last full window
+    onset = np.zeros(n, dtype=np.float64)
+    onset[librosa.onset.onset_detect(y=y, sr=sr, units="frames")] = 1.0  # frame indices as sample indices
+    return np.stack([env.astype(np.float64), onset], axis=1)
+
+
+def features_from_file(path: str | Path) -> np.ndarray:
+    """The reference's file path: librosa.load at its default 22.05 kHz, resample to 16 kHz, features."""
+    import librosa
+
+    y, sr = librosa.load(str(path))
+    return speech_features(librosa.resample(y, orig_sr=sr, target_sr=16000))
+
+
+def word_tokens(intervals: list[tuple[float, float, str]], num_frames: int, word2index: dict[str, int],
+                fps: int = 30) -> np.ndarray:
+    """Per 30 fps frame i: the first interval with start <= i/fps <= end; ' ' -> PAD, unknown -> UNK."""
+    out = np.full(num_frames, UNK_TOKEN, dtype=np.int64)
+    for i in range(num_frames):
+        t = i / fps
+        for start, end, mark in intervals:
+            if start <= t <= end:
+                out[i] = PAD_TOKEN if mark == " " else word2index.get(mark, UNK_TOKEN)
+                break
+    return out
+
+
+class ConvBN(nn.Module):
+    def __init__(self, cin: int, cout: int, stride: int, pad: int):
+        super().__init__()
+        self.conv = nn.Conv1d(cin, cout, 15, stride, pad)
+        self.bn = nn.BatchNorm1d(cout)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.bn(self.conv(x))
+
+
+class WavBlock(nn.Module):
+    """conv(k15, stride) BN LReLU conv(k15) BN + shortcut (strided conv BN when downsampling) -> LReLU."""
+
+    def __init__(self, cin: int, cout: int, stride: int, pad: int, down: bool):
+        super().__init__()
+        self.a = ConvBN(cin, cout, stride, pad)
+        self.b = ConvBN(cout, cout, 1, 7)
+        self.down = ConvBN(cin, cout, stride, pad) if down else None
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = self.b(F.leaky_relu(self.a(x), 0.01))
+        return F.leaky_relu(h + (self.down(x) if self.down is not None else x), 0.01)
+
+
+# (out channels as a fraction of audio_dim, stride, padding, downsample); total stride 540
+WAV_PLAN = ((4, 5, 1700, True), (4, 6, 0, True), (4, 1, 7, False), (2, 6, 0, True), (2, 1, 7, False), (1, 3, 0, True))
+
+
+class ReferenceSpeechEncoder(nn.Module):
+    """audio (B, S, 2) samples + words (B, frames) -> speech features (B, frames / 4, regions * latent_dim)."""
+
+    def __init__(self, cfg: GeneratorConfig):
+        super().__init__()
+        self.cfg = cfg
+        blocks, cin = [], 2
+        for div, stride, pad, down in WAV_PLAN:
+            blocks.append(WavBlock(cin, cfg.audio_dim // div, stride, pad, down))
+            cin = cfg.audio_dim // div
+        self.wav = nn.Sequential(*blocks)
+        self.word_embedding = nn.Embedding(cfg.vocab_size, cfg.word_dim)
+        self.word_proj = nn.Linear(cfg.word_dim, cfg.audio_dim)
+        self.mix = nn.Linear(2 * cfg.audio_dim, cfg.regions * cfg.latent_dim)
+
+    def forward(self, audio: torch.Tensor, words: torch.Tensor) -> torch.Tensor:
+        a = self.wav(audio.transpose(1, 2))                                     # (B, A, T')
+        n = self.cfg.frames
+        a = a[..., :n] if a.shape[-1] >= n else torch.cat([a, a[..., -1:].expand(-1, -1, n - a.shape[-1])], -1)
+        w = self.word_proj(self.word_embedding(words))                          # (B, frames, A)
+        h = self.mix(torch.cat([a.transpose(1, 2), w], -1))                     # (B, frames, R*C)
+        return F.avg_pool1d(h.transpose(1, 2), 4).transpose(1, 2)               # (B, frames/4, R*C)
