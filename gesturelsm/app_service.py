@@ -20,17 +20,19 @@ Post-processing (both optional, applied to every shown motion, ground truth incl
 from __future__ import annotations
 
 import os
+import secrets
 import shutil
 import tempfile
 import time
-import uuid
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
-from .audio import SAMPLE_RATE, AudioError, load_audio
+from .app_checks import check_request, textgrid_words
+from .audio import SAMPLE_RATE, AudioError, AudioTooLongError, load_audio
+from .limits import transcript_problems
 from .motion.sequence import MotionSequence
 
 Progress = Callable[[float, str], None]
@@ -225,42 +227,32 @@ class GestureService:
         return removed
 
     # ---- checks ----------------------------------------------------------------------------------------
-    def _check(self, req: Request, need_file: bool = True) -> None:
+    def _check(self, req: Request, need_file: bool = True) -> Request:
+        """The upload's presence and size, then every field (`gesturelsm.limits`): all problems at once,
+        one line each, before any work; returns the request with normalised values."""
         if need_file:
-            if not req.audio_path:
+            if not req.audio_path or not isinstance(req.audio_path, (str, os.PathLike)):
                 raise ServiceError("Please record or upload speech first (any common audio format).")
             p = Path(req.audio_path)
-            if not p.exists():
+            if not p.is_file():
                 raise ServiceError("The uploaded audio file is missing on the server; please upload it again.")
             mb = p.stat().st_size / 2 ** 20
             if mb > self.settings.max_upload_mb:
                 raise ServiceError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
-        methods = list(dict.fromkeys(req.methods or ()))
-        if not methods:
-            raise ServiceError("Choose at least one method to show.")
-        unknown = [m for m in methods if m not in self.methods]
-        if unknown:
-            raise ServiceError(f"Unknown method {unknown[0]!r}; available: {', '.join(self.methods)}.")
-        if not 1 <= int(req.steps) <= self.settings.max_steps:
-            raise ServiceError(f"Steps must be from 1 to {self.settings.max_steps} (got {req.steps}).")
-        if not 1 <= int(req.ddim_steps) <= 1000:
-            raise ServiceError(f"DDIM steps must be from 1 to 1000 (got {req.ddim_steps}).")
-        if not (np.isfinite(req.cfg) and 0 <= req.cfg <= 10):
-            raise ServiceError(f"CFG scale must be between 0 and 10 (got {req.cfg}).")
-        if req.smoothing not in SMOOTHING_WINDOWS:
-            raise ServiceError(f"Smoothing must be one of {', '.join(SMOOTHING_WINDOWS)}.")
-        if int(req.size) not in VIDEO_SIZES:
-            raise ServiceError(f"Video size must be one of {', '.join(map(str, VIDEO_SIZES))}.")
+        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES)
+        if problems:
+            raise ServiceError("\n".join(problems))
+        return req
 
-    def _words(self, req: Request):
+    def _words(self, req: Request, seconds: float) -> tuple[list | None, list[str]]:
+        """Word timings of the uploaded TextGrid (None without one) and notes for the page, bounded by the
+        speech's length (`gesturelsm.app_checks.textgrid_words`)."""
         if not req.textgrid_path:
-            return None
-        from .align import TextGridError, read_result
-
-        try:
-            return read_result(req.textgrid_path).words
-        except TextGridError as exc:
-            raise ServiceError(f"The TextGrid could not be read: {exc}") from None
+            return None, []
+        words, problems, notes = textgrid_words(req.textgrid_path, seconds)
+        if problems:
+            raise ServiceError("\n".join(problems))
+        return words, notes
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Outcome:
@@ -272,15 +264,21 @@ class GestureService:
         prog = progress or (lambda f, m: None)
         self.cleanup()
         if audio is None:
-            self._check(req)
+            req = self._check(req)
             try:
-                audio = load_audio(req.audio_path)
+                audio = load_audio(req.audio_path, max_seconds=self.settings.max_seconds)
+            except AudioTooLongError as exc:
+                raise ServiceError(f"The audio is too long: {exc}") from None
             except AudioError as exc:
                 raise ServiceError(f"The audio could not be read: {exc}") from None
         else:
-            self._check(req, need_file=False)
-        words = self._words(req)
-        out = self.workdir / f"req-{time.strftime('%H%M%S')}-{uuid.uuid4().hex[:8]}"
+            req = self._check(req, need_file=False)
+        seconds = len(audio) / SAMPLE_RATE
+        problems = transcript_problems(req.text, seconds)
+        if problems:
+            raise ServiceError("\n".join(problems))
+        words, notes = self._words(req, seconds)
+        out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
         out.mkdir(parents=True)
         methods = list(dict.fromkeys(req.methods))
         gen_methods = [m for m in methods if m != "ground_truth"]
@@ -292,7 +290,7 @@ class GestureService:
             raise ServiceError(str(exc)) from None
         T = speech.num_frames
         motions, labels, gen_s, rows, timings = [], [], [], [], {}
-        warnings = list(speech.warnings)
+        warnings = list(speech.warnings) + notes
         n_gen = max(1, len(gen_methods))
         for i, m in enumerate(gen_methods):
             steps = int(req.ddim_steps if m == "ddim" else req.steps)
