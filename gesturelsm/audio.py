@@ -68,8 +68,9 @@ def load_audio(path: str | Path, sr: int = SAMPLE_RATE, max_seconds: float | Non
         raise AudioError(f"Audio file {path.name} is empty (0 bytes).")
     container = sniff_container(path)
     if container is None:
-        raise AudioError(f"{path.name} is not an audio file this app reads (not WAV, FLAC, MP3, OGG, M4A, WebM "
-                         "or AIFF by its content; playlists and links are not followed).")
+        raise AudioError(f"{path.name} is not an audio file this app reads (by its content it is none of WAV, "
+                         "FLAC, MP3, OGG, AAC, M4A, WebM, AIFF, CAF, WMA or AMR; playlists and links are not "
+                         "followed).")
     if max_seconds is not None:
         stated = probe_duration(path, container)
         if stated is not None and stated > max_seconds:

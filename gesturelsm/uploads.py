@@ -4,7 +4,7 @@ Uploads are hostile until proven otherwise: the file name says nothing (a playli
 `speech.wav`), and a 2 MB FLAC can hold 10 hours of silence. So:
 
 - `sniff_container` reads the first bytes and names the container from its magic number (an allow-list:
-  WAV/RF64, FLAC, Ogg, MP3, AAC (ADTS), MP4/M4A, WebM/Matroska, AIFF). Anything else (playlists such as
+  WAV/RF64, FLAC, Ogg, MP3, AAC (ADTS), MP4/M4A, WebM/Matroska, AIFF, CAF, WMA/ASF, AMR). Anything else (playlists such as
   .m3u8, text, HTML, images, ...) is `None` and must not be handed to a decoder.
 - `probe_duration` reads the duration from the container header (libsndfile's header parse, or the
   bundled ffmpeg's demuxer without decoding) so a too-long file is refused before any sample is decoded.
@@ -39,7 +39,10 @@ AAC = Container("AAC", "aac", False)
 MP4 = Container("MP4/M4A", "mov", False)
 WEBM = Container("WebM/Matroska", "matroska", False)
 AIFF = Container("AIFF", "aiff", True)
-ALLOWED = (WAV, FLAC, OGG, MP3, AAC, MP4, WEBM, AIFF)
+CAF = Container("CAF", "caf", True)
+ASF = Container("WMA/ASF", "asf", False)
+AMR = Container("AMR", "amr", False)
+ALLOWED = (WAV, FLAC, OGG, MP3, AAC, MP4, WEBM, AIFF, CAF, ASF, AMR)
 
 
 def _id3_size(head: bytes) -> int:
@@ -78,6 +81,12 @@ def sniff_bytes(head: bytes) -> Container | None:
         return WEBM
     if len(head) >= 12 and head[:4] == b"FORM" and head[8:12] in (b"AIFF", b"AIFC"):
         return AIFF
+    if head[:4] == b"caff":
+        return CAF
+    if head[:8] == b"\x30\x26\xb2\x75\x8e\x66\xcf\x11":
+        return ASF
+    if head[:5] == b"#!AMR":
+        return AMR
     if _adts_frame(head):
         return AAC
     if _mpeg_audio_frame(head):
@@ -147,5 +156,5 @@ def describe_seconds(seconds: float) -> str:
     return f"{minutes:g} minutes" if minutes == int(minutes) else f"{minutes:.1f} minutes"
 
 
-__all__ = ["ALLOWED", "Container", "describe_seconds", "ffmpeg_input_args", "probe_duration", "sniff_bytes",
-           "sniff_container"]
+__all__ = ["AAC", "AIFF", "ALLOWED", "AMR", "ASF", "CAF", "FLAC", "MP3", "MP4", "OGG", "WAV", "WEBM", "Container",
+           "describe_seconds", "ffmpeg_input_args", "probe_duration", "sniff_bytes", "sniff_container"]
