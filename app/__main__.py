@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import signal
 import sys
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
@@ -52,9 +53,16 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.getLogger("gesturelsm").setLevel(logging.INFO)
+    signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
+    signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
