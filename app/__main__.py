@@ -61,8 +61,6 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
-    signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
-    signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
@@ -77,8 +75,13 @@ def main(argv: list[str] | None = None) -> int:
         service.warmup()
     from .ui import build_demo, launch
 
+    signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
+    signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
-    launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+    try:
+        launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+    except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
+        pass
     return 0
 
 
