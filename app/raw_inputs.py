@@ -3,50 +3,22 @@
 Gradio's own preprocessing of sliders, numbers and choice lists rounds (`precision=0` turns seed 1.5 into
 2), compares with `<` (a string or None then fails with a generic error and a server traceback) and raises
 its own wording for values outside the choices. The app checks every field itself, before any work, with
-one line per field (`gesturelsm.limits` / `gesturelsm.app_checks`), so these components pass the payload
-through untouched. The page draws them as the usual Slider / Number / CheckboxGroup / Radio / Dropdown /
-Checkbox (their block name is the Gradio parent's).
+one line per field (`gesturelsm.limits` / `gesturelsm.app_checks`), so `pass_through` replaces the
+component's `preprocess` on that one instance: the component stays a plain Gradio Slider / Number /
+CheckboxGroup / Radio / Dropdown / Checkbox for the page (same block name and class id).
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, TypeVar
 
-import gradio as gr
-
-
-class _PassThrough:
-    def _gradio_parent(self) -> type:
-        return next(c for c in type(self).__mro__ if c.__module__.startswith("gradio."))
-
-    def get_block_name(self) -> str:         # the Svelte component the page uses
-        return self._gradio_parent().__name__.lower()
-
-    def get_block_class(self) -> str:
-        return self._gradio_parent().__name__.lower()
-
-    def preprocess(self, payload: Any) -> Any:
-        return payload
+C = TypeVar("C")
 
 
-class Slider(_PassThrough, gr.Slider):
-    pass
+def _unchanged(payload: Any) -> Any:
+    return payload
 
 
-class Number(_PassThrough, gr.Number):
-    pass
-
-
-class CheckboxGroup(_PassThrough, gr.CheckboxGroup):
-    pass
-
-
-class Radio(_PassThrough, gr.Radio):
-    pass
-
-
-class Dropdown(_PassThrough, gr.Dropdown):
-    pass
-
-
-class Checkbox(_PassThrough, gr.Checkbox):
-    pass
+def pass_through(component: C) -> C:
+    """`component` with preprocessing switched off (Gradio looks `preprocess` up on the instance)."""
+    component.preprocess = _unchanged          # type: ignore[attr-defined]
+    return component

@@ -14,7 +14,7 @@ import gradio as gr
 from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
                                     Request, ServiceError)
 
-from . import raw_inputs as raw
+from .raw_inputs import pass_through
 from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
 log = logging.getLogger("gesturelsm.app")
@@ -108,19 +108,21 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                                   placeholder="Type what is said; leave empty for audio-only", elem_id="transcript")
                 textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                                    file_types=[".TextGrid", ".textgrid"], type="filepath")
-                methods = raw.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
-                                           elem_id="methods")
+                methods = pass_through(gr.CheckboxGroup(choices, value=default_methods,
+                                                        label="Methods shown side by side", elem_id="methods"))
                 with gr.Row():
-                    steps = raw.Slider(1, settings.max_steps, value=8, step=1, label="Steps (GestureLSM, rectified flow)")
-                    cfg = raw.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale")
+                    steps = pass_through(gr.Slider(1, settings.max_steps, value=8, step=1,
+                                                   label="Steps (GestureLSM, rectified flow)"))
+                    cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
                 with gr.Row():
-                    ddim_steps = raw.Slider(1, 100, value=20, step=1, label="DDIM steps")
-                    seed = raw.Number(value=0, precision=0, label="Seed")
+                    ddim_steps = pass_through(gr.Slider(1, 100, value=20, step=1, label="DDIM steps"))
+                    seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
                 with gr.Accordion("Options", open=False):
-                    in_place = raw.Checkbox(value=False, label="Stand in place (no horizontal root movement)")
-                    smoothing = raw.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing")
-                    size = raw.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
-                                       label="Video size")
+                    in_place = pass_through(gr.Checkbox(value=False,
+                                                        label="Stand in place (no horizontal root movement)"))
+                    smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing"))
+                    size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+                                       label="Video size"))
                 button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
                 ex = _examples()
                 if ex:

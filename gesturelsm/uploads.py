@@ -4,7 +4,8 @@ Uploads are hostile until proven otherwise: the file name says nothing (a playli
 `speech.wav`), and a 2 MB FLAC can hold 10 hours of silence. So:
 
 - `sniff_container` reads the first bytes and names the container from its magic number (an allow-list:
-  WAV/RF64, FLAC, Ogg, MP3, AAC (ADTS), MP4/M4A, WebM/Matroska, AIFF, CAF, WMA/ASF, AMR). Anything else (playlists such as
+  WAV/RF64, FLAC, Ogg, MP3, AAC (ADTS), MP4/M4A, WebM/Matroska, AIFF, CAF, WMA/ASF,
+  AMR). Anything else (playlists such as
   .m3u8, text, HTML, images, ...) is `None` and must not be handed to a decoder.
 - `probe_duration` reads the duration from the container header (libsndfile's header parse, or the
   bundled ffmpeg's demuxer without decoding) so a too-long file is refused before any sample is decoded.
