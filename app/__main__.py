@@ -2,13 +2,18 @@
 
 Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
 GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
-GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
+GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
 Hugging Face hub's telemetry are switched off before Gradio is imported.
+
+Logging (stderr): one line per refused request (what the visitor must change), per expired-file sweep and
+at shutdown; full tracebacks only for server errors.
 """
 from __future__ import annotations
 
 import argparse
+import logging
 import os
+import signal
 import sys
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
@@ -41,13 +46,21 @@ def build_parser() -> argparse.ArgumentParser:
                    help="delete generated files after this many minutes (default 60)")
     p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", 1)),
                    help="requests processed at once; the rest wait in the queue (default 1)")
+    p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", 32)),
+                   help="requests that may wait; beyond that visitors get 'Queue is full' (default 32)")
     p.add_argument("--workdir", default=_env("GESTURELSM_WORKDIR"), help="output folder (default <tmp>/gesturelsm-app)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
     return p
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.getLogger("gesturelsm").setLevel(logging.INFO)
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
@@ -62,8 +75,13 @@ def main(argv: list[str] | None = None) -> int:
         service.warmup()
     from .ui import build_demo, launch
 
+    signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
+    signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
-    launch(build_demo(service), service, host=args.host, port=args.port)
+    try:
+        launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+    except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
+        pass
     return 0
 
 

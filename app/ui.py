@@ -6,6 +6,7 @@ action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import gradio as gr
@@ -15,6 +16,12 @@ from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COL
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
+
+from .raw_inputs import pass_through
+from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
+
+log = logging.getLogger("gesturelsm.app")
+QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
 MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
@@ -57,23 +64,24 @@ def _examples() -> list[list]:
     return [[str(EXAMPLES / m["audio"]), m["text"]] for m in meta if (EXAMPLES / m["audio"]).exists()]
 
 
-def build_demo(service: GestureService) -> gr.Blocks:
+def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
     settings = service.settings
     choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
     default_methods = [m for m in FACTS if m in service.methods][:3]
 
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=True, *, exports: bool) -> Request:
-        return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
-                       steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=float(cfg), seed=int(seed),
-                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports,
-                       transcribe=bool(auto_text))
+        """Values exactly as sent: the service checks and normalises every field (gesturelsm.app_checks)."""
+        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
+                       steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=cfg, seed=seed,
+                       stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text)
 
     def _run(req: Request, progress):
         try:
             return service.run(req, progress=lambda f, m: progress(f, desc=m))
-        except GestureError as exc:                  # the one place the page turns errors into messages
-            raise gr.Error(str(exc), duration=None) from None
+        except GestureError as exc:    # the one place the page turns errors into messages: one log line, no
+            log.info("request refused: %s", " | ".join(str(exc).splitlines()))   # traceback (server bugs keep theirs)
+            raise gr.Error(str(exc), duration=None, print_exception=False) from None
 
     def _files(out):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
@@ -97,7 +105,7 @@ def build_demo(service: GestureService) -> gr.Blocks:
                             auto_text, exports=True), progress)
         return (str(out.video), out.rows, out.summary, *_files(out))
 
-    with gr.Blocks(title="GestureLSM demo", delete_cache=(600, int(settings.keep_minutes * 60))) as demo:
+    with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
             with gr.Column(scale=1):
@@ -106,30 +114,31 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                                   placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                                   elem_id="transcript")
-                auto_text = gr.Checkbox(value=True, elem_id="auto-transcribe",
-                                        label="Transcribe automatically when no transcript is given (English)")
+                auto_text = pass_through(gr.Checkbox(value=True, elem_id="auto-transcribe",
+                                                     label="Transcribe automatically when no transcript is given "
+                                                           "(English)"))
                 textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                                    file_types=[".TextGrid", ".textgrid"], type="filepath")
-                methods = gr.CheckboxGroup(choices, value=default_methods, label="Methods shown side by side",
-                                           elem_id="methods",
-                                           info=("Authors' weights: their released models; they generate no face, "
-                                                 "so the face stays neutral; long speech uses our windowing with a "
-                                                 "neutral first seed." if any(m.endswith("_authors") for m in service.methods)
-                                                 else None))
+                methods = pass_through(gr.CheckboxGroup(
+                    choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
+                    info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
+                          "long speech uses our windowing with a neutral first seed."
+                          if any(m.endswith("_authors") for m in service.methods) else None)))
                 with gr.Row():
-                    steps = gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
-                                      value=FACTS["gesturelsm"].default_steps, step=1,
-                                      label="Steps (GestureLSM, rectified flow)")
-                    cfg = gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale")
+                    steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
+                                                   value=FACTS["gesturelsm"].default_steps, step=1,
+                                                   label="Steps (GestureLSM, rectified flow)"))
+                    cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
                 with gr.Row():
-                    ddim_steps = gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
-                                           value=FACTS["ddim"].default_steps, step=1, label="DDIM steps")
-                    seed = gr.Number(value=0, precision=0, label="Seed")
+                    ddim_steps = pass_through(gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
+                                                        value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
+                    seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
                 with gr.Accordion("Options", open=False):
-                    in_place = gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)")
-                    smoothing = gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing")
-                    size = gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
-                                       label="Video size")
+                    in_place = pass_through(gr.Checkbox(value=False,
+                                                        label="Stand in place (no horizontal root movement)"))
+                    smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing"))
+                    size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+                                       label="Video size"))
                 button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
                 ex = _examples()
                 if ex:
@@ -158,17 +167,35 @@ def build_demo(service: GestureService) -> gr.Blocks:
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(generate, inputs, [video, table, summary, files, view], api_name="generate",
                          concurrency_limit=settings.concurrency, concurrency_id="generation")
-    demo.queue(max_size=32, default_concurrency_limit=settings.concurrency)
+    demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
     return demo
 
 
 def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
-    """Launch with the upload limit and the output folder allowed; returns what `Blocks.launch` returns."""
-    return demo.launch(server_name=host, server_port=port, max_file_size=f"{int(service.settings.max_upload_mb)}mb",
-                       allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)
+    """Launch with the upload limit and the output folder allowed, and sweep expired outputs on a timer
+    (app.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
+    and deletes all outputs. Returns what `Blocks.launch` returns."""
+    keep = service.settings.keep_minutes
+    sweeper = Sweeper(service.cleanup, sweep_seconds(keep), final=lambda: service.cleanup(max_age_s=0)).start()
+    close = demo.close
+
+    def close_and_clean(*args, **kwargs):
+        try:
+            return close(*args, **kwargs)
+        finally:
+            sweeper.stop()
+
+    demo.close = close_and_clean
+    try:
+        return demo.launch(server_name=host, server_port=port,
+                           max_file_size=f"{int(service.settings.max_upload_mb)}mb",
+                           allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)
+    finally:
+        if not kw.get("prevent_thread_lock"):
+            sweeper.stop()
 
 
-def serve_locally(service: GestureService) -> tuple[gr.Blocks, str]:
+def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[gr.Blocks, str]:
     """Build and serve the app in this process on a free port of 127.0.0.1 (tests and dev tools);
     returns the Blocks (close it when done) and the URL."""
     import socket
@@ -176,6 +203,6 @@ def serve_locally(service: GestureService) -> tuple[gr.Blocks, str]:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    demo = build_demo(service)
+    demo = build_demo(service, queue_size)
     launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
     return demo, f"http://127.0.0.1:{port}"

@@ -16,24 +16,26 @@ name here) with a message meant for the page.
 from __future__ import annotations
 
 import os
+import secrets
 import shutil
 import tempfile
 import time
-import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from .align import Word, read_result
-from .audio import SAMPLE_RATE, load_audio
+from .align import Word
+from .app_checks import check_request, textgrid_words
+from .audio import SAMPLE_RATE, AudioTooLongError, load_audio
 from .body import load_body_model
 from .body.model import resolve_model_path
 from .data.lookup import find_beat2_take
-from .errors import AudioError, GestureError, InputError, RenderError, TextGridError
+from .errors import AudioError, GestureError, InputError, RenderError
 from .export import export_bvh, export_glb, export_keypoints, export_npz
-from .flows import DEFAULT_STEPS, FACTS
+from .flows import DEFAULT_STEPS
+from .limits import transcript_problems
 from .motion.postprocess import SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
 from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
@@ -155,52 +157,58 @@ class GestureService:
         return removed
 
     # ---- checks ----------------------------------------------------------------------------------------
-    def _check(self, req: Request, need_file: bool = True) -> Plan:
-        """The upload and the page's own choices; the generation settings are the pipeline's to check."""
+    def _check(self, req: Request, need_file: bool = True) -> tuple[Request, Plan]:
+        """The upload's presence and size, then every field (`gesturelsm.limits`): all problems at once, one line
+        each, before any work; returns the request with normalised values and its plan (whose generation settings
+        the pipeline checks against the method registry)."""
         if need_file:
-            if not req.audio_path:
+            if not req.audio_path or not isinstance(req.audio_path, (str, os.PathLike)):
                 raise ServiceError("Please record or upload speech first (any common audio format).")
             p = Path(req.audio_path)
-            if not p.exists():
+            if not p.is_file():
                 raise ServiceError("The uploaded audio file is missing on the server; please upload it again.")
             mb = p.stat().st_size / 2 ** 20
             if mb > self.settings.max_upload_mb:
                 raise ServiceError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
+        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, ALL_FACTS)
+        if problems:
+            raise ServiceError("\n".join(problems))
         plan = req.plan(self.settings.beat2)
-        if not plan.methods:
-            raise ServiceError("Choose at least one method to show.")
-        unknown = [m for m in plan.methods if m not in self.methods]
-        if unknown:
-            raise ServiceError(f"Unknown method {unknown[0]!r}; available: {', '.join(self.methods)}.")
-        if int(req.size) not in VIDEO_SIZES:
-            raise ServiceError(f"Video size must be one of {', '.join(map(str, VIDEO_SIZES))}.")
         self.pipeline.check_plan(plan)
-        return plan
+        return req, plan
 
-    def _words(self, req: Request):
+    def _words(self, req: Request, seconds: float) -> tuple[list | None, list[str]]:
+        """Word timings of the uploaded TextGrid (None without one) and notes for the page, bounded by the
+        speech's length (`gesturelsm.app_checks.textgrid_words`)."""
         if not req.textgrid_path:
-            return None
-        try:
-            return read_result(req.textgrid_path).words
-        except TextGridError as exc:
-            raise TextGridError(f"The TextGrid could not be read: {exc}") from None
+            return None, []
+        words, problems, notes = textgrid_words(req.textgrid_path, seconds)
+        if problems:
+            raise ServiceError("\n".join(problems))
+        return words, notes
 
-    def _speech(self, req: Request, audio: np.ndarray | None, prog: Progress) -> tuple[Plan, SpeechInput]:
-        """Checks, then the speech prepared once for every method."""
+    def _speech(self, req: Request, audio: np.ndarray | None, prog: Progress) -> tuple[Plan, SpeechInput, list[str]]:
+        """Checks, then the speech prepared once for every method, and notes for the page."""
         if audio is None:
-            plan = self._check(req)
+            req, plan = self._check(req)
             try:
-                audio = load_audio(req.audio_path)
+                audio = load_audio(req.audio_path, max_seconds=self.settings.max_seconds)
+            except AudioTooLongError as exc:
+                raise AudioError(f"The audio is too long: {exc}") from None
             except AudioError as exc:
                 raise AudioError(f"The audio could not be read: {exc}") from None
         else:
-            plan = self._check(req, need_file=False)
-        words = self._words(req)
+            req, plan = self._check(req, need_file=False)
+        seconds = len(audio) / SAMPLE_RATE
+        problems = transcript_problems(req.text, seconds)
+        if problems:
+            raise ServiceError("\n".join(problems))
+        words, notes = self._words(req, seconds)
         prog(0.02, "reading speech")
         speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
                                               progress=lambda f, m: prog(0.02 + 0.1 * f, m),
                                               transcribe=bool(req.transcribe))
-        return plan, speech
+        return plan, speech, notes
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Outcome:
@@ -208,10 +216,11 @@ class GestureService:
         t_start = time.perf_counter()
         prog = progress or (lambda f, m: None)
         self.cleanup()
-        plan, speech = self._speech(req, audio, prog)
-        out = self.workdir / f"req-{time.strftime('%H%M%S')}-{uuid.uuid4().hex[:8]}"
+        plan, speech, notes = self._speech(req, audio, prog)
+        out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
         out.mkdir(parents=True)
         gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m))
+        gen.warnings.extend(notes)
         if not gen.motions:
             raise ServiceError("Nothing to show: choose a generator method.")
         prog(0.62, "rendering video")

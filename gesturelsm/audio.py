@@ -38,24 +38,54 @@ def to_mono(y: np.ndarray) -> np.ndarray:
     return y.reshape(-1)
 
 
-def load_audio(path: str | Path, sr: int = SAMPLE_RATE) -> np.ndarray:
+MAX_CHANNELS = 8                # more is not speech; block-wise downmixing keeps memory bounded anyway
+MAX_SAMPLE_RATE = 192_000
+_BLOCK = 1 << 16                # frames per block when reading with libsndfile
+
+
+class AudioTooLongError(AudioError):
+    """Audio longer than the caller's limit (refused before it is decoded in full)."""
+
+
+def load_audio(path: str | Path, sr: int = SAMPLE_RATE, max_seconds: float | None = None) -> np.ndarray:
     """Read wav/flac/ogg/mp3/m4a/webm... -> (N,) float32 mono at `sr`.
 
-    soundfile reads wav/flac/ogg (float or int PCM, any rate); other containers are decoded with the
-    ffmpeg binary that imageio-ffmpeg bundles.
+    The container is recognised by its content, on an allow-list (`gesturelsm.uploads`): playlists and
+    anything else are refused before a decoder sees them. With `max_seconds`, the header's duration is
+    checked first and decoding stops one sample past the limit (`AudioTooLongError`), so memory and time
+    stay bounded by the limit, not by what the file claims or contains. soundfile reads wav/flac/ogg/mp3/
+    aiff block by block (downmixed per block); other containers, and files libsndfile rejects, are decoded
+    with the ffmpeg binary that imageio-ffmpeg bundles, pinned to the sniffed demuxer.
     """
+    from .uploads import describe_seconds, probe_duration, sniff_container
+
     path = Path(path)
     if not path.exists():
         raise AudioError(f"Audio file not found: {path}")
     if path.stat().st_size == 0:
         raise AudioError(f"Audio file {path.name} is empty (0 bytes).")
-    import soundfile as sf
-
-    try:
-        y, sr_in = sf.read(str(path), always_2d=False)
-    except Exception:
-        y, sr_in = _decode_with_ffmpeg(path, sr)
-    y = to_mono(y)
+    container = sniff_container(path)
+    if container is None:
+        raise AudioError(f"{path.name} is not an audio file this app reads (by its content it is none of WAV, "
+                         "FLAC, MP3, OGG, AAC, M4A, WebM, AIFF, CAF, WMA or AMR; playlists and links are not "
+                         "followed).")
+    if max_seconds is not None:
+        stated = probe_duration(path, container)
+        if stated is not None and stated > max_seconds:
+            raise AudioTooLongError(f"{path.name} is {describe_seconds(stated)} long; the limit is "
+                                    f"{describe_seconds(max_seconds)}.")
+    y, sr_in = None, sr
+    if container.soundfile:
+        try:
+            y, sr_in = _read_with_soundfile(path, max_seconds)
+        except AudioError:
+            raise
+        except Exception:
+            y = None
+    if y is None:
+        y, sr_in = _decode_with_ffmpeg(path, sr, container, max_seconds)
+    if max_seconds is not None and len(y) > max_seconds * sr_in:
+        raise AudioTooLongError(f"{path.name} is longer than the limit of {describe_seconds(max_seconds)}.")
     if len(y) == 0:
         raise AudioError(f"Audio file {path.name} contains no samples.")
     if not np.isfinite(y).all():
@@ -63,13 +93,36 @@ def load_audio(path: str | Path, sr: int = SAMPLE_RATE) -> np.ndarray:
     return resample(y, int(sr_in), sr)
 
 
-def _decode_with_ffmpeg(path: Path, sr: int) -> tuple[np.ndarray, int]:
+def _read_with_soundfile(path: Path, max_seconds: float | None) -> tuple[np.ndarray, int]:
+    """(N,) float32 mono at the file's rate, read in blocks of at most _BLOCK frames and stopped one frame
+    past max_seconds; raises AudioError for channel counts or rates that are not speech."""
+    import soundfile as sf
+
+    with sf.SoundFile(str(path)) as f:
+        if f.channels > MAX_CHANNELS:
+            raise AudioError(f"{path.name} has {f.channels} channels; speech needs 1 or 2 (at most {MAX_CHANNELS}).")
+        if not 0 < f.samplerate <= MAX_SAMPLE_RATE:
+            raise AudioError(f"{path.name} has a sample rate of {f.samplerate} Hz; at most {MAX_SAMPLE_RATE} Hz "
+                             "is accepted.")
+        limit = -1 if max_seconds is None else int(max_seconds * f.samplerate) + 1
+        parts = [b.mean(axis=1) for b in f.blocks(blocksize=_BLOCK, frames=limit, dtype="float32", always_2d=True)]
+        return (np.concatenate(parts) if parts else np.zeros(0, np.float32)), int(f.samplerate)
+
+
+def _decode_with_ffmpeg(path: Path, sr: int, container=None, max_seconds: float | None = None
+                        ) -> tuple[np.ndarray, int]:
     import subprocess
 
     import imageio_ffmpeg
 
-    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-nostdin", "-i", str(path), "-vn", "-ac", "1",
-           "-ar", str(sr), "-f", "f32le", "-"]
+    from .uploads import ffmpeg_input_args, sniff_container
+
+    container = container or sniff_container(path)
+    if container is None:
+        raise AudioError(f"{path.name} is not an audio file this app reads.")
+    limit = [] if max_seconds is None else ["-t", f"{max_seconds + 1.0 / sr:.6f}"]
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-nostdin", *ffmpeg_input_args(path, container), *limit,
+           "-vn", "-ac", "1", "-ar", str(sr), "-f", "f32le", "-"]
     try:
         proc = subprocess.run(cmd, capture_output=True, timeout=300)
     except subprocess.TimeoutExpired:

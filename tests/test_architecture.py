@@ -10,7 +10,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors"},                                   # conventions, the error family
+    {"constants", "errors", "limits", "uploads", "safe_load"},  # conventions, the error family, request limits,
+                                                               # upload format sniffing, tensors-only loading
     {"motion", "audio", "checkpoint", "flows"},                # motion data, speech loading, files, the methods
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr"},                                                   # speech recognition (times words with align)
@@ -18,6 +19,7 @@ FLOORS: list[set[str]] = [
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
     {"pipeline"},                                              # speech -> motion, one request flow
+    {"app_checks"},                                            # a web request's fields checked before any work
     {"app_service", "study", "evaluation", "pipeline_cli", "live"},   # what uses the pipeline (live: streaming)
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

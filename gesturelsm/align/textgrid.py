@@ -124,8 +124,9 @@ def _decode(data: bytes) -> str:
         return data.decode("latin-1")
 
 
-def parse_textgrid(text: str, source: str = "TextGrid") -> TextGrid:
-    """Parse the text of a TextGrid (long or short format)."""
+def parse_textgrid(text: str, source: str = "TextGrid", max_intervals: int | None = None) -> TextGrid:
+    """Parse the text of a TextGrid (long or short format); a tier declaring more than `max_intervals`
+    intervals or points is refused before they are read."""
     if text.lstrip().startswith('File type = "ooBinaryFile"') or text.startswith("ooBinaryFile"):
         raise TextGridError(f"{source}: binary TextGrid; save it from Praat as a text file")
     if not text.strip():
@@ -149,17 +150,19 @@ def parse_textgrid(text: str, source: str = "TextGrid") -> TextGrid:
     if flag not in (None, "<exists>"):
         raise v.error(line, f"expected <exists> or <absent>, found {flag}")
     n_tiers, _ = v.count("number of tiers")
-    return TextGrid(xmin, xmax, [_read_tier(v) for _ in range(n_tiers)])
+    return TextGrid(xmin, xmax, [_read_tier(v, max_intervals) for _ in range(n_tiers)])
 
 
-def _read_tier(v: _Values) -> Tier:
+def _read_tier(v: _Values, max_items: int | None = None) -> Tier:
     kind, line = v.string("tier class")
     if kind not in ("IntervalTier", "TextTier"):
         raise v.error(line, f'unknown tier class {kind!r} (expected "IntervalTier" or "TextTier")')
     name, _ = v.string("tier name")
     xmin, _ = v.number("tier xmin")
     xmax, _ = v.number("tier xmax")
-    n, _ = v.count("number of intervals" if kind == "IntervalTier" else "number of points")
+    n, n_line = v.count("number of intervals" if kind == "IntervalTier" else "number of points")
+    if max_items is not None and n > max_items:
+        raise v.error(n_line, f"tier {name!r} has {n} intervals; at most {max_items} are accepted for this speech")
     items: list[tuple[float, float, str]] = []
     prev_end = -float("inf")
     for k in range(n):
@@ -181,8 +184,8 @@ def _read_tier(v: _Values) -> Tier:
     return Tier(name, kind, xmin, xmax, items)
 
 
-def read_textgrid(path: str | Path) -> TextGrid:
-    """Read a TextGrid file (Praat long or short text format)."""
+def read_textgrid(path: str | Path, max_intervals: int | None = None) -> TextGrid:
+    """Read a TextGrid file (Praat long or short text format); see parse_textgrid for max_intervals."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -190,7 +193,7 @@ def read_textgrid(path: str | Path) -> TextGrid:
         raise TextGridError(f"TextGrid not found: {path}") from None
     except OSError as exc:
         raise TextGridError(f"cannot read {path}: {exc.strerror}") from None
-    return parse_textgrid(_decode(data), path.name)
+    return parse_textgrid(_decode(data), path.name, max_intervals)
 
 
 def words_from(tg: TextGrid, tier: str | None = None, source: str = "TextGrid") -> list[Word]:
@@ -208,14 +211,14 @@ def words_from(tg: TextGrid, tier: str | None = None, source: str = "TextGrid") 
     return [Word(text.strip(), start, end) for start, end, text in chosen[0].items if text.strip()]
 
 
-def read_words(path: str | Path, tier: str | None = None) -> list[Word]:
+def read_words(path: str | Path, tier: str | None = None, max_intervals: int | None = None) -> list[Word]:
     """Words (non-empty intervals) of a TextGrid file's words tier, in time order."""
-    return words_from(read_textgrid(path), tier, Path(path).name)
+    return words_from(read_textgrid(path, max_intervals), tier, Path(path).name)
 
 
-def read_result(path: str | Path, tier: str | None = None) -> AlignmentResult:
+def read_result(path: str | Path, tier: str | None = None, max_intervals: int | None = None) -> AlignmentResult:
     """A TextGrid upload as an alignment: method "textgrid", confidence 1 (a warning when it has no words)."""
-    words = read_words(path, tier)
+    words = read_words(path, tier, max_intervals)
     warning = None if words else f"{Path(path).name} has no words (only silence): using the audio only."
     return AlignmentResult(words, 1.0 if words else 0.0, "textgrid" if words else "audio-only", warning)
 

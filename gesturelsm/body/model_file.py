@@ -16,6 +16,7 @@ import numpy as np
 
 from ..motion.skeleton import NUM_JOINTS
 from ..errors import BodyModelError
+from ..safe_load import UnsafePickleError, load_npz
 
 ENV_VAR = "GESTURELSM_SMPLX_MODEL"
 SMPLX_FILE_NAMES = ("SMPLX_NEUTRAL_2020.npz", "SMPLX_NEUTRAL.npz")
@@ -55,19 +56,20 @@ def validate_model_file(path: Path) -> dict[str, int]:
     """Check the keys and shapes smplx needs; returns {'vertices', 'faces', 'shape_dims'}."""
     if not zipfile.is_zipfile(path):
         raise BodyModelError(f"{path} is not an .npz file — {HINT}")
-    try:
-        data = np.load(path, allow_pickle=True)   # smplx itself loads with pickles allowed
+    try:  # pickled members only through an allow-list: smplx itself then loads with pickles allowed
+        data = load_npz(path)
+    except UnsafePickleError as exc:
+        raise BodyModelError(f"{exc}; refusing to load it (a pickle can run code) — {HINT}") from None
     except Exception as exc:
         raise BodyModelError(f"{path} is not a readable .npz file ({exc}) — {HINT}") from None
-    with data:
-        need = ("v_template", "f", "J_regressor", "weights", "kintree_table", "shapedirs", "posedirs",
-                "hands_componentsl", "hands_componentsr", "hands_meanl", "hands_meanr",
-                "lmk_faces_idx", "lmk_bary_coords")
-        for key in need:
-            if key not in data.files:
-                raise BodyModelError(f"{path} is missing '{key}' — {HINT}")
-        a = {k: data[k] for k in need}
-        has_ids = "vertex_id_names" in data.files and "vertex_id_values" in data.files
+    need = ("v_template", "f", "J_regressor", "weights", "kintree_table", "shapedirs", "posedirs",
+            "hands_componentsl", "hands_componentsr", "hands_meanl", "hands_meanr",
+            "lmk_faces_idx", "lmk_bary_coords")
+    for key in need:
+        if key not in data:
+            raise BodyModelError(f"{path} is missing '{key}' — {HINT}")
+    a = {k: data[k] for k in need}
+    has_ids = "vertex_id_names" in data and "vertex_id_values" in data
     V = a["v_template"].shape[0] if a["v_template"].ndim == 2 else -1
     F = a["f"].shape[0] if a["f"].ndim == 2 else -1
     expected = {
@@ -96,7 +98,7 @@ def validate_model_file(path: Path) -> dict[str, int]:
 def used_dims(path: Path) -> tuple[int, int]:
     """Shape / expression directions up to the last non-zero one (at least 10 each): the rest are zero
     and only cost time (smplx concatenates and contracts all of them on every call)."""
-    with np.load(path, allow_pickle=True) as data:
+    with np.load(path, allow_pickle=False) as data:
         sd = np.asarray(data["shapedirs"])
     nz = np.nonzero(np.abs(sd).reshape(-1, sd.shape[-1]).max(0) > 0)[0]
     n_shape = 300 if sd.shape[-1] >= 400 else 10

@@ -36,11 +36,12 @@ def training_method(name: str, prediction: str = "data", time_sampler: str = "be
     return METHODS[method_facts(name).key].for_training(prediction, time_sampler)
 
 
-def steps_from_flags(steps: int, ddim_steps: int, facts: Mapping[str, MethodFacts] | None = None) -> dict[str, int]:
+def steps_from_flags(steps, ddim_steps, facts: Mapping[str, MethodFacts] | None = None) -> dict:
     """The CLI's and the page's two step settings as steps per method: `--ddim-steps` / the DDIM slider for
     diffusion methods (facts.steps_setting), `--steps` / the steps slider for every other method (the interface the
-    README documents). `facts`: the methods to cover (default: this registry)."""
-    return {k: int(ddim_steps if f.steps_setting == "ddim_steps" else steps) for k, f in (facts or FACTS).items()}
+    README documents). `facts`: the methods to cover (default: this registry). Values are passed on as given: the
+    receiver checks them (a page or API value may be anything)."""
+    return {k: (ddim_steps if f.steps_setting == "ddim_steps" else steps) for k, f in (facts or FACTS).items()}
 
 
 def label(name: str) -> str:

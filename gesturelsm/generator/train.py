@@ -13,6 +13,7 @@ import torch.distributed as dist
 from tqdm import tqdm
 
 from ..flows import training_method
+from ..safe_load import load_tensors
 from ..tokenizer.model import RVQVAE
 from .config import PRESETS, GeneratorConfig
 from .data import LatentWindowSampler, TakeTensors, encode_regions
@@ -88,7 +89,7 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     sampler = LatentWindowSampler(takes, cfg.window_latents, cfg.seed_latents, std, neutral, tc.neutral_seed_p,
                                   tc.text_drop, seed=tc.seed + 1000 * rank)
     if state_path.exists():
-        st = torch.load(state_path, weights_only=False, map_location=device)
+        st = load_tensors(state_path, map_location=device)            # tensors only: no code from the file
         model.load_state_dict(st["model"])
         ema.load_state_dict(st["ema"])
         opt.load_state_dict(st["optim"])

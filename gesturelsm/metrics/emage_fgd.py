@@ -35,6 +35,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..motion.skeleton import PARENTS
+from ..safe_load import load_tensors
 
 GROWTH = (1, 1, 2, 1)
 LATENT_DIM = 240
@@ -189,7 +190,7 @@ def load_emage_weights(model: SkeletonConvEncoder, path_or_state: str | Path | d
     state dict or one under 'model_state', with or without DataParallel's 'module.' prefix)."""
     state = path_or_state
     if not isinstance(state, dict):
-        state = torch.load(Path(path_or_state), map_location="cpu", weights_only=False)
+        state = load_tensors(Path(path_or_state), map_location="cpu")     # tensors only: no code from the file
     if "model_state" in state:
         state = state["model_state"]
     enc = {}

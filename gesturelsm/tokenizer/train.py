@@ -13,6 +13,7 @@ from ..data.split import Split, WindowSampler
 from ..motion.normalize import Normalizer
 from ..motion.regions import GENERATED_REGIONS, REGIONS
 from ..motion.sequence import mirror_features
+from ..safe_load import load_tensors
 from .config import preset
 from .model import RVQVAE
 
@@ -62,7 +63,7 @@ def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log
     ckpt, state_path = out_dir / f"{region}.safetensors", out_dir / f"{region}.state.pt"
     step = 0
     if state_path.exists() and ckpt.exists():  # resume
-        st = torch.load(state_path, weights_only=False)
+        st = load_tensors(state_path, map_location=None)              # tensors only: no code from the file
         model = RVQVAE.load(ckpt).to(device)
         model.load_state_dict(st["model"])
         opt.load_state_dict(st["optim"])

@@ -29,13 +29,13 @@ def test_synthetic_english_comes_back_in_order_with_increasing_times(recognizer,
     starts = np.array([w.start for w in tr.words])
     assert np.all(np.diff(starts) > 0) and all(w.end > w.start for w in tr.words)
     assert 0.3 < starts[0] < 1.0 and tr.words[-1].end <= len(english) / SR  # speech starts after the 0.5 s lead
-    assert " ".join(got) == tr.text
+    assert _plain(" ".join(got)) == _plain(tr.text)                   # the words are the text (punctuation aside)
 
 
 def test_whisper_and_aligner_timings_agree_roughly(recognizer, english):
     a, b = transcribe(english, timing="whisper"), transcribe(english, timing="dtw")
     assert a.timing_method == "whisper" and b.timing_method == "dtw"
-    assert [w.text for w in a.words] == [w.text for w in b.words]     # same words, two timing options
+    assert _plain(" ".join(w.text for w in a.words)) == _plain(" ".join(w.text for w in b.words))   # same words
     diff = np.abs([x.start - y.start for x, y in zip(a.words, b.words)])
     assert np.median(diff) < 0.15 and not np.allclose(diff, 0)
 
@@ -74,3 +74,10 @@ def test_german_speech_is_rejected_not_fed_as_english(recognizer, german):
 def test_bad_timing_option_is_refused():
     with pytest.raises(ValueError, match="timing must be one of"):
         transcribe(np.zeros(SR, np.float32), timing="mfa")
+
+
+def _plain(text: str) -> list[str]:
+    """Lower-case words without punctuation (Whisper may or may not end a sentence with a full stop)."""
+    import re
+
+    return re.findall(r"[a-z0-9']+", text.lower())

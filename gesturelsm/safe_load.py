@@ -1,0 +1,89 @@
+"""Loading operator-supplied files without running code from them.
+
+A pickle can call any importable function while it is read, so a checkpoint or model file from elsewhere
+is an executable. Here:
+
+- `load_tensors`: `torch.load(weights_only=True)`: tensors, numbers, strings and containers of them only
+  (resume states and EMAGE's encoder weights need no more); anything else is a `ValueError` saying so.
+- `load_npz`: every member of an .npz; plain arrays are read with `allow_pickle=False`, and members that
+  are pickled object arrays (SMPL-X files carry a few, e.g. dicts of joint names) are unpickled by
+  `PlainDataUnpickler`, which allows numpy's array/dtype/scalar reconstruction and nothing else (dicts,
+  lists, strings and numbers need no global). A pickle naming any other global is refused
+  (`UnsafePickleError`) before that global is looked up, so its code never runs.
+"""
+from __future__ import annotations
+
+import ast
+import io
+import pickle
+import re
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ALLOWED_GLOBALS = {
+    ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
+    ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
+    ("numpy", "ndarray"), ("numpy", "dtype"), ("collections", "OrderedDict"),
+}
+
+
+class UnsafePickleError(ValueError):
+    """A pickle that would need more than plain data to be read."""
+
+
+class PlainDataUnpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) not in ALLOWED_GLOBALS:
+            raise UnsafePickleError(f"it contains a pickled reference to {module}.{name}, which is not plain data")
+        return super().find_class(module, name)
+
+
+def load_tensors(path: str | Path, map_location: Any = "cpu") -> Any:
+    """`torch.load(path, weights_only=True)`; a file that needs more is refused with a clear ValueError."""
+    import torch
+
+    try:
+        return torch.load(Path(path), map_location=map_location, weights_only=True)
+    except pickle.UnpicklingError as exc:
+        found = re.search(r"GLOBAL ([\w.]+)", str(exc))
+        what = f" ({found.group(1)})" if found else ""
+        raise ValueError(f"{path}: refused to load: it holds Python objects other than tensors and plain "
+                         f"data{what}, and unpickling them could run code.") from None
+
+
+def load_npz(path: str | Path) -> dict[str, np.ndarray]:
+    """All members of an .npz as arrays, object members through PlainDataUnpickler (see the module doc)."""
+    path = Path(path)
+    out: dict[str, np.ndarray] = {}
+    with np.load(path, allow_pickle=False) as data:
+        names = list(data.files)
+        for key in names:
+            try:
+                out[key] = data[key]
+            except ValueError as exc:
+                if "allow_pickle" not in str(exc):
+                    raise
+                out[key] = _object_member(path, key)
+    return out
+
+
+def _object_member(path: Path, key: str) -> np.ndarray:
+    with zipfile.ZipFile(path) as zf:
+        raw = zf.read(f"{key}.npy")
+    f = io.BytesIO(raw)
+    major, _ = np.lib.format.read_magic(f)                     # .npy: magic, header length, header dict
+    size = int.from_bytes(f.read(2 if major == 1 else 4), "little")
+    header = ast.literal_eval(f.read(size).decode("latin-1" if major < 3 else "utf-8"))
+    if not (isinstance(header, dict) and np.dtype(header.get("descr", "f8")).hasobject):
+        raise ValueError(f"{path}: member {key!r} could not be read")
+    try:
+        arr = PlainDataUnpickler(f).load()
+    except UnsafePickleError as exc:
+        raise UnsafePickleError(f"{path}: member {key!r} refused: {exc}") from None
+    return np.asarray(arr)
+
+
+__all__ = ["ALLOWED_GLOBALS", "PlainDataUnpickler", "UnsafePickleError", "load_npz", "load_tensors"]
