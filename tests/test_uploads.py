@@ -20,7 +20,18 @@ REPO = Path(__file__).resolve().parents[1]
 
 # Runs in a fresh interpreter so its peak RSS is this load alone; prints JSON.
 _MEASURE = """
-import json, resource, sys, time
+import json, sys, time
+
+
+def peak_mb():
+    # VmHWM: this process's own peak resident memory. (ru_maxrss is not: Linux keeps it across fork + exec, so a
+    # child of a big pytest process reports the parent's size.)
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
 from gesturelsm.audio import AudioError, load_audio
 t0 = time.perf_counter()
 try:
@@ -29,7 +40,7 @@ try:
 except AudioError as exc:
     outcome = f"{type(exc).__name__}: {exc}"
 print(json.dumps({"outcome": outcome, "seconds": time.perf_counter() - t0,
-                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+                  "peak_mb": peak_mb()}))
 """
 
 

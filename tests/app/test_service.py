@@ -117,7 +117,7 @@ def _req(path, **kw):
     ("silent", "silent"),
     ("short", "at least"),
     ("long", "limit"),
-    ("steps", "steps must be"),
+    ("steps", "Steps must be"),
     ("cfg", "CFG"),
     ("method", "Unknown method"),
     ("nomethod", "at least one method"),
