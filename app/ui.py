@@ -13,6 +13,8 @@ import gradio as gr
 from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
                                     Request, ServiceError)
 
+from . import motion_player
+
 EXAMPLES = Path(__file__).resolve().parent / "examples"
 MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
 
@@ -57,10 +59,11 @@ def build_demo(service: GestureService) -> gr.Blocks:
     default_methods = [m for m in ("gesturelsm", "rectified_flow", "ddim") if m in service.methods][:3]
 
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 exports: bool) -> Request:
+                 exports: bool, render: bool = True) -> Request:
         return Request(audio_path=audio, text=text or "", textgrid_path=textgrid, methods=list(methods or []),
                        steps=int(steps), cfg=float(cfg), seed=int(seed), ddim_steps=int(ddim_steps),
-                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports)
+                       stand_in_place=bool(in_place), smoothing=str(smoothing), size=int(size), exports=exports,
+                       render=render)
 
     def _run(req: Request, progress):
         try:
@@ -71,9 +74,19 @@ def build_demo(service: GestureService) -> gr.Blocks:
     def _files(out):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def show_video(*args, progress=gr.Progress()):
-        """The page's button: the video, timings and summary first; the downloads follow (`add_exports`)."""
-        out = _run(_request(*args, exports=False), progress)
+    def show_motion(*args, progress=gr.Progress()):
+        """The page's button: the motions for the in-browser player, timings and summary first; the video
+        (`show_video`) and the downloads (`add_exports`) follow in chained events."""
+        out = _run(_request(*args, exports=False, render=False), progress)
+        return motion_player.payload(service, out), out.rows, out.summary, out
+
+    def show_video(out, progress=gr.Progress()):
+        if out is None:
+            return None, gr.skip(), gr.skip(), None
+        try:
+            service.render(out, progress=lambda f, m: progress(f, desc=m))
+        except ServiceError as exc:
+            raise gr.Error(str(exc), duration=None) from None
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
 
     def add_exports(out):
@@ -117,6 +130,8 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 if ex:
                     gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
             with gr.Column(scale=2):
+                motion_player.player_component()
+                payload = gr.JSON(visible=False)
                 video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
                 summary = gr.Markdown(elem_id="summary")
                 table = gr.Dataframe(headers=TIMING_COLUMNS, label="Timing per method and stage (seconds; real-time factor = speech seconds per generation second)",
@@ -133,8 +148,11 @@ def build_demo(service: GestureService) -> gr.Blocks:
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
         inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size]
         state = gr.State()
-        button.click(show_video, inputs, [video, table, summary, state], api_name="generate_video",
+        button.click(show_motion, inputs, [payload, table, summary, state], api_name="generate_motion",
                      concurrency_limit=settings.concurrency, concurrency_id="generation") \
+            .then(None, payload, None, js=motion_player.LOAD_JS) \
+            .then(show_video, state, [video, table, summary, state], api_visibility="private",
+                  concurrency_limit=settings.concurrency, concurrency_id="generation") \
             .then(add_exports, state, [files, view, summary], api_visibility="private", concurrency_limit=settings.concurrency,
                   concurrency_id="generation")
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
@@ -147,7 +165,7 @@ def build_demo(service: GestureService) -> gr.Blocks:
 def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
     """Launch with the upload limit and the output folder allowed; returns what `Blocks.launch` returns."""
     return demo.launch(server_name=host, server_port=port, max_file_size=f"{int(service.settings.max_upload_mb)}mb",
-                       allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)
+                       allowed_paths=[str(service.workdir), *motion_player.served_paths()], footer_links=["api"], **kw)
 
 
 def serve_locally(service: GestureService) -> tuple[gr.Blocks, str]:

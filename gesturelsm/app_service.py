@@ -74,11 +74,12 @@ class Request:
     smoothing: str = "off"
     size: int = 384
     exports: bool = True
+    render: bool = True                     # False: motions only (the page's player); GestureService.render later
 
 
 @dataclass
 class Outcome:
-    video: Path
+    video: Path | None                       # None until rendered (Request.render=False, then .render())
     rows: list[list]                         # TIMING_COLUMNS per method, then a total row
     downloads: list[Path]
     glb: Path | None
@@ -88,10 +89,16 @@ class Outcome:
     seconds: float                           # request start to video ready
     timings: dict[str, dict[str, float]] = field(default_factory=dict)
     motions: dict[str, MotionSequence] = field(default_factory=dict, repr=False)   # shown, post-processed
+    labels: list[str] = field(default_factory=list)          # one per shown motion, as drawn in the video
+    audio: np.ndarray | None = field(default=None, repr=False)  # the speech, 16 kHz mono
+    render_args: dict = field(default_factory=dict, repr=False)  # size, gen_seconds, folder for a later render
+    motion_seconds: float = 0.0              # request start to motions ready
+    started: float = 0.0                     # time.perf_counter() at the request start
 
     @property
     def summary(self) -> str:
-        lines = [f"**Transcript:** {self.text_mode}", f"**Video ready in {self.seconds:.1f} s.**"]
+        lines = [f"**Transcript:** {self.text_mode}", f"**Motion ready in {self.motion_seconds:.1f} s.** " +
+                 (f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")]
         if self.ground_truth:
             lines.append(f"**Ground truth:** BEAT2 take `{self.ground_truth}`")
         lines += [f"Note: {w}" for w in self.warnings]
@@ -266,7 +273,6 @@ class GestureService:
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Outcome:
         """Serve one request (see the module docstring). `audio` (16 kHz) skips reading req.audio_path."""
         from .pipeline import InputError
-        from .render import RenderError, render_video
 
         t_start = time.perf_counter()
         prog = progress or (lambda f, m: None)
@@ -326,16 +332,11 @@ class GestureService:
             motions = [stand_in_place(m) for m in motions]
         if req.smoothing != "off":
             motions = [smooth(m, req.smoothing) for m in motions]
-        prog(0.62, "rendering video")
-        t_r = time.perf_counter()
-        video = out / "gestures.mp4"
-        try:
-            render_video(motions, speech.audio, video, labels=labels, size=(int(req.size), int(req.size)),
-                         body=self.body, gen_seconds=gen_s,
-                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
-        except RenderError as exc:
-            raise ServiceError(f"Rendering failed on the server: {exc}") from None
-        render_s = time.perf_counter() - t_r
+        motion_s = time.perf_counter() - t_start
+        render_args = {"size": int(req.size), "gen_seconds": gen_s, "folder": out}
+        video, render_s = None, 0.0
+        if req.render:
+            video, render_s = self._render(motions, labels, speech.audio, render_args, prog)
         ready = time.perf_counter() - t_start
         shown = gen_methods + (["ground_truth"] if gt_name else [])
         for m in gen_methods:
@@ -350,11 +351,39 @@ class GestureService:
         rows.append([f"whole request, {speech.duration:.1f} s of speech", None, None, None, None,
                      round(render_s, 3), round(ready, 3), round(speech.duration / max(ready, 1e-9), 2)])
         outcome = Outcome(video, rows, [], None, speech.text_mode, warnings, gt_name, ready, timings,
-                          dict(zip(shown, motions)))
+                          dict(zip(shown, motions)), labels, speech.audio, render_args, motion_s, t_start)
         if req.exports:
             prog(0.93, "exports")
             self.export(outcome)
         prog(1.0, "done")
+        return outcome
+
+    def _render(self, motions, labels, audio, args: dict, prog: Progress) -> tuple[Path, float]:
+        from .render import RenderError, render_video
+
+        prog(0.62, "rendering video")
+        t_r = time.perf_counter()
+        video = Path(args["folder"]) / "gestures.mp4"
+        try:
+            render_video(motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
+                         gen_seconds=args["gen_seconds"], progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
+        except RenderError as exc:
+            raise ServiceError(f"Rendering failed on the server: {exc}") from None
+        return video, time.perf_counter() - t_r
+
+    def render(self, outcome: Outcome, progress: Progress | None = None) -> Outcome:
+        """Render the video of a request run with `render=False` (the page shows the motions first); fills
+        the rendering column of the timing rows and `seconds` (request start to video ready)."""
+        if outcome.video is None and outcome.motions:
+            motions = list(outcome.motions.values())
+            outcome.video, render_s = self._render(motions, outcome.labels, outcome.audio, outcome.render_args,
+                                                   progress or (lambda f, m: None))
+            for row in outcome.rows[:-1]:
+                row[5] = round(render_s / len(motions), 3)
+            outcome.seconds = time.perf_counter() - outcome.started
+            speech_s = len(outcome.audio) / SAMPLE_RATE if outcome.audio is not None else 0.0
+            outcome.rows[-1][5:8] = [round(render_s, 3), round(outcome.seconds, 3),
+                                     round(speech_s / max(outcome.seconds, 1e-9), 2)]
         return outcome
 
     def export(self, outcome: Outcome) -> Outcome:

@@ -40,7 +40,7 @@ def test_build_demo_has_the_controls(service):
         assert want in labels
     methods = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     assert [v for _, v in methods["props"]["choices"]] == ["gesturelsm", "rectified_flow", "ddim", "ground_truth"]
-    assert {"generate", "generate_video"} <= {d.get("api_name") for d in cfg["dependencies"]}
+    assert {"generate", "generate_motion"} <= {d.get("api_name") for d in cfg["dependencies"]}
 
 
 def test_app_entry_flags_and_env(monkeypatch):
