@@ -15,7 +15,8 @@ from gesturelsm.app_service import GestureService, Outcome
 
 PLAYER_DIR = Path(__file__).resolve().parent / "player"
 BUNDLE = PLAYER_DIR / "dist" / "player.js"
-ELEMENT = '<div id="motion-player" data-state="empty" data-frames="0" data-frame="0" data-fps="0"></div>'
+ELEMENT = ('<div id="motion-player" data-state="empty" data-frames="0" data-frame="0" data-fps="0" '
+           'data-preload="{preload}"></div>')
 MISSING = ('<div id="motion-player" data-state="empty" data-frames="0"><p>The in-browser player is not built '
            '(it needs npm once: <code>bash scripts/setup.sh</code>); the video below still comes.</p></div>')
 # Gradio runs this with `element` = the component's root; the import resolves against the page's URL, so the
@@ -37,12 +38,19 @@ def served_paths() -> list[str]:
     return [str(BUNDLE.parent)]
 
 
-def player_component() -> gr.HTML:
-    """The player, or a note saying how to build it when the bundle is missing."""
+def player_component(service: GestureService) -> gr.HTML:
+    """The player, or a note saying how to build it when the bundle is missing. The player loads the body of
+    the default shape (zero betas, what the generators output) as the page opens."""
+    import numpy as np
+
+    from gesturelsm.export.player import body_glb
+    from gesturelsm.motion.sequence import NUM_BETAS
+
     if not BUNDLE.exists():
         return gr.HTML(MISSING, elem_id="motion-player-box")
-    return gr.HTML("", html_template=ELEMENT, js_on_load=MOUNT_JS.format(bundle=BUNDLE), elem_id="motion-player-box",
-                   padding=False)
+    body = file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
+    return gr.HTML("", html_template=ELEMENT.format(preload=body), js_on_load=MOUNT_JS.format(bundle=BUNDLE),
+                   elem_id="motion-player-box", padding=False)
 
 
 def payload(service: GestureService, out: Outcome) -> dict | None:

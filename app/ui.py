@@ -130,7 +130,7 @@ def build_demo(service: GestureService) -> gr.Blocks:
                 if ex:
                     gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
             with gr.Column(scale=2):
-                motion_player.player_component()
+                motion_player.player_component(service)
                 payload = gr.JSON(visible=False)
                 video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
                 summary = gr.Markdown(elem_id="summary")

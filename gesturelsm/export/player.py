@@ -21,12 +21,10 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
-import torch
 
-from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
-from .glb import export_glb, matrix_to_quaternion_xyzw
+from .glb import export_glb
 from .skeleton import full_poses
 
 MAX_EXPRESSIONS = 10            # as export_glb's default: morph targets carried by the body GLB
@@ -44,13 +42,25 @@ def used_expressions(body, max_expressions: int = MAX_EXPRESSIONS) -> list[int]:
 def motion_arrays(seq: MotionSequence, body) -> dict[str, np.ndarray]:
     """The player's arrays for `seq` on `body`: rotations (T, 55, 4), root (T, 3), expressions (T, E)."""
     T = seq.num_frames
-    R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq, body).reshape(T, NUM_JOINTS, 3))).numpy()
-    quats = _continuous(matrix_to_quaternion_xyzw(R)).astype(np.float32)                  # (T, 55, 4)
+    quats = _continuous(axis_angle_to_quaternion(full_poses(seq, body).reshape(T, NUM_JOINTS, 3)))
+    quats = quats.astype(np.float32)                                                       # (T, 55, 4)
     pelvis = body.rest_joints(seq.betas).astype(np.float64)[0]                             # (3,)
     root = (seq.trans.astype(np.float64) + pelvis).astype(np.float32)                      # (T, 3)
     used = [e for e in used_expressions(body) if e < seq.expressions.shape[1]]
     expr = seq.expressions[:, used].astype(np.float32) if used else np.zeros((T, 0), np.float32)
     return {"rotations": quats, "root": root, "expressions": expr}
+
+
+def axis_angle_to_quaternion(aa: np.ndarray) -> np.ndarray:
+    """(..., 3) axis-angle -> (..., 4) unit quaternions x, y, z, w with w >= 0 (the rotation of
+    `glb.matrix_to_quaternion_xyzw(axis_angle_to_matrix(aa))`, without building matrices)."""
+    aa = np.asarray(aa, np.float64)
+    angle = np.linalg.norm(aa, axis=-1, keepdims=True)                                     # (..., 1)
+    half = 0.5 * angle
+    # sin(a/2)/a -> 1/2 as a -> 0 (Taylor: 1/2 - a^2/48)
+    k = np.where(angle > 1e-6, np.sin(half) / np.maximum(angle, 1e-12), 0.5 - angle ** 2 / 48.0)
+    q = np.concatenate([aa * k, np.cos(half)], -1)
+    return q * np.where(q[..., 3:] < 0, -1.0, 1.0)
 
 
 def _continuous(q: np.ndarray) -> np.ndarray:
@@ -87,6 +97,9 @@ def read_motion(path: str | Path, frames: int, expressions: int = 0) -> dict[str
 
 def body_glb(body, betas: np.ndarray | None, cache: str | Path) -> Path:
     """The rest body as a skinned GLB in `cache`, written once per shape (file name = hash of the betas)."""
+    from ..render.frames import resolve_body
+
+    body = resolve_body(body)
     betas = np.zeros(0, np.float32) if betas is None else np.asarray(betas, np.float32).reshape(-1)
     template = body.module.v_template.detach().cpu().numpy().astype(np.float32)
     key = hashlib.sha1(np.round(betas, 5).tobytes() + template.tobytes()).hexdigest()[:12]
@@ -121,4 +134,4 @@ def player_payload(motions: Sequence[MotionSequence], labels: Sequence[str], met
             "audio": url(audio) if audio else None, "bodies": bodies, "id": out.name}
 
 
-__all__ = ["body_glb", "motion_arrays", "player_payload", "read_motion", "used_expressions", "write_motion"]
+__all__ = ["axis_angle_to_quaternion", "body_glb", "motion_arrays", "player_payload", "read_motion", "used_expressions", "write_motion"]

@@ -19,7 +19,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import * as SkeletonUtils from 'three/addons/utils/SkeletonUtils.js';
 
 const JOINTS = 55;
-const SPACING = 0.9;           // metres between bodies, as in the server-side video
+const SPACING = 1.0;           // metres between bodies, as in the server-side video
 const glbCache = new Map();    // url -> Promise<gltf>
 
 function loadGlb(url) {
@@ -32,6 +32,19 @@ function el(tag, attrs = {}, parent = null) {
   for (const [k, v] of Object.entries(attrs)) (k === 'text' ? (e.textContent = v) : e.setAttribute(k, v));
   if (parent) parent.appendChild(e);
   return e;
+}
+
+// A matcap (the colour of a sphere seen from the camera, looked up by the surface normal): clay lit from the
+// upper left. One texture read per pixel instead of lighting: SwiftShader (software WebGL) draws it fastest.
+function clayMatcap(size = 128) {
+  const c = document.createElement('canvas'); c.width = c.height = size;
+  const g = c.getContext('2d');
+  const grad = g.createRadialGradient(size * 0.38, size * 0.32, size * 0.04, size / 2, size / 2, size / 2);
+  grad.addColorStop(0, '#fbf1e6'); grad.addColorStop(0.45, '#d8c3ad'); grad.addColorStop(0.85, '#9c8672');
+  grad.addColorStop(1, '#6f5f51');
+  g.fillStyle = grad; g.fillRect(0, 0, size, size);
+  const t = new THREE.CanvasTexture(c); t.colorSpace = THREE.SRGBColorSpace;
+  return t;
 }
 
 class Body {
@@ -66,7 +79,7 @@ class Body {
 }
 
 export class MotionPlayer {
-  constructor(element, { width = 960, height = 420 } = {}) {
+  constructor(element, { width = 640, height = 300 } = {}) {  // drawing size; CSS scales it
     this.element = element;
     this.fps = 30; this.bodies = []; this.clock = null; this.shown = -1; this.drawn = 0;
     this.dirty = true; this.draws = []; this.generation = 0;
@@ -83,9 +96,9 @@ export class MotionPlayer {
     this.scene.background = new THREE.Color(0xf4f4f2);
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8a84, 2.2));
     const sun = new THREE.DirectionalLight(0xffffff, 1.6); sun.position.set(1.5, 3, 4); this.scene.add(sun);
-    const floor = new THREE.Mesh(new THREE.CircleGeometry(4, 48), new THREE.MeshLambertMaterial({ color: 0xdcdad5 }));
+    const floor = new THREE.Mesh(new THREE.CircleGeometry(4, 48), new THREE.MeshBasicMaterial({ color: 0xdcdad5 }));
     floor.rotation.x = -Math.PI / 2; this.scene.add(floor);
-    this.material = new THREE.MeshLambertMaterial({ color: new THREE.Color(0.78, 0.69, 0.60) });
+    this.material = new THREE.MeshMatcapMaterial({ matcap: clayMatcap() });   // lit look, no light maths
     this.camera = new THREE.PerspectiveCamera(30, width / height, 0.05, 50);
     this.camera.position.set(0, 1.2, 4.6);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
@@ -101,7 +114,7 @@ export class MotionPlayer {
     this.audio = el('audio', { class: 'mp-audio', preload: 'auto' }, element);
     this.audio.addEventListener('ended', () => this._state());
     this.audio.addEventListener('pause', () => this._state());
-    this.audio.addEventListener('play', () => this._state());
+    this.audio.addEventListener('playing', () => this._state());
     this._setState('empty');
     const tick = () => { this._frame(); this.raf = requestAnimationFrame(tick); };
     this.raf = requestAnimationFrame(tick);
@@ -121,7 +134,8 @@ export class MotionPlayer {
       const b = new Body(gltfs[i], s.label, (i - (n - 1) / 2) * SPACING, this.material);
       this.scene.add(b.root);
       b.tag = el('div', { class: 'mp-label', text: s.label, style: 'position:absolute;transform:translateX(-50%);' +
-        'font:600 12px sans-serif;background:rgba(255,255,255,.8);padding:1px 5px;border-radius:4px' }, this.labelBox);
+        'font:600 11px sans-serif;background:rgba(255,255,255,.8);padding:1px 4px;border-radius:4px;' +
+        `text-align:center;max-width:${Math.floor(90 / Math.max(n, 1))}%` }, this.labelBox);
       return b;
     });
     this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
@@ -155,16 +169,32 @@ export class MotionPlayer {
     this.dirty = true;
   }
 
+  // Load and compile a body before any motion exists, so the first payload only fetches motion files.
+  async preload(url) {
+    const gltf = await loadGlb(url);
+    const b = new Body(gltf, '', 0, this.material);
+    this.scene.add(b.root);
+    this.renderer.compile(this.scene, this.camera);
+    this.renderer.render(this.scene, this.camera);
+    this.scene.remove(b.root);
+    this.dirty = true;
+  }
+
   async load(payload) {
     const gen = this.generation + 1;
+    const t0 = performance.now();
+    this.marks = { start: t0 };
     this.pause();
+    this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
     const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
       if (!r.ok) throw new Error(`${b.motion}: HTTP ${r.status}`);
       return r.arrayBuffer();
     })));
     if (!(await this.setBodies(payload.bodies, payload.fps))) return;
+    this.marks.bodies = performance.now() - t0;
     const bufs = await motions;
     if (gen !== this.generation) return;
+    this.marks.motion = performance.now() - t0;
     const T = payload.frames;
     bufs.forEach((buf, i) => {
       const E = payload.bodies[i].expressions || 0;
@@ -172,10 +202,11 @@ export class MotionPlayer {
       const nr = T * JOINTS * 4;
       this.appendFrames(i, a.subarray(0, nr), a.subarray(nr, nr + 3 * T), E ? a.subarray(nr + 3 * T, nr + 3 * T + E * T) : null);
     });
-    this.audio.src = payload.audio || '';
     this.audio.currentTime = 0;
     this.attachClock(this.audio);
     await this.play();
+    this.marks.play = performance.now() - t0;
+    this.element.dataset.marks = JSON.stringify(this.marks);
   }
 
   // ---- internals -----------------------------------------------------------------------------------------
@@ -183,7 +214,9 @@ export class MotionPlayer {
 
   _state() {
     if (!this.bodies.length || !this.clock) return this._setState(this.bodies.length ? 'loading' : 'empty');
-    const playing = !this.clock.paused && !this.clock.ended;
+    // HTMLMediaElement: playing once the 'playing' event fired (data arrived), not merely after play()
+    const ready = this.clock.readyState === undefined || this.clock.readyState >= 3;
+    const playing = !this.clock.paused && !this.clock.ended && ready;
     this._setState(playing ? 'playing' : 'paused');
     this.button.textContent = playing ? 'Pause' : 'Play';
   }
@@ -230,7 +263,12 @@ export class MotionPlayer {
 
 // One player per element, created on first use; the page calls gesturelsmPlayer.load(payload).
 export function mount(element) {
-  if (!element.__player) element.__player = new MotionPlayer(element);
+  if (!element.__player) {
+    element.__player = new MotionPlayer(element);
+    const done = () => { element.dataset.ready = '1'; };
+    if (element.dataset.preload) element.__player.preload(element.dataset.preload).then(done, done);
+    else done();
+  }
   window.gesturelsmPlayer = element.__player;
   return element.__player;
 }
