@@ -184,6 +184,7 @@ export class MotionPlayer {
     const gen = this.generation + 1;
     const t0 = performance.now();
     this.marks = { start: t0 };
+    this.payload = payload;
     this.pause();
     this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
     const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
@@ -251,6 +252,11 @@ export class MotionPlayer {
       b.tag.style.left = `${((v.x + 1) / 2) * 100}%`;
       b.tag.style.top = `${((1 - v.y) / 2) * c.clientHeight}px`;
     }
+  }
+
+  // test and tool helper: the local joint rotations of body i on screen now, 55 x (x, y, z, w)
+  jointRotations(i) {
+    return this.bodies[i].bones.slice(0, JOINTS).map((b) => b.quaternion.toArray());
   }
 
   // test and tool helper: world position of joint j of body i on screen now (metres)
