@@ -79,8 +79,8 @@ def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
     old = video_src(page)
     page.get_by_label("Seed").fill("7")
     r["again"], _ = click_and_wait(page)
-    page.wait_for_function(f"() => {{ const v = document.querySelector('#video video'); return v && v.src !== {old!r}; }}",
-                           timeout=900000)
+    changed = f"() => {{ const v = document.querySelector('#video video'); return v && v.src !== {old!r}; }}"
+    page.wait_for_function(changed, timeout=900000)
     page.close()
     return r
 

@@ -366,7 +366,8 @@ class GestureService:
         video = Path(args["folder"]) / "gestures.mp4"
         try:
             render_video(motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
-                         gen_seconds=args["gen_seconds"], progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
+                         gen_seconds=args["gen_seconds"],
+                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
         except RenderError as exc:
             raise ServiceError(f"Rendering failed on the server: {exc}") from None
         return video, time.perf_counter() - t_r

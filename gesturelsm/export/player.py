@@ -134,4 +134,5 @@ def player_payload(motions: Sequence[MotionSequence], labels: Sequence[str], met
             "audio": url(audio) if audio else None, "bodies": bodies, "id": out.name}
 
 
-__all__ = ["axis_angle_to_quaternion", "body_glb", "motion_arrays", "player_payload", "read_motion", "used_expressions", "write_motion"]
+__all__ = ["axis_angle_to_quaternion", "body_glb", "motion_arrays", "player_payload", "read_motion", "used_expressions",
+           "write_motion"]
