@@ -138,8 +138,10 @@ def build_demo(service: GestureService) -> gr.Blocks:
                                      interactive=False, elem_id="timings", wrap=True)
                 files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
                                 elem_id="downloads")
-                view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
-                                  elem_id="view3d")
+                # closed by default: its viewer redraws continuously and would slow the player's software WebGL
+                with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
+                    view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
+                                      elem_id="view3d")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())

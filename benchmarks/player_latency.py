@@ -37,8 +37,9 @@ def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
     worst = 0.0
     page.evaluate("() => window.gesturelsmPlayer.pause()")
     for t in times:
-        r = page.evaluate("""async (t) => { const p = window.gesturelsmPlayer; p.seek(t);
-            await new Promise(r => setTimeout(r, 200));
+        r = page.evaluate("""async (t) => { const p = window.gesturelsmPlayer, n = Number(p.element.dataset.frames);
+            p.seek(t);                                   // then wait for the next draw (a new frame index)
+            while (Number(p.element.dataset.frames) === n) await new Promise(r => setTimeout(r, 20));
             return [Number(p.element.dataset.frame), p.clock.currentTime * p.fps]; }""", t)
         worst = max(worst, abs(r[0] - int(r[1])))
     return worst
@@ -47,10 +48,13 @@ def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
 def click_and_wait(page, timeout_s: float = 600) -> tuple[float, dict]:
     """Click generate; seconds until the player plays the new motion, and the player's own marks (ms)."""
     page.evaluate(f"() => {{ delete document.querySelector('{PLAYER}').dataset.marks; }}")
+    click_ms = page.evaluate("() => performance.now()")
     t0 = time.perf_counter()
     page.locator("#generate").click()
     page.wait_for_selector(f"{PLAYER}[data-marks][data-state=playing]", timeout=timeout_s * 1000)
-    return time.perf_counter() - t0, json.loads(page.get_attribute(PLAYER, "data-marks"))
+    marks = json.loads(page.get_attribute(PLAYER, "data-marks"))
+    marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> payload in the page (s)
+    return time.perf_counter() - t0, marks
 
 
 def video_src(page) -> str:
@@ -104,10 +108,11 @@ def main(argv: list[str] | None = None) -> int:
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
     service.warmup()
     demo, url = serve_locally(service)
-    print("| speech | methods | click -> playing (s) | of which in the browser: bodies / motion / play (ms) | "
+    print("| speech | methods | click -> playing (s) | click -> payload in the page (s) | then bodies / motion / "
+          "playing (ms) | "
           "player fps while the mp4 renders | player fps after | scrub offset (frames) | click -> mp4 (s) | "
           "again, new seed -> playing (s) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
         for sec in args.seconds:
@@ -115,7 +120,8 @@ def main(argv: list[str] | None = None) -> int:
             for n in args.methods:
                 r = run_case(browser, url, wav, ALL[:n])
                 m = r["marks"]
-                print(f"| {dur:.1f} s | {n} | {r['play']:.2f} | {m.get('bodies', 0):.0f} / {m.get('motion', 0):.0f} / "
+                print(f"| {dur:.1f} s | {n} | {r['play']:.2f} | {m['payload']:.2f} | {m.get('bodies', 0):.0f} / "
+                      f"{m.get('motion', 0):.0f} / "
                       f"{m.get('play', 0):.0f} | {r['fps_render']:.1f} | {r['fps_idle']:.1f} | {r['scrub']:.0f} | "
                       f"{r['mp4']:.1f} | {r['again']:.2f} |", flush=True)
         browser.close()

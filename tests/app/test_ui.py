@@ -125,6 +125,7 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert "aligned automatically" in page.locator("#summary").inner_text()
     page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
     assert ".glb" in page.locator("#downloads").inner_text()
+    page.locator("#view3d-box button").first.click()                        # open the GLB viewer's accordion
     canvas = page.locator("#view3d canvas")                                # the interactive 3D view draws
     canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
     for _ in range(20):
