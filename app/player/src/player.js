@@ -19,7 +19,7 @@ import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import * as SkeletonUtils from 'three/addons/utils/SkeletonUtils.js';
 
 const JOINTS = 55;
-const SPACING = 1.0;           // metres between bodies, as in the server-side video
+const SPACING = 1.2;           // metres between bodies, as in the server-side video
 const glbCache = new Map();    // url -> Promise<gltf>
 
 function loadGlb(url) {
@@ -133,9 +133,13 @@ export class MotionPlayer {
     this.bodies = specs.map((s, i) => {
       const b = new Body(gltfs[i], s.label, (i - (n - 1) / 2) * SPACING, this.material);
       this.scene.add(b.root);
-      b.tag = el('div', { class: 'mp-label', text: s.label, style: 'position:absolute;transform:translateX(-50%);' +
+      b.tag = el('div', { class: 'mp-label', style: 'position:absolute;transform:translateX(-50%);' +
         'font:600 11px sans-serif;background:rgba(255,255,255,.8);padding:1px 4px;border-radius:4px;' +
         `text-align:center;max-width:${Math.floor(90 / Math.max(n, 1))}%` }, this.labelBox);
+      // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
+      const m = /^(\D+?)\s+(\d.*)$/.exec(s.label);
+      b.tag.textContent = m ? m[1] : s.label;
+      if (m) { el('br', {}, b.tag); el('span', { text: m[2], style: 'font-weight:400' }, b.tag); }
       return b;
     });
     this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
@@ -230,8 +234,11 @@ export class MotionPlayer {
     if (f !== this.shown) {
       for (const b of this.bodies) b.pose(f);
       this.shown = f; this.drawn += 1; this.dirty = true;
-      this.range.value = String(t);
-      this.time.textContent = `${t.toFixed(2)} / ${(T / this.fps).toFixed(2)} s`;
+      if (Math.floor(t * 4) !== this.tick4 || this.clock.paused) {   // the page's layout: 4 times a second
+        this.tick4 = Math.floor(t * 4);
+        this.range.value = String(t);
+        this.time.textContent = `${t.toFixed(2)} / ${(T / this.fps).toFixed(2)} s`;
+      }
     }
     if (!this.dirty) return;
     this.renderer.render(this.scene, this.camera);
