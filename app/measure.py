@@ -1,5 +1,5 @@
 """Upload-to-video time of the served app as a visitor sees it: gradio_client uploads the speech and calls
-`/generate_video` (what the page's button does; downloads are prepared after the video), for eSpeak NG
+`/generate` (the video and the downloads in one call), for eSpeak NG
 speech of the given lengths, one method and three side by side, without and with a transcript.
 Prints a markdown table.
 
@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
                 for text in ("", words):
                     t0 = time.perf_counter()
                     video, table, *_ = client.predict(handle_file(str(wav)), text, None, methods, args.steps, 2.0, 0,
-                                                      20, False, "off", args.size, api_name="/generate_video")
+                                                      20, False, "off", args.size, api_name="/generate")
                     dt = time.perf_counter() - t0
                     rows = table["data"]
                     gens = ", ".join(f"{r[0]} {r[6]:.2f}" for r in rows[:-1])

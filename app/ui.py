@@ -17,6 +17,7 @@ from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
 
+from . import motion_player
 from .raw_inputs import pass_through
 from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
@@ -70,11 +71,12 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
     default_methods = [m for m in FACTS if m in service.methods][:3]
 
     def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=True, *, exports: bool) -> Request:
+                 auto_text=True, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.app_checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
                        steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=cfg, seed=seed,
-                       stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text)
+                       stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text,
+                       render=render)
 
     def _run(req: Request, progress):
         try:
@@ -86,11 +88,22 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
     def _files(out):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def show_video(*args, progress=gr.Progress()):
-        """The page's button: the video, timings and summary first; the downloads follow (`add_exports`)."""
-        out = _run(_request(*args, exports=False), progress)
+    def show_motion(*args, progress=gr.Progress()):
+        """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
+        first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events."""
+        out = _run(_request(*args, exports=False, render=False), progress)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out, recognised
+        return motion_player.payload(service, out), out.rows, out.summary, out, recognised
+
+    def show_video(out, progress=gr.Progress()):
+        if out is None:
+            return None, gr.skip(), gr.skip(), None
+        try:
+            service.render(out, progress=lambda f, m: progress(f, desc=m))
+        except GestureError as exc:
+            log.info("request refused: %s", " | ".join(str(exc).splitlines()))
+            raise gr.Error(str(exc), duration=None, print_exception=False) from None
+        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
 
     def add_exports(out):
         if out is None:
@@ -144,14 +157,18 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 if ex:
                     gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
             with gr.Column(scale=2):
+                motion_player.player_component(service)
+                payload = gr.JSON(visible=False)
                 video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
                 summary = gr.Markdown(elem_id="summary")
                 table = gr.Dataframe(headers=TIMING_COLUMNS, label="Timing per method and stage (seconds; real-time factor = speech seconds per generation second)",
                                      interactive=False, elem_id="timings", wrap=True)
                 files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
                                 elem_id="downloads")
-                view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
-                                  elem_id="view3d")
+                # closed by default: its viewer redraws continuously and would slow the player's software WebGL
+                with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
+                    view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
+                                      elem_id="view3d")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())
@@ -160,8 +177,11 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
         inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text]
         state = gr.State()
-        button.click(show_video, inputs, [video, table, summary, state, text], api_name="generate_video",
+        button.click(show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion",
                      concurrency_limit=settings.concurrency, concurrency_id="generation") \
+            .then(None, payload, None, js=motion_player.LOAD_JS) \
+            .then(show_video, state, [video, table, summary, state], api_visibility="private",
+                  concurrency_limit=settings.concurrency, concurrency_id="generation") \
             .then(add_exports, state, [files, view, summary], api_visibility="private", concurrency_limit=settings.concurrency,
                   concurrency_id="generation")
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
@@ -189,7 +209,8 @@ def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", po
     try:
         return demo.launch(server_name=host, server_port=port,
                            max_file_size=f"{int(service.settings.max_upload_mb)}mb",
-                           allowed_paths=[str(service.workdir)], footer_links=["api"], **kw)
+                           allowed_paths=[str(service.workdir), *motion_player.served_paths()],
+                           footer_links=["api"], **kw)
     finally:
         if not kw.get("prevent_thread_lock"):
             sweeper.stop()

@@ -79,6 +79,7 @@ class Request:
     size: int = 384
     exports: bool = True
     transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
+    render: bool = True                      # False: motions only (the page's player); GestureService.render later
 
     def plan(self, beat2: str | None = None) -> Plan:
         steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in ALL_FACTS}
@@ -89,7 +90,7 @@ class Request:
 
 @dataclass
 class Outcome:
-    video: Path
+    video: Path | None                       # None until rendered (Request.render=False, then .render())
     rows: list[list]                         # TIMING_COLUMNS per method, then a total row
     downloads: list[Path]
     glb: Path | None
@@ -100,10 +101,16 @@ class Outcome:
     timings: dict[str, dict[str, float]] = field(default_factory=dict)
     motions: dict[str, MotionSequence] = field(default_factory=dict, repr=False)   # shown, post-processed
     transcript: str | None = None            # the automatic transcript used (shown in the transcript box)
+    labels: list[str] = field(default_factory=list)          # one per shown motion, as drawn in the video
+    audio: np.ndarray | None = field(default=None, repr=False)  # the speech, 16 kHz mono
+    render_args: dict = field(default_factory=dict, repr=False)  # size, gen_seconds, folder for a later render
+    motion_seconds: float = 0.0              # request start to motions ready
+    started: float = 0.0                     # time.perf_counter() at the request start
 
     @property
     def summary(self) -> str:
-        lines = [f"**Transcript:** {self.text_mode}", f"**Video ready in {self.seconds:.1f} s.**"]
+        lines = [f"**Transcript:** {self.text_mode}", f"**Motion ready in {self.motion_seconds:.1f} s.** " +
+                 (f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")]
         if self.ground_truth:
             lines.append(f"**Ground truth:** BEAT2 take `{self.ground_truth}`")
         lines += [f"Note: {w}" for w in self.warnings]
@@ -223,35 +230,59 @@ class GestureService:
         gen.warnings.extend(notes)
         if not gen.motions:
             raise ServiceError("Nothing to show: choose a generator method.")
-        prog(0.62, "rendering video")
-        t_r = time.perf_counter()
-        video = out / "gestures.mp4"
         labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
         labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
         gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
-        try:
-            render_video(list(gen.motions.values()), speech.audio, video, labels=labels,
-                         size=(int(req.size), int(req.size)), body=self.body, gen_seconds=gen_s,
-                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
-        except RenderError as exc:
-            raise RenderError(f"Rendering failed on the server: {exc}") from None
-        render_s = time.perf_counter() - t_r
+        motion_s = time.perf_counter() - t_start
+        render_args = {"size": int(req.size), "gen_seconds": gen_s, "folder": out}
+        video, render_s = None, 0.0
+        if req.render:
+            video, render_s = self._render(list(gen.motions.values()), labels, speech.audio, render_args, prog)
         ready = time.perf_counter() - t_start
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows = timing_rows(gen, timings, speech.duration, render_s, ready)
         outcome = Outcome(video, rows, [], None, speech.text_mode, gen.warnings, gen.ground_truth, ready, timings,
-                          dict(gen.motions), speech.transcript)
+                          dict(gen.motions), speech.transcript, labels, speech.audio, render_args, motion_s, t_start)
         if req.exports:
             prog(0.93, "exports")
             self.export(outcome)
         prog(1.0, "done")
         return outcome
 
+    def _render(self, motions, labels, audio, args: dict, prog: Progress) -> tuple[Path, float]:
+        prog(0.62, "rendering video")
+        t_r = time.perf_counter()
+        video = Path(args["folder"]) / "gestures.mp4"
+        try:
+            render_video(motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
+                         gen_seconds=args["gen_seconds"],
+                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
+        except RenderError as exc:
+            raise RenderError(f"Rendering failed on the server: {exc}") from None
+        return video, time.perf_counter() - t_r
+
+    def render(self, outcome: Outcome, progress: Progress | None = None) -> Outcome:
+        """Render the video of a request run with `render=False` (the page shows the motions first); fills
+        the rendering column of the timing rows and `seconds` (request start to video ready)."""
+        if outcome.video is None and outcome.motions:
+            motions = list(outcome.motions.values())
+            outcome.video, render_s = self._render(motions, outcome.labels, outcome.audio, outcome.render_args,
+                                                   progress or (lambda f, m: None))
+            col = TIMING_COLUMNS.index("rendering")
+            for row in outcome.rows[:-1]:
+                row[col] = round(render_s / len(motions), 3)
+            outcome.seconds = time.perf_counter() - outcome.started
+            speech_s = len(outcome.audio) / SAMPLE_RATE if outcome.audio is not None else 0.0
+            outcome.rows[-1][col:col + 3] = [round(render_s, 3), round(outcome.seconds, 3),
+                                             round(speech_s / max(outcome.seconds, 1e-9), 2)]
+        return outcome
+
     def export(self, outcome: Outcome) -> Outcome:
         """Write the downloads of a finished request (the page shows the video first, then calls this)."""
         motions = outcome.motions
         if motions and not outcome.downloads:
-            outcome.downloads, outcome.glb = self._exports(list(motions.values()), list(motions), outcome.video.parent)
+            folder = Path(outcome.render_args.get("folder") or outcome.video.parent)
+            outcome.downloads, outcome.glb = self._exports(list(motions.values()), list(motions), folder)
         return outcome
 
     def _exports(self, motions: list[MotionSequence], names: list[str], out: Path) -> tuple[list[Path], Path | None]:

@@ -40,7 +40,7 @@ def test_build_demo_has_the_controls(service):
         assert want in labels
     methods = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     assert [v for _, v in methods["props"]["choices"]] == ["gesturelsm", "rectified_flow", "ddim", "ground_truth"]
-    assert {"generate", "generate_video"} <= {d.get("api_name") for d in cfg["dependencies"]}
+    assert {"generate", "generate_motion"} <= {d.get("api_name") for d in cfg["dependencies"]}
 
 
 def test_app_entry_flags_and_env(monkeypatch):
@@ -125,6 +125,7 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert "aligned automatically" in page.locator("#summary").inner_text()
     page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
     assert ".glb" in page.locator("#downloads").inner_text()
+    page.locator("#view3d-box button").first.click()                        # open the GLB viewer's accordion
     canvas = page.locator("#view3d canvas")                                # the interactive 3D view draws
     canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
     for _ in range(20):

@@ -1,0 +1,71 @@
+"""The page's in-browser motion player: the Gradio side of app/player/ (three.js, bundled offline).
+
+`player_component()` puts the player (element id `motion-player`) in the page; its JavaScript bundle
+(app/player/dist/player.js, built by scripts/setup.sh with npm + esbuild, no CDN) is served by the app itself.
+`payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB once per shape, one
+compact motion file per method) and returns the JSON the page hands to `gesturelsmPlayer.load(payload)`.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import gradio as gr
+
+from gesturelsm.app_service import GestureService, Outcome
+
+PLAYER_DIR = Path(__file__).resolve().parent / "player"
+BUNDLE = PLAYER_DIR / "dist" / "player.js"
+ELEMENT = ('<div id="motion-player" data-state="empty" data-frames="0" data-frame="0" data-fps="0" '
+           'data-preload="{preload}"></div>')
+MISSING = ('<div id="motion-player" data-state="empty" data-frames="0"><p>The in-browser player is not built '
+           '(it needs npm once: <code>bash scripts/setup.sh</code>); the video below still comes.</p></div>')
+# Gradio runs this with `element` = the component's root; the import resolves against the page's URL, so the
+# app also works under a root path (reverse proxy).
+MOUNT_JS = "import(new URL('gradio_api/file={bundle}', document.baseURI).href)" \
+           ".then((m) => m.mount(element.querySelector('#motion-player')))" \
+           ".catch((e) => {{ element.querySelector('#motion-player').dataset.error = String(e); }});"
+# The chained event that hands a payload to the player (not awaited: rendering the mp4 starts at once).
+LOAD_JS = "(p) => { if (p && window.gesturelsmPlayer) { window.gesturelsmPlayer.load(p); } }"
+
+
+def file_url(path: Path) -> str:
+    """URL (relative to the page) under which the app serves a file it is allowed to serve."""
+    return f"gradio_api/file={Path(path).resolve()}"
+
+
+def served_paths() -> list[str]:
+    """Folders `launch(allowed_paths=...)` must include for the player (its bundle)."""
+    return [str(BUNDLE.parent)]
+
+
+def player_component(service: GestureService) -> gr.HTML:
+    """The player, or a note saying how to build it when the bundle is missing. The player loads the body of
+    the default shape (zero betas, what the generators output) as the page opens."""
+    import numpy as np
+
+    from gesturelsm.export.player import body_glb
+    from gesturelsm.motion.sequence import NUM_BETAS
+
+    if not BUNDLE.exists():
+        return gr.HTML(MISSING, elem_id="motion-player-box")
+    body = file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
+    return gr.HTML("", html_template=ELEMENT.format(preload=body), js_on_load=MOUNT_JS.format(bundle=BUNDLE),
+                   elem_id="motion-player-box", padding=False)
+
+
+def payload(service: GestureService, out: Outcome) -> dict | None:
+    """Write the player's files for a generated request (its folder) and return the player's payload."""
+    import soundfile as sf
+
+    from gesturelsm.audio import SAMPLE_RATE
+    from gesturelsm.export.player import player_payload
+
+    if not out.motions:
+        return None
+    folder = Path(out.render_args["folder"])
+    wav = folder / "speech.wav"
+    if out.audio is not None:
+        sf.write(wav, out.audio, SAMPLE_RATE, subtype="PCM_16")
+    return player_payload(list(out.motions.values()), out.labels, list(out.motions), service.body, folder,
+                          service.workdir / "player-bodies", url=file_url,
+                          audio=wav if out.audio is not None else None)

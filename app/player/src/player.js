@@ -1,0 +1,289 @@
+// The in-browser motion player of the GestureLSM page: every method's body side by side, skinned by three.js
+// from the generated joint rotations, driven by one clock (the speech's <audio> element), orbit camera.
+// Bundled with three.js into ../dist/player.js by esbuild (scripts/setup.sh); no network at run time.
+//
+// API (also for a live tab that streams motion):
+//   const p = new MotionPlayer(element)                   // builds canvas, controls, labels inside element
+//   await p.setBodies([{label, body: glbUrl}], fps=30)     // rest bodies (GLB cached per URL), frames cleared
+//   p.appendFrames(i, rotations, root, expressions)       // Float32Arrays: (n, 55, 4) x,y,z,w; (n, 3); (n, E)
+//   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
+//   p.play(); p.pause(); p.seek(seconds)
+//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player.py
+// Frame shown = floor(clock.currentTime * fps), clamped to the frames received so far, so motion and speech
+// stay within one frame of each other whatever the clock does (play, scrub, seek, stall).
+// Test contract on the element: data-state = empty | loading | playing | paused, data-frames = motion frames
+// drawn so far, data-frame = index of the frame on screen, data-fps = draws in the last second.
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import * as SkeletonUtils from 'three/addons/utils/SkeletonUtils.js';
+
+const JOINTS = 55;
+const SPACING = 1.2;           // metres between bodies, as in the server-side video
+const glbCache = new Map();    // url -> Promise<gltf>
+
+function loadGlb(url) {
+  if (!glbCache.has(url)) glbCache.set(url, new GLTFLoader().loadAsync(url));
+  return glbCache.get(url);
+}
+
+function el(tag, attrs = {}, parent = null) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) (k === 'text' ? (e.textContent = v) : e.setAttribute(k, v));
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+// A matcap (the colour of a sphere seen from the camera, looked up by the surface normal): clay lit from the
+// upper left. One texture read per pixel instead of lighting: SwiftShader (software WebGL) draws it fastest.
+function clayMatcap(size = 128) {
+  const c = document.createElement('canvas'); c.width = c.height = size;
+  const g = c.getContext('2d');
+  const grad = g.createRadialGradient(size * 0.38, size * 0.32, size * 0.04, size / 2, size / 2, size / 2);
+  grad.addColorStop(0, '#fbf1e6'); grad.addColorStop(0.45, '#d8c3ad'); grad.addColorStop(0.85, '#9c8672');
+  grad.addColorStop(1, '#6f5f51');
+  g.fillStyle = grad; g.fillRect(0, 0, size, size);
+  const t = new THREE.CanvasTexture(c); t.colorSpace = THREE.SRGBColorSpace;
+  return t;
+}
+
+class Body {
+  constructor(gltf, label, offset, material) {
+    this.root = SkeletonUtils.clone(gltf.scene);
+    this.root.position.x = offset;
+    this.mesh = null;
+    this.root.traverse((o) => {
+      if (o.isSkinnedMesh) { this.mesh = o; o.frustumCulled = false; o.material = material; }
+    });
+    this.bones = this.mesh.skeleton.bones;            // skin joint order = SMPL-X joint order
+    this.label = label;
+    this.rot = new Float32Array(0); this.pos = new Float32Array(0); this.expr = new Float32Array(0);
+    this.frames = 0; this.E = 0;
+  }
+
+  append(rot, pos, expr, E) {
+    const cat = (a, b) => { const c = new Float32Array(a.length + b.length); c.set(a); c.set(b, a.length); return c; };
+    const n = rot.length / (JOINTS * 4);
+    this.rot = cat(this.rot, rot); this.pos = cat(this.pos, pos);
+    if (E) { this.E = E; this.expr = cat(this.expr, expr); }
+    this.frames += n;
+  }
+
+  pose(f) {
+    const r = this.rot, o = f * JOINTS * 4;
+    for (let j = 0; j < JOINTS; j++) this.bones[j].quaternion.set(r[o + 4 * j], r[o + 4 * j + 1], r[o + 4 * j + 2], r[o + 4 * j + 3]);
+    this.bones[0].position.set(this.pos[3 * f], this.pos[3 * f + 1], this.pos[3 * f + 2]);
+    const infl = this.mesh.morphTargetInfluences;
+    if (infl && this.E) for (let e = 0; e < Math.min(this.E, infl.length); e++) infl[e] = this.expr[f * this.E + e];
+  }
+}
+
+export class MotionPlayer {
+  constructor(element, { width = 640, height = 300 } = {}) {  // drawing size; CSS scales it
+    this.element = element;
+    this.fps = 30; this.bodies = []; this.clock = null; this.shown = -1; this.drawn = 0;
+    this.dirty = true; this.draws = []; this.generation = 0;
+    element.innerHTML = '';
+    element.classList.add('motion-player');
+    const stage = el('div', { class: 'mp-stage', style: 'position:relative' }, element);
+    this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'high-performance' });
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(width, height);
+    this.renderer.domElement.style.width = '100%'; this.renderer.domElement.style.height = 'auto';
+    stage.appendChild(this.renderer.domElement);
+    this.labelBox = el('div', { class: 'mp-labels', style: 'position:absolute;inset:0;pointer-events:none' }, stage);
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0xf4f4f2);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8a84, 2.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6); sun.position.set(1.5, 3, 4); this.scene.add(sun);
+    const floor = new THREE.Mesh(new THREE.CircleGeometry(4, 48), new THREE.MeshBasicMaterial({ color: 0xdcdad5 }));
+    floor.rotation.x = -Math.PI / 2; this.scene.add(floor);
+    this.material = new THREE.MeshMatcapMaterial({ matcap: clayMatcap() });   // lit look, no light maths
+    this.camera = new THREE.PerspectiveCamera(30, width / height, 0.05, 50);
+    this.camera.position.set(0, 1.2, 4.6);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.target.set(0, 1.0, 0); this.controls.update();
+    this.controls.addEventListener('change', () => { this.dirty = true; });
+    const bar = el('div', { class: 'mp-bar', style: 'display:flex;gap:8px;align-items:center;margin-top:4px' }, element);
+    this.button = el('button', { class: 'mp-play', type: 'button', text: 'Play' }, bar);
+    this.range = el('input', { class: 'mp-seek', type: 'range', min: '0', max: '0', step: '0.001', value: '0',
+      style: 'flex:1' }, bar);
+    this.time = el('span', { class: 'mp-time', text: '0.00 / 0.00 s' }, bar);
+    this.button.addEventListener('click', () => (this.clock && this.clock.paused ? this.play() : this.pause()));
+    this.range.addEventListener('input', () => this.seek(parseFloat(this.range.value)));
+    this.audio = el('audio', { class: 'mp-audio', preload: 'auto' }, element);
+    this.audio.addEventListener('ended', () => this._state());
+    this.audio.addEventListener('pause', () => this._state());
+    this.audio.addEventListener('playing', () => this._state());
+    this._setState('empty');
+    const tick = () => { this._frame(); this.raf = requestAnimationFrame(tick); };
+    this.raf = requestAnimationFrame(tick);
+  }
+
+  // ---- API -----------------------------------------------------------------------------------------------
+  async setBodies(specs, fps = 30) {
+    const gen = ++this.generation;
+    this._setState('loading');
+    const gltfs = await Promise.all(specs.map((s) => loadGlb(s.body)));
+    if (gen !== this.generation) return false;            // a newer request replaced these bodies
+    for (const b of this.bodies) this.scene.remove(b.root);
+    this.labelBox.innerHTML = '';
+    this.fps = fps; this.shown = -1; this.drawn = 0;
+    const n = specs.length;
+    this.bodies = specs.map((s, i) => {
+      const b = new Body(gltfs[i], s.label, (i - (n - 1) / 2) * SPACING, this.material);
+      this.scene.add(b.root);
+      b.tag = el('div', { class: 'mp-label', style: 'position:absolute;transform:translateX(-50%);' +
+        'font:600 11px sans-serif;background:rgba(255,255,255,.8);padding:1px 4px;border-radius:4px;' +
+        `text-align:center;max-width:${Math.floor(90 / Math.max(n, 1))}%` }, this.labelBox);
+      // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
+      const m = /^(\D+?)\s+(\d.*)$/.exec(s.label);
+      b.tag.textContent = m ? m[1] : s.label;
+      if (m) { el('br', {}, b.tag); el('span', { text: m[2], style: 'font-weight:400' }, b.tag); }
+      return b;
+    });
+    this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
+    this.dirty = true;
+    return true;
+  }
+
+  appendFrames(i, rotations, root, expressions = null) {
+    const b = this.bodies[i];
+    const E = expressions ? expressions.length / (rotations.length / (JOINTS * 4)) : 0;
+    b.append(rotations, root, expressions || new Float32Array(0), E);
+    this.range.max = String(this.frames() / this.fps);
+    this.dirty = true;
+  }
+
+  attachClock(clock) { this.clock = clock; this.dirty = true; this._state(); }
+
+  frames() { return this.bodies.length ? Math.min(...this.bodies.map((b) => b.frames)) : 0; }
+
+  async play() {
+    if (!this.clock) return;
+    try { await this.clock.play(); } catch (e) { /* autoplay refused: the visitor presses Play */ }
+    this._state();
+  }
+
+  pause() { if (this.clock) this.clock.pause(); this._state(); }
+
+  seek(t) {
+    if (!this.clock) return;
+    this.clock.currentTime = Math.max(0, Math.min(t, this.frames() / this.fps));
+    this.dirty = true;
+  }
+
+  // Load and compile a body before any motion exists, so the first payload only fetches motion files.
+  async preload(url) {
+    const gltf = await loadGlb(url);
+    const b = new Body(gltf, '', 0, this.material);
+    this.scene.add(b.root);
+    this.renderer.compile(this.scene, this.camera);
+    this.renderer.render(this.scene, this.camera);
+    this.scene.remove(b.root);
+    this.dirty = true;
+  }
+
+  async load(payload) {
+    const gen = this.generation + 1;
+    const t0 = performance.now();
+    this.marks = { start: t0 };
+    this.payload = payload;
+    this.pause();
+    this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
+    const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
+      if (!r.ok) throw new Error(`${b.motion}: HTTP ${r.status}`);
+      return r.arrayBuffer();
+    })));
+    if (!(await this.setBodies(payload.bodies, payload.fps))) return;
+    this.marks.bodies = performance.now() - t0;
+    const bufs = await motions;
+    if (gen !== this.generation) return;
+    this.marks.motion = performance.now() - t0;
+    const T = payload.frames;
+    bufs.forEach((buf, i) => {
+      const E = payload.bodies[i].expressions || 0;
+      const a = new Float32Array(buf);
+      const nr = T * JOINTS * 4;
+      this.appendFrames(i, a.subarray(0, nr), a.subarray(nr, nr + 3 * T), E ? a.subarray(nr + 3 * T, nr + 3 * T + E * T) : null);
+    });
+    this.audio.currentTime = 0;
+    this.attachClock(this.audio);
+    await this.play();
+    this.marks.play = performance.now() - t0;
+    this.element.dataset.marks = JSON.stringify(this.marks);
+  }
+
+  // ---- internals -----------------------------------------------------------------------------------------
+  _setState(s) { if (this.element.dataset.state !== s) this.element.dataset.state = s; }
+
+  _state() {
+    if (!this.bodies.length || !this.clock) return this._setState(this.bodies.length ? 'loading' : 'empty');
+    // HTMLMediaElement: playing once the 'playing' event fired (data arrived), not merely after play()
+    const ready = this.clock.readyState === undefined || this.clock.readyState >= 3;
+    const playing = !this.clock.paused && !this.clock.ended && ready;
+    this._setState(playing ? 'playing' : 'paused');
+    this.button.textContent = playing ? 'Pause' : 'Play';
+  }
+
+  _frame() {
+    const T = this.frames();
+    if (!T || !this.clock) return;
+    const t = this.clock.currentTime || 0;
+    const f = Math.max(0, Math.min(T - 1, Math.floor(t * this.fps + 1e-6)));
+    if (f !== this.shown) {
+      for (const b of this.bodies) b.pose(f);
+      this.shown = f; this.drawn += 1; this.dirty = true;
+      if (Math.floor(t * 4) !== this.tick4 || this.clock.paused) {   // the page's layout: 4 times a second
+        this.tick4 = Math.floor(t * 4);
+        this.range.value = String(t);
+        this.time.textContent = `${t.toFixed(2)} / ${(T / this.fps).toFixed(2)} s`;
+      }
+    }
+    if (!this.dirty) return;
+    this.renderer.render(this.scene, this.camera);
+    this._labels();
+    this.dirty = false;
+    const now = performance.now();
+    this.draws.push(now);
+    while (this.draws.length && this.draws[0] < now - 1000) this.draws.shift();
+    const d = this.element.dataset;
+    d.frames = String(this.drawn); d.frame = String(f); d.fps = String(this.draws.length);
+    this._state();
+  }
+
+  _labels() {
+    const c = this.renderer.domElement, v = new THREE.Vector3();
+    for (const b of this.bodies) {
+      b.bones[15].getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
+      b.tag.style.left = `${((v.x + 1) / 2) * 100}%`;
+      b.tag.style.top = `${((1 - v.y) / 2) * c.clientHeight}px`;
+    }
+  }
+
+  // test and tool helper: the local joint rotations of body i on screen now, 55 x (x, y, z, w)
+  jointRotations(i) {
+    return this.bodies[i].bones.slice(0, JOINTS).map((b) => b.quaternion.toArray());
+  }
+
+  // test and tool helper: world position of joint j of body i on screen now (metres)
+  jointWorld(i, j) {
+    const v = new THREE.Vector3();
+    this.bodies[i].bones[j].getWorldPosition(v);
+    return [v.x, v.y, v.z];
+  }
+}
+
+// One player per element, created on first use; the page calls gesturelsmPlayer.load(payload).
+export function mount(element) {
+  if (!element.__player) {
+    element.__player = new MotionPlayer(element);
+    const done = () => { element.dataset.ready = '1'; };
+    if (element.dataset.preload) element.__player.preload(element.dataset.preload).then(done, done);
+    else done();
+  }
+  window.gesturelsmPlayer = element.__player;
+  return element.__player;
+}
+
+window.GestureLSMPlayer = { MotionPlayer, mount };

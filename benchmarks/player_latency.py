@@ -1,0 +1,133 @@
+"""What a visitor of the page waits for, measured in real headless Chromium (SwiftShader WebGL, the floor):
+click on "Generate" -> the in-browser player plays (`#motion-player[data-state=playing]`), the player's frame
+rate while the server renders the mp4 and after, audio-motion offset when scrubbing, click -> mp4 shown, and
+generating again with another seed on the same page (the bodies are replaced). Shipped checkpoints, eSpeak NG
+speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Prints a markdown table.
+
+    .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR]
+"""
+from __future__ import annotations
+
+import os
+
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+ALL = ["gesturelsm", "rectified_flow", "ddim"]
+LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
+PLAYER = "#motion-player"
+
+
+def fps(page, seconds: float = 2.0) -> float:
+    """Motion frames drawn per second by the player over `seconds` (data-frames counts them)."""
+    n0 = int(page.get_attribute(PLAYER, "data-frames"))
+    t0 = time.perf_counter()
+    page.wait_for_timeout(seconds * 1000)
+    return (int(page.get_attribute(PLAYER, "data-frames")) - n0) / (time.perf_counter() - t0)
+
+
+def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
+    """Largest |frame shown - audio time * fps| (frames) after seeking the player's clock while paused."""
+    worst = 0.0
+    page.evaluate("() => window.gesturelsmPlayer.pause()")
+    for t in times:
+        r = page.evaluate("""async (t) => { const p = window.gesturelsmPlayer, n = Number(p.element.dataset.frames);
+            p.seek(t);                                   // then wait for the next draw (a new frame index)
+            while (Number(p.element.dataset.frames) === n) await new Promise(r => setTimeout(r, 20));
+            return [Number(p.element.dataset.frame), p.clock.currentTime * p.fps]; }""", t)
+        worst = max(worst, abs(r[0] - int(r[1])))
+    return worst
+
+
+def click_and_wait(page, timeout_s: float = 600) -> tuple[float, dict]:
+    """Click generate; seconds until the player plays the new motion, and the player's own marks (ms)."""
+    page.evaluate(f"() => {{ delete document.querySelector('{PLAYER}').dataset.marks; }}")
+    click_ms = page.evaluate("() => performance.now()")
+    t0 = time.perf_counter()
+    page.locator("#generate").click()
+    page.wait_for_selector(f"{PLAYER}[data-marks][data-state=playing]", timeout=timeout_s * 1000)
+    marks = json.loads(page.get_attribute(PLAYER, "data-marks"))
+    marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> payload in the page (s)
+    return time.perf_counter() - t0, marks
+
+
+def video_src(page) -> str:
+    return page.evaluate("() => { const v = document.querySelector('#video video'); return v ? v.src : ''; }")
+
+
+def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
+    page = browser.new_page(viewport={"width": 1400, "height": 1300})
+    page.goto(url)
+    page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
+    for m in ALL:
+        if m not in methods:
+            page.locator("#methods label", has_text=LABELS[m]).click()
+    page.locator("#speech input[type=file]").first.set_input_files(str(wav))
+    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+    t0 = time.perf_counter()
+    play_s, marks = click_and_wait(page)
+    r = {"play": play_s, "marks": marks, "fps_render": fps(page)}
+    page.wait_for_function("() => document.querySelector('#video video')", timeout=900000)
+    r["mp4"] = time.perf_counter() - t0
+    page.evaluate("() => { const p = window.gesturelsmPlayer; p.seek(0); p.play(); }")
+    page.wait_for_timeout(300)
+    r["fps_idle"] = fps(page)
+    r["scrub"] = scrub_offset(page)
+    page.locator("#downloads a").first.wait_for(timeout=300000)          # the chain is over: the queue is free
+    old = video_src(page)
+    page.get_by_label("Seed").fill("7")
+    r["again"], _ = click_and_wait(page)
+    changed = f"() => {{ const v = document.querySelector('#video video'); return v && v.src !== {old!r}; }}"
+    page.wait_for_function(changed, timeout=900000)
+    page.close()
+    return r
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
+    p.add_argument("--methods", type=int, nargs="+", default=[1, 3], choices=[1, 2, 3])
+    p.add_argument("--checkpoints")
+    p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
+    args = p.parse_args(argv)
+    import torch
+    from playwright.sync_api import sync_playwright
+
+    from app.measure import speech
+    from app.screenshot import CHROMIUM_ARGS
+    from app.ui import serve_locally
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    torch.set_num_threads(1)
+    service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
+    service.warmup()
+    demo, url = serve_locally(service)
+    print("| speech | methods | click -> playing (s) | click -> payload in the page (s) | then bodies / motion / "
+          "playing (ms) | "
+          "player fps while the mp4 renders | player fps after | scrub offset (frames) | click -> mp4 (s) | "
+          "again, new seed -> playing (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
+        for sec in args.seconds:
+            wav, _, dur = speech(sec, Path(tmp) / f"speech_{int(sec)}.wav")
+            for n in args.methods:
+                r = run_case(browser, url, wav, ALL[:n])
+                m = r["marks"]
+                print(f"| {dur:.1f} s | {n} | {r['play']:.2f} | {m['payload']:.2f} | {m.get('bodies', 0):.0f} / "
+                      f"{m.get('motion', 0):.0f} / "
+                      f"{m.get('play', 0):.0f} | {r['fps_render']:.1f} | {r['fps_idle']:.1f} | {r['scrub']:.0f} | "
+                      f"{r['mp4']:.1f} | {r['again']:.2f} |", flush=True)
+        browser.close()
+    demo.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
