@@ -11,6 +11,8 @@ import time
 from pathlib import Path
 
 from ..errors import UserError
+from .metrics import onset_errors_ms, onset_stats
+from .textgrid import write_textgrid
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,9 +33,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..audio import SAMPLE_RATE, load_audio
     from .aligner import AlignConfig, align_words
-    from .metrics import onset_errors_ms, onset_stats
     from .normalize import tokenize
-    from .textgrid import read_words, write_textgrid
+    from .textgrid import read_words
 
     text = _transcript(args, UserError)
     if not tokenize(text):
@@ -50,18 +51,24 @@ def run(args: argparse.Namespace) -> int:
           f"{elapsed:.1f} s for {duration:.1f} s of audio")
     if result.warning:
         print(f"warning: {result.warning}", file=sys.stderr)
+    output_words(result.words, duration, args, reference)
+    return 0
+
+
+def output_words(words: list, duration: float, args: argparse.Namespace, reference: list | None) -> None:
+    """Write the words tier to `args.out` (a TextGrid in `args.format`) or print one word a line; with a
+    `reference` (words with known timings) print the onset errors. Shared by `align` and `transcribe`."""
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        write_textgrid(args.out, result.words, duration, args.format)
+        write_textgrid(args.out, words, duration, args.format)
         print(f"wrote {args.out}")
     else:
-        for w in result.words:
+        for w in words:
             print(f"{w.start:8.3f} {w.end:8.3f}  {w.text}")
     if reference is not None:
-        s = onset_stats(onset_errors_ms(result.words, reference))
+        s = onset_stats(onset_errors_ms(words, reference))
         print(f"onset error vs {args.reference.name}: {s.n} words, mean {s.mean_ms:.0f} ms, "
               f"90th percentile {s.p90_ms:.0f} ms, {100 * s.within_100ms:.0f} % within 100 ms")
-    return 0
 
 
 def _transcript(args: argparse.Namespace, error: type[Exception]) -> str:

@@ -25,8 +25,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..align import read_words, write_textgrid
-    from ..align.metrics import onset_errors_ms, onset_stats
+    from ..align import read_words
+    from ..align.cli import output_words
     from ..audio import SAMPLE_RATE, load_audio
     from ..errors import UserError
     from .model import RecognizerUnavailable
@@ -50,15 +50,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"text: {tr.text}")
     for w in tr.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    if args.out is not None:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        write_textgrid(args.out, tr.words, duration, args.format)
-        print(f"wrote {args.out}")
-    else:
-        for w in tr.words:
-            print(f"{w.start:8.3f} {w.end:8.3f}  {w.text}")
-    if reference is not None:
-        s = onset_stats(onset_errors_ms(tr.words, reference))
-        print(f"onset error vs {args.reference.name}: {s.n} words, mean {s.mean_ms:.0f} ms, "
-              f"90th percentile {s.p90_ms:.0f} ms, {100 * s.within_100ms:.0f} % within 100 ms")
+    output_words(tr.words, duration, args, reference)
     return 0
