@@ -132,8 +132,8 @@ def main() -> None:
         print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
     if not args.skip_quality:
         rows = quality(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], cfg.steps)
-        print(f"| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
-              f"jitter (m/s^2) | jerk at seams / inside |")
+        print("| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
+              "jitter (m/s^2) | jerk at seams / inside |")
         print("|---|---|---|---|---|---|---|")
         for name, label, bt, ef, sp, acc, seam in rows:
             print(f"| {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | {sp:.3f} | "

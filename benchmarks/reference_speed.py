@@ -128,7 +128,7 @@ def main() -> None:
     print(f"torch {torch.__version__}, {args.threads} thread(s), median of {args.repeats}")
     if args.reference_code:
         rows = compare(args.reference_code, args.repeats)
-        print(f"\n| what | theirs (s) | ours (s) | ours faster |\n|---|---|---|---|")
+        print("\n| what | theirs (s) | ours (s) | ours faster |\n|---|---|---|---|")
         for name, a, b in rows:
             print(f"| {name} | {a:.4f} | {b:.4f} | {a / b:.2f}x |")
     print(f"\n| ours, {args.seconds:g} s of speech, paper-size models | real-time factor |\n|---|---|")

@@ -17,7 +17,7 @@ from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from .config import REGION_DIMS, REGIONS, RELEASED_SAMPLERS, GeneratorConfig, RVQConfig
 from .model import ReferenceGenerator
 from .rvq import ReferenceRVQ
-from .safe_load import ReferenceFileError, load_state
+from .safe_load import ReferenceFileError
 
 # reference key (without 'module.') -> ours; None = not used at inference (dropped)
 _RENAMES: tuple[tuple[str, str | None], ...] = (
