@@ -14,6 +14,9 @@ Stages (--stages, any of):
   methods     every method at --steps (DDIM also at 20), CFG --cfg, audio-only and transcript
   cfg         GestureLSM at 8 steps over CFG scales --cfg-scan
   seed        GestureLSM at 8 steps: neutral first-window seed vs seeds from the speaker's rest moments
+  decay       GestureLSM at 8 steps, audio-only: raised share in the first window (frames 0-127, shaped by the
+              first-window seed) and after it (each window seeded by the previous one's latents), for the neutral
+              seed and for seeds from the speaker's most raised spans: does a raised start persist or decay?
   interval    GestureLSM at 8 steps: CFG only for t in an interval (t = 0 noise, t = 1 data)
   respread    diagnostic, not a fix: GestureLSM's generated latents with their deviation from the training mean
               stretched so each region's spread equals the training latents' (then re-quantised and decoded):
@@ -26,11 +29,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
 import torch
 
 REPO = Path(__file__).resolve().parents[1]
 BEAT2 = REPO.parent / "shared" / "data" / "beat2"
-STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "interval", "latents", "respread")
+STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "decay", "interval", "latents", "respread")
 
 
 def main() -> None:
@@ -96,6 +100,8 @@ def main() -> None:
             rows.append(data.generated(pipe, "gesturelsm", 8, args.cfg, text, seeds, f"rest seed, {mode}",
                                        seed_bank=bank))
         show(f"GestureLSM 8 steps CFG {args.cfg:g}: first-window seed")
+    if "decay" in args.stages:
+        decay(pipe, data, seeds, args.cfg)
     if "interval" in args.stages:
         for iv in [(0.0, 1.0), (0.0, 0.5), (0.25, 0.75), (0.5, 1.0)]:
             for text in modes:
@@ -109,6 +115,41 @@ def main() -> None:
         show(f"GestureLSM 8 steps CFG {args.cfg:g}, latent spread restored (diagnostic)")
     if "latents" in args.stages:
         latent_spread(pipe, data, seeds, args.steps, args.cfg, args.methods or pipe.methods)
+
+
+def raised_seeds(pipe, data, method: str = "gesturelsm", count: int = 8) -> list[torch.Tensor]:
+    """`count` first-window seeds (R, s, D) from the training spans where the speaker's wrists are highest."""
+    from gesturelsm.generator.data import encode_regions
+    from gesturelsm.metrics.amplitude import wrist_heights
+
+    model = pipe.generators[method]
+    s, spans = model.config.seed_latents, []
+    for m in data.train:
+        lat = encode_regions(pipe.tokenizers, m.to_features()) / model.latent_std.cpu()[:, None, None]  # (R, L, D)
+        high = wrist_heights(data.joints(m)).max(1)                                   # (T,) higher wrist, m
+        spans += [(float(high[4 * a:4 * (a + s)].mean()), lat[:, a:a + s]) for a in range(0, lat.shape[1] - s + 1, s)]
+    spans.sort(key=lambda p: p[0])
+    return [lat for _, lat in spans[-count:]]
+
+
+def decay(pipe, data, seeds: list[int], cfg: float, window: int = 128) -> None:
+    from gesturelsm.evaluation.amplitude import sampling_options
+    from gesturelsm.metrics.amplitude import RAISED_M, wrist_heights
+
+    print(f"\n### GestureLSM 8 steps CFG {cfg:g}, audio-only: raised share by position\n")
+    print("| first-window seed | first window (0-4.3 s) | after it | whole clips |\n|---|---|---|---|")
+    model = pipe.generators["gesturelsm"]
+    for name, bank in (("neutral pose", None), ("speaker's most raised spans", raised_seeds(pipe, data))):
+        first, after = [], []
+        for k in seeds:
+            with sampling_options(model, seed_latents=None if bank is None else bank[k % len(bank)]):
+                for c in data.clips:
+                    res = pipe.generate(pipe.prepare_speech(c.audio, 16000), steps=8, cfg=cfg, seed=k,
+                                        method="gesturelsm")
+                    up = (wrist_heights(data.joints(res.motion)) > RAISED_M).any(1)     # (T,) a wrist raised
+                    first.append(up[:window]), after.append(up[window:])
+        f, a = np.concatenate(first), np.concatenate(after)
+        print(f"| {name} | {100 * f.mean():.1f} % | {100 * a.mean():.1f} % | {100 * np.concatenate([f, a]).mean():.1f} % |")
 
 
 def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, methods: list[str]) -> None:
