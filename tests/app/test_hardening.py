@@ -81,13 +81,12 @@ def test_whole_floats_are_accepted_as_numbers(service, speech_wav):
 
 
 def test_transcript_is_bounded_by_the_speech(no_work, speech_wav):
-    """50k words for 2 s of speech took 81 s of the only worker; now refused before alignment."""
-    t0 = time.perf_counter()
+    """50k words for 2 s of speech took 81 s of the only worker; now refused before alignment (no_work fails
+    the test if features or alignment start)."""
     with pytest.raises(ServiceError, match="transcript has 50000 words"):
         no_work.run(_req(speech_wav, text="word " * 50_000))
     with pytest.raises(ServiceError, match=r"for 2\.0 s of speech at most 36 words"):
         no_work.run(_req(speech_wav, text="word " * 100))              # within the 20 s limit, not within 2 s
-    assert time.perf_counter() - t0 < 60                              # guard against hangs only
 
 
 def _short_textgrid(path: Path, intervals: list[tuple[float, float, str]], declared: int | None = None) -> Path:
