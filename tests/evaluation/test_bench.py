@@ -1,7 +1,7 @@
 import json
 
 from gesturelsm.cli import main
-from gesturelsm.evaluation.bench import PeakRSS, run_bench
+from gesturelsm.evaluation.bench import run_bench
 from gesturelsm.evaluation.plot import quality_time_plot
 
 
