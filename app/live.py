@@ -7,10 +7,11 @@
 Each browser tab gets its own `LiveSession` (gesturelsm/live/session.py) in a `gr.State`; it ends on the stop
 button, when the tab closes (Gradio deletes the state and the delete callback stops the session), or when no audio
 arrived for the session's idle timeout (network drop). When all streams are taken the visitor reads a "busy" line.
-The JSON for a player: {"start": first frame, "fps": 30, "poses": [[165 axis-angle] per frame], "trans": [[x, y, z]
-per frame], "frames": frames so far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"}; with a
-body (the page's), also the in-browser player's arrays, flat: "rotations" (n * 55 * 4 quaternions x, y, z, w),
-"root" (n * 3, metres), "expressions" (n * E) (gesturelsm/export/player.py `motion_arrays`).
+The JSON for a player: {"start": first frame, "fps": 30, "frames": frames so far, "audio_seconds": audio received so
+far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"} and the frames since the last JSON: "poses"
+([[165 axis-angle] per frame]) and "trans" ([[x, y, z] per frame]), or with a body (the page's) the in-browser
+player's arrays instead, flat: "rotations" (n * 55 * 4 quaternions x, y, z, w), "root" (n * 3, metres),
+"expressions" (n * E) (gesturelsm/export/player.py `motion_arrays`).
 The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
 factor beside it. The player `live-player` (app/player/src/player.js `LiveFeed`) plays the frames at 1x one steady
@@ -25,8 +26,10 @@ import gradio as gr
 import numpy as np
 
 from gesturelsm.audio import resample, to_mono
+from gesturelsm.export.player import motion_arrays
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
 from gesturelsm.live.stream import SR
+from gesturelsm.motion.sequence import MotionSequence
 
 STREAM_EVERY_S = 0.2
 TIME_LIMIT_S = 15 * 60
@@ -45,18 +48,17 @@ def payload(session: LiveSession, status: str, body=None) -> tuple[str, str, str
     last call; `body` (a resolved body model) adds the in-browser player's arrays."""
     chunks = session.poll()
     st = session.stats()
-    data = {"start": chunks[0].start if chunks else session.delivered, "fps": 30,
-            "poses": np.concatenate([c.motion.poses for c in chunks]).round(4).tolist() if chunks else [],
-            "trans": np.concatenate([c.motion.trans for c in chunks]).round(4).tolist() if chunks else [],
-            "frames": st["frames"], "median_latency_ms": st["median_latency_ms"],
+    data = {"start": chunks[0].start if chunks else session.delivered, "fps": 30, "frames": st["frames"],
+            "audio_seconds": round(st["audio_seconds"], 3), "median_latency_ms": st["median_latency_ms"],
             "p90_latency_ms": st["p90_latency_ms"], "real_time_factor": st["real_time_factor"], "status": status}
-    if chunks and body is not None:
-        from gesturelsm.export.player import motion_arrays
-        from gesturelsm.motion.sequence import MotionSequence
-
-        seq = MotionSequence(poses=np.asarray(data["poses"], np.float32), trans=np.asarray(data["trans"], np.float32),
-                             expressions=np.concatenate([c.motion.expressions for c in chunks]))
-        data.update({k: v.reshape(-1).round(5).tolist() for k, v in motion_arrays(seq, body).items()})
+    seq = MotionSequence(*(np.concatenate([getattr(c.motion, k) for c in chunks])
+                           for k in ("poses", "trans", "expressions"))) if chunks else None
+    if seq is None:
+        data.update(poses=[], trans=[], rotations=[], root=[])
+    elif body is None:
+        data.update(poses=seq.poses.round(4).tolist(), trans=seq.trans.round(4).tolist())
+    else:                       # only what the player draws: the JSON is a third of the size with the poses too
+        data.update({k: v.reshape(-1).round(4).tolist() for k, v in motion_arrays(seq, body).items()})
     return json.dumps(data), _ms(st["median_latency_ms"]), _stats(st)
 
 

@@ -63,32 +63,39 @@ def test_busy_message_and_closed_tab(shipped_pipe):
 
 
 def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
-    """With the page's body, each JSON also carries the in-browser player's arrays for exactly its frames: the
-    quaternions rotate like the axis-angle poses (plus the body's pose mean) and the root is trans + rest pelvis."""
+    """With the page's body, each JSON carries the in-browser player's arrays for exactly the frames the same stream
+    gives without a body (streams are deterministic): quaternions that rotate like the axis-angle poses (plus the
+    body's pose mean) and the root = trans + rest pelvis."""
     from gesturelsm.body.model import resolve_body
     from gesturelsm.export.player import motion_arrays
     from gesturelsm.motion.sequence import MotionSequence
 
     body = resolve_body(None)
-    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
-    state, got = None, []
-    for ch in mic_chunks(2.0):
-        state, js, *_ = live.on_chunk(mgr, ch, state, body)
-        got.append(json.loads(js))
-    state, js, *_ = live.on_stop(state, body)
-    got.append(json.loads(js))
-    got = [d for d in got if d["poses"]]
-    assert sum(len(d["poses"]) for d in got) == 60
-    for d in got:
-        n = len(d["poses"])
+    runs = []
+    for b in (None, body):
+        mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+        state, got = None, []
+        for ch in mic_chunks(2.0):
+            state, js, *_ = live.on_chunk(mgr, ch, state, b)
+            got.append(json.loads(js))
+        state, js, *_ = live.on_stop(state, b)
+        runs.append(got + [json.loads(js)])
+    plain, player = runs
+    n_all = 0
+    for p, d in zip(plain, player):
+        n = len(p["poses"])
+        assert d["start"] == p["start"] and not d.get("poses")
         assert len(d["rotations"]) == n * 55 * 4 and len(d["root"]) == n * 3
-        seq = MotionSequence(poses=np.asarray(d["poses"], np.float32), trans=np.asarray(d["trans"], np.float32),
+        n_all += n
+        if not n:
+            continue
+        seq = MotionSequence(poses=np.asarray(p["poses"], np.float32), trans=np.asarray(p["trans"], np.float32),
                              expressions=np.zeros((n, 100), np.float32))
         want = motion_arrays(seq, body)
         q = np.asarray(d["rotations"]).reshape(n, 55, 4)
         dots = np.abs((q * want["rotations"]).sum(-1))                      # q and -q are the same rotation
-        np.testing.assert_allclose(dots, 1.0, atol=1e-4)
-        np.testing.assert_allclose(np.asarray(d["root"]).reshape(n, 3), want["root"], atol=1e-4)
-    pelvis = body.rest_joints()[0]
-    first = np.asarray(got[0]["root"]).reshape(-1, 3)[0]
-    np.testing.assert_allclose(first[[0, 2]], pelvis[[0, 2]], atol=1e-5)      # the stream starts at x = z = 0
+        np.testing.assert_allclose(dots, 1.0, atol=1e-3)
+        np.testing.assert_allclose(np.asarray(d["root"]).reshape(n, 3), want["root"], atol=1e-3)
+    assert n_all == 60
+    first = np.asarray(next(d for d in player if d["root"])["root"]).reshape(-1, 3)[0]
+    np.testing.assert_allclose(first[[0, 2]], body.rest_joints()[0][[0, 2]], atol=1e-4)   # starts at x = z = 0

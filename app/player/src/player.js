@@ -347,6 +347,7 @@ export class LiveFeed {
 
   async push(json) {
     let d; try { d = JSON.parse(json); } catch (e) { return; }
+    this.last = { audio_seconds: d.audio_seconds, frames: d.frames, at: performance.now() };   // for benchmarks
     if (!this.clock) await this.reset();           // frames from a stream whose start this page did not see
     await this.ready;
     const n = d.root ? d.root.length / 3 : 0;
