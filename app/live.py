@@ -31,7 +31,8 @@ from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveS
 from gesturelsm.live.stream import SR
 from gesturelsm.motion.sequence import MotionSequence
 
-STREAM_EVERY_S = 0.2
+STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
+                         # fell 3-11 s behind the speech on the loaded 2-core machine (benchmarks/live_browser.py)
 TIME_LIMIT_S = 15 * 60
 
 
