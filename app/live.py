@@ -7,22 +7,32 @@
 Each browser tab gets its own `LiveSession` (gesturelsm/live/session.py) in a `gr.State`; it ends on the stop
 button, when the tab closes (Gradio deletes the state and the delete callback stops the session), or when no audio
 arrived for the session's idle timeout (network drop). When all streams are taken the visitor reads a "busy" line.
-The JSON for a player: {"start": first frame, "fps": 30, "poses": [[165 axis-angle] per frame], "trans": [[x, y, z]
-per frame], "frames": frames so far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"}.
-The element with id `live-latency` shows the median latency in milliseconds (just the number).
+The JSON for a player: {"start": first frame, "fps": 30, "frames": frames so far, "audio_seconds": audio received so
+far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"} and the frames since the last JSON: "poses"
+([[165 axis-angle] per frame]) and "trans" ([[x, y, z] per frame]), or with a body (the page's) the in-browser
+player's arrays instead, flat: "rotations" (n * 55 * 4 quaternions x, y, z, w), "root" (n * 3, metres),
+"expressions" (n * E) (gesturelsm/export/player.py `motion_arrays`).
+The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
+chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
+factor beside it. The player `live-player` (app/player/src/player.js `LiveFeed`) plays the frames at 1x one steady
+delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms).
 """
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import gradio as gr
 import numpy as np
 
 from gesturelsm.audio import resample, to_mono
+from gesturelsm.export.player import motion_arrays
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
 from gesturelsm.live.stream import SR
+from gesturelsm.motion.sequence import MotionSequence
 
-STREAM_EVERY_S = 0.2
+STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
+                         # fell 3-11 s behind the speech on the loaded 2-core machine (benchmarks/live_browser.py)
 TIME_LIMIT_S = 15 * 60
 
 
@@ -34,44 +44,62 @@ def to_float(sr: int, data: np.ndarray) -> np.ndarray:
     return resample(to_mono(y.astype(np.float32)), int(sr), SR).astype(np.float32)
 
 
-def payload(session: LiveSession, status: str) -> tuple[str, str]:
-    """(JSON for the player, text of #live-latency) from what the session produced since the last call."""
+def payload(session: LiveSession, status: str, body=None) -> tuple[str, str, str]:
+    """(JSON for the player, text of #live-latency, text of #live-stats) from what the session produced since the
+    last call; `body` (a resolved body model) adds the in-browser player's arrays."""
     chunks = session.poll()
     st = session.stats()
-    data = {"start": chunks[0].start if chunks else session.delivered, "fps": 30,
-            "poses": np.concatenate([c.motion.poses for c in chunks]).round(4).tolist() if chunks else [],
-            "trans": np.concatenate([c.motion.trans for c in chunks]).round(4).tolist() if chunks else [],
-            "frames": st["frames"], "median_latency_ms": st["median_latency_ms"],
+    data = {"start": chunks[0].start if chunks else session.delivered, "fps": 30, "frames": st["frames"],
+            "audio_seconds": round(st["audio_seconds"], 3), "median_latency_ms": st["median_latency_ms"],
             "p90_latency_ms": st["p90_latency_ms"], "real_time_factor": st["real_time_factor"], "status": status}
-    med = st["median_latency_ms"]
-    return json.dumps(data), ("" if med is None else f"{med:.0f}")
+    seq = MotionSequence(*(np.concatenate([getattr(c.motion, k) for c in chunks])
+                           for k in ("poses", "trans", "expressions"))) if chunks else None
+    if seq is None:
+        data.update(poses=[], trans=[], rotations=[], root=[])
+    elif body is None:
+        data.update(poses=seq.poses.round(4).tolist(), trans=seq.trans.round(4).tolist())
+    else:                       # only what the player draws: the JSON is a third of the size with the poses too
+        data.update({k: v.reshape(-1).round(4).tolist() for k, v in motion_arrays(seq, body).items()})
+    return json.dumps(data), _ms(st["median_latency_ms"]), _stats(st)
 
 
-def on_chunk(manager: LiveManager, chunk, session: LiveSession | None):
-    """One microphone chunk: open a session on the first, feed it, return what is ready."""
+def _ms(v: float | None) -> str:
+    return "" if v is None else f"{v:.0f}"
+
+
+def _stats(st: dict) -> str:
+    """The line beside #live-latency: p90 latency and real-time factor since the stream started."""
+    if st["p90_latency_ms"] is None:
+        return ""
+    rtf = st["real_time_factor"]
+    return f"p90 {st['p90_latency_ms']:.0f} ms · real-time factor {rtf:.1f}x · {st['frames']} frames"
+
+
+def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, body=None):
+    """One microphone chunk: open a session on the first, feed it, return what is ready
+    (state, player JSON, #live-latency, #live-stats, status)."""
     if chunk is None:
-        return session, gr.skip(), gr.skip(), gr.skip()
+        return session, gr.skip(), gr.skip(), gr.skip(), gr.skip()
     if session is None or not session.running:
         try:
             session = manager.open()
         except LiveBusy as exc:
-            return None, json.dumps({"status": str(exc)}), "", str(exc)
+            return None, json.dumps({"status": str(exc)}), "", "", str(exc)
     try:
         session.feed(to_float(*chunk))
         status = "streaming"
     except (LiveOverloaded, RuntimeError) as exc:
         status = str(exc)
         session.stop()
-    js, lat = payload(session, status)
-    return session, js, lat, status
+    return session, *payload(session, status, body), status
 
 
-def on_stop(session: LiveSession | None):
+def on_stop(session: LiveSession | None, body=None):
+    """The stop button (or the stream's time limit): generate the rest of the speech, then end the session."""
     if session is None:
-        return None, gr.skip(), gr.skip(), "stopped"
+        return None, gr.skip(), gr.skip(), gr.skip(), "stopped"
     session.end(timeout=10.0)
-    js, lat = payload(session, "stopped")
-    return None, js, lat, "stopped"
+    return None, *payload(session, "stopped", body), "stopped"
 
 
 def _delete(session: LiveSession | None) -> None:
@@ -79,19 +107,52 @@ def _delete(session: LiveSession | None) -> None:
         session.stop()
 
 
-def add_live_tab(manager: LiveManager) -> gr.Tab:
-    """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`)."""
+def live_player(body, cache: str | Path) -> gr.HTML | None:
+    """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`), or
+    None when the player bundle is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
+    from gesturelsm.export.player import body_glb
+    from gesturelsm.motion.sequence import NUM_BETAS
+
+    from .motion_player import BUNDLE, file_url
+
+    if not BUNDLE.exists():
+        return None
+    url = file_url(body_glb(body, np.zeros(NUM_BETAS, np.float32), cache))
+    js = (f"import(new URL('gradio_api/file={BUNDLE}', document.baseURI).href)"
+          ".then((m) => m.mountLive(element.querySelector('#live-player')))"
+          ".catch((e) => { element.querySelector('#live-player').dataset.error = String(e); });")
+    html = f'<div id="live-player" data-state="empty" data-frames="0" data-frame="0" data-preload="{url}"></div>'
+    return gr.HTML("", html_template=html, js_on_load=js, elem_id="live-player-box", padding=False)
+
+
+def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> gr.Tab:
+    """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`). With `body` (the page's body
+    model) and `cache` (where its rest GLB goes), the motion plays in the in-browser player `live-player`."""
+    if body is not None:
+        from gesturelsm.body.model import resolve_body
+
+        body = resolve_body(body)
     with gr.Tab("Live") as tab:
-        gr.Markdown("Speak into the microphone: the body gestures with you, generated on this CPU as you talk. "
+        gr.Markdown("Press record and speak: the body gestures with you, generated on this CPU while you talk, one "
+                    "steady delay behind your voice (it waits for 0.27 s of the speech after each moment, and "
+                    "generates half a second of motion at a time). Press stop to end the stream. "
                     f"At most {manager.max_sessions} live streams run at once.")
+        player = live_player(body, cache) if body is not None and cache is not None else None
         state = gr.State(None, delete_callback=_delete)
-        mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone")
+        mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
+                       waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page
         with gr.Row():
             latency = gr.Textbox(label="median latency (ms)", elem_id="live-latency", interactive=False)
+            stats = gr.Textbox(label="since the stream started", elem_id="live-stats", interactive=False)
             status = gr.Textbox(label="status", elem_id="live-status", interactive=False)
         motion = gr.Textbox(visible=False, elem_id="live-motion")            # JSON for the player
-        mic.stream(lambda c, s: on_chunk(manager, c, s), [mic, state], [state, motion, latency, status],
+        pbody = body if player is not None else None
+        outs = [state, motion, latency, stats, status]
+        mic.stream(lambda c, s: on_chunk(manager, c, s, pbody), [mic, state], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
-                   api_name="live_chunk")
-        mic.stop_recording(on_stop, [state], [state, motion, latency, status], api_name="live_stop")
+                   api_name="live_chunk", show_progress="hidden")
+        mic.stop_recording(lambda s: on_stop(s, pbody), [state], outs, api_name="live_stop")
+        if player is not None:
+            mic.start_recording(None, None, None, js="() => { window.gesturelsmLive && window.gesturelsmLive.reset(); }")
+            motion.change(None, motion, None, js="(j) => { window.gesturelsmLive && window.gesturelsmLive.push(j); }")
     return tab

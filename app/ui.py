@@ -17,12 +17,13 @@ from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
 
-from . import motion_player
+from . import live, motion_player
 from .raw_inputs import pass_through
 from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
 log = logging.getLogger("gesturelsm.app")
 QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
+LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
 MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
@@ -169,6 +170,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
                     view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
                                       elem_id="view3d")
+        if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
+            live.add_live_tab(live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS), body=service.body,
+                              cache=service.workdir / "player-bodies")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())

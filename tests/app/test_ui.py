@@ -149,7 +149,7 @@ def test_browser_microphone_recording_generates(playwright, app_url):
         page = b.new_context(permissions=["microphone"]).new_page()
         page.goto(app_url)
         page.locator("#speech button[aria-label='Record audio']").first.click()
-        page.get_by_role("button", name="Record", exact=True).click()
+        page.locator("#speech").get_by_role("button", name="Record", exact=True).click()   # not the Live tab's
         page.wait_for_timeout(2500)
         page.locator("#speech button.stop-button").first.click()
         page.locator("#speech [aria-label='Play']").wait_for(timeout=20000)     # the recording is in the player

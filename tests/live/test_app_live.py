@@ -36,17 +36,18 @@ def test_stream_then_stop_gives_all_frames_and_latency(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     state, frames, seen = None, [], []
     for ch in mic_chunks(3.0):
-        state, js, lat, status = live.on_chunk(mgr, ch, state)
+        state, js, lat, stats, status = live.on_chunk(mgr, ch, state)
         d = json.loads(js)
         assert d["start"] == sum(len(f) for f in frames)              # chunks continue where the last ended
         frames.append(d["poses"])
         seen.append(lat)
-    state, js, lat, status = live.on_stop(state)
+    state, js, lat, stats, status = live.on_stop(state)
     d = json.loads(js)
     frames.append(d["poses"])
     total = sum(len(f) for f in frames)
     assert total == 90 and all(len(p) == 165 for f in frames for p in f)     # 3 s at 30 fps
     assert float(lat) > 0 and d["median_latency_ms"] == pytest.approx(float(lat), abs=1)
+    assert f"p90 {d['p90_latency_ms']:.0f} ms" in stats and "real-time factor" in stats
     assert state is None and mgr.active == 0
     assert not [t for t in threading.enumerate() if t.name == "gesturelsm-live"]
 
@@ -55,7 +56,46 @@ def test_busy_message_and_closed_tab(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     ch = mic_chunks(0.4)[0]
     s1, *_ = live.on_chunk(mgr, ch, None)
-    s2, js, lat, status = live.on_chunk(mgr, ch, None)
+    s2, js, lat, stats, status = live.on_chunk(mgr, ch, None)
     assert s2 is None and "in use" in status and "in use" in json.loads(js)["status"]
     live._delete(s1)                                                   # what Gradio calls when the tab closes
     assert mgr.active == 0 and not s1.running
+
+
+def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
+    """With the page's body, each JSON carries the in-browser player's arrays for exactly the frames the same stream
+    gives without a body (streams are deterministic): quaternions that rotate like the axis-angle poses (plus the
+    body's pose mean) and the root = trans + rest pelvis."""
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.export.player import motion_arrays
+    from gesturelsm.motion.sequence import MotionSequence
+
+    body = resolve_body(None)
+    runs = []
+    for b in (None, body):
+        mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+        state, got = None, []
+        for ch in mic_chunks(2.0):
+            state, js, *_ = live.on_chunk(mgr, ch, state, b)
+            got.append(json.loads(js))
+        state, js, *_ = live.on_stop(state, b)
+        runs.append(got + [json.loads(js)])
+    plain, player = runs
+    n_all = 0
+    for p, d in zip(plain, player):
+        n = len(p["poses"])
+        assert d["start"] == p["start"] and not d.get("poses")
+        assert len(d["rotations"]) == n * 55 * 4 and len(d["root"]) == n * 3
+        n_all += n
+        if not n:
+            continue
+        seq = MotionSequence(poses=np.asarray(p["poses"], np.float32), trans=np.asarray(p["trans"], np.float32),
+                             expressions=np.zeros((n, 100), np.float32))
+        want = motion_arrays(seq, body)
+        q = np.asarray(d["rotations"]).reshape(n, 55, 4)
+        dots = np.abs((q * want["rotations"]).sum(-1))                      # q and -q are the same rotation
+        np.testing.assert_allclose(dots, 1.0, atol=1e-3)
+        np.testing.assert_allclose(np.asarray(d["root"]).reshape(n, 3), want["root"], atol=1e-3)
+    assert n_all == 60
+    first = np.asarray(next(d for d in player if d["root"])["root"]).reshape(-1, 3)[0]
+    np.testing.assert_allclose(first[[0, 2]], body.rest_joints()[0][[0, 2]], atol=1e-4)   # starts at x = z = 0

@@ -286,4 +286,102 @@ export function mount(element) {
   return element.__player;
 }
 
-window.GestureLSMPlayer = { MotionPlayer, mount };
+// ---- live streaming (the Live tab, app/live.py) -------------------------------------------------------------
+// A clock for motion that arrives in chunks while the visitor speaks: frame f is shown at f / fps + delay (seconds of
+// performance.now()), where delay is the largest lateness (browser arrival time - first frame / fps) of the last
+// LATE_KEEP chunks. Playback runs at 1x, keeps one steady delay behind the voice, and never goes backwards (when the
+// delay grows it holds the frame; when it shrinks it skips ahead).
+const LATE_KEEP = 8;
+
+export class LiveClock {
+  constructor(fps = 30) { this.fps = fps; this.paused = true; this.delay = null; this.late = []; this.t = 0; }
+
+  arrived(firstFrame) {                       // a chunk starting at frame firstFrame has just arrived
+    this.late.push(performance.now() / 1000 - firstFrame / this.fps);
+    if (this.late.length > LATE_KEEP) this.late.shift();
+    this.delay = Math.max(...this.late);
+    this.paused = false;
+  }
+
+  get currentTime() {
+    if (this.delay !== null && !this.paused) this.t = Math.max(this.t, performance.now() / 1000 - this.delay);
+    return this.t;
+  }
+
+  set currentTime(t) { /* a live stream is not scrubbed */ }
+  play() { return Promise.resolve(); }
+  pause() { this.paused = true; }
+}
+
+// The live player: a MotionPlayer with one body fed by the server's JSON (app/live.py `payload`), on a LiveClock.
+// push(json) appends the frames it carries; reset() starts a new stream (recording started). It also measures the
+// latency the visitor sees: for every newly drawn frame f, now - (recording start + f / fps), i.e. from the moment
+// the speech of that frame was spoken to the moment its motion is on screen (element data-shown-median-ms and
+// data-shown-p90-ms; the start is the browser's start_recording event, so the microphone's own start-up counts in).
+export class LiveFeed {
+  constructor(element, bodyUrl, label = 'live') {
+    this.player = new MotionPlayer(element);
+    this.element = element; this.bodyUrl = bodyUrl; this.label = label;
+    for (const c of ['.mp-play', '.mp-seek']) element.querySelector(c).style.display = 'none';
+    this.caption = el('span', { class: 'mp-live', style: 'font:12px sans-serif;margin-left:auto' },
+      element.querySelector('.mp-bar'));
+    this.ready = this.player.setBodies([{ label, body: bodyUrl }]).then(() => {   // the body at rest until a stream
+      this.player.renderer.render(this.player.scene, this.player.camera);
+      element.dataset.ready = '1';
+    });
+    this.spoken0 = null; this.seen = -1; this.shown = [];
+    const watch = () => { this._watch(); requestAnimationFrame(watch); };
+    requestAnimationFrame(watch);
+  }
+
+  async reset() {
+    this.spoken0 = performance.now(); this.seen = -1; this.shown = [];
+    this.clock = new LiveClock(30);
+    this.pending = [];
+    this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl }]);
+    await this.ready;
+    this.player.attachClock(this.clock);
+    for (const d of ['shownMedianMs', 'shownP90Ms']) delete this.element.dataset[d];
+    this.caption.textContent = '';
+  }
+
+  async push(json) {
+    let d; try { d = JSON.parse(json); } catch (e) { return; }
+    this.last = { audio_seconds: d.audio_seconds, frames: d.frames, at: performance.now() };   // for benchmarks
+    if (!this.clock) await this.reset();           // frames from a stream whose start this page did not see
+    await this.ready;
+    const n = d.root ? d.root.length / 3 : 0;
+    if (n && d.start === this.player.frames()) {   // contiguous with what is shown (chunks never overlap)
+      const E = d.expressions && d.expressions.length ? d.expressions.length / n : 0;
+      this.clock.arrived(d.start);
+      this.player.appendFrames(0, Float32Array.from(d.rotations), Float32Array.from(d.root),
+        E ? Float32Array.from(d.expressions) : null);
+    } else if (n) this.element.dataset.gaps = String(Number(this.element.dataset.gaps || 0) + 1);
+    if (d.status && d.status !== 'streaming') this.ended = true;
+  }
+
+  _watch() {
+    const f = this.player.shown;
+    if (this.spoken0 === null || f <= this.seen) return;
+    this.seen = f;
+    this.shown.push(performance.now() - (this.spoken0 + (1000 * f) / 30));
+    if (this.shown.length > 20000) this.shown.shift();
+    const now = performance.now();
+    if (now - (this.statsAt || 0) < 250) return;    // the page's layout: 4 times a second
+    this.statsAt = now;
+    const s = [...this.shown].sort((a, b) => a - b);
+    const q = (p) => s[Math.min(s.length - 1, Math.floor(p * s.length))];
+    this.element.dataset.shownMedianMs = String(Math.round(q(0.5)));
+    this.element.dataset.shownP90Ms = String(Math.round(q(0.9)));
+    this.caption.textContent = `on screen ${(q(0.5) / 1000).toFixed(2)} s after the speech (median; p90 ` +
+      `${(q(0.9) / 1000).toFixed(2)} s), in this browser`;
+  }
+}
+
+export function mountLive(element) {
+  if (!element.__live) element.__live = new LiveFeed(element, element.dataset.preload);
+  window.gesturelsmLive = element.__live;
+  return element.__live;
+}
+
+window.GestureLSMPlayer = { MotionPlayer, mount, LiveClock, LiveFeed, mountLive };
