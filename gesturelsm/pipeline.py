@@ -16,6 +16,7 @@ import numpy as np
 import torch
 
 from .audio import SAMPLE_RATE, resample, to_mono
+from .constants import ASSETS
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .flows import FACTS
@@ -27,7 +28,6 @@ from .reference.runner import REFERENCE_FACTS
 # every method a pipeline can run: ours (flows registry) and the authors' released weights (reference/)
 ALL_FACTS = {**FACTS, **REFERENCE_FACTS}
 
-ASSETS = Path(__file__).resolve().parents[1] / "assets"
 MIN_SECONDS = 0.5
 MAX_CFG = 10.0
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion

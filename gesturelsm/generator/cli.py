@@ -4,11 +4,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..constants import FPS, SAMPLE_RATE
+from ..constants import ASSETS, FPS, SAMPLE_RATE
 from ..errors import UserError
 from ..flows import METHODS
-
-ASSETS = Path(__file__).resolve().parents[2] / "assets"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

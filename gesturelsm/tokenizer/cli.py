@@ -4,10 +4,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..constants import ASSETS
 from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
-
-ASSETS = Path(__file__).resolve().parents[2] / "assets" / "tokenizer"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +30,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
     e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")
     e.add_argument("--data", required=True, help="BEAT2-layout folder")
-    e.add_argument("--ckpt", default=str(ASSETS), help="folder with <region>.safetensors (default: shipped)")
+    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"), help="folder with <region>.safetensors (default: shipped)")
     e.add_argument("--train-fraction", type=float, default=0.8)
     e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")
     e.add_argument("--json", help="also write the numbers as JSON here")
