@@ -13,6 +13,7 @@ import torch.distributed as dist
 from tqdm import tqdm
 
 from ..flows import training_method
+from ..motion.regions import REGIONS
 from ..safe_load import load_tensors
 from ..tokenizer.model import RVQVAE
 from .config import PRESETS, GeneratorConfig
@@ -58,8 +59,6 @@ def latent_stats(tokenizers: dict[str, RVQVAE], takes: list[TakeTensors], cfg: G
     std = torch.cat([tk.latents for tk in takes], dim=1).std(dim=(1, 2)).clamp_min(1e-3)     # (R,)
     zeros = torch.zeros(cfg.window_frames, 433)
     for region, tok in tokenizers.items():  # raw mean pose = normaliser mean
-        from ..motion.regions import REGIONS
-
         zeros[:, list(REGIONS[region].columns)] = tok.normalizer.mean
     neutral = encode_regions(tokenizers, zeros)[:, -cfg.seed_latents:] / std[:, None, None]
     return std, neutral

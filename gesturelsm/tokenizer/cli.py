@@ -5,8 +5,11 @@ import argparse
 from pathlib import Path
 
 from ..constants import ASSETS
+from ..data.split import split_features
 from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
+from .evaluate import evaluate_folder, format_report
+from .train import TrainConfig, train_region
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -38,9 +41,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    from ..data.split import split_features
-    from .train import TrainConfig, train_region
-
     if args.window % 4:
         raise UserError(f"--window must be a multiple of 4 (got {args.window})")
     if args.steps <= 0 or args.batch_size <= 0:
@@ -61,8 +61,6 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    from .evaluate import evaluate_folder, format_report
-
     report = evaluate_folder(args.data, args.ckpt, args.train_fraction, args.model)
     print(format_report(report))
     if args.json:
