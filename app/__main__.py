@@ -61,6 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
+    # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
+    # answer without them
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,

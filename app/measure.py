@@ -18,6 +18,8 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from gesturelsm.audio import load_audio  # noqa: E402
+
 SENTENCE = ("When we talk about the weather, we often move our hands to show the clouds, the wind and the sun. "
             "Then we point at the sky and explain why tomorrow will be better than today. ")
 
@@ -25,8 +27,6 @@ SENTENCE = ("When we talk about the weather, we often move our hands to show the
 def speech(seconds: float, out: Path) -> tuple[Path, str, float]:
     """eSpeak NG speech of about `seconds` (whole words), its text and its duration."""
     import soundfile as sf
-
-    from gesturelsm.audio import load_audio
 
     words = (SENTENCE * (int(seconds // 10) + 2)).split()[: max(3, int(seconds * 2.9))]
     text = " ".join(words)
@@ -46,6 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     from gradio_client import Client, handle_file
 
+    # lazy: the service loads torch and the checkpoints, .ui imports gradio; only once the arguments are read
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     from .ui import serve_locally

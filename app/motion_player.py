@@ -12,6 +12,9 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.app_service import GestureService, Outcome
+from gesturelsm.constants import SAMPLE_RATE
+from gesturelsm.export.player import body_glb, player_payload
+from gesturelsm.motion.sequence import NUM_BETAS
 
 PLAYER_DIR = Path(__file__).resolve().parent / "player"
 BUNDLE = PLAYER_DIR / "dist" / "player.js"
@@ -43,9 +46,6 @@ def player_component(service: GestureService) -> gr.HTML:
     the default shape (zero betas, what the generators output) as the page opens."""
     import numpy as np
 
-    from gesturelsm.export.player import body_glb
-    from gesturelsm.motion.sequence import NUM_BETAS
-
     if not BUNDLE.exists():
         return gr.HTML(MISSING, elem_id="motion-player-box")
     body = file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
@@ -56,9 +56,6 @@ def player_component(service: GestureService) -> gr.HTML:
 def payload(service: GestureService, out: Outcome) -> dict | None:
     """Write the player's files for a generated request (its folder) and return the player's payload."""
     import soundfile as sf
-
-    from gesturelsm.audio import SAMPLE_RATE
-    from gesturelsm.export.player import player_payload
 
     if not out.motions:
         return None

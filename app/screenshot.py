@@ -28,6 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     from playwright.sync_api import sync_playwright
 
+    # lazy: the service loads torch, .ui imports gradio; only once the arguments are read
     from gesturelsm.app_service import GestureService, ServiceSettings
 
     from .ui import EXAMPLES, serve_locally

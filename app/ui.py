@@ -13,6 +13,7 @@ import gradio as gr
 
 from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
                                     Request)
+from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
@@ -26,7 +27,7 @@ QUEUE_SIZE = 32                 # requests waiting beyond the ones being served;
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
-MODEL_CARD = Path(__file__).resolve().parents[1] / "assets" / "MODEL_CARD.md"
+MODEL_CARD = ASSETS / "MODEL_CARD.md"
 
 INTRO = """# GestureLSM: speech to gestures
 Record or upload speech, optionally give the transcript, and watch a body gesture with it, next to baselines.

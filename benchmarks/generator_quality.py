@@ -33,36 +33,51 @@ command does not make: BC against foreign speech, and window seams.
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import torch
 
+from gesturelsm.align.words import Word
+from gesturelsm.body import load_body_model
+from gesturelsm.data.beat2 import Beat2Dataset
+from gesturelsm.evaluation.amplitude import AmplitudeRow, format_rows
+from gesturelsm.generator.sampling import window_layout
+from gesturelsm.metrics.amplitude import pooled_stats, replay_novelty, training_bank
+from gesturelsm.metrics.beat import audio_beats, beat_consistency, joint_speed
+from gesturelsm.metrics.speech_response import beat_timing, energy_following
+from gesturelsm.motion.regions import REGIONS
+from gesturelsm.pipeline import GesturePipeline
+
 REPO = Path(__file__).resolve().parents[1]
 BEAT2 = REPO.parent / "shared" / "data" / "beat2"
+UPPER = list(REGIONS["upper"].joints)
+Seams = dict[str, list[tuple[float, float, float, float]]]
 
 
-def main() -> None:
+@dataclass
+class Heldout:
+    """The held-out speech: (name, 16 kHz audio, words, ground-truth joints or None) per clip, their beats,
+    the speaker's real take, its training part's joints and mean joint speeds (55,) on the body."""
+    clips: list[tuple]
+    beats: list[np.ndarray]
+    take: object
+    gt_train: np.ndarray
+    mean_speed: np.ndarray
+
+
+def parse_args() -> argparse.Namespace:
     ap = argparse.ArgumentParser()
     ap.add_argument("--checkpoints", default=None)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--steps", type=int, nargs="+", default=[1, 2, 4, 8])
     ap.add_argument("--cfg", type=float, nargs="+", default=[2.0], help="one or more CFG scales")
-    args = ap.parse_args()
-    from gesturelsm.body import load_body_model
-    from gesturelsm.data.beat2 import Beat2Dataset
-    from gesturelsm.evaluation.amplitude import AmplitudeRow, format_rows
-    from gesturelsm.metrics.amplitude import pooled_stats, replay_novelty, training_bank
-    from gesturelsm.metrics.beat import audio_beats, beat_consistency, joint_speed
-    from gesturelsm.metrics.speech_response import beat_timing, energy_following
-    from gesturelsm.motion.regions import REGIONS
-    from gesturelsm.pipeline import GesturePipeline
-    from gesturelsm.align.words import Word
+    return ap.parse_args()
 
-    if not BEAT2.exists():
-        raise SystemExit(f"needs the real BEAT2 sample at {BEAT2}")
-    body = load_body_model()
-    pipe = GesturePipeline.from_pretrained(args.checkpoints)
+
+def load_heldout(body) -> Heldout:
+    """The last 20 % of 2_scott_0_1_1 (the first 80 % is the ground truth's training part) and the audio-only takes."""
     ds = Beat2Dataset(BEAT2)
     take = ds.load("2_scott_0_1_1")
     T = take.motion.num_frames
@@ -76,98 +91,95 @@ def main() -> None:
     for name in ds.audio_only_names:
         t = ds.load(name)
         clips.append((name, t.audio, t.words, None))
-    beats = [audio_beats(c[1]) for c in clips]
-    upper = list(REGIONS["upper"].joints)
+    return Heldout(clips, [audio_beats(c[1]) for c in clips], take, gt_train, mean_speed)
 
-    def stats(j: np.ndarray, i: int) -> tuple[float, float, float, float, float, float]:
-        bc = beat_consistency(j, beats=beats[i], mean_speed=mean_speed)
-        other = beats[(i + 1) % len(clips)]
-        bc_sh = beat_consistency(j, beats=other, mean_speed=mean_speed)
-        gain = beat_timing(j, beats[i], mean_speed=mean_speed).gain
-        loud = energy_following(j, clips[i][1]).gain
-        sp = joint_speed(j)[:, upper].mean()
-        acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, upper].mean()
-        return bc, bc_sh, gain, loud, sp, acc
 
-    def with_gaps(audio: np.ndarray, words) -> tuple[np.ndarray, list, list[tuple[float, float]]]:
-        dur = len(audio) / 16000
-        gaps = [(a, a + 4.0) for a in np.arange(6.0, dur - 6.0, 12.0)]
-        y = audio.copy()
-        for a, b in gaps:
-            y[int(a * 16000):int(b * 16000)] = 0
-        kept = [w for w in words if not any(w.end > a and w.start < b for a, b in gaps)] if words else words
-        return y, kept, gaps
+def clip_stats(j: np.ndarray, i: int, h: Heldout) -> tuple[float, float, float, float, float, float]:
+    """Joints (T, 55, 3) made for clip i -> BC own, BC other speech, beat-timing gain, loudness gain, speed, jitter."""
+    bc = beat_consistency(j, beats=h.beats[i], mean_speed=h.mean_speed)
+    other = h.beats[(i + 1) % len(h.clips)]
+    bc_sh = beat_consistency(j, beats=other, mean_speed=h.mean_speed)
+    gain = beat_timing(j, h.beats[i], mean_speed=h.mean_speed).gain
+    loud = energy_following(j, h.clips[i][1]).gain
+    sp = joint_speed(j)[:, UPPER].mean()
+    acc = (np.linalg.norm(j[2:] - 2 * j[1:-1] + j[:-2], axis=-1) * 900)[:, UPPER].mean()
+    return bc, bc_sh, gain, loud, sp, acc
 
-    seams: dict[str, list[tuple[float, float, float, float]]] = {}
 
-    def seam_stats(j: np.ndarray, method: str) -> None:
-        """Per-frame max joint speed change (m/s per frame) near window borders vs inside windows."""
-        from gesturelsm.generator.sampling import window_layout
+def with_gaps(audio: np.ndarray, words) -> tuple[np.ndarray, list, list[tuple[float, float]]]:
+    """4 s of silence every 12 s (from 6 s on), words inside the gaps dropped: (audio, words, gaps in s)."""
+    dur = len(audio) / 16000
+    gaps = [(a, a + 4.0) for a in np.arange(6.0, dur - 6.0, 12.0)]
+    y = audio.copy()
+    for a, b in gaps:
+        y[int(a * 16000):int(b * 16000)] = 0
+    kept = [w for w in words if not any(w.end > a and w.start < b for a, b in gaps)] if words else words
+    return y, kept, gaps
 
-        g = pipe.generators[method].config
-        speed = np.linalg.norm(np.diff(j, axis=0), axis=-1) * 30                        # (T-1, 55)
-        jump = np.abs(np.diff(speed, axis=0)).max(axis=1)                              # (T-2,)
-        borders = [4 * (st + g.seed_latents // 2) for st in window_layout(len(j) // 4, g.window_latents,
-                                                                           g.seed_latents)[1:]]
-        near = np.zeros(len(jump), bool)
-        for b in borders:
-            near[max(0, b - 8):b + 8] = True
-        if near.any() and (~near).any():
-            seams.setdefault(method, []).append((jump[near].max(), jump[~near].max(), jump[near].mean(),
-                                                 jump[~near].mean()))
 
-    rows = []
-    gt_whole = body.joints(take.motion.poses, take.motion.trans)
-    bank = training_bank([gt_train])
-    amp_rows = [AmplitudeRow("speaker, whole take", pooled_stats([gt_whole]), None),
-                AmplitudeRow("speaker, held-out 20 %", pooled_stats([clips[0][3]]),
-                             replay_novelty([clips[0][3]], bank, [clips[0][3]]))]
-    whole_beats = audio_beats(take.audio)
-    gt_tests = {"beat timing (BC)": beat_timing(gt_whole, whole_beats, mean_speed=mean_speed),
-                "loudness following (correlation)": energy_following(gt_whole, take.audio)}
-    gt = stats(clips[0][3], 0)
-    rows.append(("ground truth (clip 1 only)", "-", "-", *gt[:2], f"{gt[2]:+.3f}", f"{gt[3]:+.3f}", *gt[4:],
-                 float("nan")))
-    gapped = [(i, *with_gaps(c[1], c[2])) for i, c in enumerate(clips) if len(c[1]) > 20 * 16000]
-    gapped_speech = [(i, pipe.prepare_speech(y, 16000, words=w), gaps) for i, y, w, gaps in gapped]
-    plan = [(m, s, c) for c in args.cfg for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods
-            for s in args.steps]
-    if "ddim" in pipe.methods:
-        plan += [("ddim", 20, c) for c in args.cfg]
-    speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in clips]
-    def upper_speed(j: np.ndarray) -> np.ndarray:
-        return joint_speed(j)[:, upper].mean(1)
+def seam_stats(j: np.ndarray, pipe: GesturePipeline, method: str, seams: Seams) -> None:
+    """Per-frame max joint speed change (m/s per frame) near window borders vs inside windows."""
+    g = pipe.generators[method].config
+    speed = np.linalg.norm(np.diff(j, axis=0), axis=-1) * 30                        # (T-1, 55)
+    jump = np.abs(np.diff(speed, axis=0)).max(axis=1)                              # (T-2,)
+    borders = [4 * (st + g.seed_latents // 2) for st in window_layout(len(j) // 4, g.window_latents,
+                                                                       g.seed_latents)[1:]]
+    near = np.zeros(len(jump), bool)
+    for b in borders:
+        near[max(0, b - 8):b + 8] = True
+    if near.any() and (~near).any():
+        seams.setdefault(method, []).append((jump[near].max(), jump[~near].max(), jump[near].mean(),
+                                             jump[~near].mean()))
 
-    for method, steps, cfg in plan:
-        vals, in_gap, with_speech, motions = [], [], [], []
-        main_setting = (steps == 8 or (method == "ddim" and steps == 20)) and cfg == args.cfg[0]
-        speeds = {}                                                      # (clip, seed) -> upper-body speed
-        for i, sp in enumerate(speech):
-            for seed in range(args.seeds):
-                res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method)
-                j = body.joints(res.motion.poses, res.motion.trans)
-                vals.append(stats(j, i))
-                motions.append(j)
-                speeds[i, seed] = upper_speed(j)
-                if main_setting:
-                    seam_stats(j, method)
-        if main_setting:
-            for i, gsp, gaps in gapped_speech:
-                for seed in range(args.seeds):
-                    res = pipe.generate(gsp, steps=steps, cfg=cfg, seed=seed, method=method)
-                    v0, v1 = speeds[i, seed], upper_speed(body.joints(res.motion.poses, res.motion.trans))
-                    for a, b in gaps:
-                        sl = slice(int((a + 1) * 30), int(b * 30))
-                        in_gap.append(v1[sl].mean())
-                        with_speech.append(v0[sl].mean())
-        amp_rows.append(AmplitudeRow(f"{method} {steps} steps CFG {cfg:g}", pooled_stats(motions),
-                                     replay_novelty(motions, bank, [clips[0][3]])))
-        silence = np.mean(in_gap) / np.mean(with_speech) if in_gap else float("nan")
-        v = np.array(vals)
-        gains = [f"{g.mean():+.3f} +- {g.std(ddof=1) / np.sqrt(len(g)):.3f} ({(g > 0).sum()}/{len(g)} > 0)"
-                 for g in (v[:, 2], v[:, 3])]
-        rows.append((method, steps, cfg, *v[:, :2].mean(0), *gains, *v[:, 4:].mean(0), silence))
-    print(f"held-out clips: {', '.join(c[0] for c in clips)}; {args.seeds} seeds\n")
+
+def upper_speed(j: np.ndarray) -> np.ndarray:
+    return joint_speed(j)[:, UPPER].mean(1)
+
+
+def silence_ratio(pipe: GesturePipeline, body, gapped_speech: list, speeds: dict, method: str, steps: int,
+                  cfg: float, seeds: int) -> float:
+    """Upper-body speed inside the gaps (from 1 s after each gap starts) over the speed in the same spans with
+    speech, same seeds; `speeds`: (clip, seed) -> upper-body speed with the whole speech."""
+    in_gap, with_speech = [], []
+    for i, gsp, gaps in gapped_speech:
+        for seed in range(seeds):
+            res = pipe.generate(gsp, steps=steps, cfg=cfg, seed=seed, method=method)
+            v0, v1 = speeds[i, seed], upper_speed(body.joints(res.motion.poses, res.motion.trans))
+            for a, b in gaps:
+                sl = slice(int((a + 1) * 30), int(b * 30))
+                in_gap.append(v1[sl].mean())
+                with_speech.append(v0[sl].mean())
+    return np.mean(in_gap) / np.mean(with_speech) if in_gap else float("nan")
+
+
+def method_row(pipe: GesturePipeline, body, h: Heldout, speech: list, gapped_speech: list, bank, seams: Seams,
+               method: str, steps: int, cfg: float, seeds: int, main_setting: bool) -> tuple[tuple, AmplitudeRow]:
+    """One method x steps x CFG over every clip and seed: the table row and the amplitude row (at the main
+    setting also the window seams and the speed in silence)."""
+    vals, motions = [], []
+    speeds = {}                                                      # (clip, seed) -> upper-body speed
+    for i, sp in enumerate(speech):
+        for seed in range(seeds):
+            res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method)
+            j = body.joints(res.motion.poses, res.motion.trans)
+            vals.append(clip_stats(j, i, h))
+            motions.append(j)
+            speeds[i, seed] = upper_speed(j)
+            if main_setting:
+                seam_stats(j, pipe, method, seams)
+    silence = (silence_ratio(pipe, body, gapped_speech, speeds, method, steps, cfg, seeds) if main_setting
+               else float("nan"))
+    amp = AmplitudeRow(f"{method} {steps} steps CFG {cfg:g}", pooled_stats(motions),
+                       replay_novelty(motions, bank, [h.clips[0][3]]))
+    v = np.array(vals)
+    gains = [f"{g.mean():+.3f} +- {g.std(ddof=1) / np.sqrt(len(g)):.3f} ({(g > 0).sum()}/{len(g)} > 0)"
+             for g in (v[:, 2], v[:, 3])]
+    return (method, steps, cfg, *v[:, :2].mean(0), *gains, *v[:, 4:].mean(0), silence), amp
+
+
+def print_report(h: Heldout, seeds: int, rows: list, gt_tests: dict, amp_rows: list, seams: Seams,
+                 cfg: float) -> None:
+    print(f"held-out clips: {', '.join(c[0] for c in h.clips)}; {seeds} seeds\n")
     print("| method | steps | CFG | BC (own speech) | BC (other speech) | BC gain over shifted speech | "
           "loudness-following gain | upper-body speed (m/s) | jitter (m/s^2) | speed in silence / with speech |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -183,12 +195,48 @@ def main() -> None:
     print("\nAmplitude (with the transcript; in brackets the ratio to the speaker's whole take):\n")
     print(format_rows(amp_rows, amp_rows[0].stats))
     print("\nWindow seams (frame-to-frame change of joint speed, m/s; +-8 frames around each window border vs the")
-    print(f"rest; 8 steps, DDIM 20; CFG {args.cfg[0]}):\n")
+    print(f"rest; 8 steps, DDIM 20; CFG {cfg}):\n")
     print("| method | max at borders | max inside | mean at borders | mean inside |")
     print("|---|---|---|---|---|")
     for m, v in seams.items():
         a = np.array(v)
         print(f"| {m} | {a[:, 0].max():.3f} | {a[:, 1].max():.3f} | {a[:, 2].mean():.3f} | {a[:, 3].mean():.3f} |")
+
+
+def main() -> None:
+    args = parse_args()
+    if not BEAT2.exists():
+        raise SystemExit(f"needs the real BEAT2 sample at {BEAT2}")
+    body = load_body_model()
+    pipe = GesturePipeline.from_pretrained(args.checkpoints)
+    h = load_heldout(body)
+    take = h.take
+    gt_whole = body.joints(take.motion.poses, take.motion.trans)
+    bank = training_bank([h.gt_train])
+    amp_rows = [AmplitudeRow("speaker, whole take", pooled_stats([gt_whole]), None),
+                AmplitudeRow("speaker, held-out 20 %", pooled_stats([h.clips[0][3]]),
+                             replay_novelty([h.clips[0][3]], bank, [h.clips[0][3]]))]
+    whole_beats = audio_beats(take.audio)
+    gt_tests = {"beat timing (BC)": beat_timing(gt_whole, whole_beats, mean_speed=h.mean_speed),
+                "loudness following (correlation)": energy_following(gt_whole, take.audio)}
+    gt = clip_stats(h.clips[0][3], 0, h)
+    rows = [("ground truth (clip 1 only)", "-", "-", *gt[:2], f"{gt[2]:+.3f}", f"{gt[3]:+.3f}", *gt[4:],
+             float("nan"))]
+    gapped = [(i, *with_gaps(c[1], c[2])) for i, c in enumerate(h.clips) if len(c[1]) > 20 * 16000]
+    gapped_speech = [(i, pipe.prepare_speech(y, 16000, words=w), gaps) for i, y, w, gaps in gapped]
+    plan = [(m, s, c) for c in args.cfg for m in ("gesturelsm", "rectified_flow", "ddim") if m in pipe.methods
+            for s in args.steps]
+    if "ddim" in pipe.methods:
+        plan += [("ddim", 20, c) for c in args.cfg]
+    speech = [pipe.prepare_speech(c[1], 16000, words=c[2]) for c in h.clips]
+    seams: Seams = {}
+    for method, steps, cfg in plan:
+        main_setting = (steps == 8 or (method == "ddim" and steps == 20)) and cfg == args.cfg[0]
+        row, amp = method_row(pipe, body, h, speech, gapped_speech, bank, seams, method, steps, cfg, args.seeds,
+                              main_setting)
+        rows.append(row)
+        amp_rows.append(amp)
+    print_report(h, args.seeds, rows, gt_tests, amp_rows, seams, args.cfg[0])
 
 
 if __name__ == "__main__":

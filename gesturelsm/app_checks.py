@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from . import limits
+from .align import TextGridError, read_result
 from .limits import SEED_MAX, method_list, one_of, real_number, switch, transcript_problems, whole_number
 
 def method_steps(raw: Any, chosen: Sequence[str] | None, facts: Mapping[str, Any], p: list[str]) -> dict | None:
@@ -61,8 +62,6 @@ def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices
 
 def textgrid_words(path: str | Path, seconds: float) -> tuple[list | None, list[str], list[str]]:
     """(words inside the audio, problems, notes) for an uploaded TextGrid and `seconds` of speech."""
-    from .align import TextGridError, read_result
-
     path = Path(path)
     try:
         size = path.stat().st_size

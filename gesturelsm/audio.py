@@ -11,6 +11,7 @@ import numpy as np
 
 from .constants import SAMPLE_RATE
 from .errors import AudioError
+from .uploads import describe_seconds, ffmpeg_input_args, probe_duration, sniff_container
 
 
 
@@ -57,8 +58,6 @@ def load_audio(path: str | Path, sr: int = SAMPLE_RATE, max_seconds: float | Non
     aiff block by block (downmixed per block); other containers, and files libsndfile rejects, are decoded
     with the ffmpeg binary that imageio-ffmpeg bundles, pinned to the sniffed demuxer.
     """
-    from .uploads import describe_seconds, probe_duration, sniff_container
-
     path = Path(path)
     if not path.exists():
         raise AudioError(f"Audio file not found: {path}")
@@ -114,8 +113,6 @@ def _decode_with_ffmpeg(path: Path, sr: int, container=None, max_seconds: float 
     import subprocess
 
     import imageio_ffmpeg
-
-    from .uploads import ffmpeg_input_args, sniff_container
 
     container = container or sniff_container(path)
     if container is None:

@@ -1,3 +1,18 @@
-"""Conventions shared by the whole package, defined once: speech is 16 kHz mono, motion is 30 frames per second."""
+"""Conventions shared by the whole package, defined once: speech is 16 kHz mono, motion is 30 frames per second;
+and where the shipped checkpoints and body model live."""
+from pathlib import Path
+
 SAMPLE_RATE = 16_000        # Hz: every audio array inside the package
 FPS = 30                    # motion frames per second (BEAT2's rate)
+
+
+def _shipped_assets() -> Path:
+    """The shipped files (tokenizer/, generator/, body/, MODEL_CARD.md): inside an installed wheel they are the
+    package's `_assets/` (setup.py maps the repository's top-level assets/ there); in a checkout or an editable
+    install they are the repository's `assets/` beside the package."""
+    package = Path(__file__).resolve().parent
+    installed = package / "_assets"
+    return installed if installed.is_dir() else package.parent / "assets"
+
+
+ASSETS = _shipped_assets()

@@ -15,19 +15,26 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import torch
 
+from .align import align_words
+from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, resample, to_mono
+from .constants import ASSETS
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
+from .features.audio import audio_channels
+from .features.text import TEXT_DIM, TextEmbedder
 from .flows import FACTS
+from .generator.model import GestureGenerator
+from .generator.sampling import decode_latents, generate_latents
 from .motion.postprocess import check_smoothing, fit_length, postprocess
-from .motion.regions import join_regions
+from .motion.regions import GENERATED_REGIONS, join_regions
 from .motion.sequence import FPS, MotionSequence
-from .reference.runner import REFERENCE_FACTS
+from .reference.runner import REFERENCE_FACTS, attach_reference, generate_for_pipeline
+from .tokenizer.model import RVQVAE
 
 # every method a pipeline can run: ours (flows registry) and the authors' released weights (reference/)
 ALL_FACTS = {**FACTS, **REFERENCE_FACTS}
 
-ASSETS = Path(__file__).resolve().parents[1] / "assets"
 MIN_SECONDS = 0.5
 MAX_CFG = 10.0
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
@@ -119,10 +126,6 @@ class GesturePipeline:
                         max_seconds: float = 600.0, warm_up: bool = True) -> "GesturePipeline":
         """`path`: a folder with tokenizer/<region>.safetensors and generator/<method>.safetensors
         (default: the shipped assets/)."""
-        from .generator.model import GestureGenerator
-        from .motion.regions import GENERATED_REGIONS
-        from .tokenizer.model import RVQVAE
-
         root = Path(path) if path else ASSETS
         ref_root = root if (root / "reference_rvq.safetensors").exists() else None  # authors' weights (import-reference)
         if ref_root is not None and not (root / "tokenizer").exists():
@@ -139,8 +142,6 @@ class GesturePipeline:
         if not gens and ref_root is None:
             raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
         pipe = cls(tokenizers, gens, device, max_seconds)
-        from .reference.runner import attach_reference
-
         attach_reference(pipe, ref_root)
         if warm_up:
             pipe.warm_up()
@@ -149,9 +150,6 @@ class GesturePipeline:
     def warm_up(self) -> None:
         """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
         (~3 s) are not counted in the first request's feature time."""
-        from .features.audio import audio_channels
-        from .features.text import TextEmbedder
-
         TextEmbedder.shared().available  # noqa: B018 (loads the model)
         audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
 
@@ -166,9 +164,6 @@ class GesturePipeline:
         """Validate and resample audio; word timings from aligning a typed `text`, else from `words` (e.g. a
         TextGrid), else from automatic transcription (`transcribe`), else audio-only. Features that do not
         depend on the method are computed here once."""
-        from .features.audio import audio_channels
-        from .features.text import TEXT_DIM, TextEmbedder
-
         timings: dict[str, float] = {}
         warnings: list[str] = []
         t0 = time.perf_counter()
@@ -194,8 +189,6 @@ class GesturePipeline:
             progress(0.1, "audio features")
         mode, transcript = "audio-only (no transcript given)", None
         if text and text.strip():
-            from .align import align_words
-
             t1 = time.perf_counter()
             res = align_words(y, text)
             timings["alignment"] = time.perf_counter() - t1
@@ -208,8 +201,6 @@ class GesturePipeline:
         elif words is not None:
             mode = "transcript with given word timings"
         elif transcribe:
-            from .asr.source import automatic_words
-
             t1 = time.perf_counter()
             auto = automatic_words(y)
             timings["transcription"] = time.perf_counter() - t1
@@ -282,13 +273,10 @@ class GesturePipeline:
                  text: str | None = None, steps: int = 8, cfg: float = 2.0, seed: int = 0,
                  method: str = "gesturelsm", progress: Progress | None = None,
                  transcribe: bool = True) -> GenerationResult:
-        from .generator.sampling import decode_latents, generate_latents
-
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe)
         if method in getattr(self, "reference_methods", {}):   # the authors' released weights (reference/)
-            from .reference.runner import generate_for_pipeline
 
             motion, t, warn = generate_for_pipeline(self, speech, method, steps, cfg, seed)
             return GenerationResult(motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **t},

@@ -10,9 +10,12 @@ import sys
 import time
 from pathlib import Path
 
+from ..audio import SAMPLE_RATE, load_audio
 from ..errors import UserError
+from .aligner import AlignConfig, align_words
 from .metrics import onset_errors_ms, onset_stats
-from .textgrid import write_textgrid
+from .normalize import tokenize
+from .textgrid import read_words, write_textgrid
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,11 +34,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..audio import SAMPLE_RATE, load_audio
-    from .aligner import AlignConfig, align_words
-    from .normalize import tokenize
-    from .textgrid import read_words
-
     text = _transcript(args, UserError)
     if not tokenize(text):
         raise UserError("the transcript has no words to align (only punctuation or spaces?)")

@@ -10,6 +10,13 @@ import sys
 import time
 from pathlib import Path
 
+from ..align import read_words
+from ..align.cli import output_words
+from ..audio import SAMPLE_RATE, load_audio
+from ..errors import UserError
+from .model import RecognizerUnavailable
+from .transcribe import AUDIO_ONLY_NOTE, transcribe
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("transcribe", help="recognise English speech offline, words with times (TextGrid out)",
@@ -25,13 +32,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..align import read_words
-    from ..align.cli import output_words
-    from ..audio import SAMPLE_RATE, load_audio
-    from ..errors import UserError
-    from .model import RecognizerUnavailable
-    from .transcribe import AUDIO_ONLY_NOTE, transcribe
-
     if args.out is not None and args.out.suffix.lower() != ".textgrid":
         raise UserError(f"--out must end in .TextGrid (got {args.out.name})")
     reference = read_words(args.reference) if args.reference else None

@@ -8,6 +8,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .mannequin import DEFAULT_PATH, write_mannequin
+from .model import load_body_model
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("body", help="build or check the SMPL-X body model",
@@ -24,8 +27,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run_build(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .mannequin import DEFAULT_PATH, write_mannequin
-
     path = write_mannequin(args.out or DEFAULT_PATH)
     with np.load(path) as d:
         V, F = len(d["v_template"]), len(d["f"])
@@ -34,8 +35,6 @@ def run_build(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from .model import load_body_model
-
     body = load_body_model(args.model)   # BodyModelError (a ValueError) -> one clear line, exit 2
     J = body.rest_joints()
     print(f"model:     {body.path}")

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constants import ASSETS
 from ..motion.skeleton import JOINT_NAMES, NUM_JOINTS, PARENTS
 from .mannequin_head import NOSE_TIP, expression_fields, eyeball, head, landmark_targets
 from .mannequin_mesh import Part
@@ -32,7 +33,7 @@ from .proportions import FINGERS
 
 NUM_SHAPE, NUM_EXPR = 300, 100
 HEIGHT_PER_BETA, GIRTH_PER_BETA = 0.04, 0.08
-DEFAULT_PATH = Path(__file__).resolve().parents[2] / "assets" / "body" / "SMPLX_MANNEQUIN.npz"
+DEFAULT_PATH = ASSETS / "body" / "SMPLX_MANNEQUIN.npz"
 MODEL_TAG = "gesturelsm-mannequin"
 
 # joint -> (part, ring) whose vertices regress it

@@ -17,6 +17,7 @@ import numpy as np
 from ..motion.skeleton import NUM_JOINTS
 from ..errors import BodyModelError
 from ..safe_load import UnsafePickleError, load_npz
+from .mannequin import DEFAULT_PATH, write_mannequin
 
 ENV_VAR = "GESTURELSM_SMPLX_MODEL"
 SMPLX_FILE_NAMES = ("SMPLX_NEUTRAL_2020.npz", "SMPLX_NEUTRAL.npz")
@@ -26,8 +27,6 @@ _MIN_VERTICES_DEFAULT_IDS = 9930   # smplx's default extra-joint vertex ids go u
 
 def default_model_path() -> Path:
     """The shipped mannequin; rebuilt into a user cache if the asset is missing (e.g. a wheel install)."""
-    from .mannequin import DEFAULT_PATH, write_mannequin
-
     if DEFAULT_PATH.exists():
         return DEFAULT_PATH
     cached = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "gesturelsm" / DEFAULT_PATH.name

@@ -20,6 +20,7 @@ from typing import Iterable, Iterator
 import numpy as np
 import torch
 
+from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, AudioError, load_audio
 from ..errors import DatasetError
 from ..motion.sequence import FPS, MotionFileError, MotionSequence
@@ -131,8 +132,6 @@ class Beat2Dataset:
         words = None
         tg = self.text_dir / f"{name}.TextGrid"
         if with_text and tg.exists():
-            from ..align.textgrid import read_words  # TextGrid I/O lives with the aligner
-
             words = read_words(tg)
         return Take(name, speaker_of(name), motion, audio, words, self.splits.get(name))
 

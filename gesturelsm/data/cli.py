@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from ..constants import SAMPLE_RATE
+from .beat2 import Beat2Dataset
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -16,8 +17,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
-    from .beat2 import Beat2Dataset
-
     ds = Beat2Dataset(args.root, speakers=args.speakers)
     print(f"{ds.root}: {len(ds.names)} motion takes, {len(ds.audio_only_names)} audio-only takes")
     print(f"{'take':<28}{'frames':>8}{'seconds':>9}{'audio s':>9}{'words':>7}  split")

@@ -25,6 +25,7 @@ import torch
 
 from ..body import load_body_model
 from ..data.beat2 import Beat2Dataset
+from ..generator.data import encode_regions
 from ..metrics.amplitude import AmplitudeStats, ReplayGuard, pooled_stats, replay_novelty, training_bank
 from ..motion.regions import REGIONS
 from ..motion.sequence import MotionSequence
@@ -134,8 +135,6 @@ def rest_seeds(pipe, method: str, train: list[MotionSequence], count: int = 8, q
     """`count` first-window seeds (R, s, D), scaled like the generator's latents, from the speaker's rest
     moments: the s-latent spans of the training motion whose upper-body rotation change is in the lowest
     `quantile`, spread evenly over those spans (deterministic)."""
-    from ..generator.data import encode_regions
-
     model = pipe.generators[method]
     s = model.config.seed_latents
     spans = []

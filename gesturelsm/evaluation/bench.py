@@ -32,7 +32,13 @@ from typing import Callable
 import numpy as np
 import torch
 
+from ..audio import load_audio
 from ..constants import FPS, SAMPLE_RATE
+from ..flows import make_method
+from ..generator.config import PRESETS
+from ..generator.model import GestureGenerator
+from ..pipeline import GesturePipeline
+from ..render import render_video
 from .timing import hardware_name, synchronize, timed
 
 Log = Callable[[str], None]
@@ -88,11 +94,6 @@ def speech_clip(seconds: float, source: np.ndarray | None = None) -> np.ndarray:
 
 def paper_pipeline(shipped, device: str = "cpu"):
     """The paper-size generator for every shipped method (random weights), on the shipped tokenizers."""
-    from ..flows import make_method
-    from ..generator.config import PRESETS
-    from ..generator.model import GestureGenerator
-    from ..pipeline import GesturePipeline
-
     torch.manual_seed(0)
     gens = {}
     for name, g in shipped.generators.items():
@@ -122,8 +123,6 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
               speech: np.ndarray | None = None, long_seconds: float = 60.0, end_to_end: dict | None = None,
               log: Log | None = None, long_presets: tuple[str, ...] = ("shipped", "paper")) -> dict:
     """-> JSON-ready report. `end_to_end`: {"audio": path, "text": str | None, "out": mp4 path} or None."""
-    from ..pipeline import GesturePipeline
-
     log = log or (lambda m: None)
     shipped = GesturePipeline.from_pretrained(checkpoints, device=device, methods=methods)
     pipes = {"shipped": shipped}
@@ -195,9 +194,6 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
 def time_end_to_end(pipe, audio: str | Path, out: str | Path, text: str | None = None, method: str = "gesturelsm",
                     steps: int = 8, cfg: float = 2.0, seconds: float | None = 10.0) -> dict:
     """Upload to video: decode the file, (align the transcript), generate, render the mp4 with the speech."""
-    from ..audio import load_audio
-    from ..render import render_video
-
     stages = {}
     t0 = time.perf_counter()
     y = load_audio(audio)

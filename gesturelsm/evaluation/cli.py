@@ -13,6 +13,17 @@ import argparse
 import json
 from pathlib import Path
 
+from ..body import load_body_model
+from ..data.beat2 import Beat2Dataset
+from ..metrics.fgd import default_extractors
+from ..pipeline import GesturePipeline
+from .bench import run_bench
+from .clips import heldout_clips
+from .evaluate import evaluate, plan_grid
+from .plot import quality_time_plot
+from .tables import bench_markdown, eval_markdown
+from .timing import check_device
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("eval", help="paper metrics (FGD, BC vs GT, diversity, face error, time) on held-out data",
@@ -72,13 +83,6 @@ def run_eval(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from ..body import load_body_model
-    from ..metrics.fgd import default_extractors
-    from ..pipeline import GesturePipeline
-    from .clips import heldout_clips
-    from .evaluate import evaluate, plan_grid
-    from .tables import eval_markdown
-
     if args.threads:
         torch.set_num_threads(args.threads)
     clips, policy = heldout_clips(args.data, args.train_fraction, audio_only=not args.no_audio_only,
@@ -112,11 +116,6 @@ def run_eval(args: argparse.Namespace) -> int:
 def run_bench_cli(args: argparse.Namespace) -> int:
     import torch
 
-    from .bench import run_bench
-    from .plot import quality_time_plot
-    from .tables import bench_markdown
-    from .timing import check_device
-
     if args.threads:
         torch.set_num_threads(args.threads)
     devices = ["cpu"] + (["cuda"] if torch.cuda.is_available() else []) if args.device == "auto" else [args.device]
@@ -125,8 +124,6 @@ def run_bench_cli(args: argparse.Namespace) -> int:
     speech, e2e = None, None
     out = Path(args.out)
     if args.data:
-        from ..data.beat2 import Beat2Dataset
-
         ds = Beat2Dataset(args.data)
         names = ds.audio_only_names + ds.names
         if names:

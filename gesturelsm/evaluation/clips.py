@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..align.words import Word
 from ..audio import SAMPLE_RATE
 from ..data.beat2 import Beat2Dataset
 from ..motion.sequence import FPS, MotionSequence
@@ -31,8 +32,6 @@ class EvalClip:
 def _shift_words(words: list | None, t0: float, t1: float) -> list | None:
     if words is None:
         return None
-    from ..align.words import Word
-
     return [Word(w.text, max(w.start, t0) - t0, min(w.end, t1) - t0) for w in words if w.end > t0 and w.start < t1]
 
 

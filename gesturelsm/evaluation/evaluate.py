@@ -21,12 +21,13 @@ from typing import Callable
 
 import numpy as np
 
+from ..body import load_body_model
 from ..constants import SAMPLE_RATE
 from ..metrics.amplitude import amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
 from ..metrics.face import expression_mse, face_vertex_mse
-from ..metrics.fgd import fgd
+from ..metrics.fgd import default_extractors, fgd
 from ..metrics.physics import foot_skating, jitter
 from .clips import EvalClip
 
@@ -104,9 +105,6 @@ def evaluate(pipe, clips: list[EvalClip], plan: list[EvalPlanItem], seeds: int =
              extractors=None, mean_speed: np.ndarray | None = None, face_vertices: bool = False,
              log: Log | None = None) -> dict:
     """-> report dict (JSON-ready): ground truth summary, one row per plan item, clip list, settings."""
-    from ..body import load_body_model
-    from ..metrics.fgd import default_extractors
-
     log = log or (lambda m: None)
     body = body or load_body_model()
     extractors = default_extractors() if extractors is None else extractors

@@ -11,6 +11,9 @@ from pathlib import Path
 
 from ..body.model import resolve_body
 from ..errors import UserError
+from ..motion.sequence import MotionSequence
+from ..render.style import STYLES, parse_size
+from . import export_bvh, export_glb, export_keypoints, export_npz
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -32,9 +35,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..motion.sequence import MotionSequence
-    from . import export_bvh, export_glb, export_keypoints, export_npz
-
     if not any((args.bvh, args.glb, args.keypoints, args.npz)):
         raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --npz")
     if not Path(args.motion).exists():
@@ -51,8 +51,6 @@ def run(args: argparse.Namespace) -> int:
     if args.glb:
         done.append(export_glb(seq, args.glb, body=body, names=args.names))
     if args.keypoints:
-        from ..render.style import STYLES, parse_size
-
         if args.style not in STYLES:
             raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
         done.append(export_keypoints(seq, args.keypoints, size=parse_size(args.size), body=body,

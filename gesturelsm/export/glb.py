@@ -105,21 +105,9 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return n
 
 
-def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "animator",
-               max_expressions: int = 10, color: tuple[float, float, float] = (0.78, 0.69, 0.60)) -> Path:
-    """Write `seq` as an animated skinned GLB (see the module docstring); returns the path."""
-    label = joint_names(names)
-    body = resolve_body(body)
-    path = Path(path)
-    T = seq.num_frames
-    J = body.rest_joints(seq.betas).astype(np.float64)                               # (55, 3)
-    rest = rest_pose(body, seq.betas)                                                 # bind pose
-    V = rest.vertices[0].astype(np.float32)                                           # (V, 3)
-    F = body.faces.astype(np.uint32)
-    W = body.module.lbs_weights.detach().cpu().numpy()                                # (V, 55)
+def _add_mesh(b: _Builder, V: np.ndarray, F: np.ndarray, W: np.ndarray) -> dict:
+    """The rest mesh's buffers: (V, 3) vertices, (F, 3) faces, (V, 55) skinning weights -> a glTF primitive."""
     jidx, jw = top_k_weights(W, 4)
-
-    b = _Builder()
     a_pos = b.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)
     a_nrm = b.add(_vertex_normals(V.astype(np.float64), F.astype(np.int64)).astype(np.float32), FLOAT, "VEC3",
                   ARRAY_BUFFER)
@@ -127,18 +115,26 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
     a_wgt = b.add(jw, FLOAT, "VEC4", ARRAY_BUFFER)
     a_idx = b.add(F.reshape(-1).astype(np.uint16 if len(V) < 65536 else np.uint32),
                   USHORT if len(V) < 65536 else UINT, "SCALAR", ELEMENT_ARRAY_BUFFER)
+    return {"attributes": {"POSITION": a_pos, "NORMAL": a_nrm, "JOINTS_0": a_jnt, "WEIGHTS_0": a_wgt},
+            "indices": a_idx, "material": 0, "mode": 4}
 
-    # morph targets: expression directions the body actually uses (the first max_expressions)
+
+def _add_morph_targets(b: _Builder, body, seq: MotionSequence, num_vertices: int,
+                       max_expressions: int) -> tuple[list[int], list[dict]]:
+    """Expression directions the body actually uses (of the first max_expressions): (their indices, targets)."""
     E = min(int(body.num_expressions), int(max_expressions), seq.expressions.shape[1])
-    dirs = body.module.expr_dirs.detach().cpu().numpy()[..., :E] if E > 0 else np.zeros((len(V), 3, 0))
+    dirs = body.module.expr_dirs.detach().cpu().numpy()[..., :E] if E > 0 else np.zeros((num_vertices, 3, 0))
     used = [e for e in range(E) if np.abs(dirs[..., e]).max() > 0]
     targets = [{"POSITION": b.add(np.ascontiguousarray(dirs[..., e]).astype(np.float32), FLOAT, "VEC3",
                                   ARRAY_BUFFER, minmax=True)} for e in used]
+    return used, targets
 
-    ibm = np.tile(np.eye(4), (NUM_JOINTS, 1, 1))
-    ibm[:, :3, 3] = -J
-    a_ibm = b.add(np.transpose(ibm, (0, 2, 1)).astype(np.float32), FLOAT, "MAT4")    # column-major
 
+def _add_animation(b: _Builder, seq: MotionSequence, body, J: np.ndarray,
+                   used: list[int]) -> tuple[list[dict], list[dict]]:
+    """Samplers and channels at seq.fps: a rotation per joint, the pelvis translation (rest pelvis J[0] + trans)
+    and the used expressions' morph weights."""
+    T = seq.num_frames
     times = (np.arange(T) / seq.fps).astype(np.float32)
     a_time = b.add(times, FLOAT, "SCALAR", minmax=True)
     R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq, body).reshape(T, NUM_JOINTS, 3))).numpy()
@@ -156,7 +152,11 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
         samplers.append({"input": a_time, "output": b.add(wts.reshape(-1), FLOAT, "SCALAR"),
                          "interpolation": "LINEAR"})
         channels.append({"sampler": len(samplers) - 1, "target": {"node": NUM_JOINTS, "path": "weights"}})
+    return samplers, channels
 
+
+def _nodes(J: np.ndarray, label: list[str]) -> list[dict]:
+    """The 55 joint nodes (rest translation from the parent), then the body mesh node and the scene root."""
     nodes = []
     for j in range(NUM_JOINTS):
         t = J[j] if j == 0 else J[j] - J[PARENTS[j]]
@@ -167,9 +167,42 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
         nodes.append(node)
     nodes.append({"name": "body", "mesh": 0, "skin": 0})
     nodes.append({"name": "gesturelsm", "children": [0, NUM_JOINTS]})
+    return nodes
 
-    prim = {"attributes": {"POSITION": a_pos, "NORMAL": a_nrm, "JOINTS_0": a_jnt, "WEIGHTS_0": a_wgt},
-            "indices": a_idx, "material": 0, "mode": 4}
+
+def _write_glb(path: Path, gltf: dict, blob: bytearray) -> None:
+    """The GLB container: 12-byte header, then the JSON and BIN chunks, each padded to 4 bytes."""
+    js = json.dumps(gltf, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    data = bytes(blob) + b"\0" * (-len(blob) % 4)
+    total = 12 + 8 + len(js) + 8 + len(data)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as fh:
+        fh.write(struct.pack("<4sII", b"glTF", 2, total))
+        fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
+        fh.write(struct.pack("<I4s", len(data), b"BIN\0") + data)
+
+
+def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "animator",
+               max_expressions: int = 10, color: tuple[float, float, float] = (0.78, 0.69, 0.60)) -> Path:
+    """Write `seq` as an animated skinned GLB (see the module docstring); returns the path."""
+    label = joint_names(names)
+    body = resolve_body(body)
+    path = Path(path)
+    J = body.rest_joints(seq.betas).astype(np.float64)                               # (55, 3)
+    rest = rest_pose(body, seq.betas)                                                 # bind pose
+    V = rest.vertices[0].astype(np.float32)                                           # (V, 3)
+    F = body.faces.astype(np.uint32)
+    W = body.module.lbs_weights.detach().cpu().numpy()                                # (V, 55)
+
+    b = _Builder()
+    prim = _add_mesh(b, V, F, W)
+    used, targets = _add_morph_targets(b, body, seq, len(V), max_expressions)
+    ibm = np.tile(np.eye(4), (NUM_JOINTS, 1, 1))
+    ibm[:, :3, 3] = -J
+    a_ibm = b.add(np.transpose(ibm, (0, 2, 1)).astype(np.float32), FLOAT, "MAT4")    # column-major
+    samplers, channels = _add_animation(b, seq, body, J, used)
+
     mesh = {"name": "body", "primitives": [prim]}
     if targets:
         prim["targets"] = targets
@@ -179,7 +212,7 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
         "asset": {"version": "2.0", "generator": "gesturelsm export_glb"},
         "scene": 0,
         "scenes": [{"name": "gesturelsm", "nodes": [NUM_JOINTS + 1]}],
-        "nodes": nodes,
+        "nodes": _nodes(J, label),
         "meshes": [mesh],
         "materials": [{"name": "clay", "pbrMetallicRoughness": {
             "baseColorFactor": [float(c) ** 2.2 for c in color] + [1.0], "metallicFactor": 0.0,
@@ -190,17 +223,9 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
         "accessors": b.accessors,
         "bufferViews": b.views,
         "buffers": [{"byteLength": len(b.blob)}],
-        "extras": {"fps": seq.fps, "frames": T, "units": "metres, y up, body faces +z"},
+        "extras": {"fps": seq.fps, "frames": seq.num_frames, "units": "metres, y up, body faces +z"},
     }
-    js = json.dumps(gltf, separators=(",", ":")).encode()
-    js += b" " * (-len(js) % 4)
-    blob = bytes(b.blob) + b"\0" * (-len(b.blob) % 4)
-    total = 12 + 8 + len(js) + 8 + len(blob)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "wb") as fh:
-        fh.write(struct.pack("<4sII", b"glTF", 2, total))
-        fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
-        fh.write(struct.pack("<I4s", len(blob), b"BIN\0") + blob)
+    _write_glb(path, gltf, b.blob)
     return path
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS
+from ..render.frames import fit_camera
 from .skeleton import EXTRA_NAMES, extra_vertex_ids
 
 _X = {n: NUM_JOINTS + i for i, n in enumerate(EXTRA_NAMES)}      # index into [joints | extra]
@@ -85,8 +86,6 @@ def keypoints_2d(seq: MotionSequence, camera=None, size: tuple[int, int] = (512,
                  ) -> tuple[dict[str, np.ndarray], object]:
     """({layout: (T, K, 3) [x, y, c]}, camera): projected keypoints; missing / outside points are 0, 0, 0.
     camera None: the one `render_video([seq], ..., style=style)` uses at `size` (no labels)."""
-    from ..render.frames import fit_camera
-
     if camera is None:
         camera = fit_camera([seq], body=body, style=style, size=size)
     pts = keypoints_3d(seq, body)

@@ -22,6 +22,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
@@ -97,8 +98,6 @@ def read_motion(path: str | Path, frames: int, expressions: int = 0) -> dict[str
 
 def body_glb(body, betas: np.ndarray | None, cache: str | Path) -> Path:
     """The rest body as a skinned GLB in `cache`, written once per shape (file name = hash of the betas)."""
-    from ..render.frames import resolve_body
-
     body = resolve_body(body)
     betas = np.zeros(0, np.float32) if betas is None else np.asarray(betas, np.float32).reshape(-1)
     template = body.module.v_template.detach().cpu().numpy().astype(np.float32)
@@ -118,8 +117,6 @@ def player_payload(motions: Sequence[MotionSequence], labels: Sequence[str], met
                    audio: Path | None = None) -> dict:
     """Write each motion's `.bin` into `out` (rest bodies into `cache`) and return the player's payload;
     `url(path)` turns a written file into the URL the browser fetches."""
-    from ..render.frames import resolve_body
-
     body = resolve_body(body)
     out = Path(out)
     frames = min(m.num_frames for m in motions)

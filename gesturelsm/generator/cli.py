@@ -4,11 +4,18 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..constants import FPS, SAMPLE_RATE
+from ..align.words import Word
+from ..constants import ASSETS, FPS, SAMPLE_RATE
+from ..data.beat2 import Beat2Dataset
 from ..errors import UserError
+from ..features.text import TextEmbedder
 from ..flows import METHODS
-
-ASSETS = Path(__file__).resolve().parents[2] / "assets"
+from ..motion.regions import GENERATED_REGIONS
+from ..tokenizer.model import RVQVAE
+from .config import PRESETS
+from .data import build_take
+from .distributed import check_launch
+from .train import GenTrainConfig, train_generator
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -42,14 +49,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_train(args: argparse.Namespace) -> int:
     import torch
-
-    from ..data.beat2 import Beat2Dataset
-    from ..features.text import TextEmbedder
-    from ..motion.regions import GENERATED_REGIONS
-    from ..tokenizer.model import RVQVAE
-    from .data import build_take
-    from .distributed import check_launch
-    from .train import GenTrainConfig, train_generator
 
     check_launch(args.device)              # refuse e.g. more torchrun processes than GPUs before loading anything
     tok_dir = Path(args.tokenizers)
@@ -85,8 +84,6 @@ def run_train(args: argparse.Namespace) -> int:
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
         held_words = None
         if take.words is not None:
-            from ..align.words import Word
-
             t0 = cut / FPS
             held_words = [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0]
         held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
@@ -110,8 +107,6 @@ def run_train(args: argparse.Namespace) -> int:
 def preset_with(preset: str, overrides: list[str]):
     """A named GeneratorConfig preset with FIELD=VALUE overrides (values parsed as the field's type)."""
     import dataclasses
-
-    from .config import PRESETS
 
     if preset not in PRESETS:
         raise UserError(f"unknown preset {preset!r}; choose from {', '.join(PRESETS)}")

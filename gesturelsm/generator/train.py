@@ -13,6 +13,7 @@ import torch.distributed as dist
 from tqdm import tqdm
 
 from ..flows import training_method
+from ..motion.regions import REGIONS
 from ..safe_load import load_tensors
 from ..tokenizer.model import RVQVAE
 from .config import PRESETS, GeneratorConfig
@@ -58,11 +59,62 @@ def latent_stats(tokenizers: dict[str, RVQVAE], takes: list[TakeTensors], cfg: G
     std = torch.cat([tk.latents for tk in takes], dim=1).std(dim=(1, 2)).clamp_min(1e-3)     # (R,)
     zeros = torch.zeros(cfg.window_frames, 433)
     for region, tok in tokenizers.items():  # raw mean pose = normaliser mean
-        from ..motion.regions import REGIONS
-
         zeros[:, list(REGIONS[region].columns)] = tok.normalizer.mean
     neutral = encode_regions(tokenizers, zeros)[:, -cfg.seed_latents:] / std[:, None, None]
     return std, neutral
+
+
+def _build_model(takes: list[TakeTensors], tokenizers: dict[str, RVQVAE], tc: GenTrainConfig, method,
+                 config: GeneratorConfig | None) -> tuple[GeneratorConfig, GestureGenerator, torch.Tensor, torch.Tensor]:
+    """The generator for `tc`'s method on the tokenizers' latents, with its latent std and neutral seed set."""
+    base = config or PRESETS[tc.preset]
+    cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
+                             "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
+                             "prediction": tc.prediction if method.facts.predicts == "velocity" else "data"})
+    model = GestureGenerator(cfg, tc.method)
+    std, neutral = latent_stats(tokenizers, takes, cfg)
+    model.latent_std.copy_(std)
+    model.neutral_seed.copy_(neutral)
+    return cfg, model, std, neutral
+
+
+def _learning_rate(tc: GenTrainConfig, step: int) -> float:
+    """Linear warm-up over tc.warmup steps, then cosine decay to 10 % of tc.lr."""
+    return tc.lr * min(1.0, (step + 1) / tc.warmup) * (0.5 * (1 + math.cos(math.pi * step / tc.steps)) * 0.9 + 0.1)
+
+
+def _batch_loss(method, net, model: GestureGenerator, ema: GestureGenerator, b, tc: GenTrainConfig, world: int,
+                g: torch.Generator):
+    """The method's loss on batch `b`: the network as `f(x, t, d, drop, rows)` (speech encoded once per batch,
+    or inside the DDP call), and with tc.ema_teacher the EMA network as the shortcut teacher."""
+    cond = model.speech(b.audio, b.words, b.has_word, b.has_text) if world == 1 else None
+
+    def f(x, t, d, drop, rows=None):
+        r = slice(None) if rows is None else rows
+        if world > 1:  # DDP needs the whole forward inside the wrapped module's call
+            return net(x, t, d, None, b.seed[r], drop,
+                       speech=(b.audio[r], b.words[r], b.has_word[r], b.has_text[r]))
+        return net(x, t, d, cond[r], b.seed[r], drop)
+
+    teacher = None
+    if tc.ema_teacher:
+        ema_cond = ema.speech(b.audio, b.words, b.has_word, b.has_text)
+
+        def teacher(x, t, d, drop, rows=None):
+            r = slice(None) if rows is None else rows
+            return ema(x, t, d, ema_cond[r], b.seed[r], drop)
+    return method.loss(f, b.x1, tc.cond_drop, generator=g, **({"teacher": teacher} if teacher else {}))
+
+
+@torch.no_grad()
+def _update_ema(ema: GestureGenerator, model: GestureGenerator, decay: float) -> None:
+    for pe, pm in zip(ema.parameters(), model.parameters()):
+        pe.lerp_(pm, 1 - decay)
+    # buffers are not averaged but must follow: the speech encoder's BatchNorm running statistics.
+    # (Until this release they stayed at their initial mean 0 / variance 1 in the exported EMA network,
+    # so at inference the speech features were mis-scaled and the models learned to ignore speech.)
+    for be, bm in zip(ema.buffers(), model.buffers()):
+        be.copy_(bm)
 
 
 def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokenizers: dict[str, RVQVAE],
@@ -73,14 +125,7 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     if tc.prediction not in ("data", "velocity"):
         raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
     method = training_method(tc.method, tc.prediction, tc.time_sampler)
-    base = config or PRESETS[tc.preset]
-    cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
-                             "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
-                             "prediction": tc.prediction if method.facts.predicts == "velocity" else "data"})
-    model = GestureGenerator(cfg, tc.method)
-    std, neutral = latent_stats(tokenizers, takes, cfg)
-    model.latent_std.copy_(std)
-    model.neutral_seed.copy_(neutral)
+    cfg, model, std, neutral = _build_model(takes, tokenizers, tc, method, config)
     model.to(device)
     ema = copy.deepcopy(model).eval().requires_grad_(False)
     opt = torch.optim.Adam(model.parameters(), lr=tc.lr, betas=tc.betas)
@@ -106,40 +151,16 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     model.train()
     t0 = time.time()
     while step < tc.steps:
-        lr = tc.lr * min(1.0, (step + 1) / tc.warmup) * (0.5 * (1 + math.cos(math.pi * step / tc.steps)) * 0.9 + 0.1)
+        lr = _learning_rate(tc, step)
         for grp in opt.param_groups:
             grp["lr"] = lr
         b = sampler.sample(tc.batch_size).to(device)
-        cond = model.speech(b.audio, b.words, b.has_word, b.has_text) if world == 1 else None
-
-        def f(x, t, d, drop, rows=None):
-            r = slice(None) if rows is None else rows
-            if world > 1:  # DDP needs the whole forward inside the wrapped module's call
-                return net(x, t, d, None, b.seed[r], drop,
-                           speech=(b.audio[r], b.words[r], b.has_word[r], b.has_text[r]))
-            return net(x, t, d, cond[r], b.seed[r], drop)
-
-        teacher = None
-        if tc.ema_teacher:
-            ema_cond = ema.speech(b.audio, b.words, b.has_word, b.has_text)
-
-            def teacher(x, t, d, drop, rows=None):
-                r = slice(None) if rows is None else rows
-                return ema(x, t, d, ema_cond[r], b.seed[r], drop)
-        res = method.loss(f, b.x1, tc.cond_drop, generator=g, **({"teacher": teacher} if teacher else {}))
+        res = _batch_loss(method, net, model, ema, b, tc, world, g)
         opt.zero_grad(set_to_none=True)
         res.loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), tc.grad_clip)
         opt.step()
-        with torch.no_grad():
-            decay = ema_decay(step, tc.ema)
-            for pe, pm in zip(ema.parameters(), model.parameters()):
-                pe.lerp_(pm, 1 - decay)
-            # buffers are not averaged but must follow: the speech encoder's BatchNorm running statistics.
-            # (Until this release they stayed at their initial mean 0 / variance 1 in the exported EMA network,
-            # so at inference the speech features were mis-scaled and the models learned to ignore speech.)
-            for be, bm in zip(ema.buffers(), model.buffers()):
-                be.copy_(bm)
+        _update_ema(ema, model, ema_decay(step, tc.ema))
         step += 1
         bar.update(1)
         if step % 10 == 0:

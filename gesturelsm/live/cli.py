@@ -11,6 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..audio import load_audio
+from ..features.audio import audio_channels
+from ..motion.sequence import MotionSequence
+from ..pipeline import GesturePipeline
 from .stream import SR, LiveConfig, MotionChunk, StreamingGenerator
 
 
@@ -28,8 +32,6 @@ class LiveRun:
         return self.audio_seconds / max(self.compute_seconds, 1e-9)
 
     def motion(self):
-        from ..motion.sequence import MotionSequence
-
         ms = [c.motion for c in self.chunks]
         return MotionSequence(np.concatenate([m.poses for m in ms]), np.concatenate([m.trans for m in ms]),
                               np.concatenate([m.expressions for m in ms]))
@@ -74,16 +76,11 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..audio import load_audio
-    from ..pipeline import GesturePipeline
-
     if args.chunk_ms <= 0:
         raise ValueError("--chunk-ms must be positive")
     cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed)
     audio = load_audio(args.audio)
     import torch
-
-    from ..features.audio import audio_channels
 
     torch.set_num_threads(max(1, args.threads))
 

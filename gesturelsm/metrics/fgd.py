@@ -14,6 +14,7 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
+from .emage_fgd import SkeletonConvEncoder, emage_features, load_emage_weights
 from .frechet import frechet_distance
 from .motion_features import geometric_features, kinetic_features
 
@@ -42,16 +43,12 @@ class EmageExtractor:
     name = "fgd_emage"
 
     def __init__(self, weights: str | Path | dict | None = None, model=None):
-        from .emage_fgd import SkeletonConvEncoder, load_emage_weights
-
         self.model = model if model is not None else SkeletonConvEncoder()
         if weights is not None:
             load_emage_weights(self.model, weights)
         self.model.eval()
 
     def __call__(self, motion, joints: np.ndarray | None) -> np.ndarray:
-        from .emage_fgd import emage_features
-
         return emage_features(self.model, motion.to_features()[:, :330])
 
 

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from .importer import import_reference
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("import-reference", help="convert the authors' released GestureLSM files (safely) to our checkpoints",
@@ -16,8 +18,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .importer import import_reference
-
     for path in import_reference(args.dir, args.out, heads=args.heads):
         print(f"wrote {path}")
     return 0

@@ -13,6 +13,8 @@ import warnings
 from pathlib import Path
 
 from ..errors import UserError
+from . import STYLES, RenderError, parse_size, render_frames, render_video
+from .frames import RenderWarning
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -55,9 +57,6 @@ def _gen_times(values: list[str] | None) -> list[float | None] | None:
 
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
-
-    from . import STYLES, RenderError, parse_size, render_frames, render_video
-    from .frames import RenderWarning
 
     if args.style not in STYLES:
         raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")

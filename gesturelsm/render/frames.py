@@ -18,6 +18,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera
 from .labels import LabelPatch, label_lines, make_label
+from .scene import SceneRenderer
 from .style import RenderStyle
 
 MotionLike = MotionSequence | str | Path
@@ -159,8 +160,6 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
                 gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
                 frame_indices: Sequence[int] | None = None, chunk: int = 32) -> Iterator[np.ndarray]:
     """Yield (H, N * W, 3) uint8 frames, one per motion frame (or per index in `frame_indices`)."""
-    from .scene import SceneRenderer
-
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
     body = resolve_body(body)

@@ -29,7 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .backend import RenderError, select_platform
+from .backend import PACKAGES, RenderError, select_platform
 from .camera import Camera
 from .shaders import program_cache
 from .style import RenderStyle
@@ -138,7 +138,6 @@ class SceneRenderer:
         try:
             self._r = pyrender.OffscreenRenderer(W, H)
         except Exception as exc:  # context creation: missing driver pieces, no device, ...
-            from .backend import PACKAGES
 
             raise RenderError(f"could not create an offscreen OpenGL context with {self.backend} "
                               f"({type(exc).__name__}: {exc}); try GESTURELSM_GL="

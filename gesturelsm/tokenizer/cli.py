@@ -4,10 +4,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..constants import ASSETS
+from ..data.split import split_features
 from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
-
-ASSETS = Path(__file__).resolve().parents[2] / "assets" / "tokenizer"
+from .evaluate import evaluate_folder, format_report
+from .train import TrainConfig, train_region
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
     e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")
     e.add_argument("--data", required=True, help="BEAT2-layout folder")
-    e.add_argument("--ckpt", default=str(ASSETS), help="folder with <region>.safetensors (default: shipped)")
+    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"), help="folder with <region>.safetensors (default: shipped)")
     e.add_argument("--train-fraction", type=float, default=0.8)
     e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")
     e.add_argument("--json", help="also write the numbers as JSON here")
@@ -39,9 +41,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    from ..data.split import split_features
-    from .train import TrainConfig, train_region
-
     if args.window % 4:
         raise UserError(f"--window must be a multiple of 4 (got {args.window})")
     if args.steps <= 0 or args.batch_size <= 0:
@@ -62,8 +61,6 @@ def run_train(args: argparse.Namespace) -> int:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    from .evaluate import evaluate_folder, format_report
-
     report = evaluate_folder(args.data, args.ckpt, args.train_fraction, args.model)
     print(format_report(report))
     if args.json:

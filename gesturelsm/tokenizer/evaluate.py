@@ -3,8 +3,13 @@ from __future__ import annotations
 
 import torch
 
+from ..body import load_body_model
+from ..body.fk import forward_kinematics
+from ..data.split import split_features
 from ..motion.regions import REGIONS, TRANS_OFFSET
 from ..motion.rotations import geodesic_angle, rot6d_to_matrix
+from ..motion.skeleton import PARENTS
+from ..motion.translation import velocity_to_trans
 from .model import RVQVAE
 
 
@@ -49,10 +54,6 @@ def reconstruction_error(model: RVQVAE, heldout: list[torch.Tensor], num_layers:
 
 def _joint_positions(feats: torch.Tensor, rest_joints: torch.Tensor) -> torch.Tensor:
     """(T, 433) raw features -> (T, 55, 3) joint positions (m) by forward kinematics on the given skeleton."""
-    from ..body.fk import forward_kinematics
-    from ..motion.skeleton import PARENTS
-    from ..motion.translation import velocity_to_trans
-
     T = feats.shape[0]
     rot = rot6d_to_matrix(feats[:, :330].reshape(T, 55, 6))
     joints, _ = forward_kinematics(rot, rest_joints, PARENTS)
@@ -107,9 +108,6 @@ def evaluate_region(model: RVQVAE, heldout: list[torch.Tensor], rest_joints: tor
 
 def evaluate_folder(data_root, ckpt_dir, train_fraction: float = 0.8, body_model=None) -> dict:
     from pathlib import Path
-
-    from ..body import load_body_model
-    from ..data.split import split_features
 
     split = split_features(data_root, train_fraction)
     rest = torch.as_tensor(load_body_model(body_model).rest_joints(), dtype=torch.float32)

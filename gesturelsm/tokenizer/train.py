@@ -15,6 +15,7 @@ from ..motion.regions import GENERATED_REGIONS, REGIONS
 from ..motion.sequence import mirror_features
 from ..safe_load import load_tensors
 from .config import preset
+from .evaluate import reconstruction_error
 from .model import RVQVAE
 
 
@@ -94,8 +95,6 @@ def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log
             bar.set_postfix(loss=f"{out.recon_loss.item():.4f}", ppl=f"{out.quant.perplexity[0].item():.0f}",
                             use=f"{out.quant.usage[:out.quant.num_layers].mean().item():.2f}", dead=resets)
         if heldout and (step % cfg.eval_every == 0 or step == cfg.steps):
-            from .evaluate import reconstruction_error
-
             model.eval()
             err = reconstruction_error(model, heldout)
             model.train()
