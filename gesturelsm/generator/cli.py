@@ -34,6 +34,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--time-sampler", default="beta", choices=["beta", "uniform", "logit_normal"],
                    help="gesturelsm only: training-time distribution of t")
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
+    p.add_argument("--seed-noise", type=float, default=0.0,
+                   help="std of noise on the real seed latents in training (the rollout seeds windows with generated ones)")
     p.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8)
@@ -93,6 +95,7 @@ def run_train(args: argparse.Namespace) -> int:
     tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
                         lr=args.lr, betas=tuple(args.betas), prediction=args.prediction,
                         time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
+                        seed_noise=args.seed_noise,
                         eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
     out = Path(args.out) / f"{args.method}.safetensors"
     policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"

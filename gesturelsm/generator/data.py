@@ -79,7 +79,8 @@ class Batch:
 
 class LatentWindowSampler:
     def __init__(self, takes: list[TakeTensors], window: int, seed_len: int, latent_std: torch.Tensor,
-                 neutral_seed: torch.Tensor, p_neutral_seed: float = 0.1, p_no_text: float = 0.2, seed: int = 0):
+                 neutral_seed: torch.Tensor, p_neutral_seed: float = 0.1, p_no_text: float = 0.2, seed: int = 0,
+                 seed_noise: float = 0.0):
         self.takes = [tk for tk in takes if tk.latents.shape[1] >= window]
         if not self.takes:
             raise ValueError(f"no take has {window * 4} frames (one generator window)")
@@ -87,6 +88,8 @@ class LatentWindowSampler:
         self.std = latent_std.reshape(-1, 1, 1)
         self.neutral = neutral_seed
         self.p_neutral, self.p_no_text = p_neutral_seed, p_no_text
+        self.seed_noise = seed_noise      # std of Gaussian noise on real seeds (scaled latents): at inference the
+                                          # seed is the previous window's *generated* overlap, not real motion
         self.g = torch.Generator().manual_seed(seed)
         n = torch.tensor([tk.latents.shape[1] - window + 1 for tk in self.takes], dtype=torch.float)
         self.weights = n / n.sum()
@@ -102,7 +105,9 @@ class LatentWindowSampler:
             # the seed is the window's own first s latents: at inference they are the overlap that the
             # previous window generated (see sampling.py)
             if torch.rand((), generator=self.g) >= self.p_neutral:
-                seeds.append(tk.latents[:, st:st + s] / self.std)
+                clean = tk.latents[:, st:st + s] / self.std
+                seeds.append(clean + self.seed_noise * torch.randn(clean.shape, generator=self.g)
+                             if self.seed_noise > 0 else clean)
             else:
                 seeds.append(self.neutral)
             a0 = samples_for(4 * st)

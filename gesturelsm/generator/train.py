@@ -35,6 +35,7 @@ class GenTrainConfig:
     cond_drop: float = 0.1           # classifier-free guidance dropout
     text_drop: float = 0.2           # transcript dropout (trains audio-only mode)
     neutral_seed_p: float = 0.1      # windows started from the neutral seed
+    seed_noise: float = 0.0          # std of noise added to real seed latents (robust window-to-window rollout)
     ema: float = 0.999               # EMA weights are what gets exported (decay warms up: see ema_decay)
     ema_teacher: bool = False        # shortcut targets from the EMA network (Shortcut Models) or online
     time_sampler: str = "beta"       # gesturelsm: beta | uniform | logit_normal
@@ -132,7 +133,8 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     state_path = out_path.with_suffix(".state.pt")
     step = 0
     sampler = LatentWindowSampler(takes, cfg.window_latents, cfg.seed_latents, std, neutral, tc.neutral_seed_p,
-                                  tc.text_drop, seed=tc.seed + 1000 * rank)
+                                  tc.text_drop, seed=tc.seed + 1000 * rank,
+                                  seed_noise=tc.seed_noise)
     if state_path.exists():
         st = load_tensors(state_path, map_location=device)            # tensors only: no code from the file
         model.load_state_dict(st["model"])
