@@ -67,110 +67,136 @@ def _examples() -> list[list]:
     return [[str(EXAMPLES / m["audio"]), m["text"]] for m in meta if (EXAMPLES / m["audio"]).exists()]
 
 
-def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
-    settings = service.settings
-    choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
-    default_methods = [m for m in FACTS if m in service.methods][:3]
+class _Handlers:
+    """The page's event handlers over one service; each turns the service's errors into one message."""
 
-    def _request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=True, *, exports: bool, render: bool = True) -> Request:
+    def __init__(self, service: GestureService):
+        self.service = service
+
+    @staticmethod
+    def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                auto_text=True, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.app_checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
                        steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=cfg, seed=seed,
                        stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text,
                        render=render)
 
-    def _run(req: Request, progress):
-        try:
-            return service.run(req, progress=lambda f, m: progress(f, desc=m))
-        except GestureError as exc:    # the one place the page turns errors into messages: one log line, no
-            log.info("request refused: %s", " | ".join(str(exc).splitlines()))   # traceback (server bugs keep theirs)
-            raise gr.Error(str(exc), duration=None, print_exception=False) from None
+    @staticmethod
+    def _refuse(exc: GestureError):
+        """The one place the page turns errors into messages: one log line, no traceback (server bugs keep theirs)."""
+        log.info("request refused: %s", " | ".join(str(exc).splitlines()))
+        raise gr.Error(str(exc), duration=None, print_exception=False) from None
 
+    def _run(self, req: Request, progress):
+        try:
+            return self.service.run(req, progress=lambda f, m: progress(f, desc=m))
+        except GestureError as exc:
+            self._refuse(exc)
+
+    @staticmethod
     def _files(out):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def show_motion(*args, progress=gr.Progress()):
+    def show_motion(self, *args, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events."""
-        out = _run(_request(*args, exports=False, render=False), progress)
+        out = self._run(self.request(*args, exports=False, render=False), progress)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return motion_player.payload(service, out), out.rows, out.summary, out, recognised
+        return motion_player.payload(self.service, out), out.rows, out.summary, out, recognised
 
-    def show_video(out, progress=gr.Progress()):
+    def show_video(self, out, progress=gr.Progress()):
         if out is None:
             return None, gr.skip(), gr.skip(), None
         try:
-            service.render(out, progress=lambda f, m: progress(f, desc=m))
+            self.service.render(out, progress=lambda f, m: progress(f, desc=m))
         except GestureError as exc:
-            log.info("request refused: %s", " | ".join(str(exc).splitlines()))
-            raise gr.Error(str(exc), duration=None, print_exception=False) from None
+            self._refuse(exc)
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
 
-    def add_exports(out):
+    def add_exports(self, out):
         if out is None:
             return None, None, gr.skip()
-        service.export(out)
-        return *_files(out), out.summary
+        self.service.export(out)
+        return *self._files(out), out.summary
 
-    def generate(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+    def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=True, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
-        out = _run(_request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                            auto_text, exports=True), progress)
-        return (str(out.video), out.rows, out.summary, *_files(out))
+        out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
+                                     size, auto_text, exports=True), progress)
+        return (str(out.video), out.rows, out.summary, *self._files(out))
 
+
+def _input_column(service: GestureService) -> tuple[list, gr.Button]:
+    """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order and the button."""
+    settings = service.settings
+    choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
+    default_methods = [m for m in FACTS if m in service.methods][:3]
+    audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
+                     elem_id="speech")
+    text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
+                      placeholder="Type what is said, or leave empty to transcribe the speech automatically",
+                      elem_id="transcript")
+    auto_text = pass_through(gr.Checkbox(value=True, elem_id="auto-transcribe",
+                                         label="Transcribe automatically when no transcript is given (English)"))
+    textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
+                       file_types=[".TextGrid", ".textgrid"], type="filepath")
+    methods = pass_through(gr.CheckboxGroup(
+        choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
+        info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
+              "long speech uses our windowing with a neutral first seed."
+              if any(m.endswith("_authors") for m in service.methods) else None)))
+    with gr.Row():
+        steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
+                                       value=FACTS["gesturelsm"].default_steps, step=1,
+                                       label="Steps (GestureLSM, rectified flow)"))
+        cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
+    with gr.Row():
+        ddim_steps = pass_through(gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
+                                            value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
+        seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
+    with gr.Accordion("Options", open=False):
+        in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
+        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing"))
+        size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+                                        label="Video size"))
+    button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
+    ex = _examples()
+    if ex:
+        gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
+    return [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text], button
+
+
+def _output_column(service: GestureService) -> tuple:
+    """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
+    motion_player.player_component(service)
+    payload = gr.JSON(visible=False)
+    video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
+    summary = gr.Markdown(elem_id="summary")
+    table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
+                         label="Timing per method and stage (seconds; real-time factor = speech seconds per "
+                               "generation second)")
+    files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
+                    elem_id="downloads")
+    # closed by default: its viewer redraws continuously and would slow the player's software WebGL
+    with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
+        view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
+                          elem_id="view3d")
+    return payload, video, summary, table, files, view
+
+
+def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
+    settings = service.settings
+    h = _Handlers(service)
+    gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
             with gr.Column(scale=1):
-                audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
-                                 elem_id="speech")
-                text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
-                                  placeholder="Type what is said, or leave empty to transcribe the speech automatically",
-                                  elem_id="transcript")
-                auto_text = pass_through(gr.Checkbox(value=True, elem_id="auto-transcribe",
-                                                     label="Transcribe automatically when no transcript is given "
-                                                           "(English)"))
-                textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
-                                   file_types=[".TextGrid", ".textgrid"], type="filepath")
-                methods = pass_through(gr.CheckboxGroup(
-                    choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
-                    info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
-                          "long speech uses our windowing with a neutral first seed."
-                          if any(m.endswith("_authors") for m in service.methods) else None)))
-                with gr.Row():
-                    steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
-                                                   value=FACTS["gesturelsm"].default_steps, step=1,
-                                                   label="Steps (GestureLSM, rectified flow)"))
-                    cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
-                with gr.Row():
-                    ddim_steps = pass_through(gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
-                                                        value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
-                    seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
-                with gr.Accordion("Options", open=False):
-                    in_place = pass_through(gr.Checkbox(value=False,
-                                                        label="Stand in place (no horizontal root movement)"))
-                    smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing"))
-                    size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
-                                       label="Video size"))
-                button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
-                ex = _examples()
-                if ex:
-                    gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
+                inputs, button = _input_column(service)
             with gr.Column(scale=2):
-                motion_player.player_component(service)
-                payload = gr.JSON(visible=False)
-                video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
-                summary = gr.Markdown(elem_id="summary")
-                table = gr.Dataframe(headers=TIMING_COLUMNS, label="Timing per method and stage (seconds; real-time factor = speech seconds per generation second)",
-                                     interactive=False, elem_id="timings", wrap=True)
-                files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
-                                elem_id="downloads")
-                # closed by default: its viewer redraws continuously and would slow the player's software WebGL
-                with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
-                    view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
-                                      elem_id="view3d")
+                payload, video, summary, table, files, view = _output_column(service)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             live.add_live_tab(live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS), body=service.body,
                               cache=service.workdir / "player-bodies")
@@ -180,18 +206,13 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             gr.Markdown(f"Limits of this server: speech up to {settings.max_seconds / 60:g} minutes, uploads up to "
                         f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
-        inputs = [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text]
-        state = gr.State()
-        button.click(show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion",
-                     concurrency_limit=settings.concurrency, concurrency_id="generation") \
+        text, state = inputs[1], gr.State()
+        button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
             .then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(show_video, state, [video, table, summary, state], api_visibility="private",
-                  concurrency_limit=settings.concurrency, concurrency_id="generation") \
-            .then(add_exports, state, [files, view, summary], api_visibility="private", concurrency_limit=settings.concurrency,
-                  concurrency_id="generation")
+            .then(h.show_video, state, [video, table, summary, state], api_visibility="private", **gen) \
+            .then(h.add_exports, state, [files, view, summary], api_visibility="private", **gen)
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
-        api_button.click(generate, inputs, [video, table, summary, files, view], api_name="generate",
-                         concurrency_limit=settings.concurrency, concurrency_id="generation")
+        api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
     return demo
 
