@@ -1,6 +1,11 @@
 """Helpers shared by tests (importable because pytest puts tests/ on sys.path)."""
 from __future__ import annotations
 
+import contextlib
+import os
+import shutil
+from typing import Iterator, Sequence
+
 import numpy as np
 
 from gesturelsm.motion import MotionSequence
@@ -78,3 +83,58 @@ def build_tiny_assets(root, steps: int = 20, batch_size: int = 8, warmup: int = 
         gen = train_generator([take], [], toks, tc, root / "runs" / f"{method}.safetensors", log=lambda *_: None)
         gen.save(root / "generator" / f"{method}.safetensors", half=True)
     return root
+
+
+@contextlib.contextmanager
+def served(service) -> Iterator[str]:
+    """The app over `service`, served from this process (as `python -m app` serves it); yields its local URL."""
+    from app.ui import serve_locally
+
+    demo, url = serve_locally(service)
+    try:
+        yield url
+    finally:
+        demo.close()
+
+
+def shipped_service(workdir):
+    """A GestureService over the shipped checkpoints for browser tests; skips, saying why, when the checkpoints or
+    the in-browser player's bundle (built by scripts/setup.sh with npm) are missing."""
+    import pytest
+
+    from app.motion_player import BUNDLE
+    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.constants import ASSETS
+
+    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
+        pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    return GestureService.from_settings(ServiceSettings(workdir=str(workdir)))
+
+
+CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
+                 if p and os.path.exists(p)), None)
+
+
+@contextlib.contextmanager
+def player_page(url: str, player: str, extra_args: Sequence[str] = ()) -> Iterator:
+    """A page of headless Chromium (Debian's; WebGL through SwiftShader) at `url`, once the in-browser player
+    `player` (a CSS selector) has loaded; skips, saying why, when no chromium is installed."""
+    import pytest
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    from playwright.sync_api import sync_playwright
+
+    from app.screenshot import CHROMIUM_ARGS
+
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=list(CHROMIUM_ARGS) + list(extra_args))
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1300})
+            page.goto(url)
+            page.wait_for_selector(f"{player}[data-ready]", timeout=60000)
+            yield page
+        finally:
+            browser.close()

@@ -61,11 +61,10 @@ def speech_wav(tmp_path_factory) -> Path:
 @pytest.fixture(scope="session")
 def app_url(service):
     """The app served from this process (as `python -m app` serves it) at a local URL."""
-    from app.ui import serve_locally
+    from _support import served
 
-    demo, url = serve_locally(service)
-    yield url
-    demo.close()
+    with served(service) as url:
+        yield url
 
 
 def pytest_configure(config):

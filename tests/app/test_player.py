@@ -4,19 +4,12 @@ and scrubbing keeps speech and motion within one frame. Skips, saying why, witho
 (scripts/setup.sh builds it with npm) or the shipped checkpoints."""
 from __future__ import annotations
 
-import os
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gesturelsm.pipeline import ASSETS
-
-from app.screenshot import CHROMIUM_ARGS
-
-CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
-                 if p and os.path.exists(p)), None)
+from _support import player_page, served, shipped_service
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "app" / "examples"
 PLAYER = "#motion-player"
@@ -52,18 +45,8 @@ def test_motion_file_round_trip_matches_the_glb_animation(tmp_path):
 
 @pytest.fixture(scope="module")
 def shipped_url(tmp_path_factory):
-    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
-        pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
-    from app.motion_player import BUNDLE
-    if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
-    from app.ui import serve_locally
-    from gesturelsm.app_service import GestureService, ServiceSettings
-
-    service = GestureService.from_settings(ServiceSettings(workdir=str(tmp_path_factory.mktemp("player_work"))))
-    demo, url = serve_locally(service)
-    yield url
-    demo.close()
+    with served(shipped_service(tmp_path_factory.mktemp("player_work"))) as url:
+        yield url
 
 
 def _motion(url: str, frames: int, expressions: int) -> np.ndarray:
@@ -79,47 +62,36 @@ def _shown(page, i: int) -> np.ndarray:
 
 @pytest.mark.browser
 def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
-    if CHROMIUM is None:
-        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
-    from playwright.sync_api import sync_playwright
+    with player_page(shipped_url, PLAYER) as page:
+        assert page.get_attribute(PLAYER, "data-state") == "empty"
+        page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
+        page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        page.locator("#generate").click()
+        page.wait_for_selector(f"{PLAYER}[data-state=playing]", timeout=120000)
+        payload = page.evaluate("() => window.gesturelsmPlayer.payload")
+        T, fps = payload["frames"], payload["fps"]
+        assert [b["method"] for b in payload["bodies"]] == ["gesturelsm", "rectified_flow"]
+        motions = [_motion(b["motion"], T, b["expressions"]) for b in payload["bodies"]]
 
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page(viewport={"width": 1400, "height": 1300})
-            page.goto(shipped_url)
-            page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
-            assert page.get_attribute(PLAYER, "data-state") == "empty"
-            page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
-            page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
-            page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
-            page.locator("#generate").click()
-            page.wait_for_selector(f"{PLAYER}[data-state=playing]", timeout=120000)
-            payload = page.evaluate("() => window.gesturelsmPlayer.payload")
-            T, fps = payload["frames"], payload["fps"]
-            assert [b["method"] for b in payload["bodies"]] == ["gesturelsm", "rectified_flow"]
-            motions = [_motion(b["motion"], T, b["expressions"]) for b in payload["bodies"]]
+        clock = "() => [Number(document.querySelector('#motion-player').dataset.frames), " \
+                "window.gesturelsmPlayer.clock.currentTime]"
+        (n0, t0) = page.evaluate(clock)
+        page.wait_for_timeout(1500)
+        (n1, t1) = page.evaluate(clock)
+        assert t1 - t0 > 0.3 and n1 > n0                  # the speech plays and new frames are drawn
 
-            clock = "() => [Number(document.querySelector('#motion-player').dataset.frames), " \
-                    "window.gesturelsmPlayer.clock.currentTime]"
-            (n0, t0) = page.evaluate(clock)
-            page.wait_for_timeout(1500)
-            (n1, t1) = page.evaluate(clock)
-            assert t1 - t0 > 0.3 and n1 > n0                  # the speech plays and new frames are drawn
-
-            page.evaluate("() => window.gesturelsmPlayer.pause()")
-            page.wait_for_selector(f"{PLAYER}[data-state=paused]", timeout=10000)
-            for t in (0.4, 2.05, 3.3, 1.0):                  # scrub: the frame on screen follows the speech
-                page.evaluate(f"() => window.gesturelsmPlayer.seek({t})")
-                page.wait_for_function("""() => { const p = window.gesturelsmPlayer;
-                    return Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
-                                       timeout=10000)
-                audio_t = page.evaluate("() => window.gesturelsmPlayer.clock.currentTime")
-                frame = int(page.get_attribute(PLAYER, "data-frame"))
-                assert abs(audio_t - t) < 1 / fps and abs(frame - t * fps) < 1
-                shown = [_shown(page, i) for i in range(2)]
-                for i in range(2):                           # each body shows its own method's frame exactly
-                    np.testing.assert_allclose(shown[i], motions[i][frame], atol=1e-6)
-                assert np.abs(shown[0] - shown[1]).max() > 1e-3      # and the methods differ
-        finally:
-            browser.close()
+        page.evaluate("() => window.gesturelsmPlayer.pause()")
+        page.wait_for_selector(f"{PLAYER}[data-state=paused]", timeout=10000)
+        for t in (0.4, 2.05, 3.3, 1.0):                  # scrub: the frame on screen follows the speech
+            page.evaluate(f"() => window.gesturelsmPlayer.seek({t})")
+            page.wait_for_function("""() => { const p = window.gesturelsmPlayer;
+                return Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                                   timeout=10000)
+            audio_t = page.evaluate("() => window.gesturelsmPlayer.clock.currentTime")
+            frame = int(page.get_attribute(PLAYER, "data-frame"))
+            assert abs(audio_t - t) < 1 / fps and abs(frame - t * fps) < 1
+            shown = [_shown(page, i) for i in range(2)]
+            for i in range(2):                           # each body shows its own method's frame exactly
+                np.testing.assert_allclose(shown[i], motions[i][frame], atol=1e-6)
+            assert np.abs(shown[0] - shown[1]).max() > 1e-3      # and the methods differ

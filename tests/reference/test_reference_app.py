@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from _support import speech_like
+from _support import served, speech_like
 from gesturelsm.app_service import TIMING_COLUMNS, GestureService, ServiceSettings
 from gesturelsm.reference.runner import FACE_NOTE, LABELS
 
@@ -25,11 +25,8 @@ def service(ckpt_dir, tmp_path_factory) -> GestureService:
 
 @pytest.fixture(scope="module")
 def app_url(service):
-    from app.ui import serve_locally
-
-    demo, url = serve_locally(service)
-    yield url
-    demo.close()
+    with served(service) as url:
+        yield url
 
 
 def test_page_offers_the_authors_methods_with_their_labels(service):
