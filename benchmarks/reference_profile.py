@@ -1,0 +1,64 @@
+"""Where one window of the authors' paper-size model spends its time on this CPU (our reference implementation,
+random weights: timing does not depend on them). Prints a markdown table: the speech encoder (and each of its six
+strided conv blocks), the cross-attention keys/values (computed once per clip), and one denoiser step with the
+classifier-free-guidance pair, for a 128-frame window.
+
+    .venv/bin/python benchmarks/reference_profile.py [--threads 1] [--repeats 5]
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import torch
+
+from gesturelsm.reference.config import GeneratorConfig
+from gesturelsm.reference.model import ReferenceGenerator
+from gesturelsm.reference.samplers import _velocity, guided_kv
+
+
+def timed(fn, repeats: int) -> float:
+    fn()                                                              # warm-up
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(0)
+    cfg = GeneratorConfig()
+    g = ReferenceGenerator(cfg).eval()
+    n = cfg.frames
+    audio, words = torch.rand(1, 533 * n, 2), torch.randint(0, 100, (1, n))          # (B, S, 2), (B, frames)
+    seed = torch.randn(1, cfg.seed_frames, cfg.regions * cfg.input_dim)
+    x = torch.randn(1, cfg.regions * cfg.input_dim, cfg.seq_len)
+    rows = []
+    with torch.inference_mode():
+        speech = g.speech(audio, words)
+        rows.append(("speech encoder (per window)", timed(lambda: g.speech(audio, words), args.repeats)))
+        h = audio.transpose(1, 2)
+        for i, block in enumerate(g.speech.wav):
+            rows.append((f"  conv block {i} on {tuple(h.shape[1:])}", timed(lambda: block(h), args.repeats)))
+            h = block(h)
+        rows.append(("cross-attention keys/values, CFG pair (per clip)",
+                     timed(lambda: guided_kv(g.denoiser, speech, 2.0), args.repeats)))
+        f = _velocity(g.denoiser, guided_kv(g.denoiser, speech, 2.0), seed, 2.0)
+        t, d = torch.tensor([0.5]), torch.tensor([0.5])
+        rows.append(("denoiser step, CFG pair (per step)", timed(lambda: f(x, t, d), args.repeats)))
+    print(f"paper-size reference model, {args.threads} thread(s), median of {args.repeats}\n")
+    print("| part | seconds |\n|---|---|")
+    for name, sec in rows:
+        print(f"| {name} | {sec:.4f} |")
+
+
+if __name__ == "__main__":
+    main()
