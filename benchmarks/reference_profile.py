@@ -9,23 +9,19 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import torch
 
+from gesturelsm.evaluation.timing import timed
 from gesturelsm.reference.config import GeneratorConfig
 from gesturelsm.reference.model import ReferenceGenerator
 from gesturelsm.reference.samplers import _velocity, guided_kv
 
 
-def timed(fn, repeats: int) -> float:
-    fn()                                                              # warm-up
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
+def median_seconds(fn, repeats: int) -> float:
+    """Median wall time of `fn` over `repeats` calls after one warm-up call (evaluation.timing.timed on the CPU)."""
+    fn()
+    return statistics.median(timed(fn, "cpu")[1] for _ in range(repeats))
 
 
 def main() -> None:
@@ -44,16 +40,16 @@ def main() -> None:
     rows = []
     with torch.inference_mode():
         speech = g.speech(audio, words)
-        rows.append(("speech encoder (per window)", timed(lambda: g.speech(audio, words), args.repeats)))
+        rows.append(("speech encoder (per window)", median_seconds(lambda: g.speech(audio, words), args.repeats)))
         h = audio.transpose(1, 2)
         for i, block in enumerate(g.speech.wav):
-            rows.append((f"  conv block {i} on {tuple(h.shape[1:])}", timed(lambda: block(h), args.repeats)))
+            rows.append((f"  conv block {i} on {tuple(h.shape[1:])}", median_seconds(lambda: block(h), args.repeats)))
             h = block(h)
         rows.append(("cross-attention keys/values, CFG pair (per clip)",
-                     timed(lambda: guided_kv(g.denoiser, speech, 2.0), args.repeats)))
+                     median_seconds(lambda: guided_kv(g.denoiser, speech, 2.0), args.repeats)))
         f = _velocity(g.denoiser, guided_kv(g.denoiser, speech, 2.0), seed, 2.0)
         t, d = torch.tensor([0.5]), torch.tensor([0.5])
-        rows.append(("denoiser step, CFG pair (per step)", timed(lambda: f(x, t, d), args.repeats)))
+        rows.append(("denoiser step, CFG pair (per step)", median_seconds(lambda: f(x, t, d), args.repeats)))
     print(f"paper-size reference model, {args.threads} thread(s), median of {args.repeats}\n")
     print("| part | seconds |\n|---|---|")
     for name, sec in rows:
