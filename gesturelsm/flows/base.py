@@ -55,10 +55,17 @@ class Method(Protocol):
 
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor: ...
 
+    def noised(self, x1: torch.Tensor, x0: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+        """The state the model sees at time t (B,) for data x1 and noise x0 (the method's forward process)."""
+
 
 class FactsMixin:
-    """`name` and `uses_step_size` read from the class's `facts`."""
+    """`name` and `uses_step_size` read from the class's `facts`; the flows' straight path as `noised`."""
     facts: ClassVar[MethodFacts]
+
+    def noised(self, x1: torch.Tensor, x0: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+        """x_t = t x1 + (1 - t) x0 (the flows' path; DDIM overrides it with its noise schedule)."""
+        return bcast(t, x1) * x1 + (1 - bcast(t, x1)) * x0
 
     @property
     def name(self) -> str:
@@ -78,6 +85,19 @@ def euler_sample(f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float, 
         t = torch.full((B,), k / steps, device=x.device)
         x = x + (1.0 / steps) * guided(f, x, t, dd, cfg_scale)
     return x
+
+
+def inpainting(f: ModelFn, method: "Method", known: torch.Tensor, mask: torch.Tensor, noise: torch.Tensor) -> ModelFn:
+    """f for sampling with part of x known (replacement inpainting): before every call the known entries of x are
+    set to `known` noised to the call's time with the sampler's own initial `noise`, so the prediction of the
+    rest is conditioned on them (any method, any step count). known, noise: (B, ...) like x; mask: broadcastable
+    bool, True where known. CFG-stacked batches (a multiple of B) are handled."""
+    def g(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor, **kw) -> torch.Tensor:
+        r = x.shape[0] // known.shape[0]
+        x = torch.where(mask, method.noised(known.repeat(r, *[1] * (x.ndim - 1)),
+                                            noise.repeat(r, *[1] * (x.ndim - 1)), t), x)
+        return f(x, t, d, drop, **kw)
+    return g
 
 
 def guided(f: ModelFn, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, scale: float) -> torch.Tensor:

@@ -52,6 +52,12 @@ class DDIM(FactsMixin):
     def for_training(cls, prediction: str = "data", time_sampler: str = "beta") -> "DDIM":
         return cls()                        # always x0 prediction, its own noise schedule
 
+    def noised(self, x1: torch.Tensor, x0: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
+        """x_k = sqrt(abar_k) x1 + sqrt(1 - abar_k) x0 for the diffusion step k whose model time is t."""
+        k = ((1 - t) * NUM_TRAIN_STEPS - 1).round().long().clamp(0, NUM_TRAIN_STEPS - 1)
+        ab = bcast(self.alpha_bar.to(x1.device)[k], x1)
+        return ab.sqrt() * x1 + (1 - ab).sqrt() * x0
+
     def sample(self, f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float = 1.0) -> torch.Tensor:
         B, x, dev = noise.shape[0], noise, noise.device
         ab = self.alpha_bar.to(dev)

@@ -1,13 +1,16 @@
 """The generator in streaming form: 16 kHz audio chunks in (any size), 30 fps motion chunks out.
 
-Windows (t = 32 latents = 128 frames, seed s = 4 latents, as offline in generator/sampling.py) start every
-`commit` latents: window i covers latents [i c, i c + t), is seeded with the s latents there that window i - 1
-generated, cross-fades them exactly as offline, and *finalises* latents [i c, (i + 1) c) (4 <= c <= t - s; offline
-is c = t - s = 28). Window i runs as soon as the audio reaches latent (i + 1) c + `lookahead`; the rest of its span
-is silence (zero channels, as offline pads the last window). So the motion of a moment needs at most
-c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 4, lookahead = 2 that is
-0.8 s at worst, 0.53 s on average, plus compute. With lookahead >= t - c every window sees its whole span and the
-windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
+Windows (t = 32 latents = 128 frames, seed s = 4 latents, as offline in generator/sampling.py): window i
+*finalises* latents [st, st + c) with st = i c (4 <= c <= t - s; offline is c = t - s = 28) and runs as soon as the
+audio reaches latent e = st + c + `lookahead`. It covers [e - t, e) (from latent 0 while e < t): it *ends* at the
+newest audio, so the network sees real speech all through the window, as in training. Its latents before st are
+already final: they are the seed (first s) and are kept fixed while sampling (replacement inpainting,
+flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. (Anchoring windows at
+st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
+motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
+defaults c = 4, lookahead = 2 that is 0.8 s at worst, 0.53 s on average, plus compute. With lookahead >= t - c each
+window starts at st, is seeded with the previous window's latents there and cross-fades them exactly as offline:
+the windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
 
 Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
 - envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of
@@ -37,6 +40,7 @@ import torch
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM
 from ..flows import make_method
+from ..flows.base import inpainting
 from ..generator.data import samples_for
 from ..generator.sampling import decode_latents
 from ..motion.regions import TRANS_OFFSET, join_regions
@@ -134,7 +138,7 @@ class StreamingGenerator:
         self.audio, self.n_in = self.audio[:max(keep, 0)], samples_for(T)
         L = -(-T // 4)
         out = []
-        while self.window == 0 or (self.window - 1) * self.cfg.commit + self.t < L:
+        while self.window == 0 or self._span(self.window - 1)[0] + self.t < L:
             out += self._run_window(end=L)
         if self.emitted < T:
             out += self._emit(L, T, final_all=True)
@@ -157,34 +161,44 @@ class StreamingGenerator:
             ch[:, :hi - a] = audio_channels(y)[:, a - lo:]
         return torch.from_numpy(ch)
 
+    def _span(self, window: int) -> tuple[int, int, int]:
+        """(w0, st, e) of a window: it finalises latents from st = window * commit, waits for audio up to latent
+        e = st + commit + lookahead, and covers [w0, w0 + t), ending at e (real audio all through) once e >= t."""
+        st = window * self.cfg.commit
+        e = st + self.cfg.commit + self.cfg.lookahead
+        return min(st, max(0, e - self.t)), st, e
+
     @torch.no_grad()
     def _run_window(self, end: int | None) -> list[MotionChunk]:
         t0 = time.perf_counter()
-        m, c, t, s = self.model, self.cfg.commit, self.t, self.s
-        st = self.window * c
-        a = samples_for(4 * st)
+        m, t, s = self.model, self.t, self.s
+        w0, st, e = self._span(self.window)
+        a = samples_for(4 * w0)
         # the window sees exactly the audio its trigger asked for (not what else has arrived): results do not
         # depend on how the audio was chunked
-        avail = self.n_in if end is not None else samples_for(4 * (st + c + self.cfg.lookahead))
+        avail = self.n_in if end is not None else samples_for(4 * e)
         ch = self._channels(a, a + self.n_a, avail)[None]                                 # (1, 2, n_a)
         w, hw = torch.zeros(1, 4 * t, TEXT_DIM), torch.zeros(1, 4 * t, dtype=torch.bool)
         cond = m.speech(ch, w, hw, torch.zeros(1, dtype=torch.bool))
         R, D = self.lat.shape[0], self.lat.shape[2]
         noise = torch.randn(1, R, t, D, generator=self.gen)
-        if self.window == 0:
-            seed = m.neutral_seed[None]
-        else:
-            seed = self.lat[:, st - self.lat0:st - self.lat0 + s][None]
-        x = self.method.sample(m.bind(cond, seed), noise, self.cfg.steps, self.cfg.cfg)[0]    # (R, t, D) scaled
-        k = st - self.lat0
-        if self.window > 0:
+        k0, k = w0 - self.lat0, st - self.lat0
+        seed = m.neutral_seed[None] if w0 == 0 else self.lat[:, k0:k0 + s][None]
+        f = m.bind(cond, seed)
+        if st > w0:         # latents [w0, st) are final: generate the rest of the window consistent with them
+            known = torch.zeros(1, R, t, D)
+            known[0, :, :st - w0] = self.lat[:, k0:k]
+            mask = (torch.arange(t) < st - w0)[None, None, :, None]
+            f = inpainting(f, self.method, known, mask, noise)
+        x = self.method.sample(f, noise, self.cfg.steps, self.cfg.cfg)[0][:, st - w0:]        # (R, w0 + t - st, D)
+        if self.window > 0 and st == w0:  # seeded by the previous window's provisional latents: cross-fade (offline)
             ov = self.lat[:, k:k + s]
             x = torch.cat([ov * (1 - self.ramp)[None, :, None] + x[:, :s] * self.ramp[None, :, None], x[:, s:]], 1)
         self.lat = torch.cat([self.lat[:, :k], x], 1)
         self.window += 1
-        self.final_end = st + c
+        self.final_end = st + self.cfg.commit
         self.compute_s += time.perf_counter() - t0
-        if end is not None and st + t >= end:
+        if end is not None and w0 + t >= end:
             self.final_end = end
             return []                                            # finish() emits the rest with everything final
         return self._emit(self.final_end - self.cfg.decode_lag, None)
@@ -223,11 +237,12 @@ class StreamingGenerator:
 
     def _trim(self) -> None:
         """Drop latents and audio no later window or decode needs (memory stays flat on endless streams)."""
-        keep_lat = min(self.window * self.cfg.commit, self.emitted // 4 - self.cfg.decode_context)
+        w0 = self._span(self.window)[0]                           # the next window's first latent
+        keep_lat = min(w0, self.emitted // 4 - self.cfg.decode_context)
         if keep_lat > self.lat0:
             self.lat = self.lat[:, keep_lat - self.lat0:]
             self.lat0 = keep_lat
-        keep_a = samples_for(4 * self.window * self.cfg.commit) - int(self.cfg.context_s * SR)
+        keep_a = samples_for(4 * w0) - int(self.cfg.context_s * SR)
         if keep_a > self.a0:
             self.audio = self.audio[keep_a - self.a0:]
             self.a0 = keep_a

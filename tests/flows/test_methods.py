@@ -159,3 +159,40 @@ def test_data_space_loss_is_zero_for_the_exact_field(method):
         target = x1 if rows is None else x1[rows]
         return (target - x) / (1 - t).clamp_min(1e-6).reshape(-1, 1, 1, 1)
     assert method.loss(f, x1, 0.0).loss.item() < 1e-8
+
+
+@pytest.mark.parametrize("method", [Shortcut(), RectifiedFlow(), DDIM()])
+def test_inpainting_feeds_the_model_the_known_part_noised_to_its_time(method):
+    """Before every call (CFG-stacked batch included) the known entries are the known data noised with the
+    sampler's own noise by the method's forward process; the rest is the sampler's state, untouched."""
+    from gesturelsm.flows.base import inpainting
+
+    torch.manual_seed(0)
+    known, noise = torch.randn(2, 3, 8, 4), torch.randn(2, 3, 8, 4)
+    mask = (torch.arange(8) < 3)[None, None, :, None]
+    seen = []
+
+    def f(x, t, d, drop):
+        seen.append((x.clone(), t.clone()))
+        return torch.ones_like(x)
+
+    method.sample(inpainting(f, method, known, mask, noise), noise, 3, cfg_scale=2.0)
+    assert len(seen) == 3
+    for i, (x, t) in enumerate(seen):
+        assert x.shape[0] == 4                                           # both CFG halves
+        expect = method.noised(known.repeat(2, 1, 1, 1), noise.repeat(2, 1, 1, 1), t)
+        assert torch.equal(x[:, :, :3], expect[:, :, :3])
+        if i:                                                            # the unknown part is the sampler's own
+            assert not torch.allclose(x[:, :, 3:], expect[:, :, 3:])
+    first = seen[0][0]
+    assert torch.equal(first[:2, :, 3:], noise[:, :, 3:])               # the first call sees the initial noise there
+
+
+def test_noised_is_each_methods_training_path():
+    x1, x0 = torch.randn(3, 5), torch.randn(3, 5)
+    t = torch.tensor([0.0, 0.3, 1.0])
+    for m in (Shortcut(), RectifiedFlow()):
+        assert_close_rel(m.noised(x1, x0, t), t[:, None] * x1 + (1 - t[:, None]) * x0)
+    k = torch.tensor([999, 500, 0])
+    ab = cosine_alpha_bar()[k][:, None]
+    assert_close_rel(DDIM().noised(x1, x0, model_time(k)), ab.sqrt() * x1 + (1 - ab).sqrt() * x0)
