@@ -60,8 +60,8 @@ def test_ten_hours_of_silence_are_refused_without_decoding_them(tmp_path, stated
     assert flac.stat().st_size < 200_000
     got = measure_load(flac)
     assert got["outcome"].startswith("AudioTooLongError"), got
-    assert got["peak_mb"] < 500, got
-    assert got["seconds"] < 30, got          # a guard against hangs; timings: benchmarks/hostile_uploads.py
+    assert got["peak_mb"] < 500, got         # decoded in full it would need > 2 GB; hangs: the subprocess timeout
+                                             # (timings: benchmarks/hostile_uploads.py)
 
 
 def test_unknown_length_header_still_accepts_audio_within_the_limit(tmp_path):
