@@ -11,6 +11,7 @@ sampled each chunk (first minute vs the end). Drift: motion frames available vs 
 
 Quality (as fast as possible, same seed): the held-out audio-only takes streamed with the live settings vs the
 offline pipeline at the same steps: speech-response tests (metrics.speech_response), upper-body speed and jitter,
+raised share and 95th-percentile wrist height (metrics.amplitude),
 and upper-body jerk (|third difference| of joint positions) at chunk seams (the jerk values whose 4-frame stencil
 spans a chunk start) over the jerk inside chunks; offline motion is scored at the same positions as a reference.
 """
@@ -61,6 +62,7 @@ def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
     from gesturelsm.audio import load_audio
     from gesturelsm.body import load_body_model
     from gesturelsm.live.cli import run_file
+    from gesturelsm.metrics.amplitude import amplitude_stats
     from gesturelsm.metrics.beat import audio_beats, joint_speed
     from gesturelsm.metrics.speech_response import beat_timing, energy_following
     from gesturelsm.motion.regions import REGIONS
@@ -84,7 +86,7 @@ def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
             for b in borders:
                 at[max(0, b - 3):b] = True
             rows.append((name, label, beat_timing(j, beats), energy_following(j, y), sp, acc,
-                         jerk[at].mean() / jerk[~at].mean()))
+                         jerk[at].mean() / jerk[~at].mean(), amplitude_stats(j)))
     return rows
 
 
@@ -133,11 +135,11 @@ def main() -> None:
     if not args.skip_quality:
         rows = quality(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], cfg.steps)
         print("| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
-              "jitter (m/s^2) | jerk at seams / inside |")
-        print("|---|---|---|---|---|---|---|")
-        for name, label, bt, ef, sp, acc, seam in rows:
+              "jitter (m/s^2) | jerk at seams / inside | raised | p95 wrist height (m) |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for name, label, bt, ef, sp, acc, seam, amp in rows:
             print(f"| {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | {sp:.3f} | "
-                  f"{acc:.2f} | {seam:.2f} |")
+                  f"{acc:.2f} | {seam:.2f} | {100 * amp.raised_share:.1f} % | {amp.height_p95:.2f} |")
 
 
 if __name__ == "__main__":
