@@ -28,6 +28,7 @@ import numpy as np
 
 from .align import Word
 from .app_checks import check_request, textgrid_words
+from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, AudioTooLongError, load_audio
 from .body import load_body_model
 from .body.model import resolve_model_path
@@ -141,13 +142,15 @@ class GestureService:
 
     # ---- housekeeping ----------------------------------------------------------------------------------
     def warmup(self) -> float:
-        """Load the text encoder and run each generator once on 1 s of a tone, so the first visitor does
-        not wait for it; returns the seconds it took."""
+        """Load the text encoder and the speech recogniser and run each generator and the recogniser once on 1 s
+        of a tone, so the first visitor does not wait for them (the recogniser's first use from a cold disk took
+        seconds: benchmarks/player_latency.py); returns the seconds it took."""
         t0 = time.perf_counter()
         y = (0.3 * np.sin(np.arange(SAMPLE_RATE) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)
         speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
         for m in self.pipeline.methods:
             self.pipeline.generate(speech, steps=1, method=m)
+        automatic_words(y)                                   # says "unavailable" itself when not installed
         return time.perf_counter() - t0
 
     def cleanup(self, max_age_s: float | None = None) -> int:

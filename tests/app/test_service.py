@@ -198,3 +198,16 @@ def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
     assert off.rows[0][TIMING_COLUMNS.index("transcription")] == 0
     typed = service.run(replace(req, text="hello there"))
     assert "aligned automatically" in typed.text_mode and typed.transcript is None
+
+
+def test_warmup_loads_the_speech_recogniser(service):
+    """The first visitor must not pay for loading Whisper: warm-up loads it (when it is installed)."""
+    import gesturelsm.asr.model as asr_model
+
+    try:
+        asr_model.weights_dir()
+    except asr_model.RecognizerUnavailable as exc:
+        pytest.skip(f"speech recogniser not installed: {exc}")
+    asr_model._model = None
+    service.warmup()
+    assert asr_model._model is not None
