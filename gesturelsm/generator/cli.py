@@ -12,6 +12,7 @@ from ..features.text import TextEmbedder
 from ..flows import METHODS
 from ..motion.regions import GENERATED_REGIONS
 from ..tokenizer.model import RVQVAE
+from .augment import KINDS, augmented_takes, variants_for
 from .config import PRESETS
 from .data import build_take
 from .distributed import check_launch
@@ -36,6 +37,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
     p.add_argument("--seed-noise", type=float, default=0.0,
                    help="std of noise on the real seed latents in training (the rollout seeds windows with generated ones)")
+    p.add_argument("--augment", nargs="+", default=[], choices=list(KINDS), metavar="KIND",
+                   help="add precomputed speech variants of each training take (off by default): tempo = speech "
+                        "x0.9 / x1.1 as fast with the motion time-warped alike; pitch = +-2 semitones; "
+                        "gain = +-6 dB (motion unchanged); each variant also mirrored")
     p.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8)
@@ -64,6 +69,7 @@ def run_train(args: argparse.Namespace) -> int:
         print(f"warning: {emb.error}; training audio-only")
         emb = None
     train, held = [], []
+    variants = variants_for(args.augment)
     for name in ds.names:
         take = ds.load(name)
         if take.audio is None:
@@ -78,12 +84,15 @@ def run_train(args: argparse.Namespace) -> int:
             dest.append(build_take(name, feats, take.audio, take.words, tokenizers, emb))
             if part == "train":
                 train.append(build_take(name, feats, take.audio, take.words, tokenizers, emb, mirror=True))
+                train.extend(augmented_takes(name, take.motion, take.audio, take.words, tokenizers, emb, variants))
             continue
         cut = int(round(args.train_fraction * feats.shape[0])) // 4 * 4
         a_cut = int(round(cut * SAMPLE_RATE / FPS))
         words_tr = take.words
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb))
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
+        train.extend(augmented_takes(name, take.motion.slice(0, cut), take.audio[:a_cut], words_tr, tokenizers, emb,
+                                     variants))
         held_words = None
         if take.words is not None:
             t0 = cut / FPS
@@ -99,7 +108,10 @@ def run_train(args: argparse.Namespace) -> int:
                         eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
     out = Path(args.out) / f"{args.method}.safetensors"
     policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"
-    model = train_generator(train, held, tokenizers, tc, out, config=config, meta={"data": policy, "takes": ds.names})
+    meta = {"data": policy, "takes": ds.names} | ({"augment": [v.name for v in variants]} if variants else {})
+    if variants:
+        print(f"augmentation: {len(train)} training takes ({', '.join(v.name for v in variants)}, each mirrored)")
+    model = train_generator(train, held, tokenizers, tc, out, config=config, meta=meta)
     if args.ship and (not torch.distributed.is_initialized() or torch.distributed.get_rank() == 0):
         path = model.save(Path(args.ship) / f"{args.method}.safetensors", half=True,
                           meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
