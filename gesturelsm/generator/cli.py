@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from ..align.words import Word
@@ -12,9 +13,9 @@ from ..features.text import TextEmbedder
 from ..flows import METHODS
 from ..motion.regions import GENERATED_REGIONS
 from ..tokenizer.model import RVQVAE
-from .augment import KINDS, augmented_takes, variants_for
+from .augment import KINDS, Variant, augmented_takes, variants_for
 from .config import PRESETS
-from .data import build_take
+from .data import TakeTensors, build_take
 from .distributed import check_launch
 from .train import GenTrainConfig, train_generator
 
@@ -68,36 +69,8 @@ def run_train(args: argparse.Namespace) -> int:
     if emb is not None and not emb.available:
         print(f"warning: {emb.error}; training audio-only")
         emb = None
-    train, held = [], []
     variants = variants_for(args.augment)
-    for name in ds.names:
-        take = ds.load(name)
-        if take.audio is None:
-            print(f"warning: {name} has no audio; skipped")
-            continue
-        feats = take.motion.to_features()
-        if ds.splits:
-            part = ds.splits.get(name)
-            dest = train if part == "train" else held if part in ("val", "test") else None
-            if dest is None:
-                continue
-            dest.append(build_take(name, feats, take.audio, take.words, tokenizers, emb))
-            if part == "train":
-                train.append(build_take(name, feats, take.audio, take.words, tokenizers, emb, mirror=True))
-                train.extend(augmented_takes(name, take.motion, take.audio, take.words, tokenizers, emb, variants))
-            continue
-        cut = int(round(args.train_fraction * feats.shape[0])) // 4 * 4
-        a_cut = int(round(cut * SAMPLE_RATE / FPS))
-        words_tr = take.words
-        train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb))
-        train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
-        train.extend(augmented_takes(name, take.motion.slice(0, cut), take.audio[:a_cut], words_tr, tokenizers, emb,
-                                     variants))
-        held_words = None
-        if take.words is not None:
-            t0 = cut / FPS
-            held_words = [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0]
-        held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
+    train, held = training_takes(ds, tokenizers, emb, args.train_fraction, variants)
     if not train:
         raise UserError(f"{args.data}: no usable training takes (motion + audio)")
     config = preset_with(args.preset, args.set)
@@ -117,6 +90,43 @@ def run_train(args: argparse.Namespace) -> int:
                           meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
         print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0
+
+
+def training_takes(ds: Beat2Dataset, tokenizers: dict[str, RVQVAE], emb: TextEmbedder | None, train_fraction: float,
+                   variants: Sequence[Variant] = ()) -> tuple[list[TakeTensors], list[TakeTensors]]:
+    """(training, held-out) tensors of every take with motion and audio: the split file's parts, or the first
+    `train_fraction` of each take for training and the rest held out. Training takes come as [take, mirror]
+    per take, then 2 per augmentation variant (none by default, which keeps the list and so the batches exact)."""
+    train, held = [], []
+    for name in ds.names:
+        take = ds.load(name)
+        if take.audio is None:
+            print(f"warning: {name} has no audio; skipped")
+            continue
+        feats = take.motion.to_features()
+        if ds.splits:
+            part = ds.splits.get(name)
+            dest = train if part == "train" else held if part in ("val", "test") else None
+            if dest is None:
+                continue
+            dest.append(build_take(name, feats, take.audio, take.words, tokenizers, emb))
+            if part == "train":
+                train.append(build_take(name, feats, take.audio, take.words, tokenizers, emb, mirror=True))
+                train.extend(augmented_takes(name, take.motion, take.audio, take.words, tokenizers, emb, variants))
+            continue
+        cut = int(round(train_fraction * feats.shape[0])) // 4 * 4
+        a_cut = int(round(cut * SAMPLE_RATE / FPS))
+        words_tr = take.words
+        train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb))
+        train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
+        train.extend(augmented_takes(name, take.motion.slice(0, cut), take.audio[:a_cut], words_tr, tokenizers, emb,
+                                     variants))
+        held_words = None
+        if take.words is not None:
+            t0 = cut / FPS
+            held_words = [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0]
+        held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
+    return train, held
 
 
 def preset_with(preset: str, overrides: list[str]):
