@@ -11,7 +11,6 @@ import torch
 from _support import synthetic_motion
 
 from gesturelsm.errors import UserError
-from gesturelsm.features.audio import audio_channels
 from gesturelsm.generator.augment import Variant, apply_variant, augmented_takes, variants_for, warp_motion
 from gesturelsm.generator.data import LatentWindowSampler, build_take, samples_for
 from gesturelsm.motion import REGIONS, MotionSequence, Normalizer
