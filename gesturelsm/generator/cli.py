@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from ..align.words import Word
@@ -12,8 +13,9 @@ from ..features.text import TextEmbedder
 from ..flows import METHODS
 from ..motion.regions import GENERATED_REGIONS
 from ..tokenizer.model import RVQVAE
+from .augment import KINDS, Variant, augmented_takes, variants_for
 from .config import PRESETS
-from .data import build_take
+from .data import TakeTensors, build_take
 from .distributed import check_launch
 from .train import GenTrainConfig, train_generator
 
@@ -36,6 +38,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
     p.add_argument("--seed-noise", type=float, default=0.0,
                    help="std of noise on the real seed latents in training (the rollout seeds windows with generated ones)")
+    p.add_argument("--augment", nargs="+", default=[], choices=list(KINDS), metavar="KIND",
+                   help="add precomputed speech variants of each training take (off by default): tempo = speech "
+                        "x0.9 / x1.1 as fast with the motion time-warped alike; pitch = +-2 semitones; "
+                        "gain = +-6 dB (motion unchanged); each variant also mirrored")
     p.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8)
@@ -63,6 +69,34 @@ def run_train(args: argparse.Namespace) -> int:
     if emb is not None and not emb.available:
         print(f"warning: {emb.error}; training audio-only")
         emb = None
+    variants = variants_for(args.augment)
+    train, held = training_takes(ds, tokenizers, emb, args.train_fraction, variants)
+    if not train:
+        raise UserError(f"{args.data}: no usable training takes (motion + audio)")
+    config = preset_with(args.preset, args.set)
+    tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
+                        lr=args.lr, betas=tuple(args.betas), prediction=args.prediction,
+                        time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
+                        seed_noise=args.seed_noise,
+                        eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
+    out = Path(args.out) / f"{args.method}.safetensors"
+    policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"
+    meta = {"data": policy, "takes": ds.names} | ({"augment": [v.name for v in variants]} if variants else {})
+    if variants:
+        print(f"augmentation: {len(train)} training takes ({', '.join(v.name for v in variants)}, each mirrored)")
+    model = train_generator(train, held, tokenizers, tc, out, config=config, meta=meta)
+    if args.ship and (not torch.distributed.is_initialized() or torch.distributed.get_rank() == 0):
+        path = model.save(Path(args.ship) / f"{args.method}.safetensors", half=True,
+                          meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
+        print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    return 0
+
+
+def training_takes(ds: Beat2Dataset, tokenizers: dict[str, RVQVAE], emb: TextEmbedder | None, train_fraction: float,
+                   variants: Sequence[Variant] = ()) -> tuple[list[TakeTensors], list[TakeTensors]]:
+    """(training, held-out) tensors of every take with motion and audio: the split file's parts, or the first
+    `train_fraction` of each take for training and the rest held out. Training takes come as [take, mirror]
+    per take, then 2 per augmentation variant (none by default, which keeps the list and so the batches exact)."""
     train, held = [], []
     for name in ds.names:
         take = ds.load(name)
@@ -78,33 +112,21 @@ def run_train(args: argparse.Namespace) -> int:
             dest.append(build_take(name, feats, take.audio, take.words, tokenizers, emb))
             if part == "train":
                 train.append(build_take(name, feats, take.audio, take.words, tokenizers, emb, mirror=True))
+                train.extend(augmented_takes(name, take.motion, take.audio, take.words, tokenizers, emb, variants))
             continue
-        cut = int(round(args.train_fraction * feats.shape[0])) // 4 * 4
+        cut = int(round(train_fraction * feats.shape[0])) // 4 * 4
         a_cut = int(round(cut * SAMPLE_RATE / FPS))
         words_tr = take.words
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb))
         train.append(build_take(name, feats[:cut], take.audio[:a_cut], words_tr, tokenizers, emb, mirror=True))
+        train.extend(augmented_takes(name, take.motion.slice(0, cut), take.audio[:a_cut], words_tr, tokenizers, emb,
+                                     variants))
         held_words = None
         if take.words is not None:
             t0 = cut / FPS
             held_words = [Word(w.text, w.start - t0, w.end - t0) for w in take.words if w.end > t0]
         held.append(build_take(name, feats[cut:], take.audio[a_cut:], held_words, tokenizers, emb))
-    if not train:
-        raise UserError(f"{args.data}: no usable training takes (motion + audio)")
-    config = preset_with(args.preset, args.set)
-    tc = GenTrainConfig(method=args.method, preset=args.preset, steps=args.steps, batch_size=args.batch_size,
-                        lr=args.lr, betas=tuple(args.betas), prediction=args.prediction,
-                        time_sampler=args.time_sampler, ema_teacher=args.ema_teacher, seed=args.seed,
-                        seed_noise=args.seed_noise,
-                        eval_every=args.eval_every, save_every=args.eval_every, device=args.device)
-    out = Path(args.out) / f"{args.method}.safetensors"
-    policy = "train_test_split.csv" if ds.splits else f"first {round(args.train_fraction * 100)}% of each take"
-    model = train_generator(train, held, tokenizers, tc, out, config=config, meta={"data": policy, "takes": ds.names})
-    if args.ship and (not torch.distributed.is_initialized() or torch.distributed.get_rank() == 0):
-        path = model.save(Path(args.ship) / f"{args.method}.safetensors", half=True,
-                          meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
-        print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
-    return 0
+    return train, held
 
 
 def preset_with(preset: str, overrides: list[str]):
