@@ -197,9 +197,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 inputs, button = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view = _output_column(service)
+        manager = None
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
-            live.add_live_tab(live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS), body=service.body,
-                              cache=service.workdir / "player-bodies")
+            manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
+            live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())
@@ -214,22 +215,28 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
+    demo.live_manager = manager                        # launch(): closing the app stops its live streams
     return demo
 
 
 def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
     """Launch with the upload limit and the output folder allowed, and sweep expired outputs on a timer
     (app.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
-    and deletes all outputs. Returns what `Blocks.launch` returns."""
+    and the live streams and deletes all outputs. Returns what `Blocks.launch` returns."""
     keep = service.settings.keep_minutes
     sweeper = Sweeper(service.cleanup, sweep_seconds(keep), final=lambda: service.cleanup(max_age_s=0)).start()
     close = demo.close
+
+    def stop() -> None:
+        if getattr(demo, "live_manager", None) is not None:
+            demo.live_manager.stop_all()                # no live worker outlives the server
+        sweeper.stop()
 
     def close_and_clean(*args, **kwargs):
         try:
             return close(*args, **kwargs)
         finally:
-            sweeper.stop()
+            stop()
 
     demo.close = close_and_clean
     try:
@@ -239,7 +246,7 @@ def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", po
                            footer_links=["api"], **kw)
     finally:
         if not kw.get("prevent_thread_lock"):
-            sweeper.stop()
+            stop()
 
 
 def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[gr.Blocks, str]:

@@ -99,3 +99,20 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
     assert n_all == 60
     first = np.asarray(next(d for d in player if d["root"])["root"]).reshape(-1, 3)[0]
     np.testing.assert_allclose(first[[0, 2]], body.rest_joints()[0][[0, 2]], atol=1e-4)   # starts at x = z = 0
+
+
+def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
+    """`demo.close()` ends every running live session and joins its worker (none outlives the server)."""
+    from app.ui import serve_locally
+    from gesturelsm.app_service import GestureService, ServiceSettings
+
+    service = GestureService(shipped_pipe, ServiceSettings(workdir=str(tmp_path)))
+    demo, _ = serve_locally(service)
+    try:
+        session = demo.live_manager.open(LiveConfig(steps=1))
+        session.feed(speech_like(1.0, seed=3))
+        assert demo.live_manager.active == 1 and session._thread.is_alive()
+    finally:
+        demo.close()
+    assert demo.live_manager.active == 0
+    assert not session._thread.is_alive()
