@@ -58,15 +58,24 @@ class Body {
     this.bones = this.mesh.skeleton.bones;            // skin joint order = SMPL-X joint order
     this.label = label;
     this.rot = new Float32Array(0); this.pos = new Float32Array(0); this.expr = new Float32Array(0);
-    this.frames = 0; this.E = 0;
+    this.frames = 0; this.E = 0; this.cap = 0;
   }
 
+  // Frames go into buffers that double when full, so a long live stream appends in amortised O(chunk), not
+  // O(everything so far) per chunk.
   append(rot, pos, expr, E) {
-    const cat = (a, b) => { const c = new Float32Array(a.length + b.length); c.set(a); c.set(b, a.length); return c; };
-    const n = rot.length / (JOINTS * 4);
-    this.rot = cat(this.rot, rot); this.pos = cat(this.pos, pos);
-    if (E) { this.E = E; this.expr = cat(this.expr, expr); }
-    this.frames += n;
+    const n = rot.length / (JOINTS * 4), need = this.frames + n;
+    if (E) this.E = E;
+    if (need > this.cap || (this.E && this.expr.length < this.cap * this.E)) {
+      const cap = Math.max(need, 2 * (this.cap || 0), 64);
+      const grow = (a, w) => { const c = new Float32Array(cap * w); c.set(a.subarray(0, this.frames * w)); return c; };
+      this.rot = grow(this.rot, JOINTS * 4); this.pos = grow(this.pos, 3);
+      if (this.E) this.expr = grow(this.expr.length >= this.frames * this.E ? this.expr : new Float32Array(this.frames * this.E), this.E);
+      this.cap = cap;
+    }
+    this.rot.set(rot, this.frames * JOINTS * 4); this.pos.set(pos, this.frames * 3);
+    if (this.E && expr.length) this.expr.set(expr, this.frames * this.E);
+    this.frames = need;
   }
 
   pose(f) {
