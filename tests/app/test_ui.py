@@ -102,7 +102,6 @@ def browser(playwright):
 def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, tmp_path):
     page = browser.new_page(viewport={"width": 1400, "height": 1400})
     page.goto(app_url)
-    page.locator("#view3d-box button.label-wrap").click()                  # open the GLB viewer's accordion first
     page.locator("#speech input[type=file]").first.set_input_files(str(speech_wav))
     page.locator("#transcript textarea").fill("hello there everyone")
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)  # uploaded
@@ -126,7 +125,8 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert "aligned automatically" in page.locator("#summary").inner_text()
     page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
     assert ".glb" in page.locator("#downloads").inner_text()
-    canvas = page.locator("#view3d canvas")                                # the interactive 3D view draws
+    page.locator("#view3d-show").click()                                   # the GLB viewer, opened only after the
+    canvas = page.locator("#view3d canvas")                                # run, draws the body
     canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
     for _ in range(20):
         page.wait_for_timeout(500)
