@@ -41,6 +41,10 @@ def test_build_demo_has_the_controls(service):
     methods = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     assert [v for _, v in methods["props"]["choices"]] == ["gesturelsm", "rectified_flow", "ddim", "ground_truth"]
     assert {"generate", "generate_motion"} <= {d.get("api_name") for d in cfg["dependencies"]}
+    # the GLB viewer: the step that gives it a file waits in the browser for its mount (else, a race: nothing drawn)
+    view = next(c["id"] for c in cfg["components"] if c["props"].get("elem_id") == "view3d")
+    handing = [d for d in cfg["dependencies"] if d["outputs"] == [view] and d.get("trigger_after") is not None]
+    assert handing and all(d.get("js") and "#view3d" in d["js"] for d in handing)
 
 
 def test_app_entry_flags_and_env(monkeypatch):
