@@ -52,6 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         page.evaluate("""async (t) => { const v = document.querySelector('#video video');
             if (v.readyState < 2) await new Promise(r => v.addEventListener('loadeddata', r, {once: true}));
             v.currentTime = t; await new Promise(r => setTimeout(r, 800)); }""", args.seek)
+        page.locator("#view3d-show").click()                                # mount the GLB viewer
         page.locator("#view3d canvas").scroll_into_view_if_needed(timeout=30000)  # WebGL draws only on screen
         page.wait_for_timeout(3000)
         page.evaluate("window.scrollTo(0, 0)")

@@ -179,11 +179,21 @@ def _output_column(service: GestureService) -> tuple:
                                "generation second)")
     files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
                     elem_id="downloads")
-    # closed by default: its viewer redraws continuously and would slow the player's software WebGL
-    with gr.Accordion("The first method's GLB in a 3D viewer", open=False, elem_id="view3d-box"):
-        view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420,
-                          elem_id="view3d")
-    return payload, video, summary, table, files, view
+    # Mounted only when asked for: its viewer redraws continuously (it would slow the player's software WebGL), and a
+    # viewer mounted hidden (e.g. in a closed accordion) and given its file there draws nothing when shown later.
+    show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")
+    view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420, elem_id="view3d",
+                      visible=False)
+    return payload, video, summary, table, files, view, show3d
+
+
+# Runs in the browser before the GLB is requested (Gradio awaits it): waits until the viewer shown by the step
+# before is mounted and laid out (then two animation frames), so the file never reaches an unmounted viewer.
+VIEWER_MOUNTED_JS = """async (...args) => {
+    const shown = () => { const v = document.querySelector('#view3d'); return v && v.getClientRects().length > 0; };
+    for (let t0 = Date.now(); !shown() && Date.now() - t0 < 20000;) await new Promise((r) => setTimeout(r, 50));
+    for (let i = 0; i < 2; i++) await new Promise((r) => requestAnimationFrame(r));
+    return args; }"""
 
 
 def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
@@ -196,7 +206,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             with gr.Column(scale=1):
                 inputs, button = _input_column(service)
             with gr.Column(scale=2):
-                payload, video, summary, table, files, view = _output_column(service)
+                payload, video, summary, table, files, view, show3d = _output_column(service)
         manager = None
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
@@ -212,6 +222,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             .then(None, payload, None, js=motion_player.LOAD_JS) \
             .then(h.show_video, state, [video, table, summary, state], api_visibility="private", **gen) \
             .then(h.add_exports, state, [files, view, summary], api_visibility="private", **gen)
+        glb = gr.State()                               # the file is handed over only once the viewer is mounted
+        show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False) \
+            .then(lambda out: str(out.glb) if out is not None and out.glb else None, glb, view, queue=False,
+                  js=VIEWER_MOUNTED_JS)
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)

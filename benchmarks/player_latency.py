@@ -77,7 +77,9 @@ def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
     r["mp4"] = time.perf_counter() - t0
     page.evaluate("() => { const p = window.gesturelsmPlayer; p.seek(0); p.play(); }")
     page.wait_for_timeout(300)
+    page.evaluate("() => { const p = window.gesturelsmPlayer; if (p.prof) for (const k in p.prof) p.prof[k] = 0; }")
     r["fps_idle"] = fps(page)
+    r["prof"] = page.evaluate("() => window.gesturelsmPlayer.prof || null")   # ms per part, draws after
     r["scrub"] = scrub_offset(page)
     page.locator("#downloads a").first.wait_for(timeout=300000)          # the chain is over: the queue is free
     old = video_src(page)
@@ -87,6 +89,13 @@ def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
     page.wait_for_function(changed, timeout=900000)
     page.close()
     return r
+
+
+def per_draw(prof: dict | None) -> str:
+    """The player's own split of a draw (ms, mean over the draws counted), or n/a for a bundle without it."""
+    if not prof or not prof.get("draws"):
+        return "n/a"
+    return " / ".join(f"{prof[k] / prof['draws']:.1f}" for k in ("pose", "render", "labels", "dom"))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -110,9 +119,9 @@ def main(argv: list[str] | None = None) -> int:
     demo, url = serve_locally(service)
     print("| speech | methods | click -> playing (s) | click -> payload in the page (s) | then bodies / motion / "
           "playing (ms) | "
-          "player fps while the mp4 renders | player fps after | scrub offset (frames) | click -> mp4 (s) | "
+          "player fps while the mp4 renders | player fps after | ms per draw after: pose / render / labels / dom | scrub offset (frames) | click -> mp4 (s) | "
           "again, new seed -> playing (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
         for sec in args.seconds:
@@ -122,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
                 m = r["marks"]
                 print(f"| {dur:.1f} s | {n} | {r['play']:.2f} | {m['payload']:.2f} | {m.get('bodies', 0):.0f} / "
                       f"{m.get('motion', 0):.0f} / "
-                      f"{m.get('play', 0):.0f} | {r['fps_render']:.1f} | {r['fps_idle']:.1f} | {r['scrub']:.0f} | "
+                      f"{m.get('play', 0):.0f} | {r['fps_render']:.1f} | {r['fps_idle']:.1f} | {per_draw(r['prof'])} | {r['scrub']:.0f} | "
                       f"{r['mp4']:.1f} | {r['again']:.2f} |", flush=True)
         browser.close()
     demo.close()

@@ -41,6 +41,10 @@ def test_build_demo_has_the_controls(service):
     methods = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     assert [v for _, v in methods["props"]["choices"]] == ["gesturelsm", "rectified_flow", "ddim", "ground_truth"]
     assert {"generate", "generate_motion"} <= {d.get("api_name") for d in cfg["dependencies"]}
+    # the GLB viewer: the step that gives it a file waits in the browser for its mount (else, a race: nothing drawn)
+    view = next(c["id"] for c in cfg["components"] if c["props"].get("elem_id") == "view3d")
+    handing = [d for d in cfg["dependencies"] if d["outputs"] == [view] and d.get("trigger_after") is not None]
+    assert handing and all(d.get("js") and "#view3d" in d["js"] for d in handing)
 
 
 def test_app_entry_flags_and_env(monkeypatch):
@@ -102,7 +106,6 @@ def browser(playwright):
 def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, tmp_path):
     page = browser.new_page(viewport={"width": 1400, "height": 1400})
     page.goto(app_url)
-    page.locator("#view3d-box button.label-wrap").click()                  # open the GLB viewer's accordion first
     page.locator("#speech input[type=file]").first.set_input_files(str(speech_wav))
     page.locator("#transcript textarea").fill("hello there everyone")
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)  # uploaded
@@ -126,7 +129,8 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     assert "aligned automatically" in page.locator("#summary").inner_text()
     page.locator("#downloads a").first.wait_for(timeout=60000)             # downloads follow the video
     assert ".glb" in page.locator("#downloads").inner_text()
-    canvas = page.locator("#view3d canvas")                                # the interactive 3D view draws
+    page.locator("#view3d-show").click()                                   # the GLB viewer, opened only after the
+    canvas = page.locator("#view3d canvas")                                # run, draws the body
     canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
     for _ in range(20):
         page.wait_for_timeout(500)

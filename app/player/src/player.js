@@ -91,6 +91,9 @@ export class MotionPlayer {
   constructor(element, { width = 640, height = 300 } = {}) {  // drawing size; CSS scales it
     this.element = element;
     this.fps = 30; this.bodies = []; this.clock = null; this.shown = -1; this.drawn = 0;
+    // ms spent per part of the draws so far (benchmarks/player_latency.py reads it): pose = bones from the
+    // motion, render = three.js (skinning + raster, SwiftShader), labels = label positions, dom = data-* + state
+    this.prof = { pose: 0, render: 0, labels: 0, dom: 0, draws: 0 };
     this.dirty = true; this.draws = []; this.generation = 0;
     element.innerHTML = '';
     element.classList.add('motion-player');
@@ -99,6 +102,7 @@ export class MotionPlayer {
     this.renderer.setPixelRatio(1);
     this.renderer.setSize(width, height);
     this.renderer.domElement.style.width = '100%'; this.renderer.domElement.style.height = 'auto';
+    new ResizeObserver(() => { this.dirtyLayout = true; this.dirty = true; }).observe(this.renderer.domElement);
     stage.appendChild(this.renderer.domElement);
     this.labelBox = el('div', { class: 'mp-labels', style: 'position:absolute;inset:0;pointer-events:none' }, stage);
     this.scene = new THREE.Scene();
@@ -166,7 +170,11 @@ export class MotionPlayer {
 
   attachClock(clock) { this.clock = clock; this.dirty = true; this._state(); }
 
-  frames() { return this.bodies.length ? Math.min(...this.bodies.map((b) => b.frames)) : 0; }
+  frames() {                                         // runs every animation frame: no allocation
+    let n = Infinity;
+    for (const b of this.bodies) n = Math.min(n, b.frames);
+    return this.bodies.length ? n : 0;
+  }
 
   async play() {
     if (!this.clock) return;
@@ -232,7 +240,8 @@ export class MotionPlayer {
     const ready = this.clock.readyState === undefined || this.clock.readyState >= 3;
     const playing = !this.clock.paused && !this.clock.ended && ready;
     this._setState(playing ? 'playing' : 'paused');
-    this.button.textContent = playing ? 'Pause' : 'Play';
+    const label = playing ? 'Pause' : 'Play';
+    if (this.button.textContent !== label) this.button.textContent = label;
   }
 
   _frame() {
@@ -240,6 +249,7 @@ export class MotionPlayer {
     if (!T || !this.clock) return;
     const t = this.clock.currentTime || 0;
     const f = Math.max(0, Math.min(T - 1, Math.floor(t * this.fps + 1e-6)));
+    const pr = this.prof, t0 = performance.now();
     if (f !== this.shown) {
       for (const b of this.bodies) b.pose(f);
       this.shown = f; this.drawn += 1; this.dirty = true;
@@ -250,23 +260,31 @@ export class MotionPlayer {
       }
     }
     if (!this.dirty) return;
+    const t1 = performance.now();
     this.renderer.render(this.scene, this.camera);
+    const t2 = performance.now();
     this._labels();
     this.dirty = false;
     const now = performance.now();
+    pr.pose += t1 - t0; pr.render += t2 - t1; pr.labels += now - t2; pr.draws += 1;
     this.draws.push(now);
     while (this.draws.length && this.draws[0] < now - 1000) this.draws.shift();
     const d = this.element.dataset;
-    d.frames = String(this.drawn); d.frame = String(f); d.fps = String(this.draws.length);
+    d.frames = String(this.drawn); d.frame = String(f);
+    if (d.fps !== String(this.draws.length)) d.fps = String(this.draws.length);
     this._state();
+    pr.dom += performance.now() - now;
   }
 
   _labels() {
-    const c = this.renderer.domElement, v = new THREE.Vector3();
-    for (const b of this.bodies) {
+    const v = this._v || (this._v = new THREE.Vector3());
+    if (!this.stageH || this.dirtyLayout) { this.stageH = this.renderer.domElement.clientHeight; this.dirtyLayout = false; }
+    for (const b of this.bodies) {                // layout read once above, writes only here (no forced layout)
       b.bones[15].getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
-      b.tag.style.left = `${((v.x + 1) / 2) * 100}%`;
-      b.tag.style.top = `${((1 - v.y) / 2) * c.clientHeight}px`;
+      const left = Math.round(((v.x + 1) / 2) * 1000) / 10, top = Math.round(((1 - v.y) / 2) * this.stageH);
+      if (left === b.left && top === b.top) continue;                            // unchanged: no style write
+      b.left = left; b.top = top;
+      b.tag.style.left = `${left}%`; b.tag.style.top = `${top}px`;
     }
   }
 
