@@ -11,8 +11,8 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.app_service import (METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES, GestureService,
-                                    Request)
+from gesturelsm.app_service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
+                                    GestureService, Request)
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
@@ -158,7 +158,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
         seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
     with gr.Accordion("Options", open=False):
         in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
-        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value="off", label="Smoothing"))
+        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULT_SMOOTHING, label="Smoothing"))
         size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
                                         label="Video size"))
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")

@@ -6,7 +6,9 @@ Held-out speech: the last 20 % of 2_scott_0_1_1 (the shipped models trained on i
 audio-only takes 2_scott_0_2_2, 2_scott_0_3_3, audio-only and with their MFA transcripts. Statistics
 (gesturelsm/metrics/amplitude.py, wrists relative to the pelvis, y up, metres) pooled over clips x seeds,
 in brackets the ratio to the speaker's whole take (the held-out 20 % alone is a calmer stretch: 14.7 % raised); replay guard = median distance of 1 s upper-body
-windows to the nearest training window, over the same for the speaker's held-out motion.
+windows to the nearest training window, over the same for the speaker's held-out motion. Generated motion is
+post-processed as the app does by default (--smoothing, default light: a 5-frame Savitzky-Golay filter, see
+motion/postprocess.py); the jerk before it is shown in brackets ("raw").
 
 Stages (--stages, any of):
   speaker     the speaker: held-out 20 % and training 80 %
@@ -32,6 +34,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
+
 REPO = Path(__file__).resolve().parents[1]
 BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "decay", "interval", "latents", "respread")
@@ -48,6 +52,8 @@ def main() -> None:
     ap.add_argument("--stages", nargs="+", default=list(STAGES), choices=STAGES)
     ap.add_argument("--methods", nargs="+", default=None, help="methods of the latents stage (default: all)")
     ap.add_argument("--text", choices=["both", "audio", "transcript"], default="both")
+    ap.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
+                    help="post-processing of generated motion, as the app applies it (jerk before it in brackets)")
     args = ap.parse_args()
     from gesturelsm.evaluation.amplitude import AmplitudeData, format_rows, rest_seeds
     from gesturelsm.generator.data import encode_regions
@@ -59,6 +65,7 @@ def main() -> None:
     if not Path(args.data).exists():
         raise SystemExit(f"needs the real BEAT2 sample at {args.data}")
     data = AmplitudeData.load(args.data)
+    data.smoothing = args.smoothing
     pipe = GesturePipeline.from_pretrained(args.checkpoints)
     seeds = list(range(args.seeds))
     modes = {"both": [False, True], "audio": [False], "transcript": [True]}[args.text]

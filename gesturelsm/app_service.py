@@ -37,7 +37,7 @@ from .errors import AudioError, GestureError, InputError, RenderError
 from .export import export_bvh, export_glb, export_keypoints, export_npz
 from .flows import DEFAULT_STEPS
 from .limits import transcript_problems
-from .motion.postprocess import SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
+from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
 from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
 from .render import render_video
@@ -76,7 +76,7 @@ class Request:
     cfg: float = 2.0                                                                      # the same for all
     seed: int = 0
     stand_in_place: bool = False
-    smoothing: str = "off"
+    smoothing: str = DEFAULT_SMOOTHING
     size: int = 384
     exports: bool = True
     transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
@@ -333,5 +333,5 @@ def duration_seconds(path: str | os.PathLike) -> float:
 
 
 __all__ = ["GestureService", "Outcome", "Request", "ServiceError", "ServiceSettings", "METHOD_LABELS",
-           "SMOOTHING_WINDOWS", "TIMING_COLUMNS", "VIDEO_SIZES", "find_beat2_take", "fit_length",
+           "DEFAULT_SMOOTHING", "SMOOTHING_WINDOWS", "TIMING_COLUMNS", "VIDEO_SIZES", "find_beat2_take", "fit_length",
            "smooth", "stand_in_place", "timing_rows", "InputError"]

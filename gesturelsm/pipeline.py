@@ -26,7 +26,7 @@ from .features.text import TEXT_DIM, TextEmbedder
 from .flows import FACTS
 from .generator.model import GestureGenerator
 from .generator.sampling import decode_latents, generate_latents
-from .motion.postprocess import check_smoothing, fit_length, postprocess
+from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
 from .motion.regions import GENERATED_REGIONS, join_regions
 from .motion.sequence import FPS, MotionSequence
 from .reference.runner import REFERENCE_FACTS, attach_reference, generate_for_pipeline
@@ -89,7 +89,7 @@ class Plan:
     cfg: float = 2.0
     seed: int = 0
     stand_in_place: bool = False
-    smoothing: str = "off"                     # motion.postprocess.SMOOTHING_WINDOWS
+    smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
 

@@ -7,6 +7,7 @@ import time
 from .align.textgrid import read_words
 from .audio import load_audio
 from .constants import SAMPLE_RATE
+from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, postprocess
 from .pipeline import ALL_FACTS, GesturePipeline
 
 
@@ -24,6 +25,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--method", default="gesturelsm", choices=list(ALL_FACTS),
                    help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
+    g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
+                   help=f"post-processing (motion/postprocess.py); 'off' writes the raw model output (default {DEFAULT_SMOOTHING})")
+    g.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
     g.set_defaults(func=run_generate)
 
@@ -38,11 +42,11 @@ def run_generate(args: argparse.Namespace) -> int:
     steps = args.steps or ALL_FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method, transcribe=not args.no_transcribe)
-    path = res.motion.save(args.out)
+    path = postprocess(res.motion, args.stand_in_place, args.smoothing).save(args.out)
     for w in res.warnings:
         print(f"warning: {w}")
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
     print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {args.method}, {steps} steps, "
-          f"CFG {args.cfg}, seed {args.seed}; {res.text_mode}")
+          f"CFG {args.cfg}, seed {args.seed}, smoothing {args.smoothing}; {res.text_mode}")
     print(f"timings: {stages}; real-time factor {res.real_time_factor:.1f}x; total {time.perf_counter() - t0:.1f}s")
     return 0

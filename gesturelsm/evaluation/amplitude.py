@@ -28,6 +28,7 @@ from ..data.beat2 import Beat2Dataset
 from ..generator.data import encode_regions
 from ..metrics.amplitude import AmplitudeStats, ReplayGuard, pooled_stats, replay_novelty, training_bank
 from ..motion.regions import REGIONS
+from ..motion.postprocess import postprocess
 from ..motion.sequence import MotionSequence
 from .clips import EvalClip, heldout_clips
 
@@ -37,6 +38,7 @@ class AmplitudeRow:
     label: str
     stats: AmplitudeStats
     guard: ReplayGuard | None
+    raw_jerk: float | None = None           # jerk before post-processing, when the row's motion was smoothed
 
 
 @dataclass
@@ -44,6 +46,7 @@ class AmplitudeData:
     clips: list[EvalClip]
     train: list[MotionSequence]             # the training part of every motion take
     body: object
+    smoothing: str = "off"                  # post-processing of generated motion (motion.postprocess), as shipped
 
     @classmethod
     def load(cls, root: str | Path, body=None) -> "AmplitudeData":
@@ -94,10 +97,13 @@ class AmplitudeData:
             first = bank[k % len(bank)] if bank else None
             with sampling_options(pipe.generators[method], seed_latents=first, **options):
                 for sp in speech:
-                    res = pipe.generate(sp, steps=steps, cfg=cfg, seed=k, method=method)
-                    motions.append(self.joints(res.motion))
+                    motions.append(pipe.generate(sp, steps=steps, cfg=cfg, seed=k, method=method).motion)
         mode = "transcript" if text else "audio-only"
-        return self.row(label or f"{method} {steps} steps CFG {cfg:g} {mode}", motions)
+        row = self.row(label or f"{method} {steps} steps CFG {cfg:g} {mode}",
+                       [self.joints(postprocess(m, False, self.smoothing)) for m in motions])
+        if self.smoothing != "off":
+            row.raw_jerk = pooled_stats([self.joints(m) for m in motions]).jerk
+        return row
 
 
 @contextlib.contextmanager
@@ -164,5 +170,5 @@ def format_rows(rows: list[AmplitudeRow], speaker: AmplitudeStats | None = None)
         out.append(f"| {row.label} | {100 * s.raised_share:.1f} %{r(s.raised_share, sp.raised_share)} "
                    f"| {s.height_p50:.2f} / {s.height_p95:.2f}{r(s.height_p95, sp.height_p95)} "
                    f"| {s.wrist_speed:.2f}{r(s.wrist_speed, sp.wrist_speed)} | {s.hand_spread:.2f} "
-                   f"| {s.jerk:.0f} | {guard} |")
+                   f"| {s.jerk:.0f}{'' if row.raw_jerk is None else f' (raw {row.raw_jerk:.0f})'} | {guard} |")
     return "\n".join(out)

@@ -87,7 +87,7 @@ def run_train(args: argparse.Namespace) -> int:
     model = train_generator(train, held, tokenizers, tc, out, config=config, meta=meta)
     if args.ship and (not torch.distributed.is_initialized() or torch.distributed.get_rank() == 0):
         path = model.save(Path(args.ship) / f"{args.method}.safetensors", half=True,
-                          meta={"data": policy, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
+                          meta={**meta, "steps": tc.steps, "preset": tc.preset, "train": tc.__dict__})
         print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0
 

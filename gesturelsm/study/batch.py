@@ -27,6 +27,7 @@ import numpy as np
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
 from ..flows import FACTS
+from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
 
@@ -99,7 +100,7 @@ def _transcript(audio: Path):
 
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
-               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = "off",
+               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
                log: Callable[[str], None] = print) -> StudyPlan:
     """Render what is missing and (re)write key, orders, sheets and forms; returns the plan.
     `steps`: per method (missing: the method's default)."""

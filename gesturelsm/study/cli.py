@@ -12,6 +12,7 @@ from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..errors import UserError
 from ..flows import steps_from_flags
+from ..motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from .batch import make_study
 
@@ -33,7 +34,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--model", help="SMPL-X .npz body model (default: the built-in mannequin)")
     p.add_argument("--beat2", help="BEAT2-layout folder, for ground_truth videos of its takes")
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
-    p.add_argument("--smoothing", default="off", choices=["off", "light", "medium", "strong"])
+    p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
+                   help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
     p.set_defaults(func=run)
 
 
