@@ -162,6 +162,17 @@ def test_generate_cli_writes_beat2_npz(tiny_assets, tmp_path, capsys):
         assert d["poses"].shape == (90, 165) and d["trans"].shape == (90, 3) and d["expressions"].shape == (90, 100)
         assert int(d["mocap_frame_rate"]) == 30
     assert "real-time factor" in capsys.readouterr().out
+    # the default post-processing is light smoothing of the raw model output (the same seed, --smoothing off)
+    from gesturelsm.motion import MotionSequence
+    from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, postprocess
+
+    raw = tmp_path / "raw.npz"
+    assert main(["generate", str(wav), "--checkpoints", str(tiny_assets), "--steps", "2", "--smoothing", "off",
+                 "--out", str(raw)]) == 0
+    smoothed = MotionSequence.load(out)
+    want = postprocess(MotionSequence.load(raw), False, DEFAULT_SMOOTHING)
+    assert DEFAULT_SMOOTHING == "light" and np.allclose(smoothed.poses, want.poses, atol=1e-5)
+    assert not np.allclose(smoothed.poses, MotionSequence.load(raw).poses, atol=1e-4)
     (tmp_path / "broken.wav").write_bytes(b"RIFF....WAVEfmt garbage")
     assert main(["generate", str(tmp_path / "broken.wav"), "--checkpoints", str(tiny_assets), "--out",
                  str(tmp_path / "x.npz")]) == 2
