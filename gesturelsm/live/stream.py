@@ -8,7 +8,14 @@ already final: they are the seed (first s) and are kept fixed while sampling (re
 flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. (Anchoring windows at
 st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
 motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
-defaults c = 4, lookahead = 2 that is 0.8 s at worst, 0.53 s on average, plus compute. With lookahead >= t - c each
+defaults c = 6, lookahead = 2 that is 1.07 s at worst, 0.67 s on average, plus compute. Why 6 and 2 (release 4,
+2 held-out takes x 6 seeds, loudness-following gain: mean and standard errors; tests/live/test_stream.py and
+benchmarks/live_latency.py): c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; more look-ahead, 8 steps,
+only 8 known latents, no blending or waiting decodes did not help: +0.03 to +0.05); c = 6 gives +0.11 (3.2 SE),
+c = 8 +0.12 (4.4 SE). Small commits extend the motion a few latents at a time from a long fixed past, which carries
+its momentum more than the new speech's loudness. c = 8 adds latency (0.8 s on average), and with lookahead 0 the
+decoder has no latent right of a chunk: jerk at seams 13x inside. Streamed motion is calmer than offline (hands
+raised in ~7 % of frames against 17-39 % offline on these takes; README, live mode). With lookahead >= t - c each
 window starts at st, is seeded with the previous window's latents there and cross-fades them exactly as offline:
 the windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
 
@@ -51,7 +58,7 @@ SR = 16_000
 
 @dataclass(frozen=True)
 class LiveConfig:
-    commit: int = 4                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
+    commit: int = 6                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
     lookahead: int = 2             # latents of real audio past the finalised span before a window runs
     steps: int = 4                 # sampler steps per window
     cfg: float = 2.0

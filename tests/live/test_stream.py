@@ -9,7 +9,7 @@ import torch
 from gesturelsm.live import LiveConfig, StreamingGenerator
 from gesturelsm.live.stream import SR
 
-from _support import speech_like
+from _support import assert_follows_loudness, speech_like
 
 
 def chunks(y: np.ndarray, n: int):
@@ -137,10 +137,11 @@ def test_final_latents_are_never_rewritten(shipped_pipe):
 
 
 def test_streamed_motion_moves_with_the_loudness_of_new_speech(shipped_pipe, beat2_root):
-    """The offline speech-response test (tests/generator/test_shipped.py), on the same two held-out takes and seeds,
-    with the live defaults (0.8 s look-ahead): speed-loudness correlation beats the loudness shifted by >= 2 s.
-    Measured +0.04 / +0.08 / +0.36 / +0.20; windows anchored at their start with silence after the look-ahead
-    (the previous design) gave +0.02 to +0.05 on average, below the bar."""
+    """The offline speech-response test (tests/generator/test_shipped.py) on the same two held-out takes and 6 seeds,
+    streamed with the live defaults (audio only: live mode has no transcript), with the same pooled bar.
+    Measured with release 4 (take x seeds 0-5): commit 6 / look-ahead 2 (the defaults) mean +0.108, 3.2 standard
+    errors, 10 of 12 positive; the earlier defaults commit 4 / look-ahead 2 gave +0.042 (1.7 SE) and fail, as did
+    windows anchored at their start with silence after the look-ahead (the first design, +0.02 to +0.05)."""
     from gesturelsm.body import load_body_model
     from gesturelsm.data.beat2 import Beat2Dataset
     from gesturelsm.metrics.speech_response import energy_following
@@ -152,7 +153,7 @@ def test_streamed_motion_moves_with_the_loudness_of_new_speech(shipped_pipe, bea
     gains = []
     for name in ds.audio_only_names[:2]:
         y = ds.load(name).audio
-        for seed in (0, 1):
+        for seed in range(6):
             _, poses, trans = streamed(shipped_pipe, y, LiveConfig(seed=seed), 3200)
             gains.append(energy_following(body.joints(poses, trans), y).gain)
-    assert min(gains) > 0 and np.mean(gains) > 0.08, gains
+    assert_follows_loudness(gains)
