@@ -97,6 +97,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1, help="torch threads (2 oversubscribes a shared 2-core machine)")
     ap.add_argument("--steps", type=int, default=None, help="sampler steps (default: LiveConfig's)")
     ap.add_argument("--commit", type=int, default=None)
+    ap.add_argument("--cfg", type=float, default=None, help="guidance scale (default: LiveConfig's)")
     ap.add_argument("--lookahead", type=int, default=None)
     ap.add_argument("--take", default="2_scott_0_2_2")
     ap.add_argument("--skip-quality", action="store_true")
@@ -112,7 +113,7 @@ def main() -> None:
     if not BEAT2.exists():
         raise SystemExit(f"needs the real speech takes at {BEAT2}")
     cfg = replace(LiveConfig(), **{k: v for k, v in (("steps", args.steps), ("commit", args.commit),
-                                                      ("lookahead", args.lookahead)) if v is not None})
+                                                      ("lookahead", args.lookahead), ("cfg", args.cfg)) if v is not None})
     pipe = GesturePipeline.from_pretrained(methods=[cfg.method])
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"settings: {cfg}; audio look-ahead <= {look:.2f} s; torch threads {args.threads}; "
