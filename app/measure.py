@@ -20,15 +20,35 @@ from pathlib import Path  # noqa: E402
 
 from gesturelsm.audio import load_audio  # noqa: E402
 
-SENTENCE = ("When we talk about the weather, we often move our hands to show the clouds, the wind and the sun. "
-            "Then we point at the sky and explain why tomorrow will be better than today. ")
+# Varied sentences, none repeated within 30 s: Whisper re-decodes a 30 s window whose text compresses too well
+# (a repeated sentence) at five more temperatures, which made 60 s of the old one-sentence loop take 21 s to
+# transcribe instead of ~3.5 s per minute of real speech (benchmarks/transcribe_accuracy.py).
+SENTENCES = (
+    "When we talk about the weather, we often move our hands to show the clouds, the wind and the sun.",
+    "Then we point at the sky and explain why tomorrow will be better than today.",
+    "My grandmother kept a small garden behind the house, full of tomatoes, beans and bright yellow flowers.",
+    "Every summer we picked the fruit together and carried heavy baskets into the kitchen.",
+    "Learning to cook took me years, and I still burn the rice when I am not paying attention.",
+    "The train to the city leaves at seven, so most mornings I run down the hill with my coffee.",
+    "Honestly, the best part of travelling is getting lost in a market where nobody speaks your language.",
+    "You point, you smile, you count on your fingers, and somehow everyone understands each other.",
+    "Last winter the lake froze so thick that whole families walked across it to the island.",
+    "Our teacher used to say that a good question is worth more than a quick answer.",
+    "If you want to build a boat, start with a drawing, then a model, and only then the real wood.",
+    "Music was always loud in our house, and my brother practised the drums right above my bedroom.",
+    "Nobody expected the small bakery on the corner to become famous for its enormous cinnamon rolls.",
+    "We argued for hours about the ending of that film, and we still do not agree.",
+    "The mountains look close from the window, but the road takes almost three hours.",
+    "At the end of the day, what people remember is how you made them feel.",
+)
 
 
 def speech(seconds: float, out: Path) -> tuple[Path, str, float]:
     """eSpeak NG speech of about `seconds` (whole words), its text and its duration."""
     import soundfile as sf
 
-    words = (SENTENCE * (int(seconds // 10) + 2)).split()[: max(3, int(seconds * 2.9))]
+    text = " ".join(SENTENCES)
+    words = (" ".join([text] * (int(seconds // 60) + 1))).split()[: max(3, int(seconds * 2.9))]
     text = " ".join(words)
     raw = out.with_suffix(".raw.wav")
     subprocess.run(["espeak-ng", "-s", "150", "-w", str(raw), text], check=True)

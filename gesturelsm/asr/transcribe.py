@@ -54,6 +54,20 @@ class Transcript:
     details: dict = field(default_factory=dict, compare=False)
 
 
+def sequential(words: list[Word], min_s: float = 0.01) -> list[Word]:
+    """Whisper's word times made strictly sequential: each word starts no earlier than the previous one ends and
+    lasts >= `min_s`. Whisper gives fast words zero length or the same start as their neighbour; left as they
+    were, writing them as TextGrid intervals failed ("word 14 has no duration")."""
+    out: list[Word] = []
+    t = 0.0
+    for w in words:
+        start = max(w.start, t)
+        end = max(w.end, start + min_s)
+        out.append(Word(w.text, start, end))
+        t = end
+    return out
+
+
 def recognize(audio: np.ndarray, beam_size: int = 5) -> tuple[list[Word], float, dict]:
     """Whisper's words with its own times, the mean token log-probability (weighted by tokens) and details."""
     model = load_model()
@@ -68,8 +82,9 @@ def recognize(audio: np.ndarray, beam_size: int = 5) -> tuple[list[Word], float,
         for w in seg.words or []:
             text = w.word.strip()
             if text:
-                words.append(Word(text, float(w.start), float(max(w.end, w.start + 0.01))))
+                words.append(Word(text, float(w.start), float(w.end)))
                 probs.append(float(w.probability))
+    words = sequential(words)
     avg = logp / ntok if ntok else -math.inf
     details = {"model": MODEL_NAME, "mean_word_probability": float(np.mean(probs)) if probs else 0.0,
                "max_no_speech_probability": max(no_speech, default=1.0)}
@@ -116,4 +131,4 @@ def _clip(text: str, n: int = 60) -> str:
     return text if len(text) <= n else text[: n - 3].rstrip() + "..."
 
 
-__all__ = ["Transcript", "RecognizerUnavailable", "recognize", "transcribe", "MIN_AVG_LOGPROB"]
+__all__ = ["Transcript", "RecognizerUnavailable", "recognize", "sequential", "transcribe", "MIN_AVG_LOGPROB"]

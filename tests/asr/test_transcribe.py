@@ -81,3 +81,26 @@ def _plain(text: str) -> list[str]:
     import re
 
     return re.findall(r"[a-z0-9']+", text.lower())
+
+
+def test_whisper_word_times_are_made_sequential_and_write_as_a_textgrid(tmp_path):
+    """Whisper's fast words: zero length, the same start as the neighbour, or starting inside it. They must come out
+    ordered, non-overlapping and of positive length, so the TextGrid writer accepts them (it refused before)."""
+    from gesturelsm.align import TextGridError, Word, read_words, write_textgrid
+    from gesturelsm.asr.transcribe import sequential
+
+    raw = [Word("good", 4.50, 4.92), Word("morning", 4.92, 4.92), Word("to", 4.92, 5.10), Word("you", 5.00, 5.40),
+           Word("all", 5.60, 5.90)]
+    got = sequential(raw)
+    assert [w.text for w in got] == [w.text for w in raw]
+    for a, b in zip(got, got[1:]):
+        assert a.end <= b.start
+    assert all(w.end - w.start >= 0.01 - 1e-9 for w in got)
+    assert got[0] == raw[0] and got[-1] == raw[-1]                 # untouched where Whisper was already fine
+    assert got[1].start == 4.92 and got[2].start >= got[1].end and got[3].start >= 5.10
+    with pytest.raises(TextGridError, match="no duration"):
+        write_textgrid(tmp_path / "raw.TextGrid", raw)
+    path = tmp_path / "w.TextGrid"
+    write_textgrid(path, got)
+    back = read_words(path)
+    assert [w.text for w in back] == [w.text for w in raw]
