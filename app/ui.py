@@ -98,6 +98,12 @@ class _Handlers:
     def _files(out):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
+    def prefetch(self, audio, text, auto_text) -> None:
+        """Speech uploaded or recorded: transcribe it while the visitor chooses the settings (unless a transcript is
+        typed or transcription is off), so Generate finds the words ready. Silent: the request reports problems."""
+        if auto_text and not (text and text.strip()):
+            self.service.prefetch(audio)
+
     def show_motion(self, *args, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events."""
@@ -218,6 +224,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                         f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
         text, state = inputs[1], gr.State()
+        audio, auto_text = inputs[0], inputs[-1]
+        for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
+            uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",
+                     concurrency_limit=1, concurrency_id="prefetch")
         button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
             .then(None, payload, None, js=motion_player.LOAD_JS) \
             .then(h.show_video, state, [video, table, summary, state], api_visibility="private", **gen) \

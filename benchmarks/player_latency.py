@@ -4,7 +4,7 @@ rate while the server renders the mp4 and after, audio-motion offset when scrubb
 generating again with another seed on the same page (the bodies are replaced). Shipped checkpoints, eSpeak NG
 speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Prints a markdown table.
 
-    .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR]
+    .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR] [--think-s 3]
 """
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def video_src(page) -> str:
     return page.evaluate("() => { const v = document.querySelector('#video video'); return v ? v.src : ''; }")
 
 
-def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
+def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0) -> dict:
     page = browser.new_page(viewport={"width": 1400, "height": 1300})
     page.goto(url)
     page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
@@ -70,6 +70,7 @@ def run_case(browser, url: str, wav: Path, methods: list[str]) -> dict:
             page.locator("#methods label", has_text=LABELS[m]).click()
     page.locator("#speech input[type=file]").first.set_input_files(str(wav))
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+    page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being transcribed)
     t0 = time.perf_counter()
     play_s, marks = click_and_wait(page)
     r = {"play": play_s, "marks": marks, "fps_render": fps(page)}
@@ -103,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
     p.add_argument("--methods", type=int, nargs="+", default=[1, 3], choices=[1, 2, 3])
     p.add_argument("--checkpoints")
+    p.add_argument("--think-s", type=float, default=0.0,
+                   help="seconds between the upload and the click (0: click at once, the worst case)")
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     args = p.parse_args(argv)
     import torch
@@ -127,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         for sec in args.seconds:
             wav, _, dur = speech(sec, Path(tmp) / f"speech_{int(sec)}.wav")
             for n in args.methods:
-                r = run_case(browser, url, wav, ALL[:n])
+                r = run_case(browser, url, wav, ALL[:n], args.think_s)
                 m = r["marks"]
                 print(f"| {dur:.1f} s | {n} | {r['play']:.2f} | {m['payload']:.2f} | {m.get('bodies', 0):.0f} / "
                       f"{m.get('motion', 0):.0f} / "

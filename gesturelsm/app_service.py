@@ -15,6 +15,7 @@ name here) with a message meant for the page.
 """
 from __future__ import annotations
 
+import logging
 import os
 import secrets
 import shutil
@@ -44,6 +45,7 @@ from .render import render_video
 
 Progress = Callable[[float, str], None]
 
+log = logging.getLogger("gesturelsm.app")
 METHOD_LABELS = {**{k: f.label for k, f in ALL_FACTS.items()}, GROUND_TRUTH: "Ground truth"}
 VIDEO_SIZES = (256, 384, 512, 640)
 TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
@@ -150,8 +152,27 @@ class GestureService:
         speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
         for m in self.pipeline.methods:
             self.pipeline.generate(speech, steps=1, method=m)
-        automatic_words(y)                                   # says "unavailable" itself when not installed
+        automatic_words(y, remember=False)                   # says "unavailable" itself when not installed
         return time.perf_counter() - t0
+
+    def prefetch(self, audio_path: str | None) -> bool:
+        """Transcribe an upload before the visitor asks for it (the page calls this when speech is uploaded or
+        recorded), so that a request without a transcript finds the words ready (asr.source remembers them). Never
+        raises: a file that cannot be used is left for the request to refuse with its message. Returns whether
+        the words are ready."""
+        if not audio_path:
+            return False
+        try:
+            self._check(Request(audio_path))
+            audio = load_audio(audio_path, max_seconds=self.settings.max_seconds)
+            self.pipeline.prefetch_transcript(audio, SAMPLE_RATE)
+            return True
+        except GestureError as exc:                      # the request refuses it with this message
+            log.info("no transcript prefetched for %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
+            return False
+        except Exception:                                # a bug: keep its traceback in the log, not on the page
+            log.exception("prefetching the transcript of %s failed", Path(audio_path).name)
+            return False
 
     def cleanup(self, max_age_s: float | None = None) -> int:
         """Delete request folders older than keep_minutes; returns how many were removed."""

@@ -158,15 +158,8 @@ class GesturePipeline:
         return list(self.generators) + list(getattr(self, "reference_methods", {}))
 
     # ---- speech ------------------------------------------------------------------------------------------
-    def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
-                       text: str | None = None, progress: Progress | None = None,
-                       transcribe: bool = True) -> SpeechInput:
-        """Validate and resample audio; word timings from aligning a typed `text`, else from `words` (e.g. a
-        TextGrid), else from automatic transcription (`transcribe`), else audio-only. Features that do not
-        depend on the method are computed here once."""
-        timings: dict[str, float] = {}
-        warnings: list[str] = []
-        t0 = time.perf_counter()
+    def _checked_audio(self, audio: np.ndarray, sr: int) -> tuple[np.ndarray, int]:
+        """Mono 16 kHz samples cut to whole frames, and their frame count T; bad audio raises InputError."""
         y = to_mono(audio)
         if sr <= 0:
             raise InputError(f"invalid sample rate {sr}")
@@ -182,7 +175,23 @@ class GesturePipeline:
         if np.abs(y).max() < 1e-4:
             raise InputError("the audio is silent: there is no speech to gesture to")
         T = int(len(y) * FPS // SAMPLE_RATE)
-        y = y[: int(round(T * SAMPLE_RATE / FPS))]
+        return y[: int(round(T * SAMPLE_RATE / FPS))], T
+
+    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> None:
+        """Transcribe now what prepare_speech(audio, sr) would transcribe, so that it finds the words ready
+        (asr.source remembers them by content). Bad audio raises InputError, as prepare_speech would."""
+        automatic_words(self._checked_audio(audio, sr)[0])
+
+    def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
+                       text: str | None = None, progress: Progress | None = None,
+                       transcribe: bool = True) -> SpeechInput:
+        """Validate and resample audio; word timings from aligning a typed `text`, else from `words` (e.g. a
+        TextGrid), else from automatic transcription (`transcribe`), else audio-only. Features that do not
+        depend on the method are computed here once."""
+        timings: dict[str, float] = {}
+        warnings: list[str] = []
+        t0 = time.perf_counter()
+        y, T = self._checked_audio(audio, sr)
         channels = torch.from_numpy(audio_channels(y))
         timings["features"] = time.perf_counter() - t0
         if progress:

