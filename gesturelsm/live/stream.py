@@ -17,9 +17,10 @@ its momentum more than the new speech's loudness. c = 8 adds latency (0.8 s on a
 decoder has no latent right of a chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at the
 offline CFG 2 a hand is raised in 7.5 % of frames (12 streams) against 17-39 % offline on these takes, and the
 share grows with the commit (c = 12: 11.8 %, c = 28: 16.9 %), so every window start pulls the motion towards the
-mean. Stronger guidance pays part of it back: CFG 3 / 4 give 11.1 / 14.7 % raised (p95 wrist height 0.27 -> 0.30 /
-0.34 m) and loudness following +0.14 / +0.17 (4.3 / 5.4 SE; 12 of 12 positive at 4), upper-body jitter +5 %,
-seams unchanged; so the live default is CFG 4 (README, live mode). With lookahead >= t - c each
+mean. Stronger guidance pays most of it back: CFG 3 / 4 / 5 / 6 give 11.1 / 14.7 / 18.3 / 21.2 % raised (the
+speaker: 27.9 %; p95 wrist height 0.27 -> 0.30 / 0.34 / 0.37 / 0.38 m, the speaker's 0.42) and loudness following
++0.14 / +0.17 / +0.18 / +0.18 (4.3 / 5.4 / 6.0 / 6.3 SE; 12 of 12 positive from CFG 4), upper-body jitter +2 / +5 /
++7 / +8 % over CFG 2, seams unchanged; so the live default is CFG 6 (README, live mode). With lookahead >= t - c each
 window starts at st, is seeded with the previous window's latents there and cross-fades them exactly as offline:
 the windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
 
@@ -65,7 +66,7 @@ class LiveConfig:
     commit: int = 6                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
     lookahead: int = 2             # latents of real audio past the finalised span before a window runs
     steps: int = 4                 # sampler steps per window
-    cfg: float = 4.0               # guidance; offline's 2 streams calm motion (module docstring)
+    cfg: float = 6.0               # guidance; offline's 2 streams calm motion (module docstring)
     seed: int = 0
     method: str = "gesturelsm"
     context_s: float = 6.0         # audio before a window that onset detection sees
