@@ -47,8 +47,7 @@ def speech(seconds: float, out: Path) -> tuple[Path, str, float]:
     """eSpeak NG speech of about `seconds` (whole words), its text and its duration."""
     import soundfile as sf
 
-    text = " ".join(SENTENCES)
-    words = (" ".join([text] * (int(seconds // 60) + 1))).split()[: max(3, int(seconds * 2.9))]
+    words = (" ".join(SENTENCES).split() * (int(seconds // 60) + 1))[: max(3, int(seconds * 2.9))]
     text = " ".join(words)
     raw = out.with_suffix(".raw.wav")
     subprocess.run(["espeak-ng", "-s", "150", "-w", str(raw), text], check=True)

@@ -14,6 +14,10 @@ offline pipeline at the same steps: speech-response tests (metrics.speech_respon
 raised share and 95th-percentile wrist height (metrics.amplitude),
 and upper-body jerk (|third difference| of joint positions) at chunk seams (the jerk values whose 4-frame stencil
 spans a chunk start) over the jerk inside chunks; offline motion is scored at the same positions as a reference.
+
+Pooled (--pooled N): the same two takes streamed with seeds 0 .. N-1 (what tests/live/test_stream.py asserts with
+N = 6): loudness-following gain (mean, standard error, z, how many > 0), raised share and p95 wrist height averaged
+over the streams. E.g. `--skip-paced --skip-quality --pooled 6 --cfg 2` for the numbers of another setting.
 """
 from __future__ import annotations
 
@@ -90,6 +94,30 @@ def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
     return rows
 
 
+def pooled(pipe, cfg, takes: list[str], seeds: int) -> str:
+    from dataclasses import replace
+
+    from gesturelsm.audio import load_audio
+    from gesturelsm.body import load_body_model
+    from gesturelsm.live.cli import run_file
+    from gesturelsm.metrics.amplitude import amplitude_stats
+    from gesturelsm.metrics.speech_response import energy_following
+
+    body, gains, amps = load_body_model(), [], []
+    for name in takes:
+        y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
+        for seed in range(seeds):
+            mot = run_file(pipe, y, replace(cfg, seed=seed), 200.0).motion()
+            j = body.joints(mot.poses, mot.trans)
+            gains.append(energy_following(j, y).gain)
+            amps.append(amplitude_stats(j))
+    g = np.array(gains)
+    se = g.std(ddof=1) / np.sqrt(len(g))
+    return (f"| {len(takes)} takes x seeds 0-{seeds - 1} | {g.mean():+.3f} | {se:.3f} | {g.mean() / se:.1f} | "
+            f"{(g > 0).sum()} of {len(g)} | {100 * np.mean([a.raised_share for a in amps]):.1f} % | "
+            f"{np.mean([a.height_p95 for a in amps]):.2f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0, help="paced run length (the take is looped)")
@@ -102,6 +130,7 @@ def main() -> None:
     ap.add_argument("--take", default="2_scott_0_2_2")
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-paced", action="store_true")
+    ap.add_argument("--pooled", type=int, default=0, metavar="N", help="also stream both takes with seeds 0..N-1")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     from dataclasses import replace
@@ -112,8 +141,8 @@ def main() -> None:
 
     if not BEAT2.exists():
         raise SystemExit(f"needs the real speech takes at {BEAT2}")
-    cfg = replace(LiveConfig(), **{k: v for k, v in (("steps", args.steps), ("commit", args.commit),
-                                                      ("lookahead", args.lookahead), ("cfg", args.cfg)) if v is not None})
+    given = (("steps", args.steps), ("commit", args.commit), ("lookahead", args.lookahead), ("cfg", args.cfg))
+    cfg = replace(LiveConfig(), **{k: v for k, v in given if v is not None})
     pipe = GesturePipeline.from_pretrained(methods=[cfg.method])
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"settings: {cfg}; audio look-ahead <= {look:.2f} s; torch threads {args.threads}; "
@@ -141,6 +170,11 @@ def main() -> None:
         for name, label, bt, ef, sp, acc, seam, amp in rows:
             print(f"| {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | {sp:.3f} | "
                   f"{acc:.2f} | {seam:.2f} | {100 * amp.raised_share:.1f} % | {amp.height_p95:.2f} |")
+    if args.pooled:
+        print("\n| streamed (pooled) | loudness gain, mean | standard error | z | gains > 0 | raised | "
+              "p95 wrist height (m) |")
+        print("|---|---|---|---|---|---|---|")
+        print(pooled(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], args.pooled))
 
 
 if __name__ == "__main__":

@@ -8,21 +8,23 @@ already final: they are the seed (first s) and are kept fixed while sampling (re
 flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. (Anchoring windows at
 st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
 motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
-defaults c = 6, lookahead = 2 that is 1.07 s at worst, 0.67 s on average, plus compute. Why 6 and 2 (release 4,
-2 held-out takes x 6 seeds, loudness-following gain: mean and standard errors; tests/live/test_stream.py and
-benchmarks/live_latency.py): c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; more look-ahead, 8 steps,
-only 8 known latents, no blending or waiting decodes did not help: +0.03 to +0.05); c = 6 gives +0.11 (3.2 SE),
-c = 8 +0.12 (4.4 SE). Small commits extend the motion a few latents at a time from a long fixed past, which carries
-its momentum more than the new speech's loudness. c = 8 adds latency (0.8 s on average), and with lookahead 0 the
-decoder has no latent right of a chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at the
-offline CFG 2 a hand is raised in 7.5 % of frames (12 streams) against 17-39 % offline on these takes, and the
-share grows with the commit (c = 12: 11.8 %, c = 28: 16.9 %), so every window start pulls the motion towards the
-mean. Stronger guidance pays most of it back: CFG 3 / 4 / 5 / 6 give 11.1 / 14.7 / 18.3 / 21.2 % raised (the
-speaker: 27.9 %; p95 wrist height 0.27 -> 0.30 / 0.34 / 0.37 / 0.38 m, the speaker's 0.42) and loudness following
-+0.14 / +0.17 / +0.18 / +0.18 (4.3 / 5.4 / 6.0 / 6.3 SE; 12 of 12 positive from CFG 4), upper-body jitter +2 / +5 /
-+7 / +8 % over CFG 2, seams unchanged; so the live default is CFG 6 (README, live mode). With lookahead >= t - c each
-window starts at st, is seeded with the previous window's latents there and cross-fades them exactly as offline:
-the windows, seeds, noise draws and latents are the offline ones (same seed -> same noise sequence).
+defaults c = 6, lookahead = 2 that is 1.07 s at worst, 0.67 s on average, plus compute. Why 6 and 2 (release 4, 2
+held-out takes x 6 seeds, loudness-following gain: mean and standard errors; tests/live/test_stream.py and
+`benchmarks/live_latency.py --skip-paced --skip-quality --pooled 6 --cfg 2 [--commit C --lookahead L --steps S]`):
+at CFG 2, c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; look-ahead 4, 8 steps, blend_frames 0,
+decode_lag 4, or holding only 8 known latents (a one-off edit) did not help: +0.03 to +0.05); c = 6 gives +0.11 (3.2
+SE), c = 8 +0.12 (4.4 SE). Small commits extend the motion a few latents at a time from a long fixed past, which
+carries its momentum more than the new speech's loudness. c = 8 adds latency (0.8 s on average), and with lookahead
+0 the decoder has no latent right of a chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at
+the offline CFG 2 a hand is raised in 7.5 % of frames (12 streams) against 17-39 % offline on these takes, and the
+share grows with the commit (2 seeds: c = 12 in an 18-latent window, a one-off edit: 11.8 %; c = 28: 16.9 %), so
+every window start pulls the motion towards the mean. Stronger guidance pays most of it back: CFG 3 / 4 / 5 / 6 give
+11.1 / 14.7 / 18.3 / 21.2 % raised (the speaker: 27.9 %; p95 wrist height 0.27 -> 0.30 / 0.34 / 0.37 / 0.38 m, the
+speaker's 0.42) and loudness following +0.14 / +0.17 / +0.18 / +0.18 (4.3 / 5.4 / 6.0 / 6.3 SE; 12 of 12 positive
+from CFG 4), upper-body jitter +2 / +5 / +7 / +8 % over CFG 2, seams unchanged; so the live default is CFG 6
+(README, live mode). With lookahead >= t - c each window starts at st, is seeded with the previous window's latents
+there and cross-fades them exactly as offline: the windows, seeds, noise draws and latents are the offline ones
+(same seed -> same noise sequence).
 
 Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
 - envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of

@@ -49,7 +49,8 @@ def test_build_demo_has_the_controls(service):
     ids = {c["props"].get("elem_id"): c["id"] for c in cfg["components"]}
     early = {t[1]: d for d in cfg["dependencies"] for t in d["targets"] if t[0] == ids["speech"]}
     for event in ("upload", "stop_recording"):
-        assert early[event]["api_name"].startswith("prefetch") and early[event]["inputs"][:2] == [ids["speech"], ids["transcript"]]
+        dep = early[event]
+        assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
 
 
 def test_app_entry_flags_and_env(monkeypatch):
