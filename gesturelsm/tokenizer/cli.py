@@ -9,7 +9,9 @@ from ..data.split import split_features
 from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
 from .evaluate import evaluate_folder, format_report
-from .train import TrainConfig, train_region
+from ..checkpoint import load_checkpoint
+from .model import KIND, RVQVAE
+from .train import TrainConfig, train_region, tune_decoder
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -29,6 +31,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--device", default="auto", help="auto | cpu | cuda")
     p.add_argument("--eval-every", type=int, default=500)
     p.add_argument("--ship", metavar="DIR", help="also write fp16 inference copies here (e.g. assets/tokenizer)")
+    p.add_argument("--decoder-only", metavar="DIR",
+                   help="fine-tune only the decoders of the tokenizers in DIR (<region>.safetensors), encoder and "
+                        "codebooks frozen so generators trained on them stay valid; writes --out/<region>.safetensors")
+    p.add_argument("--accel-weight", type=float, default=None,
+                   help="weight of the L1 loss on the second difference (jitter); default: the preset's (0), "
+                        "2 with --decoder-only")
     p.set_defaults(func=run_train)
 
     e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")
@@ -51,11 +59,40 @@ def run_train(args: argparse.Namespace) -> int:
     cfg = TrainConfig(preset=args.preset, regions=tuple(args.regions), steps=args.steps, batch_size=args.batch_size,
                       window=args.window, lr=args.lr, seed=args.seed, eval_every=args.eval_every, device=args.device)
     out = Path(args.out)
+    if args.decoder_only:
+        return run_tune_decoder(args, split, cfg, out)
+    if args.accel_weight is not None:
+        raise UserError("--accel-weight is used with --decoder-only (a full training run takes the preset's losses)")
     for region in args.regions:
         model = train_region(region, split, cfg, out)
         if args.ship:
             path = model.cpu().save(Path(args.ship) / f"{region}.safetensors", half=True,
                                     meta={"data": split.policy, "steps": cfg.steps, "preset": cfg.preset})
+            print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
+    return 0
+
+
+def run_tune_decoder(args: argparse.Namespace, split, cfg: TrainConfig, out: Path) -> int:
+    src = Path(args.decoder_only)
+    missing = [r for r in args.regions if not (src / f"{r}.safetensors").exists()]
+    if missing:
+        raise UserError(f"{src}: no tokenizer checkpoint for {', '.join(missing)} (expected <region>.safetensors)")
+    weight = 2.0 if args.accel_weight is None else args.accel_weight
+    if weight < 0:
+        raise UserError(f"--accel-weight must be >= 0 (got {weight})")
+    out.mkdir(parents=True, exist_ok=True)
+    for region in args.regions:
+        model = RVQVAE.load(src / f"{region}.safetensors")
+        if model.region != region:
+            raise UserError(f"{src / f'{region}.safetensors'} holds the {model.region!r} tokenizer, not {region!r}")
+        _, meta = load_checkpoint(src / f"{region}.safetensors", KIND)
+        meta = {k: v for k, v in meta.items() if k not in ("kind", "config", "region")}   # keep how it was trained
+        model = tune_decoder(model, split, cfg, weight)
+        meta["decoder_tuning"] = {"data": split.policy, "steps": cfg.steps, "accel_weight": weight, "lr": cfg.lr,
+                                  "batch_size": cfg.batch_size, "window": cfg.window}
+        model.save(out / f"{region}.safetensors", meta=meta)
+        if args.ship:
+            path = model.save(Path(args.ship) / f"{region}.safetensors", half=True, meta=meta)
             print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
     return 0
 

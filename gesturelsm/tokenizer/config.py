@@ -20,6 +20,7 @@ class TokenizerConfig:
     quantizer_dropout: float = 0.2   # p of keeping only the first k ~ U{1..num_quantizers} layers
     dead_code_threshold: float = 1.0  # EMA count below which a code is re-initialised from the batch
     vel_weight: float = 0.0          # extra SmoothL1 on frame-to-frame velocity (0 = paper)
+    accel_weight: float = 0.0        # extra L1 on the second difference (frame-to-frame jitter; 0 = paper)
     linear_skip: bool = False        # add a linear path: strided block projection in / its transpose out
     dropout: float = 0.0             # dropout inside residual blocks
 

@@ -129,10 +129,19 @@ class RVQVAE(nn.Module):
         q = self.quantize(z, num_layers)
         recon = self.decode(q.quantized.reshape(z.shape))
         rec = F.smooth_l1_loss(recon, x)
-        loss = rec + self.config.commitment * q.commit_loss
+        loss = self.reconstruction_loss(recon, x) + self.config.commitment * q.commit_loss
+        return TokenizerOutput(recon, z, q, loss, rec)
+
+    def reconstruction_loss(self, recon: torch.Tensor, x: torch.Tensor) -> torch.Tensor:
+        """SmoothL1 on the features (B, T, C), plus the config's terms on their first and second differences along
+        time: velocity (SmoothL1) and acceleration (L1; the decoders' frame-to-frame jitter lives there: an
+        error of the same size as the real motion's own second difference before `accel_weight` was used)."""
+        loss = F.smooth_l1_loss(recon, x)
         if self.config.vel_weight > 0:
             loss = loss + self.config.vel_weight * F.smooth_l1_loss(recon.diff(dim=1), x.diff(dim=1))
-        return TokenizerOutput(recon, z, q, loss, rec)
+        if self.config.accel_weight > 0:
+            loss = loss + self.config.accel_weight * (recon.diff(n=2, dim=1) - x.diff(n=2, dim=1)).abs().mean()
+        return loss
 
     def _check_len(self, T: int) -> None:
         if T % self.config.downsample:

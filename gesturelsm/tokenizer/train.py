@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import torch
@@ -104,4 +104,49 @@ def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log
             torch.save({"model": model.state_dict(), "optim": opt.state_dict(), "sampler": sampler.state(),
                         "torch_rng": torch.get_rng_state(), "step": step}, state_path)
     bar.close()
+    return model.eval()
+
+
+def tune_decoder(model: RVQVAE, split: Split, cfg: TrainConfig, accel_weight: float, log=print) -> RVQVAE:
+    """Fine-tune only the decoder of a trained tokenizer, with `accel_weight` on the second-difference error
+    (`RVQVAE.reconstruction_loss`), on the training crops encoded and re-quantised by the frozen encoder and
+    codebooks. The encoder, the codebooks and so every latent and code stay bitwise as they were, so generators
+    trained on this tokenizer's latents stay valid; only what the codes decode to changes (less jitter).
+    The config saved with the model records `accel_weight`."""
+    torch.manual_seed(cfg.seed)
+    device = pick_device(cfg.device)
+    model = model.to(device).float()
+    model.config = replace(model.config, accel_weight=accel_weight)
+    cols = list(REGIONS[model.region].columns)
+    for p in model.parameters():
+        p.requires_grad_(False)
+    params = list(model.decoder.parameters())
+    for p in params:
+        p.requires_grad_(True)
+    opt = torch.optim.AdamW(params, lr=cfg.lr, betas=(0.9, 0.99), weight_decay=cfg.weight_decay)
+    sampler = WindowSampler(split.train, cfg.window, cfg.mirror, seed=cfg.seed)
+    heldout = [h for h in split.heldout if h.shape[0] >= 8]
+    model.eval()                                   # encoder and quantizer: no dropout, no EMA updates
+    if heldout:
+        log(f"[{model.region}] decoder tuning: held-out rotation error {reconstruction_error(model, heldout):.2f} deg at start")
+    for step in range(1, cfg.steps + 1):
+        lr = cfg.lr * (cfg.lr_min_ratio + (1 - cfg.lr_min_ratio) * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+        for g in opt.param_groups:
+            g["lr"] = lr
+        x = model.normalizer.normalize(sampler.sample(cfg.batch_size)[..., cols]).to(device)  # (B, W, C)
+        with torch.no_grad():
+            z = model.encode(x)
+            zq = model.quantize(z).quantized.reshape(z.shape)
+        model.decoder.train()
+        loss = model.reconstruction_loss(model.decode(zq), x)
+        model.decoder.eval()
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(params, 1.0)
+        opt.step()
+        if heldout and (step % cfg.eval_every == 0 or step == cfg.steps):
+            log(f"[{model.region}] decoder step {step}: loss {loss.item():.4f}, held-out rotation error "
+                f"{reconstruction_error(model, heldout):.2f} deg")
+    for p in model.parameters():
+        p.requires_grad_(False)
     return model.eval()
