@@ -170,5 +170,5 @@ def format_rows(rows: list[AmplitudeRow], speaker: AmplitudeStats | None = None)
         out.append(f"| {row.label} | {100 * s.raised_share:.1f} %{r(s.raised_share, sp.raised_share)} "
                    f"| {s.height_p50:.2f} / {s.height_p95:.2f}{r(s.height_p95, sp.height_p95)} "
                    f"| {s.wrist_speed:.2f}{r(s.wrist_speed, sp.wrist_speed)} | {s.hand_spread:.2f} "
-                   f"| {s.jerk:.0f}{'' if row.raw_jerk is None else f' (raw {row.raw_jerk:.0f})'} | {guard} |")
+                   f"| {s.jerk:.1f}{'' if row.raw_jerk is None else f' (raw {row.raw_jerk:.1f})'} | {guard} |")
     return "\n".join(out)
