@@ -4,12 +4,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..checkpoint import load_checkpoint
 from ..constants import ASSETS
 from ..data.split import split_features
 from ..errors import UserError
 from ..motion.regions import GENERATED_REGIONS
 from .evaluate import evaluate_folder, format_report
-from ..checkpoint import load_checkpoint
 from .model import KIND, RVQVAE
 from .train import TrainConfig, train_region, tune_decoder
 
@@ -35,8 +35,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="fine-tune only the decoders of the tokenizers in DIR (<region>.safetensors), encoder and "
                         "codebooks frozen so generators trained on them stay valid; writes --out/<region>.safetensors")
     p.add_argument("--accel-weight", type=float, default=None,
-                   help="weight of the L1 loss on the second difference (jitter); default: the preset's (0), "
-                        "2 with --decoder-only")
+                   help="with --decoder-only: weight of the L1 loss on the second difference (jitter), default 2")
     p.set_defaults(func=run_train)
 
     e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")

@@ -38,6 +38,11 @@ class TrainConfig:
     extra: dict = field(default_factory=dict)
 
 
+def cosine_lr(cfg: TrainConfig, step: int) -> float:
+    """Cosine decay from cfg.lr to cfg.lr * cfg.lr_min_ratio over cfg.steps."""
+    return cfg.lr * (cfg.lr_min_ratio + (1 - cfg.lr_min_ratio) * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+
+
 def pick_device(name: str) -> torch.device:
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
@@ -77,7 +82,7 @@ def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log
     bar = tqdm(total=cfg.steps, initial=step, desc=f"tokenizer {region}", dynamic_ncols=True, mininterval=2)
     t0 = time.time()
     while step < cfg.steps:
-        lr = cfg.lr * (cfg.lr_min_ratio + (1 - cfg.lr_min_ratio) * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+        lr = cosine_lr(cfg, step)
         for g in opt.param_groups:
             g["lr"] = lr
         x = norm.normalize(sampler.sample(cfg.batch_size)[..., cols]).to(device)  # (B, W, C)
@@ -130,7 +135,7 @@ def tune_decoder(model: RVQVAE, split: Split, cfg: TrainConfig, accel_weight: fl
     if heldout:
         log(f"[{model.region}] decoder tuning: held-out rotation error {reconstruction_error(model, heldout):.2f} deg at start")
     for step in range(1, cfg.steps + 1):
-        lr = cfg.lr * (cfg.lr_min_ratio + (1 - cfg.lr_min_ratio) * 0.5 * (1 + math.cos(math.pi * step / cfg.steps)))
+        lr = cosine_lr(cfg, step)
         for g in opt.param_groups:
             g["lr"] = lr
         x = model.normalizer.normalize(sampler.sample(cfg.batch_size)[..., cols]).to(device)  # (B, W, C)
@@ -139,7 +144,6 @@ def tune_decoder(model: RVQVAE, split: Split, cfg: TrainConfig, accel_weight: fl
             zq = model.quantize(z).quantized.reshape(z.shape)
         model.decoder.train()
         loss = model.reconstruction_loss(model.decode(zq), x)
-        model.decoder.eval()
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(params, 1.0)
