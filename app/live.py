@@ -1,12 +1,18 @@
-"""The server side of the Live tab: microphone chunks stream in, motion chunks and latency stream out as JSON.
+"""The Live tab: microphone chunks stream in, motion chunks and latency stream out as JSON.
 
     with gr.Blocks() as demo:
         ...
-        add_live_tab(LiveManager(pipe, max_sessions=2))       # from app/ui.py, inside the Blocks
+        add_live_tab(manager := LiveManager(pipe, max_sessions=2), body, cache)   # from app/ui.py, in the Blocks
+    demo.launch(app_kwargs={"routes": app.live_socket.routes(manager, body)})    # app/ui.py `launch` does this
 
-Each browser tab gets its own `LiveSession` (gesturelsm/live/session.py) in a `gr.State`; it ends on the stop
-button, when the tab closes (Gradio deletes the state and the delete callback stops the session), or when no audio
-arrived for the session's idle timeout (network drop). When all streams are taken the visitor reads a "busy" line.
+With the player bundle built (the page's case), the tab is the in-browser player with Record / Stop buttons and the
+meter, and the microphone goes over the app's own WebSocket (app/live_socket.py): raw PCM in 0.1 s blocks, motion
+pushed back the moment it exists. Without the bundle (or for `gradio_client` users: api_name "live_chunk" /
+"live_stop") it is Gradio's streaming microphone, one upload per STREAM_EVERY_S, below.
+Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket or in a `gr.State`; it ends on the stop
+button, when the tab closes (the socket closes, or Gradio deletes the state and the delete callback stops the
+session), or when no audio arrived for the session's idle timeout (network drop). When all streams are taken the
+visitor reads a "busy" line.
 The JSON for a player: {"start": first frame, "fps": 30, "frames": frames so far, "audio_seconds": audio received so
 far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"} and the frames since the last JSON: "poses"
 ([[165 axis-angle] per frame]) and "trans" ([[x, y, z] per frame]), or with a body (the page's) the in-browser
@@ -108,26 +114,36 @@ def _delete(session: LiveSession | None) -> None:
 
 
 def live_player(body, cache: str | Path) -> gr.HTML | None:
-    """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`), or
-    None when the player bundle is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
+    """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`) with
+    its controls and meter, streaming over the app's WebSocket (app/live_socket.py), or None when the player bundle
+    is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
     from gesturelsm.export.player import body_glb
     from gesturelsm.motion.sequence import NUM_BETAS
 
+    from .live_socket import PATH
     from .motion_player import BUNDLE, file_url
 
     if not BUNDLE.exists():
         return None
     url = file_url(body_glb(body, np.zeros(NUM_BETAS, np.float32), cache))
     js = (f"import(new URL('gradio_api/file={BUNDLE}', document.baseURI).href)"
-          ".then((m) => m.mountLive(element.querySelector('#live-player')))"
+          ".then((m) => m.mountLive(element.querySelector('#live-player'), element))"
           ".catch((e) => { element.querySelector('#live-player').dataset.error = String(e); });")
-    html = f'<div id="live-player" data-state="empty" data-frames="0" data-frame="0" data-preload="{url}"></div>'
+    html = (f'<div id="live-player" data-state="empty" data-frames="0" data-frame="0" data-preload="{url}" '
+            f'data-socket="{PATH.lstrip("/")}"></div>'
+            '<div class="live-bar" style="display:flex;gap:12px;align-items:center;flex-wrap:wrap;margin-top:6px">'
+            '<button id="live-record" type="button" class="lg primary">Record</button>'
+            '<button id="live-stop" type="button" class="lg secondary" disabled>Stop</button>'
+            '<span>median latency <b id="live-latency"></b> ms</span><span id="live-stats"></span>'
+            '<span id="live-status"></span></div>')
     return gr.HTML("", html_template=html, js_on_load=js, elem_id="live-player-box", padding=False)
 
 
 def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> gr.Tab:
     """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`). With `body` (the page's body
-    model) and `cache` (where its rest GLB goes), the motion plays in the in-browser player `live-player`."""
+    model), `cache` (where its rest GLB goes) and the player bundle built, the microphone streams over the app's
+    WebSocket (serve `app.live_socket.routes(manager, body)` with the page: app/ui.py does) and the motion plays in
+    the in-browser player `live-player`; otherwise through Gradio's streaming microphone, shown as JSON and numbers."""
     if body is not None:
         from gesturelsm.body.model import resolve_body
 
@@ -135,9 +151,10 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
     with gr.Tab("Live") as tab:
         gr.Markdown("Press record and speak: the body gestures with you, generated on this CPU while you talk, one "
                     "steady delay behind your voice (it waits for 0.27 s of the speech after each moment, and "
-                    "generates half a second of motion at a time). Press stop to end the stream. "
-                    f"At most {manager.max_sessions} live streams run at once.")
-        player = live_player(body, cache) if body is not None and cache is not None else None
+                    f"generates {manager.config.commit * 4 / 30:.2g} s of motion at a time). Press stop to end the "
+                    f"stream. At most {manager.max_sessions} live streams run at once.")
+        if body is not None and cache is not None and live_player(body, cache) is not None:
+            return tab                      # the socket path: everything else is in the player's HTML
         state = gr.State(None, delete_callback=_delete)
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
                        waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page
@@ -145,14 +162,10 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
             latency = gr.Textbox(label="median latency (ms)", elem_id="live-latency", interactive=False)
             stats = gr.Textbox(label="since the stream started", elem_id="live-stats", interactive=False)
             status = gr.Textbox(label="status", elem_id="live-status", interactive=False)
-        motion = gr.Textbox(visible=False, elem_id="live-motion")            # JSON for the player
-        pbody = body if player is not None else None
+        motion = gr.Textbox(visible=False, elem_id="live-motion")            # JSON for API clients
         outs = [state, motion, latency, stats, status]
-        mic.stream(lambda c, s: on_chunk(manager, c, s, pbody), [mic, state], outs,
+        mic.stream(lambda c, s: on_chunk(manager, c, s), [mic, state], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
                    api_name="live_chunk", show_progress="hidden")
-        mic.stop_recording(lambda s: on_stop(s, pbody), [state], outs, api_name="live_stop")
-        if player is not None:
-            mic.start_recording(None, None, None, js="() => { window.gesturelsmLive && window.gesturelsmLive.reset(); }")
-            motion.change(None, motion, None, js="(j) => { window.gesturelsmLive && window.gesturelsmLive.push(j); }")
+        mic.stop_recording(lambda s: on_stop(s), [state], outs, api_name="live_stop")
     return tab

@@ -13,12 +13,13 @@ import gradio as gr
 
 from gesturelsm.app_service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
                                     GestureService, Request)
+from gesturelsm.body.model import resolve_body
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
 
-from . import live, motion_player
+from . import live, live_socket, motion_player
 from .raw_inputs import pass_through
 from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
@@ -213,10 +214,12 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 inputs, button = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view, show3d = _output_column(service)
-        manager = None
+        manager, routes = None, []
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
             live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies")
+            if motion_player.BUNDLE.exists():                   # the tab's microphone socket (app/live_socket.py)
+                routes = live_socket.routes(manager, resolve_body(service.body))
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())
@@ -240,6 +243,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
     demo.live_manager = manager                        # launch(): closing the app stops its live streams
+    demo.live_routes = routes                          # launch() serves them beside the page
     return demo
 
 
@@ -263,11 +267,13 @@ def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", po
             stop()
 
     demo.close = close_and_clean
+    app_kwargs = dict(kw.pop("app_kwargs", None) or {})
+    app_kwargs["routes"] = [*app_kwargs.get("routes", []), *getattr(demo, "live_routes", [])]
     try:
         return demo.launch(server_name=host, server_port=port,
                            max_file_size=f"{int(service.settings.max_upload_mb)}mb",
                            allowed_paths=[str(service.workdir), *motion_player.served_paths()],
-                           footer_links=["api"], **kw)
+                           footer_links=["api"], app_kwargs=app_kwargs, **kw)
     finally:
         if not kw.get("prevent_thread_lock"):
             stop()

@@ -39,7 +39,7 @@ BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "dat
 TAKE = BEAT2 / "wave16k" / "2_scott_0_1_1.wav"
 FAKE_MIC = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream"]
 PAGE_STATE = """() => { const e = document.querySelector('#live-player'), v = (id) =>
-    document.querySelector(`#${id} textarea, #${id} input`).value;
+    document.querySelector(`#${id}`).textContent;
   return {frames: Number(e.dataset.frames), fps: Number(e.dataset.fps || 0), state: e.dataset.state,
           received: window.gesturelsmLive.player.frames(), gaps: Number(e.dataset.gaps || 0),
           shown_median: Number(e.dataset.shownMedianMs || NaN), shown_p90: Number(e.dataset.shownP90Ms || NaN),
@@ -117,7 +117,7 @@ def run(args) -> dict:
             page.wait_for_selector("#live-player[data-ready]", timeout=60000)
             page.locator("#live-player").scroll_into_view_if_needed()
             cpu0, bcpu0, t0 = self_cpu_s(), child_cpu_s(os.getpid()), time.perf_counter()
-            page.locator("#live-mic .record-button").click()
+            page.locator("#live-record").click()
             while time.perf_counter() - t0 < args.seconds:
                 time.sleep(1.0)
                 samples.append(page.evaluate(PAGE_STATE))
@@ -127,9 +127,9 @@ def run(args) -> dict:
             if args.screenshot:
                 page.locator("#live-player-box").locator("xpath=ancestor::div[contains(@class,'tabitem')][1]") \
                     .screenshot(path=args.screenshot)
-            page.locator("#live-mic .stop-button").click()
-            page.wait_for_function("() => document.querySelector('#live-status textarea, #live-status input')"
-                                   ".value === 'stopped'", timeout=60000)
+            page.locator("#live-stop").click()
+            page.wait_for_function("() => document.querySelector('#live-status').textContent === 'stopped'",
+                                   timeout=60000)
             browser.close()
         time.sleep(1.0)
         left = sum(t.name == "gesturelsm-live" and t.is_alive() for t in threading.enumerate())

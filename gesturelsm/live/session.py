@@ -5,6 +5,7 @@
     session.feed(chunk)                      # (n,) float32 16 kHz; never blocks; LiveOverloaded if far behind
     for mc in session.poll(): ...            # motion chunks produced so far (MotionChunk)
     session.stop()                           # or session.end() to finish the audio; both join the worker
+    manager.open(on_publish=wake)            # wake() is called from the worker when motion is ready (a socket pushes)
 
 A session stops itself when no audio came for `idle_timeout` seconds (tab closed, network gone), so no worker
 outlives its visitor. Memory is bounded: at most `max_pending` audio chunks wait, at most `max_ready` motion chunks
@@ -36,7 +37,7 @@ class LiveOverloaded(RuntimeError):
 
 class LiveSession:
     def __init__(self, pipe, config: LiveConfig = LiveConfig(), max_pending: int = 64, max_ready: int = 256,
-                 idle_timeout: float = 30.0, on_close=None):
+                 idle_timeout: float = 30.0, on_close=None, on_publish=None):
         self.gen = StreamingGenerator(pipe, config)
         self.inbox: queue.Queue = queue.Queue(maxsize=max_pending)
         self.outbox: deque[MotionChunk] = deque(maxlen=max_ready)
@@ -48,6 +49,7 @@ class LiveSession:
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._on_close = on_close
+        self._on_publish = on_publish          # called (from the worker thread) after new motion chunks are ready
         self._closed = False
         self._started = time.perf_counter()
         self._threads = torch.get_num_threads()  # the creator's setting: a new thread would get torch's default
@@ -136,6 +138,8 @@ class LiveSession:
                     self.dropped += 1
                 self.outbox.append(c)
                 self.latencies.extend(c.latencies)
+        if chunks and self._on_publish:
+            self._on_publish()
 
     def _close(self) -> None:
         with self._lock:
@@ -159,12 +163,14 @@ class LiveManager:
         self._active: set[LiveSession] = set()
         self._lock = threading.Lock()
 
-    def open(self, config: LiveConfig | None = None) -> LiveSession:
+    def open(self, config: LiveConfig | None = None, on_publish=None) -> LiveSession:
+        """A new running session; `on_publish()` is called from its worker whenever motion is ready to poll."""
         with self._lock:
             if len(self._active) >= self.max_sessions:
                 raise LiveBusy(f"All {self.max_sessions} live streams are in use right now; please try again in a "
                                "minute (or use the Generate tab, which queues).")
-            s = LiveSession(self.pipe, config or self.config, on_close=self._release, **self.session_kw)
+            s = LiveSession(self.pipe, config or self.config, on_close=self._release, on_publish=on_publish,
+                            **self.session_kw)
             self._active.add(s)
         return s.start()
 

@@ -1,6 +1,7 @@
 """The Live tab in real headless Chromium, its microphone fed a real speech take (Chromium's fake capture device):
-recording streams motion into the live player (`#live-player` data-frames advance, state `playing`), `#live-latency`
-shows a positive median in milliseconds, and stopping ends the stream on the server (no live worker left).
+Record streams the microphone over the app's WebSocket (AudioWorklet PCM, app/live_socket.py) and motion into the live
+player (`#live-player` data-frames advance, state `playing`), `#live-latency` shows a positive median in milliseconds,
+and Stop ends the stream on the server (no live worker left).
 Skips, saying why, without chromium, the player bundle, the shipped checkpoints or the real take in ../shared."""
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ def live_url(tmp_path_factory):
 
 
 def _value(page, elem_id: str) -> str:
-    return page.evaluate(f"() => document.querySelector('#{elem_id} textarea, #{elem_id} input').value")
+    return page.text_content(f"#{elem_id}")
 
 
 @pytest.mark.slow
@@ -56,7 +57,7 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
     assert live_workers() == 0
     with player_page(live_url, PLAYER, args) as page:
         assert page.get_attribute(PLAYER, "data-frames") == "0"
-        page.locator("#live-mic .record-button").click()
+        page.locator("#live-record").click()
         page.wait_for_function(f"() => Number(document.querySelector('{PLAYER}').dataset.frames) > 5",
                                timeout=30000)
         assert page.get_attribute(PLAYER, "data-state") == "playing"
@@ -69,9 +70,14 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
         assert re.fullmatch(r"\d+", latency) and int(latency) > 0, latency
         assert "p90" in _value(page, "live-stats") and "real-time factor" in _value(page, "live-stats")
         assert page.get_attribute(PLAYER, "data-gaps") is None        # every chunk arrived, in order
-        page.locator("#live-mic .stop-button").click()
-        page.wait_for_function("() => document.querySelector('#live-status textarea, #live-status input')"
-                               ".value === 'stopped'", timeout=30000)
+        page.locator("#live-stop").click()
+        page.wait_for_function("() => document.querySelector('#live-status').textContent === 'stopped'",
+                               timeout=30000)
+        page.wait_for_function("() => window.gesturelsmLive.ws === null", timeout=5000)   # the server closed it
+        # every frame of the speech the server received reached the page: 30 per second of audio
+        received, last = page.evaluate("() => [window.gesturelsmLive.player.frames(), window.gesturelsmLive.last]")
+        assert last["audio_seconds"] > 2 and received == last["frames"]
+        assert abs(received - last["audio_seconds"] * 30) <= 1
         deadline = time.monotonic() + 10
         while live_workers() and time.monotonic() < deadline:
             time.sleep(0.1)

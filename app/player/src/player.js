@@ -340,18 +340,70 @@ export class LiveClock {
   pause() { this.paused = true; }
 }
 
+// The microphone of the Live tab: an AudioWorklet taps it (at 16 kHz where the browser resamples for us, as
+// Chromium and Firefox do) and hands over int16 PCM blocks of SEND_S seconds as they are captured.
+const SEND_S = 0.1;
+const TAP = `class Tap extends AudioWorkletProcessor {
+  constructor(o) { super(); this.n = o.processorOptions.n; this.b = new Float32Array(this.n); this.k = 0; }
+  process(inputs) {
+    const x = inputs[0] && inputs[0][0];
+    if (x) for (let i = 0; i < x.length; i++) {
+      this.b[this.k++] = x[i];
+      if (this.k === this.n) { this.port.postMessage(this.b, [this.b.buffer]); this.b = new Float32Array(this.n); this.k = 0; }
+    }
+    return true;
+  }
+}
+registerProcessor('gesturelsm-tap', Tap);`;
+
+export class LiveMic {
+  async open() {                         // asks for the microphone; this.rate = the samples per second sent
+    this.stream = await navigator.mediaDevices.getUserMedia({ audio: { channelCount: 1 } });
+    try { this.ctx = new AudioContext({ sampleRate: 16000 }); } catch (e) { this.ctx = new AudioContext(); }
+    this.rate = this.ctx.sampleRate;
+    const url = URL.createObjectURL(new Blob([TAP], { type: 'text/javascript' }));
+    try { await this.ctx.audioWorklet.addModule(url); } finally { URL.revokeObjectURL(url); }
+  }
+
+  start(onBlock) {                       // onBlock(Int16Array) every SEND_S of speech
+    const src = this.ctx.createMediaStreamSource(this.stream);
+    this.node = new AudioWorkletNode(this.ctx, 'gesturelsm-tap', { channelCount: 1, channelCountMode: 'explicit',
+      processorOptions: { n: Math.round(this.rate * SEND_S) } });
+    this.node.port.onmessage = (e) => {
+      const f = e.data, pcm = new Int16Array(f.length);
+      for (let k = 0; k < f.length; k++) pcm[k] = Math.max(-1, Math.min(1, f[k])) * 32767;
+      onBlock(pcm);
+    };
+    const mute = this.ctx.createGain(); mute.gain.value = 0;   // pulled by the graph, heard by nobody
+    src.connect(this.node); this.node.connect(mute); mute.connect(this.ctx.destination);
+    return this.ctx.resume();
+  }
+
+  close() {
+    if (this.node) this.node.port.onmessage = null;
+    if (this.stream) for (const t of this.stream.getTracks()) t.stop();
+    if (this.ctx && this.ctx.state !== 'closed') this.ctx.close();
+  }
+}
+
 // The live player: a MotionPlayer with one body fed by the server's JSON (app/live.py `payload`), on a LiveClock.
-// push(json) appends the frames it carries; reset() starts a new stream (recording started). It also measures the
-// latency the visitor sees: for every newly drawn frame f, now - (recording start + f / fps), i.e. from the moment
-// the speech of that frame was spoken to the moment its motion is on screen (element data-shown-median-ms and
-// data-shown-p90-ms; the start is the browser's start_recording event, so the microphone's own start-up counts in).
+// start() opens the microphone and the app's socket (element data-socket; protocol in app/live_socket.py), streams
+// the speech and plays the motion that comes back; stop() sends the end (the server generates the rest, then closes).
+// push(json) appends the frames a message carries (also the Gradio-microphone fallback's entry); reset() starts a
+// new stream. The meter: #live-latency = the server's median (ms) from a block's arrival to its motion being ready,
+// #live-stats = p90 and real-time factor, #live-status. It also measures the latency the visitor sees: for every newly
+// drawn frame f, now - (capture of the first block - SEND_S + f / fps), i.e. from the moment the speech of that
+// frame was spoken to the moment its motion is on screen (element data-shown-median-ms and data-shown-p90-ms).
 export class LiveFeed {
-  constructor(element, bodyUrl, label = 'live') {
+  constructor(element, bodyUrl, box = document, label = 'live') {
     this.player = new MotionPlayer(element);
     this.element = element; this.bodyUrl = bodyUrl; this.label = label;
     for (const c of ['.mp-play', '.mp-seek']) element.querySelector(c).style.display = 'none';
     this.caption = el('span', { class: 'mp-live', style: 'font:12px sans-serif;margin-left:auto' },
       element.querySelector('.mp-bar'));
+    this.ui = Object.fromEntries(['record', 'stop', 'latency', 'stats', 'status'].map((k) => [k, box.querySelector(`#live-${k}`)]));
+    if (this.ui.record) this.ui.record.addEventListener('click', () => this.start());
+    if (this.ui.stop) this.ui.stop.addEventListener('click', () => this.stop());
     this.ready = this.player.setBodies([{ label, body: bodyUrl }]).then(() => {   // the body at rest until a stream
       this.player.renderer.render(this.player.scene, this.player.camera);
       element.dataset.ready = '1';
@@ -364,12 +416,63 @@ export class LiveFeed {
   async reset() {
     this.spoken0 = performance.now(); this.seen = -1; this.shown = [];
     this.clock = new LiveClock(30);
-    this.pending = [];
+    this.ended = false;
     this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl }]);
     await this.ready;
     this.player.attachClock(this.clock);
-    for (const d of ['shownMedianMs', 'shownP90Ms']) delete this.element.dataset[d];
+    for (const d of ['shownMedianMs', 'shownP90Ms', 'gaps']) delete this.element.dataset[d];
     this.caption.textContent = '';
+  }
+
+  _text(k, v) { if (this.ui[k] && this.ui[k].textContent !== v) this.ui[k].textContent = v; }
+
+  _buttons(live) {
+    if (this.ui.record) this.ui.record.disabled = live;
+    if (this.ui.stop) this.ui.stop.disabled = !live;
+  }
+
+  async start() {
+    if (this.ws) return;
+    this._buttons(true);
+    this._text('status', 'starting the microphone');
+    const mic = new LiveMic();
+    try {
+      await mic.open();
+    } catch (e) {
+      mic.close(); this._buttons(false);
+      return this._text('status', `no microphone: ${e.message || e} (allow it for this page and press Record again)`);
+    }
+    const url = new URL(this.element.dataset.socket || 'gesturelsm/live', document.baseURI);
+    url.protocol = url.protocol === 'https:' ? 'wss:' : 'ws:';
+    const ws = new WebSocket(url); ws.binaryType = 'arraybuffer';
+    this.ws = ws; this.mic = mic;
+    ws.onmessage = (e) => this.push(e.data);
+    ws.onclose = () => {
+      mic.close();
+      if (this.ws === ws) this.ws = null;
+      this._buttons(false);
+      if (!this.ended) this._text('status', 'the connection to the server closed');
+    };
+    ws.onerror = () => this._text('status', 'could not reach the live stream on the server');
+    ws.onopen = async () => {
+      ws.send(JSON.stringify({ sample_rate: mic.rate }));
+      await this.reset();
+      this.spoken0 = null;                          // set by the first block
+      this._text('status', 'streaming');
+      await mic.start((pcm) => {
+        if (this.spoken0 === null) this.spoken0 = performance.now() - 1000 * SEND_S;
+        if (ws.readyState === WebSocket.OPEN) ws.send(pcm.buffer);
+      });
+    };
+  }
+
+  stop() {
+    if (this.mic) this.mic.close();
+    if (this.ws && this.ws.readyState === WebSocket.OPEN) {
+      this.ws.send(JSON.stringify({ end: true }));
+      this._text('status', 'generating the rest of the speech');
+    }
+    if (this.ui.stop) this.ui.stop.disabled = true;
   }
 
   async push(json) {
@@ -384,7 +487,13 @@ export class LiveFeed {
       this.player.appendFrames(0, Float32Array.from(d.rotations), Float32Array.from(d.root),
         E ? Float32Array.from(d.expressions) : null);
     } else if (n) this.element.dataset.gaps = String(Number(this.element.dataset.gaps || 0) + 1);
-    if (d.status && d.status !== 'streaming') this.ended = true;
+    if (d.median_latency_ms != null) {
+      this._text('latency', String(Math.round(d.median_latency_ms)));
+      this._text('stats', `p90 ${Math.round(d.p90_latency_ms)} ms · real-time factor ` +
+        `${(d.real_time_factor || 0).toFixed(1)}x · ${d.frames} frames`);
+    }
+    if (d.status) this._text('status', d.status);
+    if (d.status && d.status !== 'streaming') { this.ended = true; if (this.mic) this.mic.close(); }
   }
 
   _watch() {
@@ -405,10 +514,10 @@ export class LiveFeed {
   }
 }
 
-export function mountLive(element) {
-  if (!element.__live) element.__live = new LiveFeed(element, element.dataset.preload);
+export function mountLive(element, box = document) {
+  if (!element.__live) element.__live = new LiveFeed(element, element.dataset.preload, box);
   window.gesturelsmLive = element.__live;
   return element.__live;
 }
 
-window.GestureLSMPlayer = { MotionPlayer, mount, LiveClock, LiveFeed, mountLive };
+window.GestureLSMPlayer = { MotionPlayer, mount, LiveClock, LiveFeed, LiveMic, mountLive };

@@ -1,0 +1,141 @@
+"""The Live tab's microphone transport: raw PCM over a WebSocket of the app's own server, motion pushed back.
+
+Gradio's streaming microphone uploads every chunk as a file through its queue; on the 2-core machine that put the
+speech 1-2.6 s behind the voice before any generation (README, live mode). Here the page captures the microphone
+with an AudioWorklet (app/player/src/player.js `LiveMic`) and sends it as it comes, and the server sends each motion
+chunk the moment the session's worker has it (no polling):
+
+    client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate)
+    client -> server   binary int16 little-endian mono PCM       any length (the page sends 100 ms)
+    client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
+    server -> client   text   the JSON of app/live.py `payload`  per motion chunk; status "streaming", then "stopped"
+                                                                 or a message (busy, overloaded, bad input) and close
+
+One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's limit applies (past it the visitor reads
+the busy message), and a closed tab or a dropped connection stops the session at once (its idle timeout is the
+backstop). Served at PATH by `routes(manager, body)`, passed to the FastAPI app when the page is launched (app/ui.py).
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+
+import numpy as np
+from starlette.routing import WebSocketRoute
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from gesturelsm.audio import resample
+from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
+from gesturelsm.live.stream import SR
+
+from .live import payload
+
+PATH = "/gesturelsm/live"
+RATES = (8000, 192000)          # sample rates accepted from a page (an AudioContext's range is 3000-768000)
+MAX_MESSAGE_S = 5.0             # longest audio in one message
+
+
+class Refused(ValueError):
+    """A message the visitor's page should not have sent; the text says what was wrong."""
+
+
+def hello_rate(text: str) -> int:
+    """The sample rate of the first message (`{"sample_rate": 48000}`), checked."""
+    try:
+        sr = int(json.loads(text)["sample_rate"])
+    except (ValueError, TypeError, KeyError):
+        raise Refused('the first message must be {"sample_rate": <Hz>}') from None
+    if not RATES[0] <= sr <= RATES[1]:
+        raise Refused(f"sample rate {sr} Hz is not supported (use {RATES[0]}-{RATES[1]} Hz)")
+    return sr
+
+
+def pcm(data: bytes, sr: int) -> np.ndarray:
+    """int16 little-endian mono PCM at `sr` -> (n,) float32 at 16 kHz."""
+    if len(data) % 2:
+        raise Refused("audio messages must be 16-bit PCM (an even number of bytes)")
+    if len(data) / 2 > MAX_MESSAGE_S * sr:
+        raise Refused(f"an audio message may hold at most {MAX_MESSAGE_S:g} s")
+    y = np.frombuffer(data, "<i2").astype(np.float32) / 32767.0
+    return y if sr == SR else resample(y, sr, SR).astype(np.float32)
+
+
+async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
+    """One visitor's stream, from the socket's opening to its close."""
+    await ws.accept()
+    loop = asyncio.get_running_loop()
+    ready = asyncio.Event()
+    session, pusher = None, None
+    last = {"status": "streaming", "final": False}
+
+    async def push() -> None:                   # motion out as soon as the worker publishes it; one sender only
+        while True:
+            await ready.wait()
+            ready.clear()
+            final = last["final"]
+            await ws.send_text(payload(session, last["status"], body)[0])
+            if final:
+                return
+
+    async def finish(status: str, end: bool) -> None:
+        """Send what is left (after generating the rest of the speech when `end`), with `status`, as the last
+        message."""
+        if end:
+            await asyncio.to_thread(session.end, 10.0)
+        else:
+            session.stop()
+        last.update(status=status, final=True)
+        ready.set()
+        await pusher
+
+    try:
+        sr = hello_rate(await ws.receive_text())
+        try:
+            session = manager.open(on_publish=lambda: loop.call_soon_threadsafe(ready.set))
+        except LiveBusy as exc:
+            await ws.send_text(json.dumps({"status": str(exc)}))
+            return
+        pusher = asyncio.create_task(push())
+        while True:
+            msg = await ws.receive()
+            if msg["type"] == "websocket.disconnect":
+                return
+            try:
+                if msg.get("bytes") is not None:
+                    session.feed(pcm(msg["bytes"], sr))
+                elif control(msg.get("text")).get("end"):
+                    return await finish("stopped", end=True)
+            except (Refused, LiveOverloaded, RuntimeError) as exc:   # bad input, too slow, or the session ended
+                return await finish(str(exc), end=False)
+    except Refused as exc:
+        await ws.send_text(json.dumps({"status": str(exc)}))
+    except (WebSocketDisconnect, RuntimeError):   # the tab closed or the network dropped mid-send
+        pass
+    finally:
+        if pusher is not None and not pusher.done():
+            pusher.cancel()
+        if session is not None:
+            session.stop()
+        try:
+            await ws.close()
+        except RuntimeError:                        # already closed by the client
+            pass
+
+
+def control(text: str | None) -> dict:
+    """A text message after the first: `{"end": true}`."""
+    try:
+        d = json.loads(text or "")
+    except ValueError:
+        raise Refused('text messages must be JSON, e.g. {"end": true}') from None
+    if not isinstance(d, dict):
+        raise Refused('text messages must be a JSON object, e.g. {"end": true}')
+    return d
+
+
+def routes(manager: LiveManager, body=None) -> list[WebSocketRoute]:
+    """The socket route for a FastAPI app (`Blocks.launch(app_kwargs={"routes": ...})`)."""
+    async def endpoint(ws: WebSocket) -> None:
+        await serve(ws, manager, body)
+
+    return [WebSocketRoute(PATH, endpoint)]
