@@ -150,8 +150,9 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
         body = resolve_body(body)
     with gr.Tab("Live") as tab:
         gr.Markdown("Press record and speak: the body gestures with you, generated on this CPU while you talk, one "
-                    "steady delay behind your voice (it waits for 0.27 s of the speech after each moment, and "
-                    f"generates {manager.config.commit * 4 / 30:.2g} s of motion at a time). Press stop to end the "
+                    f"steady delay behind your voice (it waits for {manager.config.lookahead * 4 / 30:.2g} s of the "
+                    f"speech after each moment, and generates {manager.config.commit * 4 / 30:.2g} s of motion at a "
+                    "time). Press stop to end the "
                     f"stream. At most {manager.max_sessions} live streams run at once.")
         if body is not None and cache is not None and live_player(body, cache) is not None:
             return tab                      # the socket path: everything else is in the player's HTML

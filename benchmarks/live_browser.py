@@ -19,6 +19,7 @@ The app is served in this process with the shipped checkpoints (as `python -m ap
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import re
 import resource
@@ -107,6 +108,10 @@ def run(args) -> dict:
     service = GestureService.from_settings(ServiceSettings(workdir=str(work / "app")))
     service.warmup()
     demo, url = serve_locally(service)
+    over = {k: v for k in ("commit", "lookahead", "steps", "cfg") if (v := getattr(args, k)) is not None}
+    if over:                                            # compare live settings (the app's defaults otherwise)
+        demo.live_manager.config = dataclasses.replace(demo.live_manager.config, **over)
+    config = demo.live_manager.config
     samples, load0 = [], os.getloadavg()
     try:
         with sync_playwright() as pw:
@@ -135,7 +140,7 @@ def run(args) -> dict:
         left = sum(t.name == "gesturelsm-live" and t.is_alive() for t in threading.enumerate())
     finally:
         demo.close()
-    return {"end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu, "load": (load0, os.getloadavg()),
+    return {"config": config, "end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu, "load": (load0, os.getloadavg()),
             "left": left}
 
 
@@ -147,6 +152,8 @@ def report(r: dict, seconds: float) -> None:
     fps = [s["fps"] for s in r["samples"] if s["state"] == "playing"]
     rows = [
         ("speech streamed (s)", f"{seconds:g} (recording {r['wall']:.1f} s wall)"),
+        ("live settings: commit / look-ahead (latents), steps, CFG",
+         f"{r['config'].commit} / {r['config'].lookahead}, {r['config'].steps}, {r['config'].cfg:g}"),
         ("server latency median (ms), #live-latency", med or "-"),
         ("server latency p90 (ms), #live-stats", p90),
         ("real-time factor (audio s / compute s)", rtf),
@@ -178,6 +185,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--workdir", default="/tmp/gesturelsm-live-browser")
     p.add_argument("--screenshot", help="also save a PNG of the Live tab while it streams")
+    for k, t in (("commit", int), ("lookahead", int), ("steps", int), ("cfg", float)):
+        p.add_argument(f"--{k}", type=t, help=f"live {k} (default: the app's, gesturelsm/live/stream.py LiveConfig)")
     args = p.parse_args(argv)
     if not Path(args.wav).exists():
         print(f"speech file not found: {args.wav} (give --wav, or put ../shared beside the repo)", file=sys.stderr)

@@ -8,15 +8,22 @@ already final: they are the seed (first s) and are kept fixed while sampling (re
 flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. (Anchoring windows at
 st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
 motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
-defaults c = 6, lookahead = 2 that is 1.07 s at worst, 0.67 s on average, plus compute. Why 6 and 2 (release 4, 2
-held-out takes x 6 seeds, loudness-following gain: mean and standard errors; tests/live/test_stream.py and
-`benchmarks/live_latency.py --skip-paced --skip-quality --pooled 6 --cfg 2 [--commit C --lookahead L --steps S]`):
-at CFG 2, c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; look-ahead 4, 8 steps, blend_frames 0,
-decode_lag 4, or holding only 8 known latents (a one-off edit) did not help: +0.03 to +0.05); c = 6 gives +0.11 (3.2
-SE), c = 8 +0.12 (4.4 SE). Small commits extend the motion a few latents at a time from a long fixed past, which
-carries its momentum more than the new speech's loudness. c = 8 adds latency (0.8 s on average), and with lookahead
-0 the decoder has no latent right of a chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at
-the offline CFG 2 a hand is raised in 7.5 % of frames (12 streams) against 17-39 % offline on these takes, and the
+defaults c = 5, lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a
+steady 1x delay must wait for the worst case (app/player/src/player.js `LiveClock`). Live settings at CFG 6, 2
+held-out takes x 6 seeds, release 5 (`benchmarks/live_latency.py --skip-paced --skip-quality --pooled 6 --commit C
+--lookahead L`; loudness-following gain mean, z = mean / standard error, gains > 0, raised share; the default row
+with the seam fade below, the others with the linear fade before it), and the speech-to-
+screen delay through real Chromium (`benchmarks/live_browser.py --seconds 30 --commit C --lookahead L`, median):
+    c, L = 6, 2: +0.186, 6.5, 12/12, 21.1 %, 1.25 s      c, L = 6, 1: +0.153, 6.1, 12/12, 20.9 %, 1.07 s
+    c, L = 5, 2: +0.137, 4.2, 10/12, 20.2 %              c, L = 5, 1: +0.131, 4.3, 11/12, 19.5 %, 0.94 s (default)
+    c, L = 4, 2: +0.091, 3.0,  8/12, 19.5 %
+so 5 and 1 is the largest commit inside the 1 s goal for the delay the visitor sees. (With release 4 at CFG 2:
+c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; look-ahead 4, 8 steps, blend_frames 0,
+decode_lag 4, or holding only 8 known latents (a one-off edit) did not help: +0.03 to +0.05); c = 6 gave +0.11 (3.2
+SE), c = 8 +0.12 (4.4 SE).) Small commits extend the motion a few latents at a time from a long fixed past, which
+carries its momentum more than the new speech's loudness. With lookahead 0 the decoder has no latent right of a
+chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at
+the offline CFG 2 a hand is raised in 7.5 % of frames (12 streams, c = 6) against 17-39 % offline on these takes, and the
 share grows with the commit (2 seeds: c = 12 in an 18-latent window, a one-off edit: 11.8 %; c = 28: 16.9 %), so
 every window start pulls the motion towards the mean. Stronger guidance pays most of it back: CFG 3 / 4 / 5 / 6 give
 11.1 / 14.7 / 18.3 / 21.2 % raised (the speaker: 27.9 %; p95 wrist height 0.27 -> 0.30 / 0.34 / 0.37 / 0.38 m, the
@@ -36,8 +43,10 @@ Decoding: the RVQ-VAE decoder is convolutional with a wide receptive field (a la
 away, the far ones by little). Frames of the finalised latents are decoded with `decode_context` final latents on the
 left and the window's own not-yet-final latents on the right (so no waiting); `decode_lag` > 0 instead waits for that
 many final latents on the right. The next decode sees final values there and differs a little near the seam, so the
-first `blend_frames` frames of each chunk fade (in feature space, linearly) from the previous decode of those frames
-into the new one: no jump at seams and no extra latency. Root translation is integrated across chunks (motion/translation.py convention).
+first `blend_frames` frames of each chunk fade (in feature space, cosine weights) from the previous decode of those
+frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames
+past the chunk; beyond them its last offset fades out. (The plain linear fade over only those frames left the jerk
+at seams 1.50x inside at look-ahead 1, against 1.04x now; 2 takes x 2 seeds.) Root translation is integrated across chunks (motion/translation.py convention).
 Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
 offline frame count floor(N * 30 / 16000).
 """
@@ -65,8 +74,8 @@ SR = 16_000
 
 @dataclass(frozen=True)
 class LiveConfig:
-    commit: int = 6                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
-    lookahead: int = 2             # latents of real audio past the finalised span before a window runs
+    commit: int = 5                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
+    lookahead: int = 1             # latents of real audio past the finalised span before a window runs
     steps: int = 4                 # sampler steps per window
     cfg: float = 6.0               # guidance; offline's 2 streams calm motion (module docstring)
     seed: int = 0
@@ -231,10 +240,11 @@ class StreamingGenerator:
         parts = decode_latents(self.tokenizers, z, 4 * (hi - lo))
         every = join_regions({k: v.cpu() for k, v in parts.items()})                        # (4 (hi - lo), 433)
         feats = every[self.emitted - 4 * lo:stop - 4 * lo].clone()
-        n = min(len(self.tail), len(feats))
-        if n:                                    # fade from the previous decode of these frames into this one
-            w = torch.arange(1, n + 1, dtype=torch.float32)[:, None] / (n + 1)
-            feats[:n] = self.tail[:n] * (1 - w) + feats[:n] * w
+        if len(self.tail) and len(feats):        # fade from the previous decode of these frames into this one
+            n = min(self.cfg.blend_frames, len(feats))
+            w = 0.5 - 0.5 * torch.cos(torch.pi * torch.arange(1, n + 1, dtype=torch.float32) / (n + 1))[:, None]
+            i = torch.arange(n).clamp(max=len(self.tail) - 1)   # past the old decode: its last offset, fading out
+            feats[:n] = feats[:n] + (1 - w) * (self.tail[i] - feats[i])
         self.tail = every[stop - 4 * lo:stop - 4 * lo + self.cfg.blend_frames].clone()
         dx, dz = float(feats[0, TRANS_OFFSET]), float(feats[0, TRANS_OFFSET + 2])
         start_xz = (0.0, 0.0) if self.emitted == 0 else (self.xz[0] + dx, self.xz[1] + dz)

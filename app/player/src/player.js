@@ -342,7 +342,7 @@ export class LiveClock {
 
 // The microphone of the Live tab: an AudioWorklet taps it (at 16 kHz where the browser resamples for us, as
 // Chromium and Firefox do) and hands over int16 PCM blocks of SEND_S seconds as they are captured.
-const SEND_S = 0.1;
+const SEND_S = 0.05;
 const TAP = `class Tap extends AudioWorkletProcessor {
   constructor(o) { super(); this.n = o.processorOptions.n; this.b = new Float32Array(this.n); this.k = 0; }
   process(inputs) {
