@@ -18,6 +18,16 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run
                  "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
 
+def show_video(page, timeout_ms: float = 300000) -> None:
+    """Wait until the page says the server's mp4 is ready, open its accordion (the page keeps it closed, app/ui.py),
+    and wait for the <video> element."""
+    page.wait_for_function("() => (document.querySelector('#summary') || {}).innerText?.includes('Video ready')",
+                           timeout=timeout_ms)
+    if page.locator("#video-box").count() and not page.locator("#video").count():
+        page.locator("#video-box").get_by_text("Video with the speech").click()
+    page.locator("#video video").wait_for(timeout=30000)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="/tmp/gesturelsm_page.png")
@@ -46,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
         t0 = time.perf_counter()
         page.locator("#generate").click()
-        page.locator("#video video").wait_for(timeout=300000)
+        show_video(page)
         print(f"video shown {time.perf_counter() - t0:.1f} s after the click")
         page.locator("#downloads a").first.wait_for(timeout=120000)
         page.evaluate("""async (t) => { const v = document.querySelector('#video video');

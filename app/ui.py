@@ -179,7 +179,15 @@ def _output_column(service: GestureService) -> tuple:
     """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
     motion_player.player_component(service)
     payload = gr.JSON(visible=False)
-    video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
+    if motion_player.BUNDLE.exists():
+        # The in-browser player shows the motion; the mp4 is for download and sharing. A <video> on screen, even
+        # paused, held headless Chromium's software-composited page at ~20 frames per second (the player's draws with
+        # it; 60 with it hidden: benchmarks/player_latency.py), so it opens on request.
+        with gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
+                          elem_id="video-box"):
+            video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
+    else:
+        video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
     summary = gr.Markdown(elem_id="summary")
     table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
                          label="Timing per method and stage (seconds; real-time factor = speech seconds per "

@@ -42,6 +42,7 @@ from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, fit_length
 from .motion.sequence import MotionSequence
 from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
 from .render import render_video
+from .render.background import in_background
 
 Progress = Callable[[float, str], None]
 
@@ -66,6 +67,7 @@ class ServiceSettings:
     concurrency: int = 1                    # requests generated at the same time (the rest queue)
     max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
     max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
+    render_nice: int = 10                   # the mp4 renders at this much lower CPU priority (render/background.py)
 
 
 @dataclass
@@ -278,9 +280,10 @@ class GestureService:
         t_r = time.perf_counter()
         video = Path(args["folder"]) / "gestures.mp4"
         try:
-            render_video(motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
-                         gen_seconds=args["gen_seconds"],
-                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"))
+            in_background(lambda: render_video(
+                motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
+                gen_seconds=args["gen_seconds"], progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}")),
+                nice=self.settings.render_nice)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
         return video, time.perf_counter() - t_r

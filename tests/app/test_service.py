@@ -239,3 +239,24 @@ def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
     broken.write_bytes(b"RIFF not really a wav")
     assert service.prefetch(str(broken)) is False and service.prefetch(None) is False
     assert service.prefetch(str(tmp_path / "missing.wav")) is False
+
+
+@pytest.mark.skipif(not hasattr(os, "getpriority"), reason="no thread priorities on this system")
+def test_the_video_renders_at_a_lower_priority_than_the_request(service, speech_wav, monkeypatch):
+    """The page shows the motion first; the mp4 renders niced by render_nice (render/background.py), progress kept."""
+    import threading
+
+    import gesturelsm.app_service as app_service
+
+    real, seen = app_service.render_video, {}
+
+    def spy(*args, **kw):
+        seen["nice"] = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+        return real(*args, **kw)
+
+    monkeypatch.setattr(app_service, "render_video", spy)
+    steps = []
+    out = service.run(Request(str(speech_wav), steps=1, size=256, exports=False), progress=lambda f, m: steps.append(m))
+    me = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    assert seen["nice"] == min(19, me + service.settings.render_nice) > me
+    assert out.video.stat().st_size > 1000 and any(m.startswith("rendering:") for m in steps)
