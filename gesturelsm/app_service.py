@@ -67,7 +67,7 @@ class ServiceSettings:
     concurrency: int = 1                    # requests generated at the same time (the rest queue)
     max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
     max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 10                   # the mp4 renders at this much lower CPU priority (render/background.py)
+    render_nice: int = 19                   # the mp4 renders at this much lower CPU priority (render/background.py)
 
 
 @dataclass

@@ -7,7 +7,7 @@ and threads and processes started by a thread inherit it, so the render runs in 
 renderer's GL threads (created with the render's context) and its ffmpeg follow. Elsewhere (no per-thread niceness,
 or not allowed) it just runs in that thread.
 
-    video = in_background(lambda: render_video(...), nice=10)
+    video = in_background(lambda: render_video(...), nice=19)     # the page's setting (app_service.ServiceSettings)
 """
 from __future__ import annotations
 
@@ -31,7 +31,7 @@ def lower_this_thread(nice: int) -> bool:
     return True
 
 
-def in_background(fn: Callable[[], T], nice: int = 10) -> T:
+def in_background(fn: Callable[[], T], nice: int = 19) -> T:
     """fn() in a new thread niced by `nice`, waited for; its result or its exception. Context variables (e.g. a web
     framework's progress reporting) are carried into the thread."""
     ctx, box = contextvars.copy_context(), {}
