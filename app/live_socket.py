@@ -12,8 +12,9 @@ chunk the moment the session's worker has it (no polling):
                                                                  or a message (busy, overloaded, bad input) and close
 
 One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's limit applies (past it the visitor reads
-the busy message), and a closed tab or a dropped connection stops the session at once (its idle timeout is the
-backstop). Served at PATH by `routes(manager, body)`, passed to the FastAPI app when the page is launched (app/ui.py).
+the busy message), and a closed tab or a dropped connection stops the session at once. A session that ends by itself
+(no audio for its idle timeout, or a failure) sends its reason and closes the socket; a socket that never names its
+sample rate is closed after HELLO_TIMEOUT_S. Served at PATH by `routes(manager, body)`, passed to the FastAPI app when the page is launched (app/ui.py).
 """
 from __future__ import annotations
 
@@ -33,6 +34,8 @@ from .live import payload
 PATH = "/gesturelsm/live"
 RATES = (8000, 192000)          # sample rates accepted from a page (an AudioContext's range is 3000-768000)
 MAX_MESSAGE_S = 5.0             # longest audio in one message
+HELLO_TIMEOUT_S = 10.0          # a socket that names no sample rate by then is closed
+WATCH_S = 0.5                   # how often the sender checks that the session is still running
 
 
 class Refused(ValueError):
@@ -66,11 +69,19 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
     loop = asyncio.get_running_loop()
     ready = asyncio.Event()
     session, pusher = None, None
-    last = {"status": "streaming", "final": False}
+    last = {"status": "streaming", "final": False, "closing": False}
 
     async def push() -> None:                   # motion out as soon as the worker publishes it; one sender only
         while True:
-            await ready.wait()
+            try:
+                await asyncio.wait_for(ready.wait(), WATCH_S)
+            except asyncio.TimeoutError:
+                if session.running or last["closing"]:
+                    continue
+                # the session ended by itself (no audio for its idle timeout, or generation failed): say so, close
+                await ws.send_text(payload(session, session.error or "this live stream has ended", body)[0])
+                await ws.close()
+                return
             ready.clear()
             final = last["final"]
             await ws.send_text(payload(session, last["status"], body)[0])
@@ -80,6 +91,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
     async def finish(status: str, end: bool) -> None:
         """Send what is left (after generating the rest of the speech when `end`), with `status`, as the last
         message."""
+        last["closing"] = True
         if end:
             await asyncio.to_thread(session.end, 10.0)
         else:
@@ -89,7 +101,10 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
         await pusher
 
     try:
-        sr = hello_rate(await ws.receive_text())
+        try:
+            sr = hello_rate(await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
+        except asyncio.TimeoutError:
+            raise Refused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
         try:
             session = manager.open(on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         except LiveBusy as exc:

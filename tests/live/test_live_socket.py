@@ -133,3 +133,24 @@ def test_bad_messages_get_a_clear_message_and_end_the_stream(client_for, hello, 
             ws.send_text(then)
         assert says in json.loads(ws.receive_text())["status"]
     wait_idle(mgr)
+
+
+def test_a_stream_that_goes_quiet_is_closed_with_its_reason(shipped_pipe):
+    """No audio for the session's idle timeout (a page that stopped sending): the server says why and closes."""
+    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1), idle_timeout=0.5)
+    client = TestClient(Starlette(routes=live_socket.routes(mgr)))
+    with client.websocket_connect(live_socket.PATH) as ws:
+        ws.send_text(json.dumps({"sample_rate": 16000}))
+        ws.send_bytes(pcm_blocks(0.1, 16000)[0])
+        msg = json.loads(ws.receive_text())
+        assert "no audio" in msg["status"]
+        assert ws.receive()["type"] == "websocket.close"
+    wait_idle(mgr)
+
+
+def test_a_socket_that_names_no_sample_rate_is_closed(client_for, monkeypatch):
+    monkeypatch.setattr(live_socket, "HELLO_TIMEOUT_S", 0.2)
+    mgr, client = client_for()
+    with client.websocket_connect(live_socket.PATH) as ws:
+        assert "no sample rate" in json.loads(ws.receive_text())["status"]
+    assert mgr.active == 0
