@@ -2,11 +2,11 @@
 
     with gr.Blocks() as demo:
         ...
-        add_live_tab(manager := LiveManager(pipe, max_sessions=2), body, cache)   # from app/ui.py, in the Blocks
-    demo.launch(app_kwargs={"routes": app.live_socket.routes(manager, body)})    # app/ui.py `launch` does this
+        routes = add_live_tab(LiveManager(pipe, max_sessions=2), body, cache)   # from app/ui.py, in the Blocks
+    demo.launch(app_kwargs={"routes": routes})                                  # app/ui.py `launch` does this
 
 With the player bundle built (the page's case), the tab is the in-browser player with Record / Stop buttons and the
-meter, and the microphone goes over the app's own WebSocket (app/live_socket.py): raw PCM in 0.1 s blocks, motion
+meter, and the microphone goes over the app's own WebSocket (app/live_socket.py): raw PCM in 50 ms blocks, motion
 pushed back the moment it exists. Without the bundle (or for `gradio_client` users: api_name "live_chunk" /
 "live_stop") it is Gradio's streaming microphone, one upload per STREAM_EVERY_S, below.
 Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket or in a `gr.State`; it ends on the stop
@@ -139,23 +139,26 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
     return gr.HTML("", html_template=html, js_on_load=js, elem_id="live-player-box", padding=False)
 
 
-def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> gr.Tab:
-    """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`). With `body` (the page's body
+def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> list:
+    """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`); returns the routes to serve with
+    the page (`Blocks.launch(app_kwargs={"routes": ...})`: app/ui.py `launch` does). With `body` (the page's body
     model), `cache` (where its rest GLB goes) and the player bundle built, the microphone streams over the app's
-    WebSocket (serve `app.live_socket.routes(manager, body)` with the page: app/ui.py does) and the motion plays in
-    the in-browser player `live-player`; otherwise through Gradio's streaming microphone, shown as JSON and numbers."""
+    WebSocket (app/live_socket.py, its one route) and the motion plays in the in-browser player `live-player`;
+    otherwise through Gradio's streaming microphone, shown as numbers (no routes)."""
     if body is not None:
         from gesturelsm.body.model import resolve_body
 
         body = resolve_body(body)
-    with gr.Tab("Live") as tab:
+    with gr.Tab("Live"):
         gr.Markdown("Press record and speak: the body gestures with you, generated on this CPU while you talk, one "
                     f"steady delay behind your voice (it waits for {manager.config.lookahead * 4 / 30:.2g} s of the "
                     f"speech after each moment, and generates {manager.config.commit * 4 / 30:.2g} s of motion at a "
                     "time). Press stop to end the "
                     f"stream. At most {manager.max_sessions} live streams run at once.")
         if body is not None and cache is not None and live_player(body, cache) is not None:
-            return tab                      # the socket path: everything else is in the player's HTML
+            from .live_socket import routes
+
+            return routes(manager, body)    # the socket path: everything else is in the player's HTML
         state = gr.State(None, delete_callback=_delete)
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
                        waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page
@@ -169,4 +172,4 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
                    api_name="live_chunk", show_progress="hidden")
         mic.stop_recording(lambda s: on_stop(s), [state], outs, api_name="live_stop")
-    return tab
+    return []

@@ -13,13 +13,12 @@ import gradio as gr
 
 from gesturelsm.app_service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
                                     GestureService, Request)
-from gesturelsm.body.model import resolve_body
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.pipeline import ALL_FACTS
 
-from . import live, live_socket, motion_player
+from . import live, motion_player
 from .raw_inputs import pass_through
 from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
@@ -181,8 +180,9 @@ def _output_column(service: GestureService) -> tuple:
     payload = gr.JSON(visible=False)
     if motion_player.BUNDLE.exists():
         # The in-browser player shows the motion; the mp4 is for download and sharing. A <video> on screen, even
-        # paused, held headless Chromium's software-composited page at ~20 frames per second (the player's draws with
-        # it; 60 with it hidden: benchmarks/player_latency.py), so it opens on request.
+        # paused, held headless Chromium's software-composited page at ~20 redraws per second (a one-off probe hiding
+        # the page's parts in turn: only the video mattered, ~60 without it), so it opens on request
+        # (benchmarks/player_latency.py: the player's idle frame rate went from 17.4 to 29.9 with one body).
         with gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
                           elem_id="video-box"):
             video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
@@ -225,9 +225,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         manager, routes = None, []
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
-            live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies")
-            if motion_player.BUNDLE.exists():                   # the tab's microphone socket (app/live_socket.py)
-                routes = live_socket.routes(manager, resolve_body(service.body))
+            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies")
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())

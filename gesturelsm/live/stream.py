@@ -46,7 +46,8 @@ many final latents on the right. The next decode sees final values there and dif
 first `blend_frames` frames of each chunk fade (in feature space, cosine weights) from the previous decode of those
 frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames
 past the chunk; beyond them its last offset fades out. (The plain linear fade over only those frames left the jerk
-at seams 1.50x inside at look-ahead 1, against 1.04x now; 2 takes x 2 seeds.) Root translation is integrated across chunks (motion/translation.py convention).
+at seams 1.53 / 1.47x inside at look-ahead 1, against 1.06 / 1.03x now: `benchmarks/live_latency.py --skip-paced`,
+the two held-out takes; the old figure at commit 61304c2 with `--commit 5 --lookahead 1`.) Root translation is integrated across chunks (motion/translation.py convention).
 Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
 offline frame count floor(N * 30 / 16000).
 """

@@ -27,9 +27,10 @@ def mic_chunks(seconds: float, sr: int = 48000, every: float = 0.2):
 
 def test_tab_builds_with_the_latency_element(shipped_pipe):
     with gr.Blocks() as demo:
-        live.add_live_tab(LiveManager(shipped_pipe, config=LiveConfig(steps=1)))
+        routes = live.add_live_tab(LiveManager(shipped_pipe, config=LiveConfig(steps=1)))
     ids = [getattr(b, "elem_id", None) for b in demo.blocks.values()]
     assert "live-latency" in ids and "live-motion" in ids
+    assert routes == []                                 # no body: Gradio's microphone, no socket to serve
 
 
 def test_stream_then_stop_gives_all_frames_and_latency(shipped_pipe):
