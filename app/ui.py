@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import json
 import logging
+import threading
+from collections import OrderedDict
 from pathlib import Path
 
 import gradio as gr
@@ -16,6 +18,7 @@ from gesturelsm.app_service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
+from gesturelsm.render.background import RenderCancelled
 from gesturelsm.pipeline import ALL_FACTS
 
 from . import live, motion_player
@@ -72,6 +75,27 @@ class _Handlers:
 
     def __init__(self, service: GestureService):
         self.service = service
+        # page session -> the folder of its newest request: a render still running (or queued) for an older request
+        # of that page is stopped, since the page already shows newer bodies (see show_video)
+        self.newest: OrderedDict[str, str] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def _mark_newest(self, request: gr.Request | None, out) -> None:
+        if request is None or out is None:
+            return
+        with self._lock:
+            self.newest[request.session_hash] = out.render_args.get("folder")
+            self.newest.move_to_end(request.session_hash)
+            while len(self.newest) > 10000:
+                self.newest.popitem(last=False)
+
+    def _replaced(self, request: gr.Request | None, out) -> bool:
+        """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
+        if request is None:
+            return False
+        with self._lock:
+            newest = self.newest.get(request.session_hash)
+        return newest is not None and newest != out.render_args.get("folder")
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
@@ -104,25 +128,34 @@ class _Handlers:
         if auto_text and not (text and text.strip()):
             self.service.prefetch(audio)
 
-    def show_motion(self, *args, progress=gr.Progress()):
+    def show_motion(self, *args, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events."""
         out = self._run(self.request(*args, exports=False, render=False), progress)
+        self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
         return motion_player.payload(self.service, out), out.rows, out.summary, out, recognised
 
-    def show_video(self, out, progress=gr.Progress()):
+    def show_video(self, out, request: gr.Request = None, progress=gr.Progress()):
+        """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
+        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone)."""
         if out is None:
             return None, gr.skip(), gr.skip(), None
+        if self._replaced(request, out):
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         try:
-            self.service.render(out, progress=lambda f, m: progress(f, desc=m))
+            self.service.render(out, progress=lambda f, m: progress(f, desc=m),
+                                cancelled=lambda: self._replaced(request, out))
+        except RenderCancelled:
+            log.info("a video was not finished: the page asked for newer motion")
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self._refuse(exc)
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
 
     def add_exports(self, out):
-        if out is None:
-            return None, None, gr.skip()
+        if out is None or out.video is None:           # no video: a newer request replaced it (its chain exports)
+            return gr.skip(), gr.skip(), gr.skip()
         self.service.export(out)
         return *self._files(out), out.summary
 
@@ -215,6 +248,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
+    # videos and downloads in a pool of their own: generating again never waits behind a video (the render runs in a
+    # low-priority process, render/background.py); its progress is not drawn (it slowed the player), the summary says
+    render = {"concurrency_limit": settings.concurrency, "concurrency_id": "render"}
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
@@ -239,8 +275,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                      concurrency_limit=1, concurrency_id="prefetch")
         button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
             .then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, state, [video, table, summary, state], api_visibility="private", **gen) \
-            .then(h.add_exports, state, [files, view, summary], api_visibility="private", **gen)
+            .then(h.show_video, state, [video, table, summary, state], api_name="show_video", api_visibility="private",
+                  show_progress="hidden", **render) \
+            .then(h.add_exports, state, [files, view, summary], api_name="add_exports", api_visibility="private",
+                  **render)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
         show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False) \
             .then(lambda out: str(out.glb) if out is not None and out.glb else None, glb, view, queue=False,

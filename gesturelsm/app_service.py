@@ -41,8 +41,7 @@ from .limits import transcript_problems
 from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
 from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
-from .render import render_video
-from .render.background import in_background
+from .render.background import render_apart
 
 Progress = Callable[[float, str], None]
 
@@ -67,7 +66,7 @@ class ServiceSettings:
     concurrency: int = 1                    # requests generated at the same time (the rest queue)
     max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
     max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 19                   # the mp4 renders at this much lower CPU priority (render/background.py)
+    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
 
 
 @dataclass
@@ -275,26 +274,29 @@ class GestureService:
         prog(1.0, "done")
         return outcome
 
-    def _render(self, motions, labels, audio, args: dict, prog: Progress) -> tuple[Path, float]:
+    def _render(self, motions, labels, audio, args: dict, prog: Progress,
+                cancelled: Callable[[], bool] | None = None) -> tuple[Path, float]:
         prog(0.62, "rendering video")
         t_r = time.perf_counter()
         video = Path(args["folder"]) / "gestures.mp4"
         try:
-            in_background(lambda: render_video(
-                motions, audio, video, labels=labels, size=(args["size"], args["size"]), body=self.body,
-                gen_seconds=args["gen_seconds"], progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}")),
-                nice=self.settings.render_nice)
+            render_apart(motions, audio, video, labels=labels, size=(args["size"], args["size"]),
+                         body_path=getattr(self.body, "path", None), gen_seconds=args["gen_seconds"],
+                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
+                         nice=self.settings.render_nice, cancelled=cancelled)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
         return video, time.perf_counter() - t_r
 
-    def render(self, outcome: Outcome, progress: Progress | None = None) -> Outcome:
+    def render(self, outcome: Outcome, progress: Progress | None = None,
+               cancelled: Callable[[], bool] | None = None) -> Outcome:
         """Render the video of a request run with `render=False` (the page shows the motions first); fills
-        the rendering column of the timing rows and `seconds` (request start to video ready)."""
+        the rendering column of the timing rows and `seconds` (request start to video ready). `cancelled()` (asked
+        every ~1 % of the frames) stops it: RenderCancelled, outcome unchanged (render/background.py)."""
         if outcome.video is None and outcome.motions:
             motions = list(outcome.motions.values())
             outcome.video, render_s = self._render(motions, outcome.labels, outcome.audio, outcome.render_args,
-                                                   progress or (lambda f, m: None))
+                                                   progress or (lambda f, m: None), cancelled)
             col = TIMING_COLUMNS.index("rendering")
             for row in outcome.rows[:-1]:
                 row[col] = round(render_s / len(motions), 3)

@@ -29,6 +29,11 @@ from .model import MODEL_NAME, RecognizerUnavailable, load_model
 
 SAMPLE_RATE = 16_000
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
+# Greedy decoding: on the three real BEAT2 takes it recovered 556 of 587 MFA words against 555 with beam 5, in 1.8-2.0
+# instead of 3.1-3.5 s per minute of speech, with a mean log-probability of -0.19 to -0.23 (beam 5: -0.18 to -0.20),
+# far above MIN_AVG_LOGPROB (2026-11-25, `recognize(y, beam_size)` on each take; benchmarks/transcribe_accuracy.py).
+# It is what the page waits for when Generate is clicked right after an upload.
+BEAM_SIZE = 1
 MIN_SECONDS = 0.3
 TIMINGS = ("auto", "dtw", "whisper")
 AUDIO_ONLY_NOTE = " Generating from the audio only; type the transcript to use the text-conditioned model."
@@ -68,7 +73,7 @@ def sequential(words: list[Word], min_s: float = 0.01) -> list[Word]:
     return out
 
 
-def recognize(audio: np.ndarray, beam_size: int = 5) -> tuple[list[Word], float, dict]:
+def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE) -> tuple[list[Word], float, dict]:
     """Whisper's words with its own times, the mean token log-probability (weighted by tokens) and details."""
     model = load_model()
     segments, _info = model.transcribe(np.ascontiguousarray(audio, np.float32), language="en", beam_size=beam_size,
@@ -91,7 +96,7 @@ def recognize(audio: np.ndarray, beam_size: int = 5) -> tuple[list[Word], float,
     return words, avg, details
 
 
-def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = 5) -> Transcript:
+def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE) -> Transcript:
     """Recognise `audio` ((N,) float32, 16 kHz) and time its words. Raises RecognizerUnavailable when
     faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc)."""
     if timing not in TIMINGS:

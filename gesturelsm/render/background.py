@@ -1,51 +1,182 @@
-"""Run the server-side render at a lower CPU priority than generation, live streams and (on one machine) the browser.
+"""Render the page's mp4 in its own low-priority process, so that generation, live streams and a browser on the same
+machine come first.
 
-The page shows the motion in the browser first; the mp4 is rendered after it, for download and sharing. On a 2-core
-machine the renderer (Mesa llvmpipe's threads and ffmpeg) took every core it could, and a browser on the same machine
-drew the player at ~15 frames per second while it ran (benchmarks/player_latency.py). Linux keeps a niceness per thread,
-and threads and processes started by a thread inherit it, so the render runs in its own thread niced by `nice`: the
-renderer's GL threads (created with the render's context) and its ffmpeg follow. Elsewhere (no per-thread niceness,
-or not allowed) it just runs in that thread.
+Why a process, not a niced thread: Linux's autogroup scheduling (on by default: /proc/sys/kernel/sched_autogroup_enabled)
+first shares the CPU fairly between sessions (a terminal, a desktop app, a browser launched detached) and applies a
+thread's niceness only inside its session. A browser playing the page on the same 2-core machine is a session of its
+own, so a render thread niced 19 inside the server still took half the CPU: the player drew 15-17 fps with three
+bodies, as with two plain busy loops at niceness 19 or SCHED_IDLE, against 28-29 with the same loops in a session
+of their own at autogroup niceness 19 (a one-off probe, 2026-11-25; benchmarks/player_latency.py measures the page).
+So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
+in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before importing the
+renderer; its GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the
+process is still niced.
 
-    video = in_background(lambda: render_video(...), nice=19)     # the page's setting (app_service.ServiceSettings)
+    render_apart([seq_a, seq_b], audio_16k, "out/gestures.mp4", labels=["A", "B"], size=(384, 384),
+                 body_path=body.path, gen_seconds=[0.4, None], progress=cb, nice=19)
+
+The motions go to the process as BEAT2 npz files (MotionSequence.save, exact float32) and the speech as a float WAV
+(exact samples) in a folder beside `out`, removed afterwards; progress comes back as JSON lines
+(`gesturelsm render --progress-json`), the renderer's notes as RenderWarning, and a failure as RenderError with the
+renderer's own message.
 """
 from __future__ import annotations
 
-import contextvars
+import atexit
+import json
+import logging
 import os
+import shutil
+import subprocess
+import sys
+import tempfile
 import threading
-from typing import Callable, TypeVar
+import warnings
+from pathlib import Path
+from typing import Callable, Sequence
 
-T = TypeVar("T")
+import numpy as np
+
+from ..errors import RenderError
+from ..motion.sequence import MotionSequence
+from .frames import RenderWarning
+
+log = logging.getLogger(__name__)
+Progress = Callable[[float, str], None]
+AUTOGROUP = Path("/proc/self/autogroup")
+_running: set[subprocess.Popen] = set()
+_lock = threading.Lock()
 
 
-def lower_this_thread(nice: int) -> bool:
-    """Add `nice` to the calling thread's niceness (Linux: per thread); False where that is not possible."""
-    if nice <= 0 or not hasattr(os, "setpriority"):
-        return False
-    tid = threading.get_native_id()
-    try:
-        os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + nice))
-    except OSError:
-        return False
-    return True
+class RenderCancelled(Exception):
+    """render_apart's `cancelled()` said yes: the render process was stopped and its partial file removed."""
 
 
-def in_background(fn: Callable[[], T], nice: int = 19) -> T:
-    """fn() in a new thread niced by `nice`, waited for; its result or its exception. Context variables (e.g. a web
-    framework's progress reporting) are carried into the thread."""
-    ctx, box = contextvars.copy_context(), {}
-
-    def run() -> None:
-        lower_this_thread(nice)
+def lower_this_process(nice: int) -> dict:
+    """Add `nice` to this process's niceness and set its autogroup's niceness to at least `nice` (Linux; call it in a
+    new session, which has an autogroup of its own). Returns what the process now has: pid, sid, nice, autogroup."""
+    if nice > 0:
         try:
-            box["value"] = ctx.run(fn)
-        except BaseException as exc:  # noqa: BLE001 (re-raised in the caller's thread)
-            box["error"] = exc
+            os.nice(nice)
+        except (OSError, AttributeError):
+            pass
+        try:
+            if AUTOGROUP.exists():
+                AUTOGROUP.write_text(str(min(19, nice)))
+        except OSError:                    # not permitted, or the kernel has no autogroups
+            pass
+    info = {"pid": os.getpid(), "sid": os.getsid(0) if hasattr(os, "getsid") else None,
+            "nice": os.getpriority(os.PRIO_PROCESS, 0) if hasattr(os, "getpriority") else None}
+    try:
+        info["autogroup"] = AUTOGROUP.read_text().strip()
+    except OSError:
+        info["autogroup"] = None
+    return info
 
-    t = threading.Thread(target=run, name="gesturelsm-render", daemon=True)
-    t.start()
-    t.join()
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
+
+def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, out: str | Path, *,
+                 labels: Sequence[str] | None = None, size: tuple[int, int] = (512, 512),
+                 body_path: str | Path | None = None, gen_seconds: Sequence[float | None] | None = None,
+                 progress: Progress | None = None, nice: int = 19, sr: int = 16000,
+                 cancelled: Callable[[], bool] | None = None) -> Path:
+    """What `render_video(motions, audio, out, ...)` renders (default style), rendered by a child process in its
+    own session at niceness `nice` (see the module docstring). Waits for it; returns `out`. `cancelled()` is asked
+    at every progress report (~1 % of the frames): True stops the process and raises RenderCancelled."""
+    import soundfile as sf
+
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    job = Path(tempfile.mkdtemp(prefix=".render-job-", dir=out.parent))
+    try:
+        files = [str(m.save(job / f"motion_{i}.npz")) for i, m in enumerate(motions)]
+        cmd = [sys.executable, "-m", "gesturelsm.render.background", "--nice", str(int(nice)), "render", *files,
+               "--out", str(out), "--size", f"{int(size[0])}x{int(size[1])}", "--progress-json"]
+        if audio is not None:
+            sf.write(job / "speech.wav", np.asarray(audio, np.float32), sr, subtype="FLOAT")
+            cmd += ["--audio", str(job / "speech.wav")]
+        cmd += ["--labels", *labels] if labels else ["--no-labels"]
+        if gen_seconds is not None:
+            cmd += ["--gen-times", *("-" if g is None else f"{g:.6g}" for g in gen_seconds)]
+        if body_path is not None:
+            cmd += ["--model", str(body_path)]
+        _run(cmd, out, job / "stderr.txt", progress, cancelled)
+    finally:
+        shutil.rmtree(job, ignore_errors=True)
+    return out
+
+
+def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
+         cancelled: Callable[[], bool] | None) -> None:
+    with open(err_path, "w+") as err:
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL, text=True,
+                                start_new_session=True)
+        with _lock:
+            _running.add(proc)
+        try:
+            for line in proc.stdout:
+                msg = _json(line)
+                if "process" in msg:
+                    log.info("rendering in process %s", msg["process"])
+                elif "fraction" in msg:
+                    if cancelled is not None and cancelled():
+                        raise RenderCancelled("the render was cancelled")
+                    if progress is not None:
+                        progress(float(msg["fraction"]), str(msg.get("message", "")))
+            code = proc.wait()
+        except BaseException:
+            proc.kill()                      # the renderer writes a .part file, renamed when complete: remove it
+            proc.wait()
+            out.with_name(f".{out.stem}.part{proc.pid}.mp4").unlink(missing_ok=True)   # as render_video names it
+            raise
+        finally:
+            with _lock:
+                _running.discard(proc)
+        err.seek(0)
+        text = err.read()
+    for note in (ln[len("note: "):] for ln in text.splitlines() if ln.startswith("note: ")
+                 and not ln.startswith("note: no --audio")):              # the caller chose a silent video
+        warnings.warn(note, RenderWarning, stacklevel=3)    # as render_video warns in-process
+    if code != 0:
+        log.warning("the render process exited with %s:\n%s", code, text)
+        lines = [ln for ln in text.splitlines() if ln.strip() and not ln.startswith("note: ")]
+        said = next((ln.split("error: ", 1)[1] for ln in reversed(lines) if "error: " in ln), None)
+        raise RenderError(said or f"the render process failed (exit {code}): "
+                                  f"{lines[-1] if lines else 'no message'}")
+
+
+def _json(line: str) -> dict:
+    line = line.strip()
+    if not line.startswith("{"):
+        return {}
+    try:
+        msg = json.loads(line)
+    except ValueError:
+        return {}
+    return msg if isinstance(msg, dict) else {}
+
+
+@atexit.register
+def _stop_all() -> None:
+    """Renders still running when the server exits are stopped (they are in sessions of their own, so a Ctrl-C in the
+    server's terminal does not reach them)."""
+    with _lock:
+        procs = list(_running)
+    for p in procs:
+        p.kill()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m gesturelsm.render.background --nice N <gesturelsm command ...>`: lower this process, say so as a
+    JSON line, then run the command."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    nice = 19
+    if len(args) >= 2 and args[0] == "--nice":
+        nice, args = int(args[1]), args[2:]
+    print(json.dumps({"process": lower_this_process(nice)}), flush=True)
+    from ..cli import main as cli_main
+
+    return cli_main(args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import warnings
 from pathlib import Path
@@ -37,6 +38,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--frame", type=int, help="write only this frame as a PNG")
     p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--progress-json", action="store_true",
+                   help='progress as JSON lines on stdout ({"fraction": 0.5, "message": "..."}) for programs')
     p.set_defaults(func=run)
 
 
@@ -96,13 +99,15 @@ def run(args: argparse.Namespace) -> int:
                 iio.imwrite(out, frame)
             else:
                 bar = None
-                if not args.quiet:
+                if not args.quiet and not args.progress_json:
                     from tqdm import tqdm
 
                     bar = tqdm(total=1000, dynamic_ncols=True, mininterval=0.5,
                                bar_format="render {percentage:3.0f}%|{bar}| {desc} [{elapsed}<{remaining}]")
 
                 def progress(fraction: float, message: str) -> None:
+                    if args.progress_json:
+                        print(json.dumps({"fraction": round(fraction, 4), "message": message}), flush=True)
                     if bar is not None:
                         bar.n = int(fraction * 1000)
                         bar.set_description_str(message, refresh=False)

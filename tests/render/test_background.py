@@ -1,46 +1,67 @@
-"""The server-side render runs in its own thread at a lower CPU priority (render/background.py): the niceness is the
-thread's (the caller keeps its own), results and exceptions come back, context variables are carried over."""
+"""The page's mp4 renders in a process of its own (render/background.py): a new session (its own autogroup, so a
+browser in another session is not shared fairly with it) at lowered priority, rendering exactly what render_video
+renders in-process, with progress, errors and cleanup coming back to the caller."""
 from __future__ import annotations
 
-import contextvars
+import json
+import logging
 import os
+import subprocess
 import sys
-import threading
+from pathlib import Path
 
+import numpy as np
 import pytest
 
-from gesturelsm.render.background import in_background
+from gesturelsm.errors import RenderError
+from gesturelsm.render import RenderWarning, render_video
+from gesturelsm.render.background import render_apart
 
-linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="per-thread niceness is Linux's")
+from .test_video import decode_audio, decode_video, step_clip
 
-
-def niceness() -> int:
-    return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
-
-
-@linux
-def test_the_work_runs_niced_in_another_thread_and_the_caller_keeps_its_priority():
-    before = niceness()
-    seen = in_background(lambda: (threading.get_native_id(), niceness()), nice=5)
-    assert seen[0] != threading.get_native_id()
-    assert seen[1] == min(19, before + 5)
-    assert niceness() == before
+linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="sessions, niceness and autogroups are Linux's")
+AUTOGROUPS = Path("/proc/sys/kernel/sched_autogroup_enabled")
 
 
 @linux
-def test_children_of_the_work_inherit_its_priority():
-    """The renderer's GL threads and ffmpeg are started from the render thread: they must be niced too."""
-    import subprocess
+def test_a_new_session_lowers_its_own_priority_and_its_autogroup():
+    code = "import json; from gesturelsm.render.background import lower_this_process as f; print(json.dumps(f(7)))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         start_new_session=True).stdout
+    info = json.loads(out.strip().splitlines()[-1])
+    assert info["sid"] == info["pid"] != os.getsid(0)                  # a session of its own
+    assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 7)
+    if AUTOGROUPS.exists() and AUTOGROUPS.read_text().strip() == "1":
+        mine = Path("/proc/self/autogroup").read_text().split()[0]
+        assert info["autogroup"].split()[0] != mine and info["autogroup"].endswith("nice 7")
 
-    before = niceness()
-    out = in_background(lambda: subprocess.run(["sh", "-c", "cut -d' ' -f19 /proc/self/stat"], capture_output=True,
-                                               text=True, check=True).stdout, nice=4)
-    assert int(out) == min(19, before + 4)
+
+@linux
+def test_render_apart_equals_render_video_in_a_lowered_session(tmp_path, make_pose, caplog):
+    motion, y = step_clip(make_pose, frames=40, step=25)
+    other = make_pose(40, 0.3, x=0.2)
+    kw = {"labels": ["GestureLSM 8 steps", "DDIM 20"], "gen_seconds": [0.41, None], "size": (64, 64)}
+    seen = []
+    with caplog.at_level(logging.INFO, logger="gesturelsm.render.background"), \
+            pytest.warns(RenderWarning, match="audio trimmed"):        # the renderer's notes come back as warnings
+        out = render_apart([motion, other], y, tmp_path / "req" / "apart.mp4", progress=lambda f, m: seen.append(f),
+                           nice=5, **kw)
+    with pytest.warns(RenderWarning, match="audio trimmed"):
+        ref = render_video([motion, other], y, tmp_path / "inproc.mp4", **kw)
+    a, b = decode_video(out, (128, 64)), decode_video(ref, (128, 64))
+    assert a.shape == b.shape == (40, 64, 128, 3)
+    diff = np.abs(a.astype(int) - b.astype(int))
+    assert diff.mean() < 0.3 and np.percentile(diff, 99.9) <= 8, "the same frames, labels included (x264 noise only)"
+    assert np.allclose(decode_audio(out), decode_audio(ref), atol=1e-3)
+    assert seen and seen[-1] == 1.0 and all(p <= q for p, q in zip(seen, seen[1:]))
+    assert [p.name for p in out.parent.iterdir()] == ["apart.mp4"], "the job's files are removed"
+    info = next(r.args for r in caplog.records if r.msg.startswith("rendering in process"))
+    assert info["sid"] != os.getsid(0) and info["pid"] != os.getpid()
+    assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 5)
 
 
-def test_results_errors_and_context_come_back():
-    var = contextvars.ContextVar("request", default="none")
-    var.set("visitor-1")
-    assert in_background(var.get, nice=0) == "visitor-1"
-    with pytest.raises(ValueError, match="broken"):
-        in_background(lambda: (_ for _ in ()).throw(ValueError("broken")))
+def test_a_failing_render_says_why_and_leaves_nothing(tmp_path, make_pose):
+    missing = tmp_path / "nowhere" / "SMPLX_NEUTRAL.npz"
+    with pytest.raises(RenderError, match="nowhere"):
+        render_apart([make_pose(5, -1.2)], None, tmp_path / "out" / "v.mp4", size=(64, 64), body_path=missing)
+    assert list((tmp_path / "out").iterdir()) == []

@@ -1,0 +1,52 @@
+"""The page's chained events (app/ui.py _Handlers): the video renders in a pool of its own beside generation, and a
+video for a request that a newer request of the same page replaced is not rendered, or is stopped mid-way."""
+from __future__ import annotations
+
+import threading
+from types import SimpleNamespace
+
+import gradio as gr
+
+from app.ui import _Handlers, build_demo
+
+
+def quiet(*args, **kwargs) -> None:
+    """Stands in for gr.Progress outside a Gradio event."""
+
+
+def inputs(wav, seed: int) -> tuple:
+    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
+    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False)
+
+
+def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
+    fns = build_demo(service).fns
+    pools = {f.api_name: f.concurrency_id for f in (fns.values() if isinstance(fns, dict) else fns)}
+    assert pools["generate_motion"] == "generation"
+    assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
+
+
+def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):
+    h, page, other = _Handlers(service), SimpleNamespace(session_hash="page-1"), SimpleNamespace(session_hash="page-2")
+    first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
+    second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
+    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
+    assert first.video is None and h.add_exports(first) == (gr.skip(),) * 3
+    assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
+
+    started, result = threading.Event(), {}
+
+    def progress(fraction, desc=""):
+        if desc.startswith("rendering: frame"):
+            started.set()
+
+    t = threading.Thread(target=lambda: result.update(r=h.show_video(second, request=page, progress=progress)))
+    t.start()
+    assert started.wait(120), "the render reported frames"
+    third = h.show_motion(*inputs(speech_wav, 2), request=page, progress=quiet)[3]   # generate again, meanwhile
+    t.join(120)
+    assert result["r"] == (gr.skip(),) * 4 and second.video is None
+    folder = second.render_args["folder"]
+    assert not [p.name for p in folder.iterdir() if p.suffix == ".mp4" or p.name.startswith(".render-job")]
+    video = h.show_video(third, request=page, progress=quiet)[0]                     # the newest one renders
+    assert third.video is not None and video == str(third.video) and third.video.stat().st_size > 1000
