@@ -128,9 +128,12 @@ class _Handlers:
         if auto_text and not (text and text.strip()):
             self.service.prefetch(audio)
 
-    def show_motion(self, *args, request: gr.Request = None, progress=gr.Progress()):
+    def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                    auto_text, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
-        first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events."""
+        first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events. (Parameters are
+        named, not *args: Gradio passes the request and progress only to positional parameters.)"""
+        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text)
         out = self._run(self.request(*args, exports=False, render=False), progress)
         self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
@@ -138,20 +141,21 @@ class _Handlers:
 
     def show_video(self, out, request: gr.Request = None, progress=gr.Progress()):
         """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
-        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone)."""
+        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). It
+        writes no state: the outcome is rendered in place, and the page's state may already hold a newer request."""
         if out is None:
-            return None, gr.skip(), gr.skip(), None
+            return None, gr.skip(), gr.skip()
         if self._replaced(request, out):
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
+            return gr.skip(), gr.skip(), gr.skip()
         try:
             self.service.render(out, progress=lambda f, m: progress(f, desc=m),
                                 cancelled=lambda: self._replaced(request, out))
         except RenderCancelled:
             log.info("a video was not finished: the page asked for newer motion")
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
+            return gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self._refuse(exc)
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", out
+        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads..."
 
     def add_exports(self, out):
         if out is None or out.video is None:           # no video: a newer request replaced it (its chain exports)
@@ -250,7 +254,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
     # videos and downloads in a pool of their own: generating again never waits behind a video (the render runs in a
     # low-priority process, render/background.py); its progress is not drawn (it slowed the player), the summary says
-    render = {"concurrency_limit": settings.concurrency, "concurrency_id": "render"}
+    # "multiple": the next request's video step is queued even while this one's is pending (Gradio's default "once"
+    # drops a step triggered while the same step is pending, and the newest request then never got its video)
+    render = {"concurrency_limit": settings.concurrency, "concurrency_id": "render", "trigger_mode": "multiple"}
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
@@ -275,7 +281,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                      concurrency_limit=1, concurrency_id="prefetch")
         button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
             .then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, state, [video, table, summary, state], api_name="show_video", api_visibility="private",
+            .then(h.show_video, state, [video, table, summary], api_name="show_video", api_visibility="private",
                   show_progress="hidden", **render) \
             .then(h.add_exports, state, [files, view, summary], api_name="add_exports", api_visibility="private",
                   **render)

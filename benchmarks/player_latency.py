@@ -2,7 +2,8 @@
 click on "Generate" -> the in-browser player plays (`#motion-player[data-state=playing]`, as Playwright sees it, polling
 on every animation frame, and on the page's own clock), the player's frame
 rate in the first second of play, then while the server renders the mp4 and the speech plays (up to 10 s), and after (server idle), audio-motion offset when scrubbing, click -> mp4 shown, and
-generating again with another seed on the same page (the bodies are replaced). Shipped checkpoints, eSpeak NG
+generating again with another seed on the same page (the bodies are replaced), once after the video and once while it
+renders. Shipped checkpoints, eSpeak NG
 speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Each case runs --repeat times, every run
 transcribing its upload afresh; prints a markdown table of medians.
 
@@ -18,6 +19,7 @@ os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import re  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from statistics import median  # noqa: E402
@@ -76,7 +78,12 @@ def downloads(page) -> str:
     return page.evaluate("() => [...document.querySelectorAll('#downloads a')].map((a) => a.href).join(' ')")
 
 
-def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0) -> dict:
+def downloads_changed(old: str) -> str:
+    return ("() => { const h = [...document.querySelectorAll('#downloads a')].map((a) => a.href).join(' '); "
+            f"return h && h !== {old!r}; }}")
+
+
+def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path(".")) -> dict:
     page = browser.new_page(viewport={"width": 1400, "height": 1300})
     page.goto(url)
     page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
@@ -105,9 +112,19 @@ def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 
     old = downloads(page)
     page.get_by_label("Seed").fill("7")
     r["again"], _ = click_and_wait(page)
-    changed = ("() => { const h = [...document.querySelectorAll('#downloads a')].map((a) => a.href).join(' '); "
-               f"return h && h !== {old!r}; }}")
-    page.wait_for_function(changed, timeout=900000)                # the chain is over again
+    page.wait_for_function(downloads_changed(old), timeout=900000)  # the chain is over again
+    old = downloads(page)
+    page.get_by_label("Seed").fill("8")                # its video renders; meanwhile the visitor changes the seed
+    click_and_wait(page)
+    r["rendering"] = not page.evaluate("() => document.querySelector('#summary').innerText.includes('Video ready')")
+    page.get_by_label("Seed").fill("9")
+    r["again_rendering"], _ = click_and_wait(page)
+    folder = re.search(r"req-[0-9a-f]+", page.evaluate("() => window.gesturelsmPlayer.payload.bodies[0].motion"))[0]
+    exported = workdir / folder / f"{methods[0]}_keypoints.json"    # the newest request's last download
+    t_end = time.perf_counter() + 900
+    while not exported.exists() and time.perf_counter() < t_end:
+        page.wait_for_timeout(250)
+    page.wait_for_function(downloads_changed(old), timeout=60000)   # and the page shows them
     page.close()
     return r
 
@@ -146,8 +163,8 @@ def main(argv: list[str] | None = None) -> int:
     print("| speech | methods | click -> playing (s), median (range) | same, page clock (s) | click -> payload in the page (s) | then bodies / motion / "
           "playing (ms) | "
           "player fps, first second | player fps while the mp4 renders (next <= 10 s) | player fps after (server idle) | ms per draw after: pose / render / labels / dom | scrub offset (frames) | click -> mp4 (s) | "
-          "again, new seed -> playing (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "again, new seed -> playing (s) | again while the mp4 renders -> playing (s) (runs where it still rendered) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
         for sec in args.seconds:
@@ -156,16 +173,18 @@ def main(argv: list[str] | None = None) -> int:
                 runs = []
                 for _ in range(args.repeat):
                     RECENT.clear()                   # every run transcribes its upload afresh, as a new visitor's
-                    runs.append(run_case(browser, url, wav, ALL[:n], args.think_s))
+                    runs.append(run_case(browser, url, wav, ALL[:n], args.think_s, service.workdir))
                 r = {k: median([x[k] for x in runs]) for k in ("play", "fps_first", "fps_render", "fps_idle", "scrub",
-                                                              "mp4", "again")}
+                                                              "mp4", "again", "again_rendering")}
+                busy = sum(x["rendering"] for x in runs)
                 m = {k: median([x["marks"].get(k, 0) for x in runs]) for k in ("page_play", "payload", "bodies",
                                                                                "motion", "play")}
                 spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
                 print(f"| {dur:.1f} s | {n} | {r['play']:.2f}{spread} | {m['page_play']:.2f} | {m['payload']:.2f} | "
                       f"{m['bodies']:.0f} / {m['motion']:.0f} / {m['play']:.0f} | {r['fps_first']:.1f} | "
                       f"{r['fps_render']:.1f} | {r['fps_idle']:.1f} | {per_draw(runs[-1]['prof'])} | {r['scrub']:.0f} | "
-                      f"{r['mp4']:.1f} | {r['again']:.2f} |", flush=True)
+                      f"{r['mp4']:.1f} | {r['again']:.2f} | {r['again_rendering']:.2f} ({busy}/{len(runs)}) |",
+                      flush=True)
         browser.close()
     demo.close()
     return 0

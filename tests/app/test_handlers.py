@@ -20,17 +20,32 @@ def inputs(wav, seed: int) -> tuple:
 
 
 def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
-    fns = build_demo(service).fns
-    pools = {f.api_name: f.concurrency_id for f in (fns.values() if isinstance(fns, dict) else fns)}
+    demo = build_demo(service)
+    fns = list(demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)
+    pools = {f.api_name: f.concurrency_id for f in fns}
     assert pools["generate_motion"] == "generation"
     assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
+    # a newer request's video step is queued while an older one's is pending (Gradio's default "once" drops it)
+    modes = {f.api_name: f.trigger_mode for f in fns}
+    assert modes["show_video"] == modes["add_exports"] == "multiple"
+
+
+def test_gradio_hands_both_handlers_the_page_session():
+    """Gradio passes gr.Request (and progress) only to positional parameters: a *args handler gets none, and then
+    nothing is ever marked replaced."""
+    from gradio.helpers import special_args
+
+    h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
+    for fn, n_inputs in ((h.show_motion, 12), (h.show_video, 1)):
+        filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
+        assert filled[n_inputs] is page and progress_at == n_inputs + 1
 
 
 def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):
     h, page, other = _Handlers(service), SimpleNamespace(session_hash="page-1"), SimpleNamespace(session_hash="page-2")
     first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
     second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
-    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
+    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 3     # replaced: not rendered
     assert first.video is None and h.add_exports(first) == (gr.skip(),) * 3
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
 
@@ -45,7 +60,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     assert started.wait(120), "the render reported frames"
     third = h.show_motion(*inputs(speech_wav, 2), request=page, progress=quiet)[3]   # generate again, meanwhile
     t.join(120)
-    assert result["r"] == (gr.skip(),) * 4 and second.video is None
+    assert result["r"] == (gr.skip(),) * 3 and second.video is None
     folder = second.render_args["folder"]
     assert not [p.name for p in folder.iterdir() if p.suffix == ".mp4" or p.name.startswith(".render-job")]
     video = h.show_video(third, request=page, progress=quiet)[0]                     # the newest one renders
