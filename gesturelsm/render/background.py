@@ -166,16 +166,26 @@ def _stop_all() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """`python -m gesturelsm.render.background --nice N <gesturelsm command ...>`: lower this process, say so as a
-    JSON line, then run the command."""
+    """`python -m gesturelsm.render.background --nice N render <gesturelsm render arguments>`: lower this process,
+    say so as a JSON line, then render; errors as `gesturelsm render` reports them (exit 2, one line on stderr)."""
+    import argparse
+
+    from ..errors import GestureError
+    from .cli import add_parser
+
     args = list(sys.argv[1:] if argv is None else argv)
     nice = 19
     if len(args) >= 2 and args[0] == "--nice":
         nice, args = int(args[1]), args[2:]
     print(json.dumps({"process": lower_this_process(nice)}), flush=True)
-    from ..cli import main as cli_main
-
-    return cli_main(args)
+    parser = argparse.ArgumentParser(prog="gesturelsm")
+    add_parser(parser.add_subparsers(dest="command", required=True))
+    ns = parser.parse_args(args)
+    try:
+        return int(ns.func(ns) or 0)
+    except (GestureError, FileNotFoundError, ValueError) as exc:
+        print(f"gesturelsm render: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":
