@@ -7,7 +7,7 @@
 Audio is (N,) float32 mono at 16 kHz; times are seconds from the first sample.
 
 Word timing: Whisper's own word times (cross-attention DTW) are 100-145 ms off the MFA onsets on the BEAT2
-takes; our eSpeak+DTW aligner run on the recognised text is 57-92 ms off (benchmarks/transcribe_accuracy.py).
+takes; our eSpeak+DTW aligner run on the recognised text is 66-94 ms off (benchmarks/transcribe_accuracy.py).
 So the recognised text is re-aligned with `gesturelsm.align.align_words`; where that aligner falls back
 (low confidence, no eSpeak NG) Whisper's own times are kept instead of spreading the words evenly.
 
