@@ -8,8 +8,8 @@ own, so a render thread niced 19 inside the server still took half the CPU: the 
 bodies, as with two plain busy loops at niceness 19 or SCHED_IDLE, against 28-29 with the same loops in a session
 of their own at autogroup niceness 19 (a one-off probe, 2026-11-25; benchmarks/player_latency.py measures the page).
 So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
-in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before importing the
-renderer; its GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the
+in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before it renders; its
+GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the
 process is still niced.
 
     render_apart([seq_a, seq_b], audio_16k, "out/gestures.mp4", labels=["A", "B"], size=(384, 384),
@@ -53,7 +53,7 @@ class RenderCancelled(Exception):
 
 
 def lower_this_process(nice: int) -> dict:
-    """Add `nice` to this process's niceness and set its autogroup's niceness to at least `nice` (Linux; call it in a
+    """Add `nice` to this process's niceness and set its autogroup's niceness to `nice` (Linux; call it in a
     new session, which has an autogroup of its own). Returns what the process now has: pid, sid, nice, autogroup."""
     if nice > 0:
         try:
