@@ -157,8 +157,8 @@ class _Handlers:
             self._refuse(exc)
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads..."
 
-    def add_exports(self, out):
-        if out is None or out.video is None:           # no video: a newer request replaced it (its chain exports)
+    def add_exports(self, out, request: gr.Request = None):
+        if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip()
         self.service.export(out)
         return *self._files(out), out.summary

@@ -1,6 +1,6 @@
 """Automatic transcription (gesturelsm.asr) on the real BEAT2 takes against their MFA TextGrids (markdown out).
 
-    NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_accuracy.py [--data DIR]
+    NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_accuracy.py [--data DIR] [--beam-size 1]
 
 Per take: word recovery (recognised words paired in order with the MFA words by spoken form / MFA words),
 word-onset error against MFA (mean, p90, share within 100 ms) for each timing option ("whisper": Whisper's
@@ -29,7 +29,7 @@ sys.path.insert(0, str(REPO))
 from gesturelsm.align import Word, align_words, read_words  # noqa: E402
 from gesturelsm.align.metrics import onset_errors_ms, onset_stats  # noqa: E402
 from gesturelsm.align.normalize import speak  # noqa: E402
-from gesturelsm.asr.transcribe import MIN_AVG_LOGPROB, recognize  # noqa: E402
+from gesturelsm.asr.transcribe import BEAM_SIZE, MIN_AVG_LOGPROB, recognize  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
 
 SR = 16_000
@@ -42,7 +42,7 @@ def recovered(pred: list[Word], ref: list[Word]) -> int:
     return sum(b.size for b in sm.get_matching_blocks())
 
 
-def accuracy(data: Path) -> list[str]:
+def accuracy(data: Path, beam_size: int) -> list[str]:
     rows = ["| take | MFA words | recovered | timing | mean ms | p90 ms | within 100 ms | s/min recognise (wall, CPU) "
             "| s/min + align (wall) | accepted (avg log-prob) |", "|---|---|---|---|---|---|---|---|---|---|"]
     recognize(np.zeros(SR, np.float32))  # load the model outside the timings
@@ -53,7 +53,7 @@ def accuracy(data: Path) -> list[str]:
         y = load_audio(data / "wave16k" / f"{take}.wav")
         minutes = len(y) / SR / 60
         t0, c0 = time.perf_counter(), time.process_time()
-        words, avg, _ = recognize(y)
+        words, avg, _ = recognize(y, beam_size)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         t1 = time.perf_counter()
         res = align_words(y, " ".join(w.text for w in words))
@@ -114,6 +114,7 @@ def memory(data: Path) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
+    ap.add_argument("--beam-size", type=int, default=BEAM_SIZE, help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not (args.data / "textgrid").is_dir():
@@ -122,7 +123,7 @@ def main() -> int:
     if args.memory_child:
         memory_child(args.data)
         return 0
-    print("\n".join(accuracy(args.data)))
+    print("\n".join(accuracy(args.data, args.beam_size)))
     print("\n" + memory(args.data))
     return 0
 

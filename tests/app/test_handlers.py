@@ -30,15 +30,15 @@ def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
     assert modes["show_video"] == modes["add_exports"] == "multiple"
 
 
-def test_gradio_hands_both_handlers_the_page_session():
+def test_gradio_hands_the_handlers_the_page_session():
     """Gradio passes gr.Request (and progress) only to positional parameters: a *args handler gets none, and then
     nothing is ever marked replaced."""
     from gradio.helpers import special_args
 
     h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
-    for fn, n_inputs in ((h.show_motion, 12), (h.show_video, 1)):
+    for fn, n_inputs, progress in ((h.show_motion, 12, True), (h.show_video, 1, True), (h.add_exports, 1, False)):
         filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
-        assert filled[n_inputs] is page and progress_at == n_inputs + 1
+        assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
 
 
 def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):
@@ -46,7 +46,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
     second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 3     # replaced: not rendered
-    assert first.video is None and h.add_exports(first) == (gr.skip(),) * 3
+    assert first.video is None and h.add_exports(first, request=page) == (gr.skip(),) * 3
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
 
     started, result = threading.Event(), {}
