@@ -67,11 +67,18 @@ def lower_this_process(nice: int) -> dict:
             pass
     info = {"pid": os.getpid(), "sid": os.getsid(0) if hasattr(os, "getsid") else None,
             "nice": os.getpriority(os.PRIO_PROCESS, 0) if hasattr(os, "getpriority") else None}
-    try:
-        info["autogroup"] = AUTOGROUP.read_text().strip()
-    except OSError:
-        info["autogroup"] = None
+    info["autogroup"] = read_autogroup()
     return info
+
+
+def read_autogroup() -> str | None:
+    """This process's autogroup as the kernel writes it ("/autogroup-N nice M"), or None where there is none to read
+    (no such file, not readable, or empty, as in some sandboxes that report autogroups enabled)."""
+    try:
+        text = AUTOGROUP.read_text().strip()
+    except OSError:
+        return None
+    return text if text.startswith("/autogroup-") else None
 
 
 def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, out: str | Path, *,
