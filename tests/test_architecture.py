@@ -12,7 +12,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors", "limits", "uploads", "safe_load"},  # conventions, the error family, request limits,
                                                                # upload format sniffing, tensors-only loading
-    {"motion", "audio", "checkpoint", "flows"},                # motion data, speech loading, files, the methods
+    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
+                                                               # fp32 linear layers through oneDNN
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)

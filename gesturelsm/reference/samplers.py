@@ -21,10 +21,13 @@ KV = list[tuple[torch.Tensor, torch.Tensor]]
 
 
 def guided_kv(model: ReferenceDenoiser, speech: torch.Tensor, scale: float) -> KV:
-    """Keys/values for the conditional batch, with the null condition stacked after it when scale > 1."""
-    if scale > 1.0:
-        speech = torch.cat([speech, model.null_cond[None].expand_as(speech)], 0)
-    return model.speech_kv(speech)
+    """Keys/values for the conditional batch, with the null condition's (kept by the model) stacked after it
+    when scale > 1."""
+    kv = model.speech_kv(speech)
+    if scale <= 1.0:
+        return kv
+    B = speech.shape[0]
+    return [tuple(torch.cat([c, n.expand(B, -1, -1)]) for c, n in zip(ckv, nkv)) for ckv, nkv in zip(kv, model.null_kv())]
 
 
 def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float) -> Callable:

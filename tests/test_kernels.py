@@ -1,0 +1,92 @@
+"""kernels.py: oneDNN's fp32 linear and channels-last convolution compute exactly what F.linear / F.conv1d compute
+(up to summation order), the fast path is really taken where it exists, and it steps aside for autograd."""
+from __future__ import annotations
+
+import pytest
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+from torch.profiler import profile
+
+from gesturelsm import kernels
+from gesturelsm.kernels import channels_last_1d, conv1d_as_2d, lin, linear, onednn_linear_available, weights_key
+
+needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no oneDNN linear op")
+
+
+def ops_run(fn) -> set[str]:
+    with profile() as p:
+        fn()
+    return {e.key for e in p.key_averages()}
+
+
+def close(a: torch.Tensor, b: torch.Tensor) -> bool:
+    return a.shape == b.shape and bool(torch.allclose(a, b, rtol=1e-5, atol=1e-5 * float(b.abs().max())))
+
+
+@pytest.mark.parametrize("shape", [(7, 48), (2, 5, 48), (2, 3, 4, 48)])
+@pytest.mark.parametrize("with_bias", [True, False])
+@pytest.mark.parametrize("gelu", [False, True])
+def test_linear_equals_f_linear(shape, with_bias, gelu):
+    g = torch.Generator().manual_seed(3)
+    x, w, b = torch.randn(*shape, generator=g), torch.randn(33, 48, generator=g), torch.randn(33, generator=g)
+    with torch.no_grad():
+        got = linear(x, w, b if with_bias else None, gelu=gelu)
+        want = F.linear(x, w, b if with_bias else None)
+        want = F.gelu(want) if gelu else want          # the exact (erf) GELU, not the tanh approximation
+    assert close(got, want)
+
+
+def test_strided_operands_give_the_same_result():
+    """A column slice of a weight and a transposed input (both strided) are handled, not misread."""
+    g = torch.Generator().manual_seed(4)
+    wide, x = torch.randn(40, 64, generator=g), torch.randn(3, 32, 6, generator=g).transpose(1, 2)
+    with torch.no_grad():
+        assert close(linear(x, wide[:, 32:]), F.linear(x, wide[:, 32:]))
+
+
+@needs_onednn
+def test_the_onednn_path_is_taken_and_can_be_switched_off(monkeypatch):
+    x, layer = torch.randn(4, 16), nn.Linear(16, 8)
+    with torch.no_grad():
+        assert "mkldnn::_linear_pointwise" in ops_run(lambda: lin(layer, x))
+        monkeypatch.setenv("GESTURELSM_ONEDNN", "0")
+        assert "mkldnn::_linear_pointwise" not in ops_run(lambda: lin(layer, x))
+
+
+def test_autograd_falls_back_to_f_linear():
+    layer, x = nn.Linear(6, 4), torch.randn(3, 6, requires_grad=True)
+    y = lin(layer, x, gelu=True)
+    y.sum().backward()
+    assert x.grad is not None and layer.weight.grad is not None
+    assert torch.equal(y, F.gelu(F.linear(x, layer.weight, layer.bias)))
+
+
+def test_a_failing_self_check_means_f_linear(monkeypatch):
+    monkeypatch.setattr(kernels, "_state", {"ok": False})
+    x, layer = torch.randn(4, 16), nn.Linear(16, 8)
+    with torch.no_grad():
+        assert torch.equal(lin(layer, x), F.linear(x, layer.weight, layer.bias))
+
+
+@pytest.mark.parametrize("stride,pad,k", [(1, 7, 15), (5, 1700, 15), (6, 0, 15), (3, 2, 5)])
+def test_conv1d_as_2d_equals_conv1d(stride, pad, k):
+    g = torch.Generator().manual_seed(5)
+    x, w, b = torch.randn(2, 6, 4000, generator=g), torch.randn(10, 6, k, generator=g), torch.randn(10, generator=g)
+    with torch.no_grad():
+        got = conv1d_as_2d(channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last), b,
+                           stride, pad)
+    assert got.is_contiguous(memory_format=torch.channels_last)
+    assert close(got[:, :, 0], F.conv1d(x, w, b, stride, pad))
+
+
+def test_weights_key_sees_in_place_changes_and_reloads():
+    layer = nn.Linear(3, 2)
+    key = weights_key(list(layer.parameters()))
+    assert weights_key(list(layer.parameters())) == key
+    with torch.no_grad():
+        layer.bias.add_(1.0)
+    assert weights_key(list(layer.parameters())) != key
+    key = weights_key(list(layer.parameters()))
+    layer.load_state_dict(nn.Linear(3, 2).state_dict())
+    assert weights_key(list(layer.parameters())) != key
