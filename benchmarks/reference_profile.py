@@ -13,6 +13,7 @@ import statistics
 import torch
 
 from gesturelsm.evaluation.timing import timed
+from gesturelsm.kernels import channels_last_1d
 from gesturelsm.reference.config import GeneratorConfig
 from gesturelsm.reference.model import ReferenceGenerator
 from gesturelsm.reference.samplers import _velocity, guided_kv
@@ -41,10 +42,11 @@ def main() -> None:
     with torch.inference_mode():
         speech = g.speech(audio, words)
         rows.append(("speech encoder (per window)", median_seconds(lambda: g.speech(audio, words), args.repeats)))
-        h = audio.transpose(1, 2)
-        for i, block in enumerate(g.speech.wav):
-            rows.append((f"  conv block {i} on {tuple(h.shape[1:])}", median_seconds(lambda: block(h), args.repeats)))
-            h = block(h)
+        h = channels_last_1d(audio.transpose(1, 2))         # the eval path: folded BatchNorms, channels-last
+        for i, (block, folded) in enumerate(zip(g.speech.wav, g.speech._folded[1])):
+            rows.append((f"  conv block {i} on {(h.shape[1], h.shape[3])}",
+                         median_seconds(lambda: block.fast(h, folded), args.repeats)))
+            h = block.fast(h, folded)
         rows.append(("cross-attention keys/values, CFG pair (per clip)",
                      median_seconds(lambda: guided_kv(g.denoiser, speech, 2.0), args.repeats)))
         f = _velocity(g.denoiser, guided_kv(g.denoiser, speech, 2.0), seed, 2.0)

@@ -8,9 +8,10 @@ Quirks (all deliberate here, see ../../docs and METHOD-FACTS.md):
 - spatial-temporal blocks run temporal attention, then spatial attention, each with its own residual
   around the *rotated* input, inside the block's residual (x + [rope(h) + attn(rope(h))]);
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.
-Ours is faster than the reference code for the same function: the speech keys/values of the
-cross-attention are computed once per clip with the query and output projections folded into them
-(`CrossBlock.context`), rotary tables are cached, attention is fused.
+Ours is faster than the reference code for the same function (benchmarks/reference_speed.py): linear layers run
+through oneDNN (kernels.py); the speech keys/values of the cross-attention are computed once per clip, with the
+query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`);
+the null condition's are kept; rotary tables are cached; attention is fused.
 """
 from __future__ import annotations
 
@@ -72,21 +73,29 @@ class CrossBlock(nn.Module):
         self.proj = nn.Linear(dim, dim)
         self.fc1, self.fc2 = nn.Linear(dim, hidden), nn.Linear(hidden, dim)
 
-    def context(self, ctx: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Speech tokens (B, M, D) -> G (B, H*M, D) scaled score keys, U (B, H*M, D) projected values."""
+    def context(self, ctx: torch.Tensor, fold: bool = True) -> tuple[torch.Tensor, torch.Tensor]:
+        """Speech tokens (B, M, D) -> with `fold`: G (B, H*M, D) scaled score keys and U (B, H*M, D) projected
+        values; without: K, V (B, H, M, hd), the plain keys and values (cheaper for a single evaluation)."""
         B, M, D = ctx.shape
         H, hd = self.heads, D // self.heads
-        k, v = lin(self.kv, ctx).reshape(B * M, 2, H, hd).permute(1, 2, 0, 3)                 # (H, B*M, hd) each
+        if not fold:
+            k, v = lin(self.kv, ctx).reshape(B, M, 2, H, hd).permute(2, 0, 3, 1, 4)        # (B, H, M, hd) each
+            return k, v
+        k, v = lin(self.kv, ctx).reshape(B * M, 2, H, hd).permute(1, 2, 0, 3)           # (H, B*M, hd) each
         g = torch.bmm(k, self.q.weight.reshape(H, hd, D)).mul_(hd ** -0.5)                # (H, B*M, D)
         u = torch.bmm(v, self.proj.weight.reshape(D, H, hd).permute(1, 2, 0))            # (H, B*M, D)
         return tuple(a.reshape(H, B, M, D).transpose(0, 1).reshape(B, H * M, D) for a in (g, u))
 
-    def forward(self, x: torch.Tensor, gu: tuple[torch.Tensor, torch.Tensor]) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, kv: tuple[torch.Tensor, torch.Tensor]) -> torch.Tensor:
         B, N, D = x.shape
-        g, u = gu
-        s = torch.bmm(self.norm1(x), g.transpose(1, 2))                                  # (B, N, H*M)
-        p = torch.softmax(s.reshape(B, N, self.heads, -1), -1).reshape(B, N, -1)
-        x = x + torch.baddbmm(self.proj.bias, p, u)
+        if kv[0].dim() == 4:                                                             # plain K, V
+            q = lin(self.q, self.norm1(x)).reshape(B, N, self.heads, -1).transpose(1, 2)
+            a = F.scaled_dot_product_attention(q, kv[0], kv[1]).transpose(1, 2).reshape(B, N, D)
+            x = x + lin(self.proj, a)
+        else:                                                                            # folded G, U
+            s = torch.bmm(self.norm1(x), kv[0].transpose(1, 2))                          # (B, N, H*M)
+            p = torch.softmax(s.reshape(B, N, self.heads, -1), -1).reshape(B, N, -1)
+            x = x + torch.baddbmm(self.proj.bias, p, kv[1])
         return x + lin(self.fc2, lin(self.fc1, self.norm2(x), gelu=True))
 
 
@@ -150,18 +159,19 @@ class ReferenceDenoiser(nn.Module):
         self.token_out = nn.Linear(C, cfg.input_dim)
         self.null_cond = nn.Parameter(torch.zeros(cfg.seq_len, R * C))
 
-    def speech_kv(self, speech: torch.Tensor) -> list[tuple[torch.Tensor, torch.Tensor]]:
-        """Speech features (B, N, R*C) -> every cross block's folded keys/values (CrossBlock.context); once per clip."""
-        return [blk.context(speech) for blk in self.cross]
+    def speech_kv(self, speech: torch.Tensor, fold: bool = True) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """Speech features (B, N, R*C) -> every cross block's keys/values (CrossBlock.context); once per clip.
+        Folding costs more once and less per evaluation: worth it from two evaluations on."""
+        return [blk.context(speech, fold) for blk in self.cross]
 
-    def null_kv(self) -> list[tuple[torch.Tensor, torch.Tensor]]:
+    def null_kv(self, fold: bool = True) -> list[tuple[torch.Tensor, torch.Tensor]]:
         """speech_kv of the learned null condition (batch 1), the unconditional half of guidance. It depends on
         weights only, so it is kept until one of the weights it reads changes (in place or replaced)."""
         ws = [self.null_cond] + [w for blk in self.cross for w in (blk.kv.weight, blk.q.weight, blk.proj.weight)]
-        key = weights_key(ws)
+        key = (weights_key(ws), fold)
         if getattr(self, "_null", (None,))[0] != key:
             with torch.no_grad():
-                self._null = (key, self.speech_kv(self.null_cond[None]))
+                self._null = (key, self.speech_kv(self.null_cond[None], fold))
         return self._null[1]
 
     def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor | None, seed: torch.Tensor,

@@ -20,14 +20,16 @@ from .denoiser import ReferenceDenoiser
 KV = list[tuple[torch.Tensor, torch.Tensor]]
 
 
-def guided_kv(model: ReferenceDenoiser, speech: torch.Tensor, scale: float) -> KV:
+def guided_kv(model: ReferenceDenoiser, speech: torch.Tensor, scale: float, steps: int = 2) -> KV:
     """Keys/values for the conditional batch, with the null condition's (kept by the model) stacked after it
-    when scale > 1."""
-    kv = model.speech_kv(speech)
+    when scale > 1; folded (CrossBlock.context) when the sampler evaluates the model more than once."""
+    fold = steps > 1
+    kv = model.speech_kv(speech, fold)
     if scale <= 1.0:
         return kv
     B = speech.shape[0]
-    return [tuple(torch.cat([c, n.expand(B, -1, -1)]) for c, n in zip(ckv, nkv)) for ckv, nkv in zip(kv, model.null_kv())]
+    return [tuple(torch.cat([c, n.expand(B, *n.shape[1:])]) for c, n in zip(ckv, nkv))
+            for ckv, nkv in zip(kv, model.null_kv(fold))]
 
 
 def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float) -> Callable:
@@ -43,7 +45,7 @@ def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float
 
 def shortcut(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
              steps: int, scale: float) -> torch.Tensor:
-    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     ts = torch.linspace(1e-8, 1 - 1e-8, steps + 1)
     d = torch.tensor([1.0 / steps])
     x = noise
@@ -54,7 +56,7 @@ def shortcut(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor
 
 def meanflow(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
              steps: int, scale: float) -> torch.Tensor:
-    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     if steps == 1:
         return noise - f(noise, torch.ones(1), torch.zeros(1))
     ts = torch.linspace(1 - 1e-8, 0, steps + 1)
@@ -73,7 +75,7 @@ def cosine_alphas_cumprod(n: int = 1000, max_beta: float = 0.999) -> torch.Tenso
 
 def diffusion(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
               steps: int, scale: float, train_steps: int = 1000) -> torch.Tensor:
-    f = _velocity(model, guided_kv(model, speech, scale), seed, scale)
+    f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     ac = cosine_alphas_cumprod(train_steps)
     ratio = train_steps // steps
     ks = [k * ratio for k in reversed(range(steps))]

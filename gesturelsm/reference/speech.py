@@ -20,7 +20,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..features.audio import envelope
-from ..kernels import channels_last_1d, conv1d_as_2d, lin, weights_key
+from ..kernels import channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin, weights_key
 from .config import GeneratorConfig
 
 ENVELOPE_WINDOW = 1024
@@ -98,9 +98,12 @@ class WavBlock(nn.Module):
         return F.leaky_relu(h + (self.down(x) if self.down is not None else x), 0.01)
 
     def fast(self, x: torch.Tensor, folded: list) -> torch.Tensor:
-        """forward() in eval mode on channels-last (B, C, 1, T) input; folded = [a, b, down] folded weights."""
-        h = self.b.fast(F.leaky_relu_(self.a.fast(x, folded[0]), 0.01), folded[1])   # in place: no new pages
-        return F.leaky_relu_(h.add_(self.down.fast(x, folded[2]) if self.down is not None else x), 0.01)
+        """forward() in eval mode on channels-last (B, C, 1, T) input; folded = [a, b, down] folded weights.
+        Without a downsampling branch the residual is x itself, and the result is written into x."""
+        h = F.leaky_relu_(self.a.fast(x, folded[0]), 0.01)          # in place: fresh buffers cost page faults
+        res = self.down.fast(x, folded[2]) if self.down is not None else x
+        conv1d_as_2d_add_(res, h, *folded[1], self.b.conv.stride[0], self.b.conv.padding[0])
+        return F.leaky_relu_(res, 0.01)
 
 
 # (out channels as a fraction of audio_dim, stride, padding, downsample); total stride 540

@@ -3,6 +3,7 @@ folded into the per-clip speech keys (CrossBlock.context), the speech encoder wi
 channels-last convolutions, and the kept null-condition keys of guidance; caches follow changed weights."""
 from __future__ import annotations
 
+import pytest
 import torch
 import torch.nn.functional as F
 
@@ -27,14 +28,15 @@ def plain_cross(blk: CrossBlock, x: torch.Tensor, ctx: torch.Tensor) -> torch.Te
     return x + blk.fc2(F.gelu(blk.fc1(blk.norm2(x))))
 
 
-def test_folded_cross_attention_equals_the_plain_formula():
+@pytest.mark.parametrize("fold", [True, False])
+def test_cross_attention_equals_the_plain_formula(fold):
     torch.manual_seed(0)
     blk = CrossBlock(48, 4, 96)
     x, ctx = torch.randn(3, 10, 48), torch.randn(3, 7, 48)
     with torch.no_grad():
         for p in blk.parameters():                       # non-trivial norms and biases
             p.add_(0.1 * torch.randn_like(p))
-        got = blk(x, blk.context(ctx))
+        got = blk(x, blk.context(ctx, fold))
         want = plain_cross(blk, x, ctx)
     assert torch.allclose(got, want, atol=1e-5)
 
@@ -63,14 +65,15 @@ def test_speech_encoder_fast_path_equals_the_modules_and_follows_new_weights():
         enc.load_state_dict(other.state_dict())
 
 
-def test_guidance_keys_follow_the_null_condition():
+@pytest.mark.parametrize("steps", [1, 2])
+def test_guidance_keys_follow_the_null_condition(steps):
     torch.manual_seed(2)
     den = ReferenceDenoiser(SMALL).eval()
     speech = torch.randn(1, SMALL.seq_len, SMALL.regions * SMALL.latent_dim)
     with torch.no_grad():
-        guided_kv(den, speech, 2.0)                      # keeps the null condition's keys
+        guided_kv(den, speech, 2.0, steps)               # keeps the null condition's keys
         for change in (lambda: den.null_cond.normal_(), lambda: den.load_state_dict(ReferenceDenoiser(SMALL).state_dict())):
             change()
-            kv = guided_kv(den, speech, 2.0)
-            want = den.speech_kv(torch.cat([speech, den.null_cond[None]]))
+            kv = guided_kv(den, speech, 2.0, steps)
+            want = den.speech_kv(torch.cat([speech, den.null_cond[None]]), fold=steps > 1)
             assert all(torch.allclose(a, b, atol=1e-6) for pa, pb in zip(kv, want) for a, b in zip(pa, pb))
