@@ -43,10 +43,12 @@ def main() -> None:
         speech = g.speech(audio, words)
         rows.append(("speech encoder (per window)", median_seconds(lambda: g.speech(audio, words), args.repeats)))
         h = channels_last_1d(audio.transpose(1, 2))         # the eval path: folded BatchNorms, channels-last
-        for i, (block, folded) in enumerate(zip(g.speech.wav, g.speech._folded[1])):
+        for i, (block, folded) in enumerate(zip(g.speech.wav, g.speech.folded_convs())):
+            # blocks without a downsampling branch write into their input: each timed call gets a copy
+            fresh = (lambda: h.clone()) if block.down is None else (lambda: h)
             rows.append((f"  conv block {i} on {(h.shape[1], h.shape[3])}",
-                         median_seconds(lambda: block.fast(h, folded), args.repeats)))
-            h = block.fast(h, folded)
+                         median_seconds(lambda: block.fast(fresh(), folded), args.repeats)))
+            h = block.fast(fresh(), folded)
         rows.append(("cross-attention keys/values, CFG pair (per clip)",
                      median_seconds(lambda: guided_kv(g.denoiser, speech, 2.0), args.repeats)))
         f = _velocity(g.denoiser, guided_kv(g.denoiser, speech, 2.0), seed, 2.0)

@@ -5,7 +5,7 @@
 
 Paper-size models with random weights (the released files are not needed for timing): the authors'
 GestureLSM / GestureMF classes built from their configs_new/*.yaml, their state dict converted into ours,
-outputs checked equal first. Timed (median of interleaved repeats): one denoiser step with the CFG pair for a
+outputs checked equal first (max abs difference <= 1e-4, or the script stops). Timed (median of interleaved repeats): one denoiser step with the CFG pair for a
 128-frame window, and one clip (speech encoder + sampler) for shortcut 2 / 8 steps (CFG 2) and MeanFlow
 1 step; then our real-time factor for 60 s of synthetic speech (features, all windows, RVQ decoding at
 paper size, 6D -> axis-angle). Without --reference-code only our side is measured.
@@ -32,6 +32,12 @@ def _timed(fn, repeats: int) -> float:
         fn()
         ts.append(time.perf_counter() - t0)
     return statistics.median(ts)
+
+
+def _check_equal(diff: float, what: str, tol: float = 1e-4) -> None:
+    """Timing two different functions would mean nothing: stop if ours and theirs disagree."""
+    if not diff <= tol:
+        raise SystemExit(f"{what}: ours and theirs differ by {diff:.2e} (> {tol:g}); not timing different functions")
 
 
 def _their_model(code: str, kind: str, vocab_dir: str):
@@ -75,17 +81,20 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
             our_step = lambda: f(x[:, :, 0], t, d)  # noqa: E731
             diff = (ref_step()[:, :, 0] - our_step()).abs().max().item()
             print(f"{kind}: one guided step, max |ours - theirs| = {diff:.2e}")
+            _check_equal(diff, f"{kind} guided step")
             if kind == "shortcut":
-                a = b = 0.0
+                ta, tb = [], []
                 for _ in range(repeats):  # interleaved
-                    a += _timed(ref_step, 1); b += _timed(our_step, 1)
-                rows.append(("denoiser step, CFG pair, 128 frames", a / repeats, b / repeats))
+                    ta.append(_timed(ref_step, 1)); tb.append(_timed(our_step, 1))
+                rows.append(("denoiser step, CFG pair, 128 frames", statistics.median(ta), statistics.median(tb)))
             for n in steps_list:
                 theirs.num_inference_steps = n
                 torch.manual_seed(1)
                 ref_out = theirs(cond)
                 our_out = ours.sample(audio, words, seed, ref_out["init_noise"][:, :, 0], steps=n, cfg_scale=theirs.guidance_scale)
-                print(f"{kind} {n} steps: clip max |ours - theirs| = {(ref_out['latents'][:, :, 0] - our_out).abs().max().item():.2e}")
+                diff = (ref_out['latents'][:, :, 0] - our_out).abs().max().item()
+                print(f"{kind} {n} steps: clip max |ours - theirs| = {diff:.2e}")
+                _check_equal(diff, f"{kind} {n}-step clip")
                 noise = ref_out["init_noise"][:, :, 0]
                 ta, tb = [], []
                 for _ in range(repeats):

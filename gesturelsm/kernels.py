@@ -4,24 +4,33 @@ Why: PyTorch's CPU wheels send an fp32 `nn.Linear` to MKL's sgemm, and MKL takes
 On this project's machines (AMD EPYC, Zen 5: full-width AVX-512 FMA units) that runs at ~110 GFLOP/s per core,
 while oneDNN, which PyTorch already uses for its convolutions, runs the same fp32 product with AVX-512 at
 ~245 GFLOP/s (benchmarks/kernels_speed.py prints both). No reduced precision is involved: outputs differ from
-F.linear's by summation order only (~1e-7 relative), and the GELU fused into the product is the exact (erf) one.
+F.linear's by summation order only (largest relative error against a float64 product 6-9e-7, MKL's 3-4e-7),
+and the GELU fused into the product is the exact (erf) one.
 
 Convolutions: oneDNN's 1D kernels run at ~135 GFLOP/s here, its channels-last 2D ones at ~265, so
 `conv1d_as_2d` runs a 1D convolution as a (1 x k) 2D one on channels-last tensors (same function), and
 `conv1d_as_2d_add_` adds one into an existing tensor in place (a residual connection without a new buffer).
 
-`linear(x, w, b, gelu=...)` takes oneDNN's path when it can: an fp32 CPU tensor with no gradient to record, on a
-PyTorch build that has the op, and a first-use self-check against F.linear passed. Otherwise, or with
+`linear(x, w, b, gelu=...)` takes oneDNN's path when it can: fp32 CPU tensors with no gradient to record, on an
+x86 machine (elsewhere oneDNN is not known to be faster), a PyTorch build that has the op with oneDNN enabled
+(torch.backends.mkldnn.enabled), and a first-use self-check against F.linear passed. Otherwise, or with
 GESTURELSM_ONEDNN=0 in the environment (to measure the difference), it is F.linear (+ F.gelu).
+
+`WeightsCache` keeps values derived from weights (folded BatchNorms, the null condition's keys) until a weight
+changes.
 """
 from __future__ import annotations
 
 import os
+import platform
+from typing import Callable, Hashable, TypeVar
 
 import torch
 import torch.nn.functional as F
 
 _state: dict[str, bool] = {}
+T = TypeVar("T")
+X86 = platform.machine().lower() in ("x86_64", "amd64", "x86", "i686")
 
 
 def onednn_linear_available() -> bool:
@@ -35,11 +44,11 @@ def _available(name: str, check) -> bool:
             _state[name] = bool(check())
         except Exception:  # noqa: BLE001 - any failure of a private op means: use the public one
             _state[name] = False
-    return _state[name] and os.environ.get("GESTURELSM_ONEDNN", "1") != "0"
+    return (_state[name] and torch.backends.mkldnn.enabled and os.environ.get("GESTURELSM_ONEDNN", "1") != "0")
 
 
 def _check_linear() -> bool:
-    if not (torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")):
+    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")):
         return False
     g = torch.Generator().manual_seed(0)
     x, w, b = (torch.randn(*s, generator=g) for s in ((5, 3, 24), (40, 24), (40,)))
@@ -50,10 +59,10 @@ def _check_linear() -> bool:
 
 
 def _check_conv_add() -> bool:
-    if not (torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_convolution_pointwise_")):
+    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_convolution_pointwise_")):
         return False
     g = torch.Generator().manual_seed(0)
-    x, w, b, r = (torch.randn(*s, generator=g) for s in ((2, 6, 50), (5, 6, 7), (5,), (2, 5, 24)))
+    x, w, b, r = (torch.randn(*s, generator=g) for s in ((2, 6, 50), (5, 6, 7), (5,), (2, 5, 23)))
     x2, w2 = channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last)
     out = channels_last_1d(r)
     with torch.no_grad():
@@ -82,10 +91,22 @@ def lin(module: torch.nn.Linear, x: torch.Tensor, *, gelu: bool = False) -> torc
     return linear(x, module.weight, module.bias, gelu=gelu)
 
 
-def weights_key(tensors: list[torch.Tensor]) -> tuple:
-    """Identifies the current values of `tensors` (storage and in-place version): a cache derived from weights
-    is stale when this changes (load_state_dict, an optimiser step, .to(), a replaced parameter)."""
-    return tuple((t.data_ptr(), t._version) for t in tensors)
+class WeightsCache:
+    """Values derived from weights, each recomputed once any weight it was made from changed: replaced (another
+    tensor: load_state_dict(assign=True), .to()) or changed in place (load_state_dict, an optimiser step; seen
+    through the tensor's version counter). It holds the tensors a value was made from, so a new tensor cannot
+    take a freed one's address and pass for it. Safe to share between threads (at worst a value is made twice)."""
+
+    def __init__(self) -> None:
+        self._entries: dict[Hashable, tuple[tuple, list[torch.Tensor], object]] = {}
+
+    def get(self, tag: Hashable, tensors: list[torch.Tensor], make: Callable[[], T]) -> T:
+        key = tuple((t.data_ptr(), t._version) for t in tensors)
+        entry = self._entries.get(tag)
+        if entry is None or entry[0] != key:
+            entry = (key, list(tensors), make())
+            self._entries[tag] = entry
+        return entry[2]  # type: ignore[return-value]
 
 
 def channels_last_1d(x: torch.Tensor) -> torch.Tensor:
@@ -105,7 +126,8 @@ def conv1d_as_2d_add_(out: torch.Tensor, x: torch.Tensor, weight: torch.Tensor, 
     shape as the convolution's output): no new tensor, no second pass. On a 3.6 MB residual this saves a third
     of the block's time here, most of it the page faults of a fresh buffer."""
     if (not torch.is_grad_enabled() and out.is_contiguous(memory_format=torch.channels_last)
-            and out.dtype == x.dtype == torch.float32 and _available("conv_add", _check_conv_add)):
+            and out.dtype == x.dtype == torch.float32 and out.device.type == x.device.type == "cpu"
+            and _available("conv_add", _check_conv_add)):
         return _conv_add_onednn(out, x, weight, bias, stride, padding)
     return out.add_(conv1d_as_2d(x, weight, bias, stride, padding))
 

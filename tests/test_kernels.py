@@ -9,7 +9,8 @@ import torch.nn.functional as F
 from torch.profiler import profile
 
 from gesturelsm import kernels
-from gesturelsm.kernels import channels_last_1d, conv1d_as_2d, lin, linear, onednn_linear_available, weights_key
+from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin, linear,
+                                onednn_linear_available)
 
 needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no oneDNN linear op")
 
@@ -80,13 +81,61 @@ def test_conv1d_as_2d_equals_conv1d(stride, pad, k):
     assert close(got[:, :, 0], F.conv1d(x, w, b, stride, pad))
 
 
-def test_weights_key_sees_in_place_changes_and_reloads():
-    layer = nn.Linear(3, 2)
-    key = weights_key(list(layer.parameters()))
-    assert weights_key(list(layer.parameters())) == key
+def test_weights_cache_remakes_a_value_only_when_a_weight_changed():
+    layer, made = nn.Linear(3, 2), []
+    cache = WeightsCache()
+    get = lambda: cache.get("w", list(layer.parameters()), lambda: made.append(1) or layer.weight.sum().item())  # noqa: E731
+    first = get()
+    assert get() == first and len(made) == 1                      # unchanged: kept
     with torch.no_grad():
-        layer.bias.add_(1.0)
-    assert weights_key(list(layer.parameters())) != key
-    key = weights_key(list(layer.parameters()))
-    layer.load_state_dict(nn.Linear(3, 2).state_dict())
-    assert weights_key(list(layer.parameters())) != key
+        layer.weight.add_(1.0)                                    # in place
+    assert get() == pytest.approx(first + 6) and len(made) == 2
+    layer.load_state_dict(nn.Linear(3, 2).state_dict())          # copied in
+    get()
+    assert len(made) == 3
+    for _ in range(3):                                            # replaced by new tensors, again and again
+        layer.load_state_dict(nn.Linear(3, 2).state_dict(), assign=True)
+        assert get() == pytest.approx(layer.weight.sum().item())
+    assert len(made) == 6
+    assert cache.get("other tag", [layer.weight], lambda: "x") == "x"
+
+
+@needs_onednn
+def test_linear_steps_aside_when_onednn_is_disabled_or_not_x86(monkeypatch):
+    x, layer = torch.randn(4, 16), nn.Linear(16, 8)
+    with torch.no_grad(), torch.backends.mkldnn.flags(enabled=False):
+        assert "mkldnn::_linear_pointwise" not in ops_run(lambda: lin(layer, x))
+    monkeypatch.setattr(kernels, "X86", False)
+    monkeypatch.setattr(kernels, "_state", {})
+    assert not onednn_linear_available()
+    with torch.no_grad():
+        assert "mkldnn::_linear_pointwise" not in ops_run(lambda: lin(layer, x))
+
+
+def conv_case(seed: int = 6):
+    g = torch.Generator().manual_seed(seed)
+    x, w, b = torch.randn(2, 6, 300, generator=g), torch.randn(10, 6, 15, generator=g), torch.randn(10, generator=g)
+    out = torch.randn(2, 10, 100, generator=g)                    # (300 + 2*7 - 15) // 3 + 1 = 100
+    return x, w, b, out
+
+
+@pytest.mark.parametrize("onednn", ["1", "0"])
+def test_conv_add_in_place_equals_out_plus_conv(monkeypatch, onednn):
+    monkeypatch.setenv("GESTURELSM_ONEDNN", onednn)
+    x, w, b, out = conv_case()
+    want = out + F.conv1d(x, w, b, 3, 7)
+    target = channels_last_1d(out)
+    with torch.no_grad():
+        got = conv1d_as_2d_add_(target, channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last),
+                                b, 3, 7)
+    assert got.data_ptr() == target.data_ptr()                    # written into the given tensor
+    assert close(target[:, :, 0], want)
+
+
+@needs_onednn
+def test_the_in_place_convolution_runs_on_onednn():
+    x, w, b, out = conv_case()
+    target, x2 = channels_last_1d(out), channels_last_1d(x)
+    w2 = w[:, :, None].contiguous(memory_format=torch.channels_last)
+    with torch.no_grad():
+        assert "mkldnn::_convolution_pointwise_" in ops_run(lambda: conv1d_as_2d_add_(target, x2, w2, b, 3, 7))

@@ -21,7 +21,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from ..kernels import lin, linear, weights_key
+from ..kernels import WeightsCache, lin, linear
 from .config import GeneratorConfig
 
 
@@ -158,6 +158,7 @@ class ReferenceDenoiser(nn.Module):
         self.blocks = nn.ModuleList([STBlock(C, cfg.num_heads, C * (cfg.ff_size // C)) for _ in range(cfg.num_layers)])
         self.token_out = nn.Linear(C, cfg.input_dim)
         self.null_cond = nn.Parameter(torch.zeros(cfg.seq_len, R * C))
+        self._cache = WeightsCache()
 
     def speech_kv(self, speech: torch.Tensor, fold: bool = True) -> list[tuple[torch.Tensor, torch.Tensor]]:
         """Speech features (B, N, R*C) -> every cross block's keys/values (CrossBlock.context); once per clip.
@@ -166,13 +167,13 @@ class ReferenceDenoiser(nn.Module):
 
     def null_kv(self, fold: bool = True) -> list[tuple[torch.Tensor, torch.Tensor]]:
         """speech_kv of the learned null condition (batch 1), the unconditional half of guidance. It depends on
-        weights only, so it is kept until one of the weights it reads changes (in place or replaced)."""
+        weights only, so it is kept (per layout) until one of the weights it reads changes; recomputed every time
+        when gradients are being recorded for those weights, so they flow."""
         ws = [self.null_cond] + [w for blk in self.cross for w in (blk.kv.weight, blk.q.weight, blk.proj.weight)]
-        key = (weights_key(ws), fold)
-        if getattr(self, "_null", (None,))[0] != key:
-            with torch.no_grad():
-                self._null = (key, self.speech_kv(self.null_cond[None], fold))
-        return self._null[1]
+        if torch.is_grad_enabled() and any(w.requires_grad for w in ws):
+            return self.speech_kv(self.null_cond[None], fold)
+        with torch.no_grad():
+            return self._cache.get(("null", fold), ws, lambda: self.speech_kv(self.null_cond[None], fold))
 
     def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor | None, seed: torch.Tensor,
                 kv: list[tuple[torch.Tensor, torch.Tensor]]) -> torch.Tensor:

@@ -20,7 +20,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..features.audio import envelope
-from ..kernels import channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin, weights_key
+from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin
 from .config import GeneratorConfig
 
 ENVELOPE_WINDOW = 1024
@@ -124,21 +124,28 @@ class ReferenceSpeechEncoder(nn.Module):
         self.word_embedding = nn.Embedding(cfg.vocab_size, cfg.word_dim)
         self.word_proj = nn.Linear(cfg.word_dim, cfg.audio_dim)
         self.mix = nn.Linear(2 * cfg.audio_dim, cfg.regions * cfg.latent_dim)
+        self._cache = WeightsCache()
 
     def _wav(self, audio: torch.Tensor) -> torch.Tensor:
         """(B, S, 2) -> (B, A, T'). In eval mode the BatchNorms are folded into the convolutions (kept until a
         weight changes) and the convolutions run channels-last (kernels.py: twice as fast here)."""
         if self.training or torch.is_grad_enabled():
             return self.wav(audio.transpose(1, 2))
-        convs = [c for blk in self.wav for c in (blk.a, blk.b, blk.down) if c is not None]
-        key = weights_key([t for c in convs for t in (*c.parameters(), *c.buffers())])
-        if getattr(self, "_folded", (None,))[0] != key:
-            self._folded = (key, [[c.folded() if c is not None else None for c in (blk.a, blk.b, blk.down)]
-                                  for blk in self.wav])
-        x = channels_last_1d(audio.transpose(1, 2))
-        for blk, folded in zip(self.wav, self._folded[1]):
-            x = blk.fast(x, folded)
+        folded = self.folded_convs()
+        x = channels_last_1d(audio.transpose(1, 2))          # may be a view of `audio` (same memory layout)
+        if self.wav[0].down is None:
+            x = x.clone()                                     # such a block would write into the caller's audio
+        for blk, f in zip(self.wav, folded):
+            x = blk.fast(x, f)
         return x[:, :, 0]
+
+    def folded_convs(self) -> list[list]:
+        """Per conv block [a, b, down] ConvBN.folded() weights, kept until a weight or BatchNorm statistic changes."""
+        convs = [c for blk in self.wav for c in (blk.a, blk.b, blk.down) if c is not None]
+        with torch.no_grad():
+            return self._cache.get("folded", [t for c in convs for t in (*c.parameters(), *c.buffers())],
+                                   lambda: [[c.folded() if c is not None else None for c in (blk.a, blk.b, blk.down)]
+                                            for blk in self.wav])
 
     def forward(self, audio: torch.Tensor, words: torch.Tensor) -> torch.Tensor:
         a = self._wav(audio)                                                    # (B, A, T')

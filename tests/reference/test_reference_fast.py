@@ -54,12 +54,14 @@ def test_speech_encoder_fast_path_equals_the_modules_and_follows_new_weights():
     enc = ReferenceSpeechEncoder(SMALL).eval()
     randomise_batchnorms(enc)
     audio, words = torch.rand(2, 533 * SMALL.frames, 2), torch.randint(0, 50, (2, SMALL.frames))
+    kept = audio.clone()
     for _ in range(2):                                   # the second round: after new weights were loaded
         want = enc(audio, words)                         # grad enabled: the modules as written
         with torch.no_grad():
             got = enc(audio, words)                      # folded, channels-last
         assert got.shape == (2, SMALL.seq_len, SMALL.regions * SMALL.latent_dim)
         assert torch.allclose(got, want.detach(), atol=1e-5)
+        assert torch.equal(audio, kept)                  # the in-place fast path leaves the caller's audio alone
         other = ReferenceSpeechEncoder(SMALL).eval()
         randomise_batchnorms(other)
         enc.load_state_dict(other.state_dict())
@@ -77,3 +79,14 @@ def test_guidance_keys_follow_the_null_condition(steps):
             kv = guided_kv(den, speech, 2.0, steps)
             want = den.speech_kv(torch.cat([speech, den.null_cond[None]]), fold=steps > 1)
             assert all(torch.allclose(a, b, atol=1e-6) for pa, pb in zip(kv, want) for a, b in zip(pa, pb))
+
+
+def test_guidance_keys_pass_gradients_when_they_are_recorded():
+    torch.manual_seed(3)
+    den = ReferenceDenoiser(SMALL)
+    speech = torch.randn(1, SMALL.seq_len, SMALL.regions * SMALL.latent_dim)
+    with torch.no_grad():
+        guided_kv(den, speech, 2.0)                      # a kept copy exists; training must not use it
+    kv = guided_kv(den, speech, 2.0)
+    sum(t.sum() for pair in kv for t in pair).backward()
+    assert den.null_cond.grad is not None and den.null_cond.grad.abs().sum() > 0
