@@ -13,6 +13,8 @@ from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, co
                                 onednn_linear_available)
 
 needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no oneDNN linear op")
+needs_conv_add = pytest.mark.skipif(not kernels._available("conv_add", kernels._check_conv_add),
+                                    reason="this PyTorch build has no oneDNN in-place convolution op")
 
 
 def ops_run(fn) -> set[str]:
@@ -132,7 +134,7 @@ def test_conv_add_in_place_equals_out_plus_conv(monkeypatch, onednn):
     assert close(target[:, :, 0], want)
 
 
-@needs_onednn
+@needs_conv_add
 def test_the_in_place_convolution_runs_on_onednn():
     x, w, b, out = conv_case()
     target, x2 = channels_last_1d(out), channels_last_1d(x)
