@@ -81,7 +81,7 @@ def _stats(st: dict) -> str:
     return f"p90 {st['p90_latency_ms']:.0f} ms · real-time factor {rtf:.1f}x · {st['frames']} frames"
 
 
-def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, body=None):
+def on_chunk(manager: LiveManager, chunk, session: LiveSession | None):
     """One microphone chunk: open a session on the first, feed it, return what is ready
     (state, player JSON, #live-latency, #live-stats, status)."""
     if chunk is None:
@@ -97,15 +97,15 @@ def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, body=None
     except (LiveOverloaded, RuntimeError) as exc:
         status = str(exc)
         session.stop()
-    return session, *payload(session, status, body), status
+    return session, *payload(session, status), status
 
 
-def on_stop(session: LiveSession | None, body=None):
+def on_stop(session: LiveSession | None):
     """The stop button (or the stream's time limit): generate the rest of the speech, then end the session."""
     if session is None:
         return None, gr.skip(), gr.skip(), gr.skip(), "stopped"
     session.end(timeout=10.0)
-    return None, *payload(session, "stopped", body), "stopped"
+    return None, *payload(session, "stopped"), "stopped"
 
 
 def _delete(session: LiveSession | None) -> None:

@@ -26,14 +26,13 @@ import numpy as np
 from starlette.routing import WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from gesturelsm.audio import resample
+from gesturelsm.audio import MAX_SAMPLE_RATE
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
-from gesturelsm.live.stream import SR
 
-from .live import payload
+from .live import payload, to_float
 
 PATH = "/gesturelsm/live"
-RATES = (8000, 192000)          # sample rates accepted from a page (an AudioContext's range is 3000-768000)
+RATES = (8000, MAX_SAMPLE_RATE)  # sample rates accepted from a page (an AudioContext's range is 3000-768000)
 MAX_MESSAGE_S = 5.0             # longest audio in one message
 HELLO_TIMEOUT_S = 10.0          # a socket that names no sample rate by then is closed
 WATCH_S = 0.5                   # how often the sender checks that the session is still running
@@ -60,8 +59,7 @@ def pcm(data: bytes, sr: int) -> np.ndarray:
         raise Refused("audio messages must be 16-bit PCM (an even number of bytes)")
     if len(data) / 2 > MAX_MESSAGE_S * sr:
         raise Refused(f"an audio message may hold at most {MAX_MESSAGE_S:g} s")
-    y = np.frombuffer(data, "<i2").astype(np.float32) / 32767.0
-    return y if sr == SR else resample(y, sr, SR).astype(np.float32)
+    return to_float(sr, np.frombuffer(data, "<i2"))
 
 
 async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:

@@ -5,6 +5,7 @@ action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import threading
@@ -215,15 +216,12 @@ def _output_column(service: GestureService) -> tuple:
     """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
     motion_player.player_component(service)
     payload = gr.JSON(visible=False)
-    if motion_player.BUNDLE.exists():
-        # The in-browser player shows the motion; the mp4 is for download and sharing. A <video> on screen, even
-        # paused, held headless Chromium's software-composited page at ~20 redraws per second (a one-off probe hiding
-        # the page's parts in turn: only the video mattered, ~60 without it), so it opens on request
-        # (benchmarks/player_latency.py: the player's idle frame rate went from 17.4 to 29.9 with one body).
-        with gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
-                          elem_id="video-box"):
-            video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
-    else:
+    # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
+    # sharing. A <video> on screen, even paused, held headless Chromium's software-composited page at ~20 redraws
+    # per second (a one-off probe hiding the page's parts in turn: only the video mattered, ~60 without it), so it
+    # opens on request (benchmarks/player_latency.py before and after: 17.4 and 29.9 fps idle with one body).
+    with (gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
+                       elem_id="video-box") if motion_player.BUNDLE.exists() else contextlib.nullcontext()):
         video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
     summary = gr.Markdown(elem_id="summary")
     table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,

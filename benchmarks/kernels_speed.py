@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import torch
 import torch.nn.functional as F
 
-from gesturelsm.evaluation.timing import hardware_name
+from gesturelsm.evaluation.timing import hardware_name, timed
 from gesturelsm.kernels import channels_last_1d, conv1d_as_2d, linear, onednn_linear_available
 
 # (rows, in, out): cross-attention MLP at width 768 (B 2 x 32 tokens); spatial-temporal blocks at width 256
@@ -25,21 +24,13 @@ LINEARS = [(64, 768, 3072), (64, 3072, 768), (192, 256, 1024), (192, 1024, 256),
 CONVS = [(64, 64, 14322, 1, 7), (64, 64, 14322, 6, 0), (128, 128, 396, 1, 7)]
 
 
-def per_call(fn, repeats: int) -> list[float]:
-    fn()
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return out
-
-
 def compare(a, b, repeats: int) -> tuple[float, float]:
+    """Median seconds of a() and b() after one warm-up call each, interleaved so drift on a shared machine hits both."""
+    a(), b()
     ta, tb = [], []
-    for _ in range(repeats):  # interleaved, so drift on a shared machine hits both
-        ta += per_call(a, 1)
-        tb += per_call(b, 1)
+    for _ in range(repeats):
+        ta.append(timed(a, "cpu")[1])
+        tb.append(timed(b, "cpu")[1])
     return statistics.median(ta), statistics.median(tb)
 
 

@@ -279,9 +279,12 @@ class GestureService:
         prog(0.62, "rendering video")
         t_r = time.perf_counter()
         video = Path(args["folder"]) / "gestures.mp4"
+        # the render process loads the body itself: hand it the file (None: it resolves the default as we would)
+        body_path = (self.body.path if hasattr(self.body, "path")
+                     else None if self.body is None else resolve_model_path(self.body))
         try:
             render_apart(motions, audio, video, labels=labels, size=(args["size"], args["size"]),
-                         body_path=getattr(self.body, "path", None), gen_seconds=args["gen_seconds"],
+                         body_path=body_path, gen_seconds=args["gen_seconds"],
                          progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
                          nice=self.settings.render_nice, cancelled=cancelled)
         except RenderError as exc:

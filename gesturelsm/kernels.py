@@ -1,9 +1,9 @@
 """fp32 linear layers through oneDNN on the CPU: the same IEEE fp32 function as F.linear, about twice as fast here.
 
 Why: PyTorch's CPU wheels send an fp32 `nn.Linear` to MKL's sgemm, and MKL takes its AVX2 code path on AMD CPUs.
-On this project's machines (AMD EPYC, Zen 5: full-width AVX-512 FMA units) that runs at ~110 GFLOP/s per core,
+On this project's machines (AMD EPYC, Zen 5: full-width AVX-512 FMA units) that runs at ~100-115 GFLOP/s per core,
 while oneDNN, which PyTorch already uses for its convolutions, runs the same fp32 product with AVX-512 at
-~245 GFLOP/s (benchmarks/kernels_speed.py prints both). No reduced precision is involved: outputs differ from
+~200-250 GFLOP/s (benchmarks/kernels_speed.py prints both). No reduced precision is involved: outputs differ from
 F.linear's by summation order only (largest relative error against a float64 product 6-9e-7, MKL's 3-4e-7),
 and the GELU fused into the product is the exact (erf) one.
 
@@ -124,8 +124,7 @@ def conv1d_as_2d(x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor | Non
 def conv1d_as_2d_add_(out: torch.Tensor, x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor | None,
                       stride: int, padding: int) -> torch.Tensor:
     """out += conv1d_as_2d(x, ...), in place. oneDNN writes the sum straight into `out` (channels-last, same
-    shape as the convolution's output): no new tensor, no second pass. On a 3.6 MB residual this saves a third
-    of the block's time here, most of it the page faults of a fresh buffer."""
+    shape as the convolution's output): no new tensor (whose fresh pages cost page faults) and no second pass."""
     if (not torch.is_grad_enabled() and out.is_contiguous(memory_format=torch.channels_last)
             and out.dtype == x.dtype == torch.float32 and out.device.type == x.device.type == "cpu"
             and _available("conv_add", _check_conv_add)):

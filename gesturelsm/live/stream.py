@@ -15,7 +15,7 @@ held-out takes x 6 seeds, release 5 (`benchmarks/live_latency.py --skip-paced --
 with the seam fade below, the others with the linear fade before it), and the speech-to-
 screen delay through real Chromium (`benchmarks/live_browser.py --seconds 30 --commit C --lookahead L`, median):
     c, L = 6, 2: +0.186, 6.5, 12/12, 21.1 %, 1.25 s      c, L = 6, 1: +0.153, 6.1, 12/12, 20.9 %, 1.07 s
-    c, L = 5, 2: +0.137, 4.2, 10/12, 20.2 %              c, L = 5, 1: +0.131, 4.3, 11/12, 19.5 %, 0.94 s (default)
+    c, L = 5, 2: +0.137, 4.2, 10/12, 20.2 %              c, L = 5, 1: +0.131, 4.3, 11/12, 19.5 %, 0.95 s (default)
     c, L = 4, 2: +0.091, 3.0,  8/12, 19.5 %
 so 5 and 1 is the largest commit inside the 1 s goal for the delay the visitor sees. (With release 4 at CFG 2:
 c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; look-ahead 4, 8 steps, blend_frames 0,

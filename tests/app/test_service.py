@@ -7,12 +7,13 @@ import os
 import sys
 import time
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 import soundfile as sf
 
-from gesturelsm.app_service import (TIMING_COLUMNS, Request, ServiceError, find_beat2_take, fit_length, smooth,
+from gesturelsm.app_service import (TIMING_COLUMNS, GestureService, Request, ServiceError, find_beat2_take, fit_length, smooth,
                                     stand_in_place)
 
 from _support import speech_like, synthetic_motion
@@ -255,3 +256,17 @@ def test_the_video_renders_in_a_lowered_process_of_its_own(service, speech_wav, 
     assert info["pid"] != os.getpid() and info["sid"] != os.getsid(0)
     assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + service.settings.render_nice)
     assert out.video.stat().st_size > 1000 and any(m.startswith("rendering: frame") for m in steps)
+
+
+@pytest.mark.parametrize("given", ["loaded", "path"])
+def test_the_render_process_gets_the_services_body(service, speech_wav, monkeypatch, given):
+    """A body given as a file path (not only a loaded model) reaches the render process, not the default body."""
+    import gesturelsm.app_service as app_service
+    from gesturelsm.body.model import resolve_body
+
+    body = resolve_body(service.body)
+    seen = {}
+    monkeypatch.setattr(app_service, "render_apart", lambda *a, **kw: seen.update(kw))
+    svc = GestureService(service.pipeline, service.settings, body if given == "loaded" else str(body.path))
+    svc.run(Request(str(speech_wav), steps=1, size=256, exports=False))
+    assert Path(seen["body_path"]) == Path(body.path)

@@ -74,13 +74,13 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
     body = resolve_body(None)
     runs = []
     for b in (None, body):
-        mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
-        state, got = None, []
+        session = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1)).open()
+        got = []
         for ch in mic_chunks(2.0):
-            state, js, *_ = live.on_chunk(mgr, ch, state, b)
-            got.append(json.loads(js))
-        state, js, *_ = live.on_stop(state, b)
-        runs.append(got + [json.loads(js)])
+            session.feed(live.to_float(*ch))
+            got.append(json.loads(live.payload(session, "streaming", b)[0]))
+        session.end(timeout=10.0)
+        runs.append(got + [json.loads(live.payload(session, "stopped", b)[0])])
     plain, player = runs
     n_all = 0
     for p, d in zip(plain, player):

@@ -389,7 +389,7 @@ export class LiveMic {
 // The live player: a MotionPlayer with one body fed by the server's JSON (app/live.py `payload`), on a LiveClock.
 // start() opens the microphone and the app's socket (element data-socket; protocol in app/live_socket.py), streams
 // the speech and plays the motion that comes back; stop() sends the end (the server generates the rest, then closes).
-// push(json) appends the frames a message carries (also the Gradio-microphone fallback's entry); reset() starts a
+// push(json) appends the frames a message carries; reset() starts a
 // new stream. The meter: #live-latency = the server's median (ms) from a block's arrival to its motion being ready,
 // #live-stats = p90 and real-time factor, #live-status. It also measures the latency the visitor sees: for every newly
 // drawn frame f, now - (capture of the first block - SEND_S + f / fps), i.e. from the moment the speech of that
