@@ -31,11 +31,15 @@ def test_a_new_session_lowers_its_own_priority_and_its_autogroup():
     info = json.loads(out.strip().splitlines()[-1])
     assert info["sid"] == info["pid"] != os.getsid(0)                  # a session of its own
     assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 7)
-    mine = read_autogroup()                    # None in sandboxes that report autogroups but show none
-    if AUTOGROUPS.exists() and AUTOGROUPS.read_text().strip() == "1" and mine is not None:
-        assert info["autogroup"].split()[0] != mine.split()[0] and info["autogroup"].endswith("nice 7")
+    mine, theirs = read_autogroup(), info["autogroup"]
+    if AUTOGROUPS.exists() and AUTOGROUPS.read_text().strip() == "1":
+        # Some sandboxes show no autogroup for this process (the file reads empty) yet one for a new session's.
+        if mine is not None:
+            assert theirs is not None and theirs.split()[0] != mine.split()[0]
+        if theirs is not None:
+            assert theirs.endswith("nice 7")
     else:
-        assert info["autogroup"] in (None, mine)
+        assert theirs in (None, mine)
 
 
 def test_an_unreadable_or_empty_autogroup_reads_as_none(tmp_path, monkeypatch):
