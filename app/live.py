@@ -171,5 +171,5 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
         mic.stream(lambda c, s: on_chunk(manager, c, s), [mic, state], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
                    api_name="live_chunk", show_progress="hidden")
-        mic.stop_recording(lambda s: on_stop(s), [state], outs, api_name="live_stop")
+        mic.stop_recording(on_stop, [state], outs, api_name="live_stop")
     return []
