@@ -1,2 +1,2 @@
 """The GestureLSM web app: `python -m app` (or `make demo`). UI only; the work is in
-`gesturelsm.app_service`."""
+`gesturelsm.serve.service`."""

@@ -19,7 +19,7 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run
 
 
 def show_video(page, timeout_ms: float = 300000) -> None:
-    """Wait until the page says the server's mp4 is ready, open its accordion (the page keeps it closed, app/ui.py),
+    """Wait until the page says the server's mp4 is ready, open its accordion (the page keeps it closed, gesturelsm/webapp/ui.py),
     and wait for the <video> element."""
     page.wait_for_function("() => (document.querySelector('#summary') || {}).innerText?.includes('Video ready')",
                            timeout=timeout_ms)
@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     # lazy: the service loads torch, .ui imports gradio; only once the arguments are read
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.serve.service import GestureService, ServiceSettings
 
     from .ui import EXAMPLES, serve_locally
 

@@ -33,10 +33,10 @@ def peak_mb():
 
 
 from pathlib import Path
-from gesturelsm.app_checks import textgrid_words
+from gesturelsm.serve.checks import textgrid_words
 from gesturelsm.align.textgrid import read_result
 from gesturelsm.audio import load_audio
-from gesturelsm.limits import transcript_problems
+from gesturelsm.serve.limits import transcript_problems
 kind, path, max_s = sys.argv[1], sys.argv[2], float(sys.argv[3])
 t0 = time.perf_counter()                      # imports are not timed
 try:

@@ -98,8 +98,8 @@ def run(args) -> dict:
     from playwright.sync_api import sync_playwright
 
     from app.screenshot import CHROMIUM_ARGS
-    from app.ui import serve_locally
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.webapp.ui import serve_locally
+    from gesturelsm.serve.service import GestureService, ServiceSettings
 
     torch.set_num_threads(1)
     work = Path(args.workdir)

@@ -40,26 +40,26 @@ def rss_mb() -> float:
 
 def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float) -> dict:
     from gesturelsm.live import StreamingGenerator
-    from gesturelsm.live.stream import SR
+    from gesturelsm.constants import SAMPLE_RATE
 
-    n = int(round(chunk_ms * SR / 1000))
+    n = int(round(chunk_ms * SAMPLE_RATE / 1000))
     gen = StreamingGenerator(pipe, cfg)
     lat, mem = [], []
     c0, t0 = time.process_time(), time.perf_counter()
     for a in range(0, len(audio), n):
         chunk = audio[a:a + n]
-        arrival = t0 + (a + len(chunk)) / SR
+        arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
         time.sleep(max(0.0, arrival - time.perf_counter()))
         for mc in gen.feed(chunk, arrival):
             lat += mc.latencies
-        mem.append((a / SR, rss_mb()))
+        mem.append((a / SAMPLE_RATE, rss_mb()))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    behind = gen.n_in * 30 / SR - gen.emitted                            # frames of audio without motion yet
+    behind = gen.n_in * 30 / SAMPLE_RATE - gen.emitted                            # frames of audio without motion yet
     m = np.array(mem)
     first = m[m[:, 0] <= 60, 1]
-    return {"lat": np.array(lat), "cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SR), "rtf": len(audio) / SR / gen.compute_s,
+    return {"lat": np.array(lat), "cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
             "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(),
-            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SR}
+            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
 
 
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:

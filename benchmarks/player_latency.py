@@ -152,8 +152,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from app.measure import speech
     from app.screenshot import CHROMIUM_ARGS
-    from app.ui import serve_locally
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.webapp.ui import serve_locally
+    from gesturelsm.serve.service import GestureService, ServiceSettings
     from gesturelsm.asr.source import RECENT
 
     torch.set_num_threads(1)

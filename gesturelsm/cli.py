@@ -9,7 +9,7 @@ import argparse
 import importlib
 import sys
 
-from .errors import GestureError, UserError  # noqa: F401 (UserError: importable from here as before)
+from .errors import GestureError
 
 # module paths of subcommands; each has add_parser(subparsers)
 SUBCOMMANDS: tuple[str, ...] = (

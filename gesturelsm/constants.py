@@ -1,9 +1,11 @@
-"""Conventions shared by the whole package, defined once: speech is 16 kHz mono, motion is 30 frames per second;
-and where the shipped checkpoints and body model live."""
+"""Conventions shared by the whole package, defined once: speech is 16 kHz mono, motion is 30 frames per second,
+progress is reported as (fraction, message); and where the shipped checkpoints and body model live."""
 from pathlib import Path
+from typing import Callable
 
 SAMPLE_RATE = 16_000        # Hz: every audio array inside the package
 FPS = 30                    # motion frames per second (BEAT2's rate)
+Progress = Callable[[float, str], None]     # progress callbacks: (fraction done 0-1, what is being done)
 
 
 def _shipped_assets() -> Path:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import torch
@@ -18,7 +18,7 @@ import torch
 from .align import align_words
 from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, resample, to_mono
-from .constants import ASSETS
+from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
@@ -38,7 +38,6 @@ ALL_FACTS = {**FACTS, **REFERENCE_FACTS}
 MIN_SECONDS = 0.5
 MAX_CFG = 10.0
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
-Progress = Callable[[float, str], None]
 
 
 @dataclass

@@ -7,9 +7,12 @@ is an executable. Here:
   (resume states and EMAGE's encoder weights need no more); anything else is a `ValueError` saying so.
 - `load_npz`: every member of an .npz; plain arrays are read with `allow_pickle=False`, and members that
   are pickled object arrays (SMPL-X files carry a few, e.g. dicts of joint names) are unpickled by
-  `PlainDataUnpickler`, which allows numpy's array/dtype/scalar reconstruction and nothing else (dicts,
-  lists, strings and numbers need no global). A pickle naming any other global is refused
-  (`UnsafePickleError`) before that global is looked up, so its code never runs.
+  `PlainDataUnpickler`.
+- `PlainDataUnpickler`: the one allow-list for pickles, `ALLOWED_GLOBALS`: numpy's array/dtype/scalar
+  reconstruction and plain containers (dicts, lists, strings and numbers need no global), plus the stand-in
+  classes a caller names (the authors' vocabulary, `reference/safe_load.py`, becomes an inert record). A pickle
+  naming any other global is refused (`UnsafePickleError`) before that global is looked up, so its code never
+  runs.
 """
 from __future__ import annotations
 
@@ -19,14 +22,17 @@ import pickle
 import re
 import zipfile
 from pathlib import Path
-from typing import Any
+from typing import IO, Any, Mapping
 
 import numpy as np
 
 ALLOWED_GLOBALS = {
     ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
     ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
-    ("numpy", "ndarray"), ("numpy", "dtype"), ("collections", "OrderedDict"),
+    ("numpy", "ndarray"), ("numpy", "dtype"),
+    ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer"),
+    ("collections", "OrderedDict"), ("collections", "defaultdict"), ("builtins", "set"), ("builtins", "frozenset"),
+    ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple"),
 }
 
 
@@ -35,9 +41,19 @@ class UnsafePickleError(ValueError):
 
 
 class PlainDataUnpickler(pickle.Unpickler):
+    """Builds plain data only: ALLOWED_GLOBALS, and `stand_ins` ({(module, name): class}) in place of the classes
+    they name."""
+
+    def __init__(self, file: IO[bytes], stand_ins: Mapping[tuple[str, str], type] | None = None):
+        super().__init__(file)
+        self.stand_ins = dict(stand_ins or {})
+
     def find_class(self, module: str, name: str) -> Any:
+        if (module, name) in self.stand_ins:
+            return self.stand_ins[module, name]
         if (module, name) not in ALLOWED_GLOBALS:
-            raise UnsafePickleError(f"it contains a pickled reference to {module}.{name}, which is not plain data")
+            raise UnsafePickleError(f"it contains a pickled reference to {module}.{name}, which is not allowed "
+                                    "(only plain data is read)")
         return super().find_class(module, name)
 
 

@@ -97,7 +97,7 @@ def build_tiny_assets(root, steps: int = 20, batch_size: int = 8, warmup: int = 
 @contextlib.contextmanager
 def served(service) -> Iterator[str]:
     """The app over `service`, served from this process (as `python -m app` serves it); yields its local URL."""
-    from app.ui import serve_locally
+    from gesturelsm.webapp.ui import serve_locally
 
     demo, url = serve_locally(service)
     try:
@@ -111,8 +111,8 @@ def shipped_service(workdir):
     the in-browser player's bundle (built by scripts/setup.sh with npm) are missing."""
     import pytest
 
-    from app.motion_player import BUNDLE
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.serve.service import GestureService, ServiceSettings
     from gesturelsm.constants import ASSETS
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():

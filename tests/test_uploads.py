@@ -12,7 +12,7 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.audio import AudioError, AudioTooLongError, load_audio
-from gesturelsm.uploads import FLAC, MP3, MP4, OGG, WAV, WEBM, probe_duration, sniff_bytes, sniff_container
+from gesturelsm.serve.uploads import FLAC, MP3, MP4, OGG, WAV, WEBM, probe_duration, sniff_bytes, sniff_container
 
 from _hostile import playlist_naming, silent_flac
 

@@ -25,9 +25,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..align import Word, align_words
+from ..constants import SAMPLE_RATE
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
 
-SAMPLE_RATE = 16_000
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
 # Greedy decoding: on the three real BEAT2 takes it recovered 556 of 587 MFA words against 555 with beam 5, onsets
 # 80 ms from MFA against 83, in 1.8-2.0 instead of 2.5-3.0 s per minute of speech, with a mean log-probability of

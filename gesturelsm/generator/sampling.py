@@ -10,17 +10,15 @@ unconditional CFG passes run as one batch. The last window is padded with silenc
 from __future__ import annotations
 
 import math
-from typing import Callable
 
 import torch
 import torch.nn.functional as F
 
+from ..constants import Progress
 from ..flows import make_method
 from ..tokenizer.model import quantize_regions
 from .data import samples_for
 from .model import GestureGenerator
-
-Progress = Callable[[float, str], None]
 
 
 def window_layout(num_latents: int, t: int, s: int) -> list[int]:

@@ -12,10 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..audio import load_audio
+from ..constants import SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..motion.sequence import MotionSequence
 from ..pipeline import GesturePipeline
-from .stream import SR, LiveConfig, MotionChunk, StreamingGenerator
+from .stream import LiveConfig, MotionChunk, StreamingGenerator
 
 
 @dataclass
@@ -41,7 +42,7 @@ def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_m
              realtime: bool = False) -> LiveRun:
     """Feed `audio` (N,) 16 kHz in chunks of `chunk_ms`; with `realtime` chunk k arrives (and is fed) when its last
     sample would have been spoken, else all as fast as possible (then latency is compute only)."""
-    n = max(1, int(round(chunk_ms * SR / 1000)))
+    n = max(1, int(round(chunk_ms * SAMPLE_RATE / 1000)))
     gen = StreamingGenerator(pipe, config)
     out: list[MotionChunk] = []
     t0 = time.perf_counter()
@@ -49,12 +50,12 @@ def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_m
         chunk = audio[a:a + n]
         arrival = None
         if realtime:
-            arrival = t0 + (a + len(chunk)) / SR
+            arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
             time.sleep(max(0.0, arrival - time.perf_counter()))
         out += gen.feed(chunk, arrival)
     out += gen.finish()
     lat = np.array([x for c in out for x in c.latencies])
-    return LiveRun(out, lat, len(audio) / SR, time.perf_counter() - t0, gen.compute_s)
+    return LiveRun(out, lat, len(audio) / SAMPLE_RATE, time.perf_counter() - t0, gen.compute_s)
 
 
 def add_parser(sub) -> None:
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     torch.set_num_threads(max(1, args.threads))
 
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[cfg.method], warm_up=False)   # audio only
-    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SR).astype(np.float32))  # JIT outside the timing
+    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))  # JIT outside the timing
     if not 1 <= cfg.steps <= 128:
         raise ValueError(f"--steps must be from 1 to 128 (got {cfg.steps})")
     res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)

@@ -21,7 +21,8 @@ from collections import deque
 import numpy as np
 import torch
 
-from .stream import SR, LiveConfig, MotionChunk, StreamingGenerator
+from ..constants import SAMPLE_RATE
+from .stream import LiveConfig, MotionChunk, StreamingGenerator
 
 LATENCY_KEEP = 20_000
 _END = object()
@@ -103,8 +104,8 @@ class LiveSession:
         g = self.gen
         return {"median_latency_ms": float(np.median(lat) * 1000) if len(lat) else None,
                 "p90_latency_ms": float(np.percentile(lat, 90) * 1000) if len(lat) else None,
-                "real_time_factor": (g.n_in / SR) / g.compute_s if g.compute_s > 0 else None,
-                "frames": g.emitted, "audio_seconds": g.n_in / SR, "dropped_chunks": self.dropped,
+                "real_time_factor": (g.n_in / SAMPLE_RATE) / g.compute_s if g.compute_s > 0 else None,
+                "frames": g.emitted, "audio_seconds": g.n_in / SAMPLE_RATE, "dropped_chunks": self.dropped,
                 "running": self.running, "error": self.error}
 
     # ---- worker ----------------------------------------------------------------------------------------------

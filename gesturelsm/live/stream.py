@@ -61,6 +61,7 @@ from typing import Iterable, Iterator
 import numpy as np
 import torch
 
+from ..constants import FPS, SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM
 from ..flows import make_method
@@ -68,9 +69,7 @@ from ..flows.base import inpainting
 from ..generator.data import samples_for
 from ..generator.sampling import decode_latents
 from ..motion.regions import TRANS_OFFSET, join_regions
-from ..motion.sequence import FPS, MotionSequence
-
-SR = 16_000
+from ..motion.sequence import MotionSequence
 
 
 @dataclass(frozen=True)
@@ -157,7 +156,7 @@ class StreamingGenerator:
         if self.finished:
             return []
         self.finished = True
-        T = self.n_in * FPS // SR
+        T = self.n_in * FPS // SAMPLE_RATE
         keep = samples_for(T) - self.a0                                 # offline trims the audio to T frames
         self.audio, self.n_in = self.audio[:max(keep, 0)], samples_for(T)
         L = -(-T // 4)
@@ -177,7 +176,7 @@ class StreamingGenerator:
     # ---- one window --------------------------------------------------------------------------------------
     def _channels(self, a: int, b: int, avail: int) -> torch.Tensor:
         """(2, b - a) channels of samples [a, b) from the audio before sample `avail` (zeros past it)."""
-        lo = max(self.a0, a - int(self.cfg.context_s * SR))
+        lo = max(self.a0, a - int(self.cfg.context_s * SAMPLE_RATE))
         hi = min(avail, b)
         ch = np.zeros((2, b - a), np.float32)
         if hi > a:
@@ -252,7 +251,7 @@ class StreamingGenerator:
         motion = MotionSequence.from_features(feats, start_xz=start_xz)
         self.xz = (float(motion.trans[-1, 0]), float(motion.trans[-1, 2]))
         now = time.perf_counter()
-        chunk = MotionChunk(motion, self.emitted, now, audio_ahead_s=(self.n_in - samples_for(stop)) / SR)
+        chunk = MotionChunk(motion, self.emitted, now, audio_ahead_s=(self.n_in - samples_for(stop)) / SAMPLE_RATE)
         while self.arrivals and (self.arrivals[0][0] <= samples_for(stop) or T is not None):
             chunk.latencies.append(now - self.arrivals.popleft()[1])
         self.emitted = stop
@@ -267,7 +266,7 @@ class StreamingGenerator:
         if keep_lat > self.lat0:
             self.lat = self.lat[:, keep_lat - self.lat0:]
             self.lat0 = keep_lat
-        keep_a = samples_for(4 * w0) - int(self.cfg.context_s * SR)
+        keep_a = samples_for(4 * w0) - int(self.cfg.context_s * SAMPLE_RATE)
         if keep_a > self.a0:
             self.audio = self.audio[keep_a - self.a0:]
             self.a0 = keep_a

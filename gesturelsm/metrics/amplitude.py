@@ -25,11 +25,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import torch
 
+from ..constants import FPS
 from ..motion.regions import REGIONS
 
 PELVIS, LEFT_WRIST, RIGHT_WRIST = 0, 20, 21
 RAISED_M = 0.25
-FPS = 30
 
 
 @dataclass(frozen=True)

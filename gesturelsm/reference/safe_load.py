@@ -1,19 +1,20 @@
 """Reading the released files without executing anything they contain.
 
-Tensors: torch.load(weights_only=True) (torch's own allow-list: tensors, dicts, lists, numbers, strings).
-Vocabulary pickle: a restricted unpickler that builds only numpy arrays, plain containers and the
-reference's `Vocab` class (as an inert attribute bag); any other global (os.system, builtins.eval, ...)
-is refused before it is called.
+Tensors: `gesturelsm.safe_load.load_tensors` (torch's weights_only allow-list: tensors, dicts, lists, numbers,
+strings). Vocabulary pickle: `gesturelsm.safe_load.PlainDataUnpickler`, which builds only numpy arrays, plain
+containers and the reference's `Vocab` class (as an inert attribute bag); any other global (os.system,
+builtins.eval, ...) is refused before it is called.
 """
 from __future__ import annotations
 
 import io
 import pickle
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
+
+from ..safe_load import PlainDataUnpickler, load_tensors
 
 
 class ReferenceFileError(ValueError):
@@ -22,14 +23,6 @@ class ReferenceFileError(ValueError):
 
 VOCAB_CLASS_MODULES = {"dataloaders.build_vocab", "models.utils.build_vocab", "utils.build_vocab", "build_vocab",
                        "__main__"}
-NUMPY_GLOBALS = {
-    ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
-    ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
-    ("numpy", "ndarray"), ("numpy", "dtype"),
-    ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer"),
-}
-BUILTINS = {("collections", "OrderedDict"), ("collections", "defaultdict"), ("builtins", "set"),
-            ("builtins", "frozenset"), ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple")}
 
 
 class VocabRecord:
@@ -41,20 +34,12 @@ class VocabRecord:
         self.__dict__.update(state)
 
 
-class _RestrictedUnpickler(pickle.Unpickler):
-    def find_class(self, module: str, name: str) -> Any:
-        if (module, name) in NUMPY_GLOBALS or (module, name) in BUILTINS:
-            return super().find_class(module, name)
-        if name == "Vocab" and module in VOCAB_CLASS_MODULES:
-            return VocabRecord
-        raise pickle.UnpicklingError(f"refers to {module}.{name}, which is not allowed")
-
-
 def load_vocab(path: str | Path) -> tuple[dict[str, int], np.ndarray | None]:
     """-> (word2index, initial 300-d embedding or None) from the reference's vocab.pkl."""
     path = Path(path)
     try:
-        obj = _RestrictedUnpickler(io.BytesIO(path.read_bytes())).load()
+        stand_ins = {(module, "Vocab"): VocabRecord for module in VOCAB_CLASS_MODULES}
+        obj = PlainDataUnpickler(io.BytesIO(path.read_bytes()), stand_ins).load()
     except FileNotFoundError:
         raise ReferenceFileError(f"vocabulary file not found: {path}") from None
     except Exception as exc:  # noqa: BLE001 - any failure of an untrusted file is a refusal
@@ -73,7 +58,7 @@ def load_state(path: str | Path, keys: tuple[str, ...]) -> dict[str, torch.Tenso
     if not path.exists():
         raise ReferenceFileError(f"file not found: {path}")
     try:
-        obj = torch.load(str(path), map_location="cpu", weights_only=True)
+        obj = load_tensors(path)
     except Exception as exc:  # noqa: BLE001
         raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({str(exc).splitlines()[0]})") from None
     if isinstance(obj, dict):

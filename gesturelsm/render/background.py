@@ -37,12 +37,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ..constants import Progress
 from ..errors import RenderError
 from ..motion.sequence import MotionSequence
 from .frames import RenderWarning
 
 log = logging.getLogger(__name__)
-Progress = Callable[[float, str], None]
 AUTOGROUP = Path("/proc/self/autogroup")
 _running: set[subprocess.Popen] = set()
 _lock = threading.Lock()

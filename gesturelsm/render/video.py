@@ -13,17 +13,16 @@ import tempfile
 import time
 import warnings
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from ..audio import SAMPLE_RATE, AudioError, load_audio, to_mono
-from ..motion.sequence import FPS
+from ..constants import FPS, Progress
 from .camera import Camera
 from .frames import MotionLike, RenderWarning, iter_frames, prepare_motions
 from .style import RenderStyle
 
-Progress = Callable[[float, str], None]
 AudioLike = np.ndarray | str | Path | None
 
 

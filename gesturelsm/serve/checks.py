@@ -1,5 +1,5 @@
 """The web request's checks that run before any work (the app service raises its error from the problems
-these return; see `gesturelsm.limits` for the rules and the numbers).
+these return; see `gesturelsm.serve.limits` for the rules and the numbers).
 
 - `check_request`: every field of a `Request` as a browser or API client may send it -> a normalised
   request and the list of problems, one line each, all fields at once.
@@ -14,8 +14,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
+from ..align import TextGridError, read_result
+from ..pipeline import MAX_CFG
 from . import limits
-from .align import TextGridError, read_result
 from .limits import SEED_MAX, method_list, one_of, real_number, switch, transcript_problems, whole_number
 
 def method_steps(raw: Any, chosen: Sequence[str] | None, facts: Mapping[str, Any], p: list[str]) -> dict | None:
@@ -41,7 +42,7 @@ def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices
     p: list[str] = []
     chosen = method_list(req.methods, methods, p)
     steps = method_steps(req.steps, chosen, facts, p)
-    cfg = real_number(req.cfg, "CFG scale", 0.0, 10.0, p)
+    cfg = real_number(req.cfg, "CFG scale", 0.0, MAX_CFG, p)
     seed = whole_number(req.seed, "Seed", 0, SEED_MAX, p)
     smoothing = one_of(req.smoothing, "Smoothing", smoothing_choices, p)
     size = whole_number(req.size, "Video size", min(sizes), max(sizes), p)
@@ -87,6 +88,3 @@ def textgrid_words(path: str | Path, seconds: float) -> tuple[list | None, list[
         notes.append(f"{len(words) - len(inside)} of the TextGrid's {len(words)} words start after the end of the "
                      f"speech ({seconds:.1f} s) and were ignored.")
     return inside, [], notes
-
-
-__all__ = ["check_request", "textgrid_words"]

@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
     # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
     # answer without them
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.serve.service import GestureService, ServiceSettings
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,

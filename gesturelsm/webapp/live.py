@@ -2,11 +2,11 @@
 
     with gr.Blocks() as demo:
         ...
-        routes = add_live_tab(LiveManager(pipe, max_sessions=2), body, cache)   # from app/ui.py, in the Blocks
-    demo.launch(app_kwargs={"routes": routes})                                  # app/ui.py `launch` does this
+        routes = add_live_tab(LiveManager(pipe, max_sessions=2), body, cache)   # from gesturelsm/webapp/ui.py, in the Blocks
+    demo.launch(app_kwargs={"routes": routes})                                  # gesturelsm/webapp/ui.py `launch` does this
 
 With the player bundle built (the page's case), the tab is the in-browser player with Record / Stop buttons and the
-meter, and the microphone goes over the app's own WebSocket (app/live_socket.py): raw PCM in 50 ms blocks, motion
+meter, and the microphone goes over the app's own WebSocket (gesturelsm/webapp/live_socket.py): raw PCM in 50 ms blocks, motion
 pushed back the moment it exists. Without the bundle (or for `gradio_client` users: api_name "live_chunk" /
 "live_stop") it is Gradio's streaming microphone, one upload per STREAM_EVERY_S, below.
 Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket or in a `gr.State`; it ends on the stop
@@ -34,7 +34,7 @@ import numpy as np
 from gesturelsm.audio import resample, to_mono
 from gesturelsm.export.player import motion_arrays
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
-from gesturelsm.live.stream import SR
+from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.motion.sequence import MotionSequence
 
 STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
@@ -47,7 +47,7 @@ def to_float(sr: int, data: np.ndarray) -> np.ndarray:
     y = np.asarray(data)
     if np.issubdtype(y.dtype, np.integer):
         y = y.astype(np.float32) / float(np.iinfo(y.dtype).max)
-    return resample(to_mono(y.astype(np.float32)), int(sr), SR).astype(np.float32)
+    return resample(to_mono(y.astype(np.float32)), int(sr), SAMPLE_RATE).astype(np.float32)
 
 
 def payload(session: LiveSession, status: str, body=None) -> tuple[str, str, str]:
@@ -115,7 +115,7 @@ def _delete(session: LiveSession | None) -> None:
 
 def live_player(body, cache: str | Path) -> gr.HTML | None:
     """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`) with
-    its controls and meter, streaming over the app's WebSocket (app/live_socket.py), or None when the player bundle
+    its controls and meter, streaming over the app's WebSocket (gesturelsm/webapp/live_socket.py), or None when the player bundle
     is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
     from gesturelsm.export.player import body_glb
     from gesturelsm.motion.sequence import NUM_BETAS
@@ -141,9 +141,9 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
 
 def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> list:
     """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`); returns the routes to serve with
-    the page (`Blocks.launch(app_kwargs={"routes": ...})`: app/ui.py `launch` does). With `body` (the page's body
+    the page (`Blocks.launch(app_kwargs={"routes": ...})`: gesturelsm/webapp/ui.py `launch` does). With `body` (the page's body
     model), `cache` (where its rest GLB goes) and the player bundle built, the microphone streams over the app's
-    WebSocket (app/live_socket.py, its one route) and the motion plays in the in-browser player `live-player`;
+    WebSocket (gesturelsm/webapp/live_socket.py, its one route) and the motion plays in the in-browser player `live-player`;
     otherwise through Gradio's streaming microphone, shown as numbers (no routes)."""
     if body is not None:
         from gesturelsm.body.model import resolve_body

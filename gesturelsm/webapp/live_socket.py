@@ -8,14 +8,14 @@ chunk the moment the session's worker has it (no polling):
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate)
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
-    server -> client   text   the JSON of app/live.py `payload`  per motion chunk; status "streaming", then "stopped"
+    server -> client   text   the JSON of gesturelsm/webapp/live.py `payload`  per motion chunk; status "streaming", then "stopped"
                                                                  or a message (busy, overloaded, bad input) and close
 
 One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's limit applies (past it the visitor reads
 the busy message), and a closed tab or a dropped connection stops the session at once. A session that ends by itself
 (no audio for its idle timeout, or a failure) sends its reason and closes the socket; a socket that never names its
-sample rate is closed after HELLO_TIMEOUT_S. Served at PATH by `routes(manager, body)` (app/live.py `add_live_tab`
-returns it), passed to the FastAPI app when the page is launched (app/ui.py).
+sample rate is closed after HELLO_TIMEOUT_S. Served at PATH by `routes(manager, body)` (gesturelsm/webapp/live.py `add_live_tab`
+returns it), passed to the FastAPI app when the page is launched (gesturelsm/webapp/ui.py).
 """
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.app_service import GestureService, Outcome
+from gesturelsm.serve.service import GestureService, Outcome
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.export.player import body_glb, player_payload
 from gesturelsm.motion.sequence import NUM_BETAS

@@ -3,7 +3,7 @@
 Gradio's own preprocessing of sliders, numbers and choice lists rounds (`precision=0` turns seed 1.5 into
 2), compares with `<` (a string or None then fails with a generic error and a server traceback) and raises
 its own wording for values outside the choices. The app checks every field itself, before any work, with
-one line per field (`gesturelsm.limits` / `gesturelsm.app_checks`), so `pass_through` replaces the
+one line per field (`gesturelsm.serve.limits` / `gesturelsm.serve.checks`), so `pass_through` replaces the
 component's `preprocess` on that one instance: the component stays a plain Gradio Slider / Number /
 CheckboxGroup / Radio / Dropdown / Checkbox for the page (same block name and class id).
 """

@@ -1,4 +1,4 @@
-"""The page: Gradio Blocks over `gesturelsm.app_service.GestureService` (no logic of its own).
+"""The page: Gradio Blocks over `gesturelsm.serve.service.GestureService` (no logic of its own).
 
 `build_demo(service)` builds everything inside the function, so tests can build and drive it. The main
 action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web app").
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.app_service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
+from gesturelsm.serve.service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
                                     GestureService, Request)
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
@@ -24,7 +24,7 @@ from gesturelsm.pipeline import ALL_FACTS
 
 from . import live, motion_player
 from .raw_inputs import pass_through
-from .lifetime import Sweeper, gradio_delete_cache, sweep_seconds
+from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 
 log = logging.getLogger("gesturelsm.app")
 QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
@@ -101,7 +101,7 @@ class _Handlers:
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                 auto_text=True, *, exports: bool, render: bool = True) -> Request:
-        """Values exactly as sent: the service checks and normalises every field (gesturelsm.app_checks)."""
+        """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
                        steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=cfg, seed=seed,
                        stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text,
@@ -297,7 +297,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
 
 def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
     """Launch with the upload limit and the output folder allowed, and sweep expired outputs on a timer
-    (app.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
+    (gesturelsm.serve.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
     and the live streams and deletes all outputs. Returns what `Blocks.launch` returns."""
     keep = service.settings.keep_minutes
     sweeper = Sweeper(service.cleanup, sweep_seconds(keep), final=lambda: service.cleanup(max_age_s=0)).start()

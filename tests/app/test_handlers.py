@@ -1,4 +1,4 @@
-"""The page's chained events (app/ui.py _Handlers): the video renders in a pool of its own beside generation, and a
+"""The page's chained events (gesturelsm/webapp/ui.py _Handlers): the video renders in a pool of its own beside generation, and a
 video for a request that a newer request of the same page replaced is not rendered, or is stopped mid-way."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import gradio as gr
 
-from app.ui import _Handlers, build_demo
+from gesturelsm.webapp.ui import _Handlers, build_demo
 
 
 def quiet(*args, **kwargs) -> None:

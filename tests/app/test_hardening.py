@@ -15,7 +15,7 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.flows import steps_from_flags
-from gesturelsm.app_service import GestureService, Request, ServiceError
+from gesturelsm.serve.service import GestureService, Request, ServiceError
 
 from _support import speech_like
 
@@ -138,7 +138,7 @@ def test_textgrid_words_partly_after_the_audio_are_dropped_and_said(service, spe
 def test_outputs_are_swept_on_a_timer_and_at_shutdown(service, tmp_path):
     import os
 
-    from app.lifetime import Sweeper
+    from gesturelsm.serve.lifetime import Sweeper
 
     svc = GestureService(service.pipeline, replace(service.settings, workdir=str(tmp_path), keep_minutes=1),
                          service.body)
@@ -156,8 +156,8 @@ def test_outputs_are_swept_on_a_timer_and_at_shutdown(service, tmp_path):
 
 
 def test_gradio_cache_lifetime_follows_keep_minutes(service):
-    from app.lifetime import gradio_delete_cache, sweep_seconds
-    from app.ui import build_demo
+    from gesturelsm.serve.lifetime import gradio_delete_cache, sweep_seconds
+    from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(GestureService(service.pipeline, replace(service.settings, keep_minutes=1), service.body))
     assert demo.delete_cache == (15, 60) == gradio_delete_cache(1)
@@ -208,7 +208,7 @@ def test_load_eight_concurrent_requests_served_then_queue_full(service, tmp_path
     queue of 8. At least 8 are served; the rest are refused with Gradio's 'Queue is full'."""
     from gradio_client import handle_file
 
-    from app.ui import serve_locally
+    from gesturelsm.webapp.ui import serve_locally
 
     wav = tmp_path / "one_second.wav"
     sf.write(wav, speech_like(1.0, seed=11), 16000)

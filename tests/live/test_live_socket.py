@@ -1,4 +1,4 @@
-"""The Live tab's WebSocket (app/live_socket.py), driven by Starlette's test client: int16 PCM in, motion JSON out as
+"""The Live tab's WebSocket (gesturelsm/webapp/live_socket.py), driven by Starlette's test client: int16 PCM in, motion JSON out as
 soon as it exists; every frame of the speech arrives once, in order, whatever the sample rate; Stop generates the rest
 and closes; busy, bad messages and dropped connections end cleanly (no live worker left)."""
 from __future__ import annotations
@@ -17,7 +17,7 @@ from gesturelsm.live.session import LiveManager
 from _support import speech_like
 
 pytest.importorskip("gradio")
-live_socket = pytest.importorskip("app.live_socket")
+live_socket = pytest.importorskip("gesturelsm.webapp.live_socket")
 from starlette.applications import Starlette  # noqa: E402
 from starlette.testclient import TestClient  # noqa: E402
 

@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from gesturelsm.live import LiveConfig, StreamingGenerator
-from gesturelsm.live.stream import SR
+from gesturelsm.constants import SAMPLE_RATE
 
 from _support import assert_follows_loudness, speech_like
 
@@ -28,7 +28,7 @@ def test_equals_offline_when_lookahead_covers_the_window(shipped_pipe):
     with a 16-latent margin too) = the offline windows, seeds and noise draws. The features are the offline ones (the
     incremental features are tested separately), so what remains is float rounding (different batch shapes)."""
     y = speech_like(9.0, seed=1)
-    sp = shipped_pipe.prepare_speech(y, SR)
+    sp = shipped_pipe.prepare_speech(y, SAMPLE_RATE)
 
     class OfflineFeatures(StreamingGenerator):
         def _channels(self, a: int, b: int, avail: int) -> torch.Tensor:
@@ -80,7 +80,7 @@ def test_chunk_size_does_not_change_the_motion(shipped_pipe, n):
 def test_time_locked_and_translation_continuous(shipped_pipe):
     y = speech_like(5.3, seed=4)
     out, poses, trans = streamed(shipped_pipe, y, LiveConfig(steps=1), 3200)
-    assert len(poses) == int(len(y) * 30 // SR)                         # offline frame count: no drift
+    assert len(poses) == int(len(y) * 30 // SAMPLE_RATE)                         # offline frame count: no drift
     for c in out[:-1]:
         assert c.stop % 4 == 0                                          # emitted in whole latents
     step = np.linalg.norm(np.diff(trans[:, [0, 2]], axis=0), axis=1)
@@ -111,7 +111,7 @@ def test_memory_is_bounded_on_long_streams(shipped_pipe):
             g.feed(ch)
         sizes.append((len(g.audio), g.lat.shape[1]))
     t = g.t
-    assert max(s[0] for s in sizes) <= int((cfg.context_s + 2 * t * 4 / 30) * SR)
+    assert max(s[0] for s in sizes) <= int((cfg.context_s + 2 * t * 4 / 30) * SAMPLE_RATE)
     assert max(s[1] for s in sizes) <= t + cfg.decode_context + cfg.commit
     assert g.emitted > 300
 

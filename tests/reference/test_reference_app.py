@@ -10,7 +10,7 @@ import pytest
 import soundfile as sf
 
 from _support import served, speech_like
-from gesturelsm.app_service import TIMING_COLUMNS, GestureService, ServiceSettings
+from gesturelsm.serve.service import TIMING_COLUMNS, GestureService, ServiceSettings
 from gesturelsm.reference.runner import FACE_NOTE, LABELS
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
@@ -30,7 +30,7 @@ def app_url(service):
 
 
 def test_page_offers_the_authors_methods_with_their_labels(service):
-    from app.ui import build_demo
+    from gesturelsm.webapp.ui import build_demo
 
     cfg = build_demo(service).get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
