@@ -24,6 +24,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.evaluation.cli",
     "gesturelsm.live.cli",
     "gesturelsm.reference.cli",
+    "gesturelsm.webapp.cli",
 )
 
 

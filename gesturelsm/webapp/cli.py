@@ -1,12 +1,8 @@
-"""`python -m app`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
+"""`gesturelsm serve` (installed) and `python -m app` (a checkout): the web demo, same flags.
 
-Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
-GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
-GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
-Hugging Face hub's telemetry are switched off before Gradio is imported.
-
-Logging (stderr): one line per refused request (what the visitor must change), per expired-file sweep and
-at shutdown; full tracebacks only for server errors.
+The flags' defaults come from environment variables (the description below lists them). Gradio's analytics and
+the Hugging Face hub's telemetry are switched off, and the hub set offline unless asked otherwise, when the demo
+starts, before Gradio is imported (not when the `gesturelsm` command line merely lists its subcommands).
 """
 from __future__ import annotations
 
@@ -16,9 +12,16 @@ import os
 import signal
 import sys
 
-os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
-os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
-os.environ.setdefault("HF_HUB_OFFLINE", "1")
+DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
+
+Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
+GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
+GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
+Hugging Face hub's telemetry are switched off before Gradio is imported.
+
+Logging (stderr): one line per refused request (what the visitor must change), per expired-file sweep and
+at shutdown; full tracebacks only for server errors.
+"""
 
 
 def _env(name: str, default=None):
@@ -26,9 +29,7 @@ def _env(name: str, default=None):
     return v if v not in (None, "") else default
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m app", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--host", default=_env("GESTURELSM_HOST", "127.0.0.1"),
                    help="address to bind (default 127.0.0.1; 0.0.0.0 serves the network)")
     p.add_argument("--port", type=int, default=int(_env("GESTURELSM_PORT", 7860)), help="port (default 7860)")
@@ -53,17 +54,34 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def build_parser(prog: str = "python -m app") -> argparse.ArgumentParser:
+    return add_arguments(argparse.ArgumentParser(prog=prog, description=DESCRIPTION.format(prog=prog),
+                                                 formatter_class=argparse.RawDescriptionHelpFormatter))
+
+
+def add_parser(subparsers) -> None:
+    """`gesturelsm serve`: the `gesturelsm` command line's entry to the demo."""
+    p = subparsers.add_parser("serve", help="serve the web demo (as `python -m app` in a checkout)",
+                              description=DESCRIPTION.format(prog="gesturelsm serve"),
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(p).set_defaults(func=lambda args: run_demo(args, "gesturelsm serve"))
+
+
 def _interrupt(signum, frame) -> None:
     raise KeyboardInterrupt
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+def run_demo(args: argparse.Namespace, prog: str) -> int:
+    """Load the models, warm them up, and serve the page until stopped (Ctrl-C or SIGTERM)."""
+    os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
+    os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
+    os.environ.setdefault("HF_HUB_OFFLINE", "1")
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
     # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
     # answer without them
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
@@ -71,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         service = GestureService.from_settings(settings)
     except (FileNotFoundError, ValueError) as exc:
-        print(f"python -m app: error: {exc}", file=sys.stderr)
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     if not args.no_warmup:
         service.warmup()
@@ -87,5 +105,5 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:
+    return run_demo(build_parser(prog).parse_args(argv), prog)

@@ -2,13 +2,15 @@
 
     with gr.Blocks() as demo:
         ...
-        routes = add_live_tab(LiveManager(pipe, max_sessions=2), body, cache)   # from gesturelsm/webapp/ui.py, in the Blocks
-    demo.launch(app_kwargs={"routes": routes})                                  # gesturelsm/webapp/ui.py `launch` does this
+        routes = add_live_tab(LiveManager(pipe, max_sessions=2), body, cache,   # from ui.py, in the Blocks
+                          socket_routes=live_socket.routes)
+    demo.launch(app_kwargs={"routes": routes})                               # ui.py `launch` does this
 
 With the player bundle built (the page's case), the tab is the in-browser player with Record / Stop buttons and the
-meter, and the microphone goes over the app's own WebSocket (gesturelsm/webapp/live_socket.py): raw PCM in 50 ms blocks, motion
-pushed back the moment it exists. Without the bundle (or for `gradio_client` users: api_name "live_chunk" /
-"live_stop") it is Gradio's streaming microphone, one upload per STREAM_EVERY_S, below.
+meter, and the microphone goes over the app's own WebSocket (live_socket.py, served at PATH; it sends what
+`payload` returns): raw PCM in 50 ms blocks, motion pushed back the moment it exists. Without the bundle (or for
+`gradio_client` users: api_name "live_chunk" / "live_stop") it is Gradio's streaming microphone, one upload per
+STREAM_EVERY_S, below.
 Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket or in a `gr.State`; it ends on the stop
 button, when the tab closes (the socket closes, or Gradio deletes the state and the delete callback stops the
 session), or when no audio arrived for the session's idle timeout (network drop). When all streams are taken the
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Callable
 
 import gradio as gr
 import numpy as np
@@ -37,6 +40,7 @@ from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveS
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.motion.sequence import MotionSequence
 
+PATH = "/gesturelsm/live"    # where the page's live player opens the app's WebSocket (live_socket.routes serves it)
 STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
                          # fell 3-11 s behind the speech on the loaded 2-core machine (benchmarks/live_browser.py)
 TIME_LIMIT_S = 15 * 60
@@ -115,12 +119,11 @@ def _delete(session: LiveSession | None) -> None:
 
 def live_player(body, cache: str | Path) -> gr.HTML | None:
     """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`) with
-    its controls and meter, streaming over the app's WebSocket (gesturelsm/webapp/live_socket.py), or None when the player bundle
+    its controls and meter, streaming over the app's WebSocket (live_socket.py), or None when the player bundle
     is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
     from gesturelsm.export.player import body_glb
     from gesturelsm.motion.sequence import NUM_BETAS
 
-    from .live_socket import PATH
     from .motion_player import BUNDLE, file_url
 
     if not BUNDLE.exists():
@@ -139,12 +142,13 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
     return gr.HTML("", html_template=html, js_on_load=js, elem_id="live-player-box", padding=False)
 
 
-def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None) -> list:
+def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None,
+                 socket_routes: Callable[[LiveManager, object], list] | None = None) -> list:
     """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`); returns the routes to serve with
-    the page (`Blocks.launch(app_kwargs={"routes": ...})`: gesturelsm/webapp/ui.py `launch` does). With `body` (the page's body
-    model), `cache` (where its rest GLB goes) and the player bundle built, the microphone streams over the app's
-    WebSocket (gesturelsm/webapp/live_socket.py, its one route) and the motion plays in the in-browser player `live-player`;
-    otherwise through Gradio's streaming microphone, shown as numbers (no routes)."""
+    the page (`Blocks.launch(app_kwargs={"routes": ...})`: ui.py `launch` does). With `body` (the page's body
+    model), `cache` (where its rest GLB goes), `socket_routes` (`live_socket.routes`) and the player bundle built,
+    the microphone streams over the app's WebSocket (its one route) and the motion plays in the in-browser player
+    `live-player`; otherwise through Gradio's streaming microphone, shown as numbers (no routes)."""
     if body is not None:
         from gesturelsm.body.model import resolve_body
 
@@ -155,10 +159,9 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
                     f"speech after each moment, and generates {manager.config.commit * 4 / 30:.2g} s of motion at a "
                     "time). Press stop to end the "
                     f"stream. At most {manager.max_sessions} live streams run at once.")
-        if body is not None and cache is not None and live_player(body, cache) is not None:
-            from .live_socket import routes
-
-            return routes(manager, body)    # the socket path: everything else is in the player's HTML
+        socket = body is not None and cache is not None and socket_routes is not None
+        if socket and live_player(body, cache) is not None:
+            return socket_routes(manager, body)    # the socket path: everything else is in the player's HTML
         state = gr.State(None, delete_callback=_delete)
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
                        waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page

@@ -8,14 +8,14 @@ chunk the moment the session's worker has it (no polling):
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate)
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
-    server -> client   text   the JSON of gesturelsm/webapp/live.py `payload`  per motion chunk; status "streaming", then "stopped"
+    server -> client   text   the JSON of live.py `payload`  per motion chunk; status "streaming", then "stopped"
                                                                  or a message (busy, overloaded, bad input) and close
 
 One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's limit applies (past it the visitor reads
 the busy message), and a closed tab or a dropped connection stops the session at once. A session that ends by itself
 (no audio for its idle timeout, or a failure) sends its reason and closes the socket; a socket that never names its
-sample rate is closed after HELLO_TIMEOUT_S. Served at PATH by `routes(manager, body)` (gesturelsm/webapp/live.py `add_live_tab`
-returns it), passed to the FastAPI app when the page is launched (gesturelsm/webapp/ui.py).
+sample rate is closed after HELLO_TIMEOUT_S. Served at PATH (live.py: the page's player names it) by
+`routes(manager, body)` (live.py `add_live_tab` returns it), passed to the FastAPI app when the page is launched (ui.py).
 """
 from __future__ import annotations
 
@@ -29,9 +29,8 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from gesturelsm.audio import MAX_SAMPLE_RATE
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
-from .live import payload, to_float
+from .live import PATH, payload, to_float
 
-PATH = "/gesturelsm/live"
 RATES = (8000, MAX_SAMPLE_RATE)  # sample rates accepted from a page (an AudioContext's range is 3000-768000)
 MAX_MESSAGE_S = 5.0             # longest audio in one message
 HELLO_TIMEOUT_S = 10.0          # a socket that names no sample rate by then is closed

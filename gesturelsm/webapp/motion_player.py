@@ -1,7 +1,8 @@
 """The page's in-browser motion player: the Gradio side of app/player/ (three.js, bundled offline).
 
 `player_component()` puts the player (element id `motion-player`) in the page; its JavaScript bundle
-(app/player/dist/player.js, built by scripts/setup.sh with npm + esbuild, no CDN) is served by the app itself.
+(app/player/dist/player.js in a checkout, built by scripts/setup.sh with npm + esbuild, no CDN; `player/player.js`
+inside this package in a wheel built with it) is served by the app itself.
 `payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB once per shape, one
 compact motion file per method) and returns the JSON the page hands to `gesturelsmPlayer.load(payload)`.
 """
@@ -11,13 +12,22 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.serve.service import GestureService, Outcome
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.export.player import body_glb, player_payload
 from gesturelsm.motion.sequence import NUM_BETAS
+from gesturelsm.serve.request import Result
+from gesturelsm.serve.service import GestureService
 
-PLAYER_DIR = Path(__file__).resolve().parent / "player"
-BUNDLE = PLAYER_DIR / "dist" / "player.js"
+
+def _bundle() -> Path:
+    """The built player: inside an installed wheel it is this package's `player/player.js` (setup.py maps the
+    checkout's app/player/dist there when it was built); in a checkout or an editable install, app/player/dist."""
+    here = Path(__file__).resolve().parent
+    installed = here / "player" / "player.js"
+    return installed if installed.is_file() else here.parents[1] / "app" / "player" / "dist" / "player.js"
+
+
+BUNDLE = _bundle()
 ELEMENT = ('<div id="motion-player" data-state="empty" data-frames="0" data-frame="0" data-fps="0" '
            'data-preload="{preload}"></div>')
 MISSING = ('<div id="motion-player" data-state="empty" data-frames="0"><p>The in-browser player is not built '
@@ -53,16 +63,14 @@ def player_component(service: GestureService) -> gr.HTML:
                    elem_id="motion-player-box", padding=False)
 
 
-def payload(service: GestureService, out: Outcome) -> dict | None:
+def payload(service: GestureService, out: Result) -> dict | None:
     """Write the player's files for a generated request (its folder) and return the player's payload."""
     import soundfile as sf
 
     if not out.motions:
         return None
-    folder = Path(out.render_args["folder"])
+    folder = out.job.folder
     wav = folder / "speech.wav"
-    if out.audio is not None:
-        sf.write(wav, out.audio, SAMPLE_RATE, subtype="PCM_16")
-    return player_payload(list(out.motions.values()), out.labels, list(out.motions), service.body, folder,
-                          service.workdir / "player-bodies", url=file_url,
-                          audio=wav if out.audio is not None else None)
+    sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
+    return player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
+                          service.workdir / "player-bodies", url=file_url, audio=wav)

@@ -14,17 +14,18 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.serve.service import (DEFAULT_SMOOTHING, METHOD_LABELS, SMOOTHING_WINDOWS, TIMING_COLUMNS, VIDEO_SIZES,
-                                    GestureService, Request)
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.flows import FACTS, steps_from_flags
-from gesturelsm.render.background import RenderCancelled
+from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from gesturelsm.pipeline import ALL_FACTS
-
-from . import live, motion_player
-from .raw_inputs import pass_through
+from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
+from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
+from gesturelsm.serve.service import GestureService
+
+from . import live, live_socket, motion_player
+from .raw_inputs import pass_through
 
 log = logging.getLogger("gesturelsm.app")
 QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
@@ -81,22 +82,22 @@ class _Handlers:
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
 
-    def _mark_newest(self, request: gr.Request | None, out) -> None:
+    def _mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
             return
         with self._lock:
-            self.newest[request.session_hash] = out.render_args.get("folder")
+            self.newest[request.session_hash] = out.job.folder
             self.newest.move_to_end(request.session_hash)
             while len(self.newest) > 10000:
                 self.newest.popitem(last=False)
 
-    def _replaced(self, request: gr.Request | None, out) -> bool:
+    def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
         if request is None:
             return False
         with self._lock:
             newest = self.newest.get(request.session_hash)
-        return newest is not None and newest != out.render_args.get("folder")
+        return newest is not None and newest != out.job.folder
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
@@ -113,14 +114,14 @@ class _Handlers:
         log.info("request refused: %s", " | ".join(str(exc).splitlines()))
         raise gr.Error(str(exc), duration=None, print_exception=False) from None
 
-    def _run(self, req: Request, progress):
+    def _run(self, req: Request, progress) -> Result:
         try:
             return self.service.run(req, progress=lambda f, m: progress(f, desc=m))
         except GestureError as exc:
             self._refuse(exc)
 
     @staticmethod
-    def _files(out):
+    def _files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
     def prefetch(self, audio, text, auto_text) -> None:
@@ -140,29 +141,33 @@ class _Handlers:
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
         return motion_player.payload(self.service, out), out.rows, out.summary, out, recognised
 
-    def show_video(self, out, request: gr.Request = None, progress=gr.Progress()):
+    def _kept(self, request: gr.Request | None, out: Result):
+        """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
+        return gr.skip() if self._replaced(request, out) else out
+
+    def show_video(self, out: Result | None, request: gr.Request = None, progress=gr.Progress()):
         """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
-        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). It
-        writes no state: the outcome is rendered in place, and the page's state may already hold a newer request."""
+        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). The
+        rendered result goes back into the page's state only while no newer request has replaced it there."""
         if out is None:
-            return None, gr.skip(), gr.skip()
+            return None, gr.skip(), gr.skip(), gr.skip()
         if self._replaced(request, out):
-            return gr.skip(), gr.skip(), gr.skip()
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         try:
-            self.service.render(out, progress=lambda f, m: progress(f, desc=m),
-                                cancelled=lambda: self._replaced(request, out))
+            out = self.service.render(out, progress=lambda f, m: progress(f, desc=m),
+                                      cancelled=lambda: self._replaced(request, out))
         except RenderCancelled:
             log.info("a video was not finished: the page asked for newer motion")
-            return gr.skip(), gr.skip(), gr.skip()
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self._refuse(exc)
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads..."
+        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
-    def add_exports(self, out, request: gr.Request = None):
+    def add_exports(self, out: Result | None, request: gr.Request = None):
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
-            return gr.skip(), gr.skip(), gr.skip()
-        self.service.export(out)
-        return *self._files(out), out.summary
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
+        out = self.service.export(out)
+        return *self._files(out), out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=True, progress=gr.Progress()):
@@ -265,7 +270,8 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         manager, routes = None, []
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
-            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies")
+            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
+                                       socket_routes=live_socket.routes)
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())
@@ -279,10 +285,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                      concurrency_limit=1, concurrency_id="prefetch")
         button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
             .then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, state, [video, table, summary], api_name="show_video", api_visibility="private",
-                  show_progress="hidden", **render) \
-            .then(h.add_exports, state, [files, view, summary], api_name="add_exports", api_visibility="private",
-                  **render)
+            .then(h.show_video, state, [video, table, summary, state], api_name="show_video",
+                  api_visibility="private", show_progress="hidden", **render) \
+            .then(h.add_exports, state, [files, view, summary, state], api_name="add_exports",
+                  api_visibility="private", **render)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
         show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False) \
             .then(lambda out: str(out.glb) if out is not None and out.glb else None, glb, view, queue=False,
