@@ -66,7 +66,8 @@ def main(argv: list[str] | None = None) -> int:
     from gradio_client import Client, handle_file
 
     # lazy: the service loads torch and the checkpoints, .ui imports gradio; only once the arguments are read
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     from .ui import serve_locally
 

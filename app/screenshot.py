@@ -39,7 +39,8 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     # lazy: the service loads torch, .ui imports gradio; only once the arguments are read
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     from .ui import EXAMPLES, serve_locally
 

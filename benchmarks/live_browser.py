@@ -99,7 +99,8 @@ def run(args) -> dict:
 
     from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.webapp.ui import serve_locally
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     torch.set_num_threads(1)
     work = Path(args.workdir)

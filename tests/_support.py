@@ -112,7 +112,8 @@ def shipped_service(workdir):
     import pytest
 
     from gesturelsm.webapp.motion_player import BUNDLE
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
     from gesturelsm.constants import ASSETS
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():

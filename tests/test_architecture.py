@@ -1,17 +1,21 @@
 """The package's import graph flows downward only: a module may import from its own part of the package or
 from a lower floor, never from the same floor's other parts (sideways) or from above. Floors, lowest first;
-a part is a top-level module or subpackage of gesturelsm. Imports inside functions count too."""
+a part is a top-level module or subpackage of gesturelsm, or one module of a subpackage that spans floors
+(SPLIT: serve's request rules and upload sniffing sit on the lowest floor, its service above the pipeline).
+And no module imports itself through others: the module graph has no circle, within a part either.
+Imports inside functions count too."""
 from __future__ import annotations
 
 import ast
+import sys
 from pathlib import Path
 
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "limits", "uploads", "safe_load"},  # conventions, the error family, request limits,
-                                                               # upload format sniffing, tensors-only loading
+    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load"},  # conventions, the error family,
+                                                               # request limits, upload format sniffing, safe loading
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
                                                                # fp32 linear layers through oneDNN
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
@@ -20,17 +24,23 @@ FLOORS: list[set[str]] = [
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"app_checks"},                                            # a web request's fields checked before any work
-    {"app_service", "study", "evaluation", "pipeline_cli", "live"},   # what uses the pipeline (live: streaming)
+    {"serve", "study", "evaluation", "pipeline_cli", "live"},  # what uses the pipeline (serve: one web request,
+                                                               # its checks and files; live: streaming)
+    {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm
 ]
 FLOOR = {part: i for i, parts in enumerate(FLOORS) for part in parts}
+SPLIT = {p.split(".")[0] for p in FLOOR if "." in p}          # subpackages whose modules have floors of their own
 
 
 def part_of(module: str) -> str:
-    """'gesturelsm.render.frames' -> 'render'; 'gesturelsm' (the package's __init__) -> ''."""
+    """'gesturelsm.render.frames' -> 'render'; 'gesturelsm.serve.limits' -> 'serve.limits' (a split subpackage's
+    module with a floor of its own), 'gesturelsm.serve.service' -> 'serve'; 'gesturelsm' (the package's __init__)
+    -> ''."""
     parts = module.split(".")
+    if len(parts) > 2 and parts[1] in SPLIT and f"{parts[1]}.{parts[2]}" in FLOOR:
+        return f"{parts[1]}.{parts[2]}"
     return parts[1] if len(parts) > 1 else ""
 
 
@@ -77,6 +87,73 @@ def test_every_part_of_the_package_has_a_floor():
     parts = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
              if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").exists()}
     assert parts <= set(FLOOR), f"parts without a floor: {sorted(parts - set(FLOOR))}"
+    assert all((PACKAGE / f"{p.replace('.', '/')}.py").is_file() for p in FLOOR if "." in p)
+
+
+def module_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
+    """module -> the package's modules it imports ('gesturelsm.x.y'; a package is its __init__, named as the
+    package). `from .x import name` counts as importing x, and x.name when that is a module of its own."""
+    modules = {".".join(p.relative_to(root.parent).with_suffix("").parts).removesuffix(".__init__"): p
+               for p in root.rglob("*.py")}
+    graph = {}
+    for mod, path in modules.items():
+        targets = set()
+        for _line, target in imports(path, root):
+            while target not in modules and "." in target:    # `from .m import name`: the module m
+                target = target.rsplit(".", 1)[0]
+            if target in modules and target != mod:
+                targets.add(target)
+        graph[mod] = targets
+    return graph
+
+
+def circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Every strongly connected group of more than one module (Tarjan), each sorted: a circle of imports."""
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10 * len(graph) + 100))
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                found.append(sorted(group))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_module_imports_itself_through_others():
+    """A package's __init__ that re-exports its modules is not a circle as long as those modules import their
+    siblings directly, not through the package."""
+    assert circles(module_graph()) == []
+
+
+def test_a_circle_is_caught(tmp_path):
+    pkg = tmp_path / "gesturelsm"
+    (pkg / "webapp").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "webapp" / "__init__.py").write_text("")
+    (pkg / "webapp" / "a.py").write_text("from .b import x\n")
+    (pkg / "webapp" / "b.py").write_text("def f():\n    from . import a\n")     # inside a function counts too
+    (pkg / "webapp" / "c.py").write_text("from .a import y\n")
+    assert circles(module_graph(pkg)) == [["gesturelsm.webapp.a", "gesturelsm.webapp.b"]]
 
 
 def test_imports_only_go_down():
@@ -98,6 +175,7 @@ def test_an_upward_import_is_caught(tmp_path):
 
 
 @pytest.mark.parametrize("module, part", [("gesturelsm.render.frames", "render"), ("gesturelsm", ""),
-                                          ("gesturelsm.pipeline", "pipeline")])
+                                          ("gesturelsm.pipeline", "pipeline"), ("gesturelsm.serve.limits", "serve.limits"),
+                                          ("gesturelsm.serve.service", "serve"), ("gesturelsm.serve", "serve")])
 def test_part_of(module, part):
     assert part_of(module) == part

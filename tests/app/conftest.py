@@ -38,7 +38,8 @@ def beat2_dir(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def service(app_assets, beat2_dir, tmp_path_factory):
-    from gesturelsm.serve.service import GestureService, ServiceSettings
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     settings = ServiceSettings(checkpoints=str(app_assets), beat2=str(beat2_dir), max_seconds=20,
                                workdir=str(tmp_path_factory.mktemp("app_work")))

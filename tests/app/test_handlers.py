@@ -45,8 +45,8 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     h, page, other = _Handlers(service), SimpleNamespace(session_hash="page-1"), SimpleNamespace(session_hash="page-2")
     first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
     second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
-    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 3     # replaced: not rendered
-    assert first.video is None and h.add_exports(first, request=page) == (gr.skip(),) * 3
+    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
+    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 4
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
 
     started, result = threading.Event(), {}
@@ -60,8 +60,12 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     assert started.wait(120), "the render reported frames"
     third = h.show_motion(*inputs(speech_wav, 2), request=page, progress=quiet)[3]   # generate again, meanwhile
     t.join(120)
-    assert result["r"] == (gr.skip(),) * 3 and second.video is None
-    folder = second.render_args["folder"]
+    assert result["r"] == (gr.skip(),) * 4
+    folder = second.job.folder
     assert not [p.name for p in folder.iterdir() if p.suffix == ".mp4" or p.name.startswith(".render-job")]
-    video = h.show_video(third, request=page, progress=quiet)[0]                     # the newest one renders
-    assert third.video is not None and video == str(third.video) and third.video.stat().st_size > 1000
+    video, _rows, _summary, rendered = h.show_video(third, request=page, progress=quiet)   # the newest one renders
+    assert third.video is None, "the state's result is not edited: the rendered one replaces it"
+    assert video == str(rendered.video) and rendered.video.stat().st_size > 1000 and rendered.job is third.job
+    files, glb, summary, exported = h.add_exports(rendered, request=page)          # and then its downloads
+    assert exported.video == rendered.video and glb == str(exported.glb) and "Video ready" in summary
+    assert sorted(files) == sorted(map(str, exported.downloads)) and rendered.downloads == ()

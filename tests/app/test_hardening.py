@@ -15,7 +15,9 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.flows import steps_from_flags
-from gesturelsm.serve.service import GestureService, Request, ServiceError
+from gesturelsm.errors import GestureError
+from gesturelsm.serve.request import Request
+from gesturelsm.serve.service import GestureService
 
 from _support import speech_like
 
@@ -61,13 +63,13 @@ def _req(path, **kw):
     ("text", 42, "transcript must be text"),
 ])
 def test_every_field_is_checked_before_any_work(no_work, speech_wav, field, value, message):
-    with pytest.raises(ServiceError, match=message) as err:
+    with pytest.raises(GestureError, match=message) as err:
         no_work.run(_req(speech_wav, **{field: value}))
     assert len(str(err.value).splitlines()) == 1
 
 
 def test_all_bad_fields_are_listed_one_line_each(no_work, speech_wav):
-    with pytest.raises(ServiceError) as err:
+    with pytest.raises(GestureError) as err:
         no_work.run(_req(speech_wav, seed=2 ** 70, steps=2.5, cfg=float("nan")))
     lines = str(err.value).splitlines()
     assert len(lines) == 3 and [ln.split()[0] for ln in lines] == ["Steps", "CFG", "Seed"]
@@ -82,9 +84,9 @@ def test_whole_floats_are_accepted_as_numbers(service, speech_wav):
 def test_transcript_is_bounded_by_the_speech(no_work, speech_wav):
     """50k words for 2 s of speech took 81 s of the only worker; now refused before alignment (no_work fails
     the test if features or alignment start)."""
-    with pytest.raises(ServiceError, match="transcript has 50000 words"):
+    with pytest.raises(GestureError, match="transcript has 50000 words"):
         no_work.run(_req(speech_wav, text="word " * 50_000))
-    with pytest.raises(ServiceError, match=r"for 2\.0 s of speech at most 36 words"):
+    with pytest.raises(GestureError, match=r"for 2\.0 s of speech at most 36 words"):
         no_work.run(_req(speech_wav, text="word " * 100))              # within the 20 s limit, not within 2 s
 
 
@@ -101,7 +103,7 @@ def _short_textgrid(path: Path, intervals: list[tuple[float, float, str]], decla
 def test_huge_textgrid_is_refused_by_size_before_parsing(no_work, speech_wav, tmp_path):
     """200k intervals (~4 MB) for 2 s of speech: the reader alone took minutes on such files."""
     tg = _short_textgrid(tmp_path / "big.TextGrid", [(i * 1e-5, (i + 1) * 1e-5, "w") for i in range(200_000)])
-    with pytest.raises(ServiceError, match=r"The TextGrid is \d+ KB; for 2\.0 s of speech at most \d+ KB"):
+    with pytest.raises(GestureError, match=r"The TextGrid is \d+ KB; for 2\.0 s of speech at most \d+ KB"):
         no_work.run(_req(speech_wav, textgrid_path=str(tg)))
 
 
@@ -109,7 +111,7 @@ def test_textgrid_declaring_too_many_intervals_is_refused_before_reading_them(no
     from gesturelsm.align.textgrid import TextGridError, parse_textgrid
 
     tg = _short_textgrid(tmp_path / "lying.TextGrid", [(0.0, 0.5, "hello")], declared=200_000)
-    with pytest.raises(ServiceError, match="has 200000 intervals; at most 180 are accepted"):
+    with pytest.raises(GestureError, match="has 200000 intervals; at most 180 are accepted"):
         no_work.run(_req(speech_wav, textgrid_path=str(tg)))
     with pytest.raises(TextGridError, match="at most 10"):
         parse_textgrid(tg.read_text(), max_intervals=10)
@@ -120,7 +122,7 @@ def test_textgrid_words_all_after_the_audio_are_refused(no_work, speech_wav, tmp
 
     tg = tmp_path / "late.TextGrid"
     write_textgrid(tg, [Word("hello", 10.0, 10.5), Word("world", 10.6, 11.0)], duration=12.0)
-    with pytest.raises(ServiceError, match=r"All 2 words of the TextGrid lie after the end of the speech"):
+    with pytest.raises(GestureError, match=r"All 2 words of the TextGrid lie after the end of the speech"):
         no_work.run(_req(speech_wav, textgrid_path=str(tg)))
 
 

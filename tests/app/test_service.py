@@ -1,5 +1,5 @@
 """The app's request logic (gesturelsm.serve.service) on tiny checkpoints: outputs, timing rows, post-processing
-invariants, ground truth for a known BEAT2 take, and a clear ServiceError for every bad input."""
+invariants, ground truth for a known BEAT2 take, and a clear GestureError for every bad input."""
 from __future__ import annotations
 
 import logging
@@ -13,8 +13,11 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from gesturelsm.serve.service import (TIMING_COLUMNS, GestureService, Request, ServiceError, find_beat2_take, fit_length, smooth,
-                                    stand_in_place)
+from gesturelsm.data.lookup import find_beat2_take
+from gesturelsm.errors import GestureError
+from gesturelsm.motion.postprocess import fit_length, smooth, stand_in_place
+from gesturelsm.serve.request import TIMING_COLUMNS, Request
+from gesturelsm.serve.service import GestureService
 
 from _support import speech_like, synthetic_motion
 
@@ -50,7 +53,39 @@ def test_same_seed_same_motion_and_transcript_mode(service, speech_wav):
     assert "aligned automatically" in a.text_mode
     assert a.rows[0][2] > 0                                 # alignment time shown
     np.testing.assert_array_equal(a.motions["gesturelsm"].poses, b.motions["gesturelsm"].poses)
-    assert a.downloads == [] and service.export(a).downloads
+    assert a.downloads == () and service.export(a).downloads
+
+
+def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(service, speech_wav, monkeypatch):
+    """The page keeps a result in its state and hands it to render, then export: each returns a new result (the
+    video with the rendering column and ready time, then the downloads); the one handed in keeps what it had."""
+    import dataclasses
+
+    import gesturelsm.serve.service as service_module
+
+    drawn = []
+
+    def render_apart(motions, audio, video, **kw):
+        drawn.append((len(motions), kw["labels"], kw["size"], len(audio)))
+        Path(video).write_bytes(b"mp4")
+
+    monkeypatch.setattr(service_module, "render_apart", render_apart)
+    a = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps=1, size=256, exports=False,
+                            render=False))
+    col = TIMING_COLUMNS.index("rendering")
+    assert a.video is None and a.downloads == () and [r[col] for r in a.rows] == [0.0] * 3
+    r = service.render(a)
+    assert a.video is None and [row[col] for row in a.rows] == [0.0] * 3 and a.seconds == a.motion_seconds
+    assert r.video == a.job.folder / "gestures.mp4" and r.video.read_bytes() == b"mp4"
+    assert all(row[col] > 0 for row in r.rows) and r.seconds > a.seconds and r.rows[-1][7] == round(r.seconds, 3)
+    assert drawn == [(2, list(a.job.labels), (256, 256), len(a.job.audio))]
+    assert service.render(r) is r and len(drawn) == 1                      # rendered once
+    e = service.export(r)
+    assert r.downloads == () and r.glb is None and e.video == r.video and e.rows == r.rows
+    assert sorted(p.name for p in e.downloads)[:2] == ["ddim.bvh", "ddim.npz"] and e.glb.parent == a.job.folder
+    assert service.export(e) is e
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        a.job.size = 512
 
 
 def test_textgrid_upload_gives_word_timings(service, speech_wav, tmp_path):
@@ -98,7 +133,7 @@ def test_smoothing_keeps_smooth_motion_and_removes_jitter():
     jitter = lambda p: np.abs(np.diff(p, 2, axis=0)).mean()              # noqa: E731
     assert jitter(smooth(noisy, "strong").poses) < 0.3 * jitter(noisy.poses)
     assert smooth(seq, "off") is seq
-    with pytest.raises(ServiceError):
+    with pytest.raises(GestureError):
         smooth(seq, "extreme")
 
 
@@ -158,7 +193,7 @@ def test_bad_input_gives_a_clear_message(service, speech_wav, tmp_path, case, me
         tg = tmp_path / "x.TextGrid"
         tg.write_text("not a textgrid")
         req = _req(speech_wav, textgrid_path=str(tg))
-    with pytest.raises(ServiceError, match=message):
+    with pytest.raises(GestureError, match=message):
         service.run(req)
 
 
@@ -168,7 +203,7 @@ def test_upload_size_limit(service, speech_wav):
     from gesturelsm.serve.service import GestureService
 
     small = GestureService(service.pipeline, replace(service.settings, max_upload_mb=1e-4), service.body)
-    with pytest.raises(ServiceError, match="MB"):
+    with pytest.raises(GestureError, match="MB"):
         small.run(_req(speech_wav))
 
 
@@ -261,12 +296,12 @@ def test_the_video_renders_in_a_lowered_process_of_its_own(service, speech_wav, 
 @pytest.mark.parametrize("given", ["loaded", "path"])
 def test_the_render_process_gets_the_services_body(service, speech_wav, monkeypatch, given):
     """A body given as a file path (not only a loaded model) reaches the render process, not the default body."""
-    import gesturelsm.serve.service as app_service
+    import gesturelsm.serve.service as service_module
     from gesturelsm.body.model import resolve_body
 
     body = resolve_body(service.body)
     seen = {}
-    monkeypatch.setattr(app_service, "render_apart", lambda *a, **kw: seen.update(kw))
+    monkeypatch.setattr(service_module, "render_apart", lambda *a, **kw: seen.update(kw))
     svc = GestureService(service.pipeline, service.settings, body if given == "loaded" else str(body.path))
     svc.run(Request(str(speech_wav), steps=1, size=256, exports=False))
     assert Path(seen["body_path"]) == Path(body.path)

@@ -14,7 +14,8 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "app" / "examples"
 def test_shipped_checkpoints_serve_an_example(tmp_path):
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
-    from gesturelsm.serve.service import GestureService, Request, ServiceSettings
+    from gesturelsm.serve.request import Request, ServiceSettings
+    from gesturelsm.serve.service import GestureService
 
     ex = json.loads((EXAMPLES / "examples.json").read_text())[0]
     service = GestureService.from_settings(ServiceSettings(workdir=str(tmp_path)))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from gesturelsm.serve.service import TIMING_COLUMNS
+from gesturelsm.serve.request import TIMING_COLUMNS
 
 CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
                  if p and os.path.exists(p)), None)

@@ -10,7 +10,8 @@ import pytest
 import soundfile as sf
 
 from _support import served, speech_like
-from gesturelsm.serve.service import TIMING_COLUMNS, GestureService, ServiceSettings
+from gesturelsm.serve.request import TIMING_COLUMNS, ServiceSettings
+from gesturelsm.serve.service import GestureService
 from gesturelsm.reference.runner import FACE_NOTE, LABELS
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
