@@ -145,14 +145,21 @@ def test_no_module_imports_itself_through_others():
     assert circles(module_graph()) == []
 
 
+def package(root: Path, files: dict[str, str]) -> Path:
+    """A throwaway gesturelsm package under `root`: {relative path: source}, with the __init__ files it needs."""
+    pkg = root / "gesturelsm"
+    for rel, text in {"__init__.py": "", **files}.items():
+        (pkg / rel).parent.mkdir(parents=True, exist_ok=True)
+        (pkg / rel).write_text(text)
+        if (pkg / rel).parent != pkg:
+            (pkg / rel).parent.joinpath("__init__.py").touch()
+    return pkg
+
+
 def test_a_circle_is_caught(tmp_path):
-    pkg = tmp_path / "gesturelsm"
-    (pkg / "webapp").mkdir(parents=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / "webapp" / "__init__.py").write_text("")
-    (pkg / "webapp" / "a.py").write_text("from .b import x\n")
-    (pkg / "webapp" / "b.py").write_text("def f():\n    from . import a\n")     # inside a function counts too
-    (pkg / "webapp" / "c.py").write_text("from .a import y\n")
+    pkg = package(tmp_path, {"webapp/a.py": "from .b import x\n",
+                             "webapp/b.py": "def f():\n    from . import a\n",     # inside a function counts too
+                             "webapp/c.py": "from .a import y\n"})
     assert circles(module_graph(pkg)) == [["gesturelsm.webapp.a", "gesturelsm.webapp.b"]]
 
 
@@ -162,12 +169,8 @@ def test_imports_only_go_down():
 
 def test_an_upward_import_is_caught(tmp_path):
     """The checker itself: a copy of one part that imports from above is reported."""
-    pkg = tmp_path / "gesturelsm"
-    (pkg / "motion").mkdir(parents=True)
-    (pkg / "__init__.py").write_text("")
-    (pkg / "motion" / "__init__.py").write_text("")
-    (pkg / "motion" / "x.py").write_text("from ..pipeline import GesturePipeline\nfrom . import sequence\n")
-    (pkg / "flows.py").write_text("from .motion import x\n")                    # sideways: same floor
+    pkg = package(tmp_path, {"motion/x.py": "from ..pipeline import GesturePipeline\nfrom . import sequence\n",
+                             "flows.py": "from .motion import x\n"})                 # sideways: same floor
     found = violations(pkg)
     assert any("upward import motion -> pipeline" in v for v in found), found
     assert any("sideways import flows -> motion" in v for v in found), found

@@ -1,0 +1,71 @@
+"""The wheel: one top-level package, `gesturelsm` (no `app`, which would collide with any other project's `app`),
+the web page inside it with its examples, the shipped assets, and the `gesturelsm` command whose `serve`
+subcommand starts the demo. Built from a copy of the checkout's packaging inputs, so the checkout gets no
+build/ or egg-info folders."""
+from __future__ import annotations
+
+import configparser
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    src = tmp_path_factory.mktemp("src")
+    for name in ("setup.py", "pyproject.toml", "README.md"):
+        shutil.copy2(REPO / name, src / name)
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules")
+    for name in ("gesturelsm", "assets", "app"):
+        shutil.copytree(REPO / name, src / name, ignore=ignore)
+    out = tmp_path_factory.mktemp("wheel")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(out),
+                    str(src)], check=True, cwd=src, capture_output=True)
+    (found,) = out.glob("gesturelsm-*.whl")
+    return found
+
+
+def test_the_wheel_has_one_top_level_package_and_no_app(wheel):
+    z = zipfile.ZipFile(wheel)
+    tops = {n.split("/")[0] for n in z.namelist() if not n.split("/")[0].endswith((".dist-info", ".data"))}
+    assert tops == {"gesturelsm"}, tops
+    for listed in (n for n in z.namelist() if n.endswith(".dist-info/top_level.txt")):
+        assert z.read(listed).decode().split() == ["gesturelsm"]
+
+
+def test_the_wheel_carries_the_page_its_examples_and_the_shipped_assets(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for path in ("gesturelsm/webapp/ui.py", "gesturelsm/webapp/cli.py", "gesturelsm/serve/service.py",
+                 "gesturelsm/webapp/examples/examples.json", "gesturelsm/webapp/examples/hello.wav",
+                 "gesturelsm/_assets/MODEL_CARD.md", "gesturelsm/_assets/generator/gesturelsm.safetensors",
+                 "gesturelsm/_assets/body/SMPLX_MANNEQUIN.npz"):
+        assert path in names, path
+    built = (REPO / "app" / "player" / "dist" / "player.js").is_file()
+    assert ("gesturelsm/webapp/player/player.js" in names) == built      # the player only when npm built it
+    assert not any(n.startswith("gesturelsm/webapp/player/") and n != "gesturelsm/webapp/player/player.js"
+                   for n in names)
+
+
+def test_the_wheel_installs_the_gesturelsm_command_with_serve(wheel):
+    z = zipfile.ZipFile(wheel)
+    entry = next(n for n in z.namelist() if n.endswith(".dist-info/entry_points.txt"))
+    points = configparser.ConfigParser()
+    points.read_string(z.read(entry).decode())
+    assert dict(points["console_scripts"]) == {"gesturelsm": "gesturelsm.cli:main"}
+
+
+def test_gesturelsm_serve_has_the_flags_of_python_m_app():
+    from gesturelsm.cli import build_parser
+    from gesturelsm.webapp.cli import build_parser as app_parser
+
+    sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
+    serve = sub.choices["serve"]
+    flags = lambda p: sorted((a.option_strings[-1], a.default, a.type) for a in p._actions if a.option_strings)  # noqa: E731
+    assert flags(serve) == flags(app_parser()) and ("--port", 7860, int) in flags(serve)
+    assert serve.prog == "gesturelsm serve" and serve.description.startswith("`gesturelsm serve`: start the web demo")
