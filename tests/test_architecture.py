@@ -178,7 +178,8 @@ def test_an_upward_import_is_caught(tmp_path):
 
 
 @pytest.mark.parametrize("module, part", [("gesturelsm.render.frames", "render"), ("gesturelsm", ""),
-                                          ("gesturelsm.pipeline", "pipeline"), ("gesturelsm.serve.limits", "serve.limits"),
+                                          ("gesturelsm.pipeline", "pipeline"),
+                                          ("gesturelsm.serve.limits", "serve.limits"),
                                           ("gesturelsm.serve.service", "serve"), ("gesturelsm.serve", "serve")])
 def test_part_of(module, part):
     assert part_of(module) == part

@@ -66,6 +66,8 @@ def test_gesturelsm_serve_has_the_flags_of_python_m_app():
 
     sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
     serve = sub.choices["serve"]
-    flags = lambda p: sorted((a.option_strings[-1], a.default, a.type) for a in p._actions if a.option_strings)  # noqa: E731
+    def flags(p):
+        return sorted((a.option_strings[-1], a.default, a.type) for a in p._actions if a.option_strings)
+
     assert flags(serve) == flags(app_parser()) and ("--port", 7860, int) in flags(serve)
     assert serve.prog == "gesturelsm serve" and serve.description.startswith("`gesturelsm serve`: start the web demo")

@@ -86,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
     torch.set_num_threads(max(1, args.threads))
 
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[cfg.method], warm_up=False)   # audio only
-    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))  # JIT outside the timing
+    # JIT outside the timing
+    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
     if not 1 <= cfg.steps <= 128:
         raise ValueError(f"--steps must be from 1 to 128 (got {cfg.steps})")
     res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)

@@ -15,7 +15,8 @@ One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's li
 the busy message), and a closed tab or a dropped connection stops the session at once. A session that ends by itself
 (no audio for its idle timeout, or a failure) sends its reason and closes the socket; a socket that never names its
 sample rate is closed after HELLO_TIMEOUT_S. Served at PATH (live.py: the page's player names it) by
-`routes(manager, body)` (live.py `add_live_tab` returns it), passed to the FastAPI app when the page is launched (ui.py).
+`routes(manager, body)` (live.py `add_live_tab` returns it), passed to the FastAPI app when the page is launched
+(ui.py).
 """
 from __future__ import annotations
 

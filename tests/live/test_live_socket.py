@@ -1,5 +1,5 @@
-"""The Live tab's WebSocket (gesturelsm/webapp/live_socket.py), driven by Starlette's test client: int16 PCM in, motion JSON out as
-soon as it exists; every frame of the speech arrives once, in order, whatever the sample rate; Stop generates the rest
+"""The Live tab's WebSocket (gesturelsm/webapp/live_socket.py), driven by Starlette's test client: int16 PCM in,
+motion JSON out as soon as it exists; every frame of the speech arrives once, in order, whatever the sample rate; Stop generates the rest
 and closes; busy, bad messages and dropped connections end cleanly (no live worker left)."""
 from __future__ import annotations
 
