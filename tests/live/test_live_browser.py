@@ -1,7 +1,7 @@
 """The Live tab in real headless Chromium, its microphone fed a real speech take (Chromium's fake capture device):
 Record streams the microphone over the app's WebSocket (AudioWorklet PCM, gesturelsm/webapp/live_socket.py) and
-motion into the live player (`#live-player` data-frames advance, state `playing`), `#live-latency` shows a positive median in milliseconds,
-and Stop ends the stream on the server (no live worker left).
+motion into the live player (`#live-player` data-frames advance, state `playing`), `#live-latency` shows a positive
+median in milliseconds, and Stop ends the stream on the server (no live worker left).
 Skips, saying why, without chromium, the player bundle, the shipped checkpoints or the real take in ../shared."""
 from __future__ import annotations
 
