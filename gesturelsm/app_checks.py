@@ -16,20 +16,20 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from . import limits
 from .align import TextGridError, read_result
+from .backends import MAX_CFG
 from .limits import SEED_MAX, method_list, one_of, real_number, switch, transcript_problems, whole_number
+from .presentation import steps_setting_name
 
 def method_steps(raw: Any, chosen: Sequence[str] | None, facts: Mapping[str, Any], p: list[str]) -> dict | None:
     """Steps per method from one value for every chosen method or a {method: value} mapping (the page sends its two
-    sliders that way, `flows.steps_from_flags`). Each value is checked against its method's registered bound and named
+    sliders that way, `presentation.steps_from_flags`). Each value is checked against its method's registered bound and named
     after the setting that drives it ("Steps", "DDIM steps"); the same problem is said once."""
     items = dict(raw) if isinstance(raw, Mapping) else {m: raw for m in (chosen or []) if m in facts}
     steps, found = {}, []
     for m, value in items.items():
         if m not in facts:
             continue                                    # not a generator (ground truth) or not loaded: no steps
-        f = facts[m]
-        name = "DDIM steps" if f.steps_setting == "ddim_steps" else "Steps"
-        steps[m] = whole_number(value, name, 1, f.max_steps, found)
+        steps[m] = whole_number(value, steps_setting_name(m), 1, facts[m].max_steps, found)
     p += list(dict.fromkeys(found))
     return None if found else steps
 
@@ -41,7 +41,7 @@ def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices
     p: list[str] = []
     chosen = method_list(req.methods, methods, p)
     steps = method_steps(req.steps, chosen, facts, p)
-    cfg = real_number(req.cfg, "CFG scale", 0.0, 10.0, p)
+    cfg = real_number(req.cfg, "CFG scale", 0.0, MAX_CFG, p)
     seed = whole_number(req.seed, "Seed", 0, SEED_MAX, p)
     smoothing = one_of(req.smoothing, "Smoothing", smoothing_choices, p)
     size = whole_number(req.size, "Video size", min(sizes), max(sizes), p)

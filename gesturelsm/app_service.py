@@ -31,6 +31,7 @@ from .align import Word
 from .app_checks import check_request, textgrid_words
 from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, AudioTooLongError, load_audio
+from .backends import checkpoint_sources
 from .body import load_body_model
 from .body.model import resolve_model_path
 from .data.lookup import find_beat2_take
@@ -40,13 +41,14 @@ from .flows import DEFAULT_STEPS
 from .limits import transcript_problems
 from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, fit_length, smooth, stand_in_place
 from .motion.sequence import MotionSequence
-from .pipeline import ALL_FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
+from .pipeline import FACTS, GROUND_TRUTH, Generated, GesturePipeline, Plan, SpeechInput
+from .presentation import LABELS
 from .render.background import render_apart
 
 Progress = Callable[[float, str], None]
 
 log = logging.getLogger("gesturelsm.app")
-METHOD_LABELS = {**{k: f.label for k, f in ALL_FACTS.items()}, GROUND_TRUTH: "Ground truth"}
+METHOD_LABELS = dict(LABELS)                            # every method, then ground truth: the page's order
 VIDEO_SIZES = (256, 384, 512, 640)
 TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
@@ -86,7 +88,7 @@ class Request:
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
 
     def plan(self, beat2: str | None = None) -> Plan:
-        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in ALL_FACTS}
+        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
         return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
                     bool(self.stand_in_place), str(self.smoothing), beat2,
                     Path(self.audio_path).name if self.audio_path else None)
@@ -132,7 +134,8 @@ class GestureService:
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
-        pipe = GesturePipeline.from_pretrained(settings.checkpoints, max_seconds=settings.max_seconds)
+        pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(settings.checkpoints),
+                                               max_seconds=settings.max_seconds)
         body = load_body_model(str(resolve_model_path(settings.body_model)))
         return cls(pipe, settings, body)
 
@@ -202,7 +205,7 @@ class GestureService:
             mb = p.stat().st_size / 2 ** 20
             if mb > self.settings.max_upload_mb:
                 raise ServiceError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
-        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, ALL_FACTS)
+        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, FACTS)
         if problems:
             raise ServiceError("\n".join(problems))
         plan = req.plan(self.settings.beat2)

@@ -11,7 +11,8 @@ import soundfile as sf
 
 from _support import served, speech_like
 from gesturelsm.app_service import TIMING_COLUMNS, GestureService, ServiceSettings
-from gesturelsm.reference.runner import FACE_NOTE, LABELS
+from gesturelsm.presentation import LABELS
+from gesturelsm.reference.runner import FACE_NOTE
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
