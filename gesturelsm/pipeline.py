@@ -4,6 +4,9 @@ benchmarks and the tests all call this.
     pipe = GesturePipeline.from_pretrained()            # shipped checkpoints in assets/
     res = pipe.generate(audio, sr, text="hello there", steps=8, cfg=2.0, seed=0, method="gesturelsm")
     res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
+
+Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
+against the method's registered bounds and calls the backend's `generate`.
 """
 from __future__ import annotations
 
@@ -18,45 +21,20 @@ import torch
 from .align import align_words
 from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, resample, to_mono
+from .backends import (FACTS, MAX_CFG, Backend, BackendFacts, Bounds, FlowBackend, SpeechInput, backend_facts,
+                       flow_backends, load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
-from .flows import FACTS
 from .generator.model import GestureGenerator
-from .generator.sampling import decode_latents, generate_latents
 from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
-from .motion.regions import GENERATED_REGIONS, join_regions
 from .motion.sequence import FPS, MotionSequence
-from .reference.runner import REFERENCE_FACTS, attach_reference, generate_for_pipeline
 from .tokenizer.model import RVQVAE
 
-# every method a pipeline can run: ours (flows registry) and the authors' released weights (reference/)
-ALL_FACTS = {**FACTS, **REFERENCE_FACTS}
-
 MIN_SECONDS = 0.5
-MAX_CFG = 10.0
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
-
-
-@dataclass
-class SpeechInput:
-    """Speech prepared once and reusable across methods, steps and seeds."""
-    audio: np.ndarray                   # (N,) 16 kHz mono float32
-    num_frames: int
-    channels: torch.Tensor              # (2, N) envelope + onsets
-    words: list | None                  # list[Word] used, or None (audio-only)
-    word_features: torch.Tensor         # (T, 384)
-    has_word: torch.Tensor              # (T,) bool
-    text_mode: str                      # how the transcript was used, said to the user
-    timings: dict[str, float] = field(default_factory=dict)
-    warnings: list[str] = field(default_factory=list)
-    transcript: str | None = None       # the automatic transcript's text when one was recognised and used
-
-    @property
-    def duration(self) -> float:
-        return self.num_frames / FPS
 
 
 @dataclass
@@ -93,7 +71,7 @@ class Plan:
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
 
     def steps_for(self, method: str) -> int:
-        return int(self.steps.get(method, ALL_FACTS[method].default_steps))
+        return int(self.steps.get(method, backend_facts(method).default_steps))
 
     @property
     def generators(self) -> list[str]:
@@ -110,41 +88,33 @@ class Generated:
 
 
 class GesturePipeline:
-    def __init__(self, tokenizers: dict, generators: dict, device: str | torch.device = "cpu",
-                 max_seconds: float = 600.0):
-        self.tokenizers = tokenizers            # region -> RVQVAE
-        self.generators = generators            # method -> GestureGenerator
+    def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu", max_seconds: float = 600.0):
+        self.backends = dict(backends)          # method -> backend (gesturelsm.backends), in registry order
         self.device = torch.device(device)
         self.max_seconds = max_seconds
-        for g in generators.values():
-            if tuple(g.config.regions) != tuple(tokenizers):
-                raise ValueError(f"generator regions {g.config.regions} do not match tokenizers {tuple(tokenizers)}")
 
     @classmethod
     def from_pretrained(cls, path: str | Path | None = None, device: str = "cpu", methods: list[str] | None = None,
-                        max_seconds: float = 600.0, warm_up: bool = True) -> "GesturePipeline":
-        """`path`: a folder with tokenizer/<region>.safetensors and generator/<method>.safetensors
-        (default: the shipped assets/)."""
-        root = Path(path) if path else ASSETS
-        ref_root = root if (root / "reference_rvq.safetensors").exists() else None  # authors' weights (import-reference)
-        if ref_root is not None and not (root / "tokenizer").exists():
-            root = ASSETS                                                           # ours beside theirs
-        tok_dir, gen_dir = root / "tokenizer", root / "generator"
-        missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
-        if missing:
-            raise FileNotFoundError(f"{tok_dir}: missing tokenizer checkpoints for {', '.join(missing)}")
-        tokenizers = {r: RVQVAE.load(tok_dir / f"{r}.safetensors").to(device) for r in GENERATED_REGIONS}
-        gens = {}
-        for p in sorted(gen_dir.glob("*.safetensors")):
-            if methods is None or p.stem in methods:
-                gens[p.stem] = GestureGenerator.load(p).to(device)
-        if not gens and ref_root is None:
-            raise FileNotFoundError(f"{gen_dir}: no generator checkpoints found")
-        pipe = cls(tokenizers, gens, device, max_seconds)
-        attach_reference(pipe, ref_root)
+                        max_seconds: float = 600.0, warm_up: bool = True,
+                        checkpoints: list[str | Path] | None = None) -> "GesturePipeline":
+        """Every method with a checkpoint in `path`, a folder with tokenizer/<region>.safetensors and
+        generator/<method>.safetensors and/or the authors' reference_*.safetensors (default: the shipped assets/),
+        or in `checkpoints`, a list of such folders and single checkpoint files. `methods`: load only these.
+        A folder without checkpoints is a CheckpointError naming it."""
+        if checkpoints is None:
+            checkpoints = [Path(path) if path else ASSETS]
+        elif path:
+            raise InputError("give either a checkpoint folder or a list of checkpoints, not both")
+        pipe = cls(load_backends(checkpoints, methods, device), device, max_seconds)
         if warm_up:
             pipe.warm_up()
         return pipe
+
+    @classmethod
+    def from_models(cls, tokenizers: dict[str, RVQVAE], generators: dict[str, GestureGenerator],
+                    device: str | torch.device = "cpu", max_seconds: float = 600.0) -> "GesturePipeline":
+        """A pipeline of our methods from models in memory ({method: generator} sharing `tokenizers`)."""
+        return cls(flow_backends(tokenizers, generators), device, max_seconds)
 
     def warm_up(self) -> None:
         """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
@@ -154,7 +124,29 @@ class GesturePipeline:
 
     @property
     def methods(self) -> list[str]:
-        return list(self.generators) + list(getattr(self, "reference_methods", {}))
+        return list(self.backends)
+
+    def facts(self, method: str) -> BackendFacts:
+        return self._backend(method).facts
+
+    def bounds(self, method: str) -> Bounds:
+        """The steps and CFG scales `method` accepts (its registered facts)."""
+        return self.facts(method).bounds
+
+    @property
+    def generators(self) -> dict[str, GestureGenerator]:
+        """Our loaded generator networks, for tools that reach into them (live streaming, speed and latent analyses)."""
+        return {k: b.model for k, b in self.backends.items() if isinstance(b, FlowBackend)}
+
+    @property
+    def tokenizers(self) -> dict[str, RVQVAE]:
+        """The tokenizers of our first loaded generator (empty when only the authors' methods are loaded)."""
+        return next((b.tokenizers for b in self.backends.values() if isinstance(b, FlowBackend)), {})
+
+    def _backend(self, method: str) -> Backend:
+        if method not in self.backends:
+            raise InputError(f"unknown method {method!r}; available: {', '.join(self.methods)}")
+        return self.backends[method]
 
     # ---- speech ------------------------------------------------------------------------------------------
     def _checked_audio(self, audio: np.ndarray, sr: int) -> tuple[np.ndarray, int]:
@@ -233,15 +225,14 @@ class GesturePipeline:
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
-        """The one place settings are checked: the method is loaded, steps within the method's registered
-        bounds (flows.FACTS), 0 <= CFG <= MAX_CFG."""
-        if method not in self.methods:
-            raise InputError(f"unknown method {method!r}; available: {', '.join(self.methods)}")
-        hi = ALL_FACTS[method].max_steps
-        if not isinstance(steps, (int, np.integer)) or not 1 <= steps <= hi:
-            raise InputError(f"The number of steps must be a whole number from 1 to {hi} for {method} (got {steps})")
-        if not np.isfinite(cfg) or not 0.0 <= cfg <= MAX_CFG:
-            raise InputError(f"CFG scale must be between 0 and {MAX_CFG:g} (got {cfg})")
+        """The one place settings are checked: the method is loaded, steps and CFG scale within the method's
+        registered bounds (`bounds`)."""
+        b = self.bounds(method)
+        if not isinstance(steps, (int, np.integer)) or not b.min_steps <= steps <= b.max_steps:
+            raise InputError(f"The number of steps must be a whole number from {b.min_steps} to {b.max_steps} for "
+                             f"{method} (got {steps})")
+        if not np.isfinite(cfg) or not b.min_cfg <= cfg <= b.max_cfg:
+            raise InputError(f"CFG scale must be between {b.min_cfg:g} and {b.max_cfg:g} (got {cfg})")
 
     def check_plan(self, plan: Plan) -> None:
         """All of a plan's settings, before any work is done."""
@@ -284,28 +275,13 @@ class GesturePipeline:
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe)
-        if method in getattr(self, "reference_methods", {}):   # the authors' released weights (reference/)
-
-            motion, t, warn = generate_for_pipeline(self, speech, method, steps, cfg, seed)
-            return GenerationResult(motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **t},
-                                    speech.text_mode, list(speech.warnings) + warn)
-        gen = self.generators[method]
-        timings = dict(speech.timings)
-        t0 = time.perf_counter()
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        lat = generate_latents(gen, speech.channels, speech.word_features, speech.has_word, speech.words is not None,
-                               speech.num_frames, steps, cfg, seed, prog)
-        timings["sampling"] = time.perf_counter() - t0
-        t1 = time.perf_counter()
-        parts = decode_latents(self.tokenizers, lat.to(self.device), speech.num_frames)
-        feats = join_regions({k: v.cpu() for k, v in parts.items()})
-        motion = MotionSequence.from_features(feats)
-        timings["decoding"] = time.perf_counter() - t1
+        out = self.backends[method].generate(speech, steps, cfg, seed, prog)
         if progress:
             progress(1.0, f"{method}: done")
-        return GenerationResult(motion, method, int(steps), float(cfg), int(seed), timings, speech.text_mode,
-                                list(speech.warnings))
+        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **out.timings},
+                                speech.text_mode, list(speech.warnings) + out.warnings)
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "GROUND_TRUTH", "MAX_CFG"]
+           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG"]

@@ -8,7 +8,8 @@ from .align.textgrid import read_words
 from .audio import load_audio
 from .constants import SAMPLE_RATE
 from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, postprocess
-from .pipeline import ALL_FACTS, GesturePipeline
+from .backends import FACTS, checkpoint_sources
+from .pipeline import GesturePipeline
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -22,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
     g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
     g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--method", default="gesturelsm", choices=list(ALL_FACTS),
+    g.add_argument("--method", default="gesturelsm", choices=list(FACTS),
                    help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
     g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
@@ -38,8 +39,8 @@ def run_generate(args: argparse.Namespace) -> int:
     words = None
     if args.textgrid:
         words = read_words(args.textgrid)
-    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[args.method])
-    steps = args.steps or ALL_FACTS[args.method].default_steps
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
+    steps = args.steps or FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method, transcribe=not args.no_transcribe)
     path = postprocess(res.motion, args.stand_in_place, args.smoothing).save(args.out)

@@ -14,8 +14,9 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load"},  # conventions, the error family,
-                                                               # request limits, upload format sniffing, safe loading
+    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load",  # conventions, the error family, request
+     "presentation"},                                          # limits, upload sniffing, safe loading, methods'
+                                                               # labels and colours
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
                                                                # fp32 linear layers through oneDNN
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
@@ -23,6 +24,7 @@ FLOORS: list[set[str]] = [
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
+    {"backends"},                                              # every method (ours, the authors') behind one call
     {"pipeline"},                                              # speech -> motion, one request flow
     {"serve", "study", "evaluation", "pipeline_cli", "live"},  # what uses the pipeline (serve: one web request,
                                                                # its checks and files; live: streaming)

@@ -135,7 +135,7 @@ def test_every_length_fits_the_shipped_window_size():
 def GesturePipelineWithLimit(pipe, seconds):
     from gesturelsm.pipeline import GesturePipeline
 
-    return GesturePipeline(pipe.tokenizers, pipe.generators, max_seconds=seconds)
+    return GesturePipeline.from_models(pipe.tokenizers, pipe.generators, max_seconds=seconds)
 
 
 def test_long_audio_stitches_windows_without_jumps(tiny_pipeline):

@@ -33,11 +33,13 @@ import numpy as np
 import torch
 
 from ..audio import load_audio
+from ..backends import checkpoint_sources
 from ..constants import FPS, SAMPLE_RATE
 from ..flows import make_method
 from ..generator.config import PRESETS
 from ..generator.model import GestureGenerator
 from ..pipeline import GesturePipeline
+from ..reference.config import GeneratorConfig as ReferenceConfig
 from ..render import render_video
 from .timing import hardware_name, synchronize, timed
 
@@ -100,7 +102,7 @@ def paper_pipeline(shipped, device: str = "cpu"):
         c = replace(PRESETS["paper"], regions=g.config.regions, latent_dim=g.config.latent_dim,
                     uses_step_size=make_method(name).uses_step_size)
         gens[name] = GestureGenerator(c, name).eval().to(device)
-    return GesturePipeline(shipped.tokenizers, gens, device, shipped.max_seconds)
+    return GesturePipeline.from_models(shipped.tokenizers, gens, device, shipped.max_seconds)
 
 
 def ms_per_step(gen, repeats: int = 20) -> float:
@@ -124,12 +126,12 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
               log: Log | None = None, long_presets: tuple[str, ...] = ("shipped", "paper")) -> dict:
     """-> JSON-ready report. `end_to_end`: {"audio": path, "text": str | None, "out": mp4 path} or None."""
     log = log or (lambda m: None)
-    shipped = GesturePipeline.from_pretrained(checkpoints, device=device, methods=methods)
+    shipped = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(checkpoints), device=device, methods=methods)
     pipes = {"shipped": shipped}
     if "paper" in presets:
         pipes["paper"] = paper_pipeline(shipped, device)
     pipes = {k: v for k, v in pipes.items() if k in presets}
-    clip_frames = shipped.generators[next(iter(shipped.generators))].config.window_frames
+    clip_frames = next((g.config.window_frames for g in shipped.generators.values()), ReferenceConfig().frames)
     lengths = {"clip": clip_frames / FPS, "10s": 10.0, **({"long": long_seconds} if long_seconds else {})}
     shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE, transcribe=False)  # warm-up: lazy imports, first calls
     inputs = {k: shipped.prepare_speech(speech_clip(s, speech), SAMPLE_RATE, transcribe=False)   # audio-only inputs
@@ -150,8 +152,8 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
         p, m, s = key
         pipe = pipes[p]
         row = {"preset": p, "method": m, "steps": s, "cfg": cfg, "hardware": hardware,
-               "denoiser_params_m": sum(x.numel() for x in pipe.generators[m].denoiser.parameters()) / 1e6,
-               "ms_per_step": ms_per_step(pipe.generators[m]),
+               "denoiser_params_m": sum(x.numel() for x in pipe.backends[m].model.denoiser.parameters()) / 1e6,
+               "ms_per_step": ms_per_step(pipe.generators[m]) if m in pipe.generators else None,  # ours only
                "aits": statistics.median(times[key]["clip"]),
                "rtf_10s": lengths["10s"] / statistics.median(times[key]["10s"])}
         if long_seconds and p in long_presets:

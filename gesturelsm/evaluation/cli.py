@@ -13,6 +13,7 @@ import argparse
 import json
 from pathlib import Path
 
+from ..backends import checkpoint_sources
 from ..body import load_body_model
 from ..data.beat2 import Beat2Dataset
 from ..metrics.fgd import default_extractors
@@ -87,7 +88,7 @@ def run_eval(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     clips, policy = heldout_clips(args.data, args.train_fraction, audio_only=not args.no_audio_only,
                                   max_clips=args.max_clips)
-    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=args.methods)
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods)
     methods = args.methods or pipe.methods
     missing = [m for m in methods if m not in pipe.methods]
     if missing:

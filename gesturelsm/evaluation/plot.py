@@ -3,10 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..flows import FACTS
-from .tables import NAMES
-
-COLORS = {k: f.color for k, f in FACTS.items()}
+from ..presentation import COLORS, LABELS as NAMES
 
 
 def quality_time_plot(bench: dict, out: str | Path, evaluation: dict | None = None, metric: str = "fgd_k",

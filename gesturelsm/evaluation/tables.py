@@ -1,10 +1,8 @@
 """Markdown tables for eval and bench reports, in the paper's layout, with the paper's numbers beside ours."""
 from __future__ import annotations
 
-from ..flows import FACTS
+from ..presentation import LABELS as NAMES
 from . import paper
-
-NAMES = {k: f.label for k, f in FACTS.items()}
 
 
 def _f(v, fmt: str = "{:.3f}") -> str:

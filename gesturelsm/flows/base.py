@@ -28,13 +28,10 @@ class LossResult:
 class MethodFacts:
     """What the rest of the package needs to know about a method, written once, beside the method."""
     key: str                         # the name in checkpoints, the CLI and the API, e.g. "gesturelsm"
-    label: str                       # shown to people (page, tables, plots)
     default_steps: int               # sampling steps when none are given
     max_steps: int                   # the largest step count accepted (settings are checked against it)
     predicts: str                    # what the model function returns to the sampler: "velocity" | "data" (x1)
     uses_step_size: bool             # whether the network's d input is meaningful
-    color: str                       # line colour in plots
-    steps_setting: str = "steps"     # which of the page's / CLI's two step settings drives it: "steps" | "ddim_steps"
 
 
 class Method(Protocol):

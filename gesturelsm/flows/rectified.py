@@ -18,8 +18,7 @@ from .timesteps import sample_t
 @dataclass
 class RectifiedFlow(FactsMixin):
     facts: ClassVar[MethodFacts] = MethodFacts(
-        key="rectified_flow", label="Rectified flow", default_steps=8, max_steps=128, predicts="velocity",
-        uses_step_size=False, color="#1f77b4")
+        key="rectified_flow", default_steps=8, max_steps=128, predicts="velocity", uses_step_size=False)
     time_sampler: str = "uniform"
     loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
 

@@ -30,8 +30,7 @@ from .timesteps import sample_t
 @dataclass
 class Shortcut(FactsMixin):
     facts: ClassVar[MethodFacts] = MethodFacts(
-        key="gesturelsm", label="GestureLSM", default_steps=8, max_steps=128, predicts="velocity",
-        uses_step_size=True, color="#d62728")
+        key="gesturelsm", default_steps=8, max_steps=128, predicts="velocity", uses_step_size=True)
     alpha: float = 2.0
     beta: float = 1.2
     time_sampler: str = "beta"             # beta | uniform | logit_normal (ablation)

@@ -1,11 +1,10 @@
-"""Generation for speech of any length: overlapping windows, seeds carried across, seamless stitching.
+"""Our generators on speech of any length, in the shared window loop (`flows.windows`), and decoding.
 
-Window i covers latent frames [i * stride, i * stride + t) with stride = t - s (t = 32 latents = 128 frames,
-s = 4 seed latents = 16 frames of overlap). Window 0 starts from the neutral seed (no ground truth needed);
-window i's seed is the last s latents window i-1 generated, i.e. exactly the overlap, which window i
-generates again in context: the two versions are cross-faded linearly, so there is no jump at borders.
-Speech features are computed for up to 16 windows per call (bounded memory), and the conditional and
-unconditional CFG passes run as one batch. The last window is padded with silence and cropped.
+Windows of t = 32 latents (128 frames) overlap by s = 4 seed latents (16 frames). Window 0 starts from the
+neutral seed (no ground truth needed); the overlap each window generates again is cross-faded with the previous
+window's version, so there is no jump at borders. Speech features are computed for up to 16 windows per call
+(bounded memory), and the conditional and unconditional CFG passes run as one batch. The last window is
+padded with silence and cropped.
 """
 from __future__ import annotations
 
@@ -15,17 +14,10 @@ import torch
 import torch.nn.functional as F
 
 from ..constants import Progress
-from ..flows import make_method
+from ..flows import make_method, sample_windows, window_layout
 from ..tokenizer.model import quantize_regions
 from .data import samples_for
 from .model import GestureGenerator
-
-
-def window_layout(num_latents: int, t: int, s: int) -> list[int]:
-    """Start latent of every window so that [0, num_latents) is covered."""
-    stride = t - s
-    n = max(1, math.ceil(max(num_latents - s, 1) / stride))
-    return [i * stride for i in range(n)]
 
 
 @torch.no_grad()
@@ -47,32 +39,25 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     audio_ch = F.pad(audio_ch, (0, max(0, n_samp - audio_ch.shape[1])))
     words = F.pad(words, (0, 0, 0, max(0, 4 * total - words.shape[0])))
     has_word = F.pad(has_word, (0, max(0, 4 * total - has_word.shape[0])))
-    g = torch.Generator(device="cpu").manual_seed(int(seed))
     R, D = c.num_regions, c.latent_dim
-    out = torch.zeros(R, total, D)
-    seed_lat = model.neutral_seed.to(dev)[None]                # (1, R, s, D), scaled
-    ramp = torch.arange(1, s + 1, dtype=torch.float32) / (s + 1)   # weight of the new window in the overlap
-    for i, st in enumerate(starts):
+    batch: dict = {}
+
+    def sample(i: int, st: int, seed_lat: torch.Tensor, g: torch.Generator) -> torch.Tensor:
         j = i % cond_batch
         if j == 0:                                             # speech condition of the next cond_batch windows
             chunk = starts[i:i + cond_batch]
             a = torch.stack([audio_ch[:, samples_for(4 * c0):samples_for(4 * c0) + n_a] for c0 in chunk])
             w = torch.stack([words[4 * c0:4 * (c0 + t)] for c0 in chunk])
             hw = torch.stack([has_word[4 * c0:4 * (c0 + t)] for c0 in chunk])
-            conds = model.speech(a.to(dev), w.to(dev), hw.to(dev), torch.full((len(chunk),), has_text, device=dev))
-            ctx_c, ctx_u = model.contexts(conds)                # batch n; the null context batch 1
+            batch["conds"] = model.speech(a.to(dev), w.to(dev), hw.to(dev),
+                                          torch.full((len(chunk),), has_text, device=dev))
+            batch["ctx"] = model.contexts(batch["conds"])      # batch n; the null context batch 1
+        ctx_c, ctx_u = batch["ctx"]
         noise = torch.randn(1, R, t, D, generator=g).to(dev)
-        f = model.bind(conds[j:j + 1], seed_lat, (ctx_c.rows(slice(j, j + 1)), ctx_u))
-        x = method.sample(f, noise, steps, cfg_scale)[0].cpu()                              # (R, t, D) scaled
-        if i == 0:
-            out[:, st:st + t] = x
-        else:
-            ov = out[:, st:st + s]
-            out[:, st:st + s] = ov * (1 - ramp)[None, :, None] + x[:, :s] * ramp[None, :, None]
-            out[:, st + s:st + t] = x[:, s:]
-        seed_lat = out[:, st + t - s:st + t][None].to(dev)
-        if progress:
-            progress((i + 1) / len(starts), f"window {i + 1}/{len(starts)}")
+        f = model.bind(batch["conds"][j:j + 1], seed_lat[None].to(dev), (ctx_c.rows(slice(j, j + 1)), ctx_u))
+        return method.sample(f, noise, steps, cfg_scale)[0]                                 # (R, t, D) scaled
+
+    out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress)
     return out[:, :L] * model.latent_std.cpu()[:, None, None]
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..audio import load_audio
+from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..motion.sequence import MotionSequence
@@ -85,11 +86,13 @@ def run(args: argparse.Namespace) -> int:
 
     torch.set_num_threads(max(1, args.threads))
 
-    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=[cfg.method], warm_up=False)   # audio only
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[cfg.method],
+                                           warm_up=False)   # audio only
     # JIT outside the timing
     audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
-    if not 1 <= cfg.steps <= 128:
-        raise ValueError(f"--steps must be from 1 to 128 (got {cfg.steps})")
+    b = pipe.bounds(cfg.method)
+    if not b.min_steps <= cfg.steps <= b.max_steps:
+        raise ValueError(f"--steps must be from {b.min_steps} to {b.max_steps} (got {cfg.steps})")
     res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {args.chunk_ms:.0f} ms "

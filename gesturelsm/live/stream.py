@@ -64,6 +64,8 @@ import torch
 from ..constants import FPS, SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM
+from ..backends import FlowBackend
+from ..errors import InputError
 from ..flows import make_method
 from ..flows.base import inpainting
 from ..generator.data import samples_for
@@ -109,8 +111,11 @@ class StreamingGenerator:
     """feed(chunk) -> motion chunks available now; finish() -> the rest. One stream per object (not thread-safe)."""
 
     def __init__(self, pipe, config: LiveConfig = LiveConfig()):
-        self.model = pipe.generators[config.method]
-        self.tokenizers = pipe.tokenizers
+        backend = pipe.backends.get(config.method)
+        if not isinstance(backend, FlowBackend):           # streaming reaches into our generator's windows
+            raise InputError(f"live mode streams one of our loaded generators ({', '.join(pipe.generators) or 'none'});"
+                             f" not {config.method}")
+        self.model, self.tokenizers = backend.model, backend.tokenizers
         c = self.model.config
         self.t, self.s = c.window_latents, c.seed_latents
         config.check(self.t, self.s)

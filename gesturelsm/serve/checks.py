@@ -15,22 +15,22 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 from ..align import TextGridError, read_result
-from ..pipeline import MAX_CFG
+from ..backends import MAX_CFG
+from ..presentation import steps_setting_name
 from . import limits
 from .limits import SEED_MAX, method_list, one_of, real_number, switch, transcript_problems, whole_number
 
+
 def method_steps(raw: Any, chosen: Sequence[str] | None, facts: Mapping[str, Any], p: list[str]) -> dict | None:
     """Steps per method from one value for every chosen method or a {method: value} mapping (the page sends its two
-    sliders that way, `flows.steps_from_flags`). Each value is checked against its method's registered bound and named
+    sliders that way, `presentation.steps_from_flags`). Each value is checked against its method's registered bound and named
     after the setting that drives it ("Steps", "DDIM steps"); the same problem is said once."""
     items = dict(raw) if isinstance(raw, Mapping) else {m: raw for m in (chosen or []) if m in facts}
     steps, found = {}, []
     for m, value in items.items():
         if m not in facts:
             continue                                    # not a generator (ground truth) or not loaded: no steps
-        f = facts[m]
-        name = "DDIM steps" if f.steps_setting == "ddim_steps" else "Steps"
-        steps[m] = whole_number(value, name, 1, f.max_steps, found)
+        steps[m] = whole_number(value, steps_setting_name(m), 1, facts[m].max_steps, found)
     p += list(dict.fromkeys(found))
     return None if found else steps
 

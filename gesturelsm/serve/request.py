@@ -18,9 +18,10 @@ import numpy as np
 from ..flows import DEFAULT_STEPS
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..motion.sequence import MotionSequence
-from ..pipeline import ALL_FACTS, GROUND_TRUTH, Plan
+from ..pipeline import FACTS, GROUND_TRUTH, Plan
+from ..presentation import LABELS
 
-METHOD_LABELS = {**{k: f.label for k, f in ALL_FACTS.items()}, GROUND_TRUTH: "Ground truth"}
+METHOD_LABELS = dict(LABELS)                            # every method, then ground truth: the page's order
 VIDEO_SIZES = (256, 384, 512, 640)
 TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
@@ -59,7 +60,7 @@ class Request:
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
 
     def plan(self, beat2: str | None = None) -> Plan:
-        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in ALL_FACTS}
+        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
         return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
                     bool(self.stand_in_place), str(self.smoothing), beat2,
                     Path(self.audio_path).name if self.audio_path else None)

@@ -38,7 +38,8 @@ from ..errors import AudioError, GestureError, InputError, RenderError
 from ..export import export_bvh, export_glb, export_keypoints, export_npz
 from ..motion.postprocess import SMOOTHING_WINDOWS
 from ..motion.sequence import MotionSequence
-from ..pipeline import ALL_FACTS, GROUND_TRUTH, GesturePipeline, Plan, SpeechInput
+from ..backends import checkpoint_sources
+from ..pipeline import FACTS, GROUND_TRUTH, GesturePipeline, Plan, SpeechInput
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
 from .limits import transcript_problems
@@ -58,7 +59,8 @@ class GestureService:
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
-        pipe = GesturePipeline.from_pretrained(settings.checkpoints, max_seconds=settings.max_seconds)
+        pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(settings.checkpoints),
+                                               max_seconds=settings.max_seconds)
         body = load_body_model(str(resolve_model_path(settings.body_model)))
         return cls(pipe, settings, body)
 
@@ -128,7 +130,7 @@ class GestureService:
             mb = p.stat().st_size / 2 ** 20
             if mb > self.settings.max_upload_mb:
                 raise InputError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
-        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, ALL_FACTS)
+        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, FACTS)
         if problems:
             raise InputError("\n".join(problems))
         return req, req.plan(self.settings.beat2)

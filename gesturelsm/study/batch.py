@@ -26,7 +26,7 @@ import numpy as np
 
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
-from ..flows import FACTS
+from ..backends import FACTS
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video

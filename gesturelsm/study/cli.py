@@ -11,7 +11,8 @@ import argparse
 from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..errors import UserError
-from ..flows import steps_from_flags
+from ..backends import FACTS, checkpoint_sources
+from ..presentation import steps_from_flags
 from ..motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from .batch import make_study
@@ -43,9 +44,9 @@ def run(args: argparse.Namespace) -> int:
     if args.size % 16 or not 128 <= args.size <= 1024:
         raise UserError("--size must be a multiple of 16 from 128 to 1024")
     gens = [m for m in args.methods if m != GROUND_TRUTH]
-    pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=gens or None)
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=gens or None)
     body = load_body_model(str(resolve_model_path(args.model)))
     make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
-               steps=steps_from_flags(args.steps, args.ddim_steps), cfg=args.cfg, seed=args.seed, size=args.size,
+               steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
                body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing)
     return 0

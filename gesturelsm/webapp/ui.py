@@ -14,11 +14,11 @@ from pathlib import Path
 
 import gradio as gr
 
+from gesturelsm.backends import FACTS
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
-from gesturelsm.flows import FACTS, steps_from_flags
 from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
-from gesturelsm.pipeline import ALL_FACTS
+from gesturelsm.presentation import steps_from_flags
 from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
@@ -104,7 +104,7 @@ class _Handlers:
                 auto_text=True, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
-                       steps=steps_from_flags(steps, ddim_steps, ALL_FACTS), cfg=cfg, seed=seed,
+                       steps=steps_from_flags(steps, ddim_steps, FACTS), cfg=cfg, seed=seed,
                        stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text,
                        render=render)
 
@@ -181,7 +181,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
     """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order and the button."""
     settings = service.settings
     choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
-    default_methods = [m for m in FACTS if m in service.methods][:3]
+    default_methods = [m for m in FACTS if m in service.methods and not FACTS[m].imported][:3]     # ours
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                      elem_id="speech")
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
@@ -195,7 +195,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
         choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
         info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
               "long speech uses our windowing with a neutral first seed."
-              if any(m.endswith("_authors") for m in service.methods) else None)))
+              if any(m in FACTS and FACTS[m].imported for m in service.methods) else None)))
     with gr.Row():
         steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
                                        value=FACTS["gesturelsm"].default_steps, step=1,

@@ -14,8 +14,9 @@ from pathlib import Path
 import pytest
 import soundfile as sf
 
-from gesturelsm.flows import steps_from_flags
+from gesturelsm.backends import FACTS
 from gesturelsm.errors import GestureError
+from gesturelsm.presentation import steps_from_flags
 from gesturelsm.serve.request import Request
 from gesturelsm.serve.service import GestureService
 
@@ -32,9 +33,9 @@ def no_work(service, monkeypatch):
 
 
 def _req(path, **kw):
-    """A request as the page sends it: its two step sliders become steps per method (flows.steps_from_flags)."""
+    """A request as the page sends it: its two step sliders become steps per method (presentation.steps_from_flags)."""
     if "ddim_steps" in kw:
-        kw["steps"] = steps_from_flags(kw.pop("steps", 1), kw.pop("ddim_steps"))
+        kw["steps"] = steps_from_flags(kw.pop("steps", 1), kw.pop("ddim_steps"), FACTS)
     return Request(str(path), **{"steps": 1, "size": 256, "exports": False, **kw})
 
 

@@ -10,9 +10,10 @@ import pytest
 import soundfile as sf
 
 from _support import served, speech_like
+from gesturelsm.presentation import LABELS
+from gesturelsm.reference.runner import FACE_NOTE
 from gesturelsm.serve.request import TIMING_COLUMNS, ServiceSettings
 from gesturelsm.serve.service import GestureService
-from gesturelsm.reference.runner import FACE_NOTE, LABELS
 
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"

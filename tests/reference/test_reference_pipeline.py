@@ -8,7 +8,7 @@ import pytest
 import torch
 
 from _support import speech_like
-from gesturelsm.pipeline import GesturePipeline, InputError
+from gesturelsm.pipeline import ASSETS, GesturePipeline, InputError
 from gesturelsm.reference.config import REGION_DIMS, RVQConfig
 from gesturelsm.reference.rvq import ReferenceRVQ
 from gesturelsm.reference.runner import FACE_NOTE, ReferenceBundle
@@ -18,7 +18,7 @@ FIX = Path(__file__).parent / "fixtures"
 
 @pytest.fixture(scope="module")
 def pipe(ckpt_dir) -> GesturePipeline:
-    return GesturePipeline.from_pretrained(ckpt_dir, warm_up=False)
+    return GesturePipeline.from_pretrained(checkpoints=[ASSETS, ckpt_dir], warm_up=False)
 
 
 def test_authors_methods_offered_beside_ours(pipe):

@@ -1,0 +1,100 @@
+"""What every backend is: its facts, the prepared speech it generates from, and one `generate` call.
+
+A backend is one method with its loaded weights: ours (a flow/diffusion generator on our tokenizers,
+`ours.py`) or the authors' (their converted networks and RVQ-VAEs, `authors.py`). The pipeline knows
+backends only through this interface; the registry (`__init__.py`) says which exist and how each is
+found in a checkpoint folder.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Protocol
+
+import numpy as np
+import torch
+
+from ..motion.sequence import FPS, MotionSequence
+
+Progress = Callable[[float, str], None]
+MAX_CFG = 10.0                      # the largest classifier-free guidance scale any backend accepts
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """The settings a backend accepts: steps in [min_steps, max_steps], CFG scale in [min_cfg, max_cfg]."""
+    min_steps: int
+    max_steps: int
+    min_cfg: float
+    max_cfg: float
+
+
+@dataclass(frozen=True)
+class BackendFacts:
+    """What the rest of the package needs to know about a method, written once, in its registry line."""
+    key: str                        # the name in the CLI, the API and the page, e.g. "gesturelsm"
+    default_steps: int              # sampling steps when none are given
+    max_steps: int                  # the largest step count accepted
+    predicts: str                   # what its network returns to the sampler: "velocity" | "data"
+    uses_step_size: bool            # whether the network takes the step size as an input
+    regions: tuple[str, ...]        # the body regions it generates; the others stay neutral (e.g. no "face")
+    guidance: bool = True           # whether the CFG scale changes its output
+    max_cfg: float = MAX_CFG        # the largest CFG scale accepted
+    imported: bool = False          # True: the authors' released weights (`gesturelsm import-reference`)
+
+    @property
+    def bounds(self) -> Bounds:
+        return Bounds(1, self.max_steps, 0.0, self.max_cfg)
+
+
+@dataclass
+class SpeechInput:
+    """Speech prepared once and reusable across methods, steps and seeds."""
+    audio: np.ndarray                   # (N,) 16 kHz mono float32
+    num_frames: int
+    channels: torch.Tensor              # (2, N) envelope + onsets
+    words: list | None                  # list[Word] used, or None (audio-only)
+    word_features: torch.Tensor         # (T, 384)
+    has_word: torch.Tensor              # (T,) bool
+    text_mode: str                      # how the transcript was used, said to the user
+    timings: dict[str, float] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+    transcript: str | None = None       # the automatic transcript's text when one was recognised and used
+
+    @property
+    def duration(self) -> float:
+        return self.num_frames / FPS
+
+
+@dataclass
+class BackendOutput:
+    motion: MotionSequence              # exactly speech.num_frames frames
+    timings: dict[str, float]           # seconds per stage (sampling, decoding)
+    warnings: list[str]                 # what the visitor should know about this backend's output
+
+
+class Backend(Protocol):
+    """One method with its weights, ready to generate."""
+    facts: BackendFacts
+
+    def generate(self, speech: SpeechInput, steps: int, cfg: float, seed: int,
+                 progress: Progress | None = None) -> BackendOutput:
+        """Motion for the prepared speech; settings are already checked against `facts`. `progress(f, msg)`
+        with f in [0, 1]."""
+
+
+class BackendKind(Protocol):
+    """A registry line: a method's facts and how its checkpoint is found and loaded."""
+    facts: BackendFacts
+
+    def checkpoint(self, root: Path) -> Path:
+        """The file this method's weights have in a checkpoint folder."""
+
+    def root_of(self, file: Path) -> Path:
+        """The checkpoint folder a file of this method lies in (where shared files such as tokenizers are)."""
+
+    def load(self, file: Path, device: str | torch.device, shared: dict) -> Backend:
+        """The backend from its checkpoint; `shared` caches what backends of one folder share (tokenizers)."""
+
+
+__all__ = ["Backend", "BackendFacts", "BackendKind", "BackendOutput", "Bounds", "MAX_CFG", "Progress", "SpeechInput"]

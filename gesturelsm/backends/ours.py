@@ -1,0 +1,78 @@
+"""Our methods as backends: a generator of the flows registry (GestureLSM's shortcut flow, rectified flow,
+DDIM) on our per-region tokenizers, all regions including the face.
+
+Checkpoint folder layout: tokenizer/<region>.safetensors (shared by the folder's generators) and
+generator/<method>.safetensors.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+
+from ..errors import CheckpointError
+from ..flows import FACTS as FLOW_FACTS
+from ..generator.model import GestureGenerator
+from ..generator.sampling import decode_latents, generate_latents
+from ..motion.regions import GENERATED_REGIONS, join_regions
+from ..motion.sequence import MotionSequence
+from ..tokenizer.model import RVQVAE
+from .base import BackendFacts, BackendOutput, Progress, SpeechInput
+
+
+def load_tokenizers(folder: Path, device: str | torch.device = "cpu") -> dict[str, RVQVAE]:
+    missing = [r for r in GENERATED_REGIONS if not (folder / f"{r}.safetensors").exists()]
+    if missing:
+        raise CheckpointError(f"{folder}: missing tokenizer checkpoints for {', '.join(missing)}")
+    return {r: RVQVAE.load(folder / f"{r}.safetensors").to(device) for r in GENERATED_REGIONS}
+
+
+class FlowBackend:
+    """One of our generators with the tokenizers that decode its latents."""
+
+    def __init__(self, facts: BackendFacts, model: GestureGenerator, tokenizers: dict[str, RVQVAE]):
+        if tuple(model.config.regions) != tuple(tokenizers):
+            raise CheckpointError(f"generator regions {model.config.regions} do not match tokenizers {tuple(tokenizers)}")
+        self.facts, self.model, self.tokenizers = facts, model, tokenizers
+
+    @torch.no_grad()
+    def generate(self, speech: SpeechInput, steps: int, cfg: float, seed: int,
+                 progress: Progress | None = None) -> BackendOutput:
+        t0 = time.perf_counter()
+        lat = generate_latents(self.model, speech.channels, speech.word_features, speech.has_word,
+                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress)
+        timings = {"sampling": time.perf_counter() - t0}
+        t1 = time.perf_counter()
+        device = next(self.model.parameters()).device
+        parts = decode_latents(self.tokenizers, lat.to(device), speech.num_frames)
+        motion = MotionSequence.from_features(join_regions({k: v.cpu() for k, v in parts.items()}))
+        timings["decoding"] = time.perf_counter() - t1
+        return BackendOutput(motion, timings, [])
+
+
+@dataclass(frozen=True)
+class Ours:
+    """Registry line of one of our methods: `Ours.of("gesturelsm")` (facts from the flows registry)."""
+    facts: BackendFacts
+
+    @classmethod
+    def of(cls, key: str) -> "Ours":
+        f = FLOW_FACTS[key]
+        return cls(BackendFacts(f.key, f.default_steps, f.max_steps, f.predicts, f.uses_step_size, GENERATED_REGIONS))
+
+    def checkpoint(self, root: Path) -> Path:
+        return root / "generator" / f"{self.facts.key}.safetensors"
+
+    def root_of(self, file: Path) -> Path:
+        return file.parent.parent
+
+    def load(self, file: Path, device: str | torch.device, shared: dict) -> FlowBackend:
+        root = self.root_of(file)
+        if ("tokenizers", root) not in shared:
+            shared["tokenizers", root] = load_tokenizers(root / "tokenizer", device)
+        return FlowBackend(self.facts, GestureGenerator.load(file).to(device), shared["tokenizers", root])
+
+
+__all__ = ["FlowBackend", "Ours", "load_tokenizers"]

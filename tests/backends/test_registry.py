@@ -1,0 +1,105 @@
+"""One registry for every method: backends built from checkpoint folders or files, bounds from the facts,
+the authors' methods as backends like ours, clear messages for missing or unknown ones."""
+from __future__ import annotations
+
+import shutil
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from _support import speech_like
+from gesturelsm.backends import BACKENDS, FACTS, MAX_CFG, backend_facts, checkpoint_sources
+from gesturelsm.backends.authors import AuthorsBackend
+from gesturelsm.backends.ours import FlowBackend
+from gesturelsm.constants import ASSETS
+from gesturelsm.errors import CheckpointError, InputError
+from gesturelsm.pipeline import GesturePipeline
+
+
+def test_registry_lists_ours_then_the_authors_methods_with_their_facts():
+    assert list(FACTS) == ["gesturelsm", "rectified_flow", "ddim", "gesturelsm_authors", "meanflow_authors",
+                           "diffusion_authors"]
+    assert [k for k, f in FACTS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors", "diffusion_authors"]
+    assert (FACTS["gesturelsm"].default_steps, FACTS["ddim"].default_steps, FACTS["gesturelsm_authors"].default_steps,
+            FACTS["meanflow_authors"].default_steps, FACTS["diffusion_authors"].default_steps) == (8, 20, 2, 1, 20)
+    assert "face" in FACTS["gesturelsm"].regions and "face" not in FACTS["meanflow_authors"].regions
+    assert all(BACKENDS[k].facts is f for k, f in FACTS.items())
+
+
+def test_backend_from_an_explicit_checkpoint_file_equals_the_folders(tiny_assets):
+    """One generator file (its tokenizers found beside it) gives the same motion as the whole folder."""
+    one = GesturePipeline.from_pretrained(checkpoints=[tiny_assets / "generator" / "ddim.safetensors"], warm_up=False)
+    assert one.methods == ["ddim"] and isinstance(one.backends["ddim"], FlowBackend)
+    full = GesturePipeline.from_pretrained(tiny_assets, warm_up=False)
+    assert full.methods == ["gesturelsm", "rectified_flow", "ddim"]
+    y = speech_like(2.0)
+    a = one.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False).motion
+    b = full.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False).motion
+    assert np.array_equal(a.poses, b.poses) and np.array_equal(a.expressions, b.expressions)
+
+
+def test_authors_methods_are_backends_without_patching(ckpt_dir, tiny_assets):
+    theirs = GesturePipeline.from_pretrained(checkpoints=[ckpt_dir], warm_up=False)
+    assert theirs.methods == ["gesturelsm_authors", "meanflow_authors"]          # registry order, only what is there
+    assert all(isinstance(b, AuthorsBackend) for b in theirs.backends.values())
+    assert not hasattr(theirs, "reference_methods") and theirs.generators == {} and theirs.tokenizers == {}
+    both = GesturePipeline.from_pretrained(checkpoints=[tiny_assets, ckpt_dir / "reference_meanflow.safetensors"],
+                                           warm_up=False)
+    assert both.methods == ["gesturelsm", "rectified_flow", "ddim", "meanflow_authors"]
+    res = both.generate(speech_like(1.0), 16000, steps=1, cfg=1.0, method="meanflow_authors", transcribe=False)
+    assert res.motion.num_frames == 30 and np.allclose(res.motion.expressions, 0)
+
+
+def test_bounds_come_from_the_facts(tiny_assets):
+    pipe = GesturePipeline.from_pretrained(tiny_assets, warm_up=False)
+    for m in pipe.methods:
+        b = pipe.bounds(m)
+        assert (b.min_steps, b.max_steps, b.min_cfg, b.max_cfg) == (1, FACTS[m].max_steps, 0.0, MAX_CFG)
+        pipe.check_settings(m, b.max_steps, b.max_cfg)
+        with pytest.raises(InputError, match=f"from 1 to {b.max_steps} for {m}"):
+            pipe.check_settings(m, b.max_steps + 1, 1.0)
+    backend = pipe.backends["gesturelsm"]
+    backend.facts = replace(backend.facts, max_steps=3, max_cfg=1.5)    # the checker reads nothing else
+    with pytest.raises(InputError, match="from 1 to 3 for gesturelsm"):
+        pipe.check_settings("gesturelsm", 4, 1.0)
+    with pytest.raises(InputError, match="between 0 and 1.5"):
+        pipe.check_settings("gesturelsm", 2, 2.0)
+
+
+def test_unknown_method_is_named_with_the_choices(tiny_assets):
+    pipe = GesturePipeline.from_pretrained(tiny_assets, methods=["gesturelsm"], warm_up=False)
+    with pytest.raises(InputError, match="unknown method 'meanflow_authors'; available: gesturelsm$"):
+        pipe.generate(speech_like(1.0), method="meanflow_authors")
+    with pytest.raises(InputError, match="unknown method 'nope'; the methods are: gesturelsm, rectified_flow"):
+        backend_facts("nope")
+
+
+def test_missing_checkpoints_are_said_clearly(tmp_path, tiny_assets, ckpt_dir):
+    with pytest.raises(CheckpointError, match=f"{tmp_path}: no checkpoints found"):
+        GesturePipeline.from_pretrained(tmp_path, warm_up=False)               # not the shipped assets instead
+    with pytest.raises(CheckpointError, match="no such checkpoint file or folder"):
+        GesturePipeline.from_pretrained(tmp_path / "absent", warm_up=False)
+    with pytest.raises(CheckpointError, match="not a checkpoint of any method"):
+        GesturePipeline.from_pretrained(checkpoints=[tiny_assets / "tokenizer" / "face.safetensors"], warm_up=False)
+    with pytest.raises(CheckpointError, match="method gesturelsm has two checkpoints"):
+        GesturePipeline.from_pretrained(checkpoints=[tiny_assets, tiny_assets / "generator" / "gesturelsm.safetensors"],
+                                        warm_up=False)
+    with pytest.raises(CheckpointError, match="no checkpoint for ddim in"):
+        GesturePipeline.from_pretrained(ckpt_dir, methods=["ddim"], warm_up=False)
+    lone = tmp_path / "lone"
+    lone.mkdir()
+    shutil.copy(ckpt_dir / "reference_shortcut.safetensors", lone)
+    with pytest.raises(CheckpointError, match="reference_rvq.safetensors is missing beside it"):
+        GesturePipeline.from_pretrained(lone, warm_up=False)
+    (tmp_path / "gen" / "generator").mkdir(parents=True)
+    shutil.copy(tiny_assets / "generator" / "ddim.safetensors", tmp_path / "gen" / "generator")
+    with pytest.raises(CheckpointError, match="missing tokenizer checkpoints for upper, hands, lower, face"):
+        GesturePipeline.from_pretrained(tmp_path / "gen", warm_up=False)
+
+
+def test_checkpoints_setting_puts_the_authors_beside_the_shipped_models(ckpt_dir, tiny_assets):
+    """`--checkpoints`: nothing, the shipped models; an import-reference folder, those beside them; else exactly it."""
+    assert checkpoint_sources(None) == [ASSETS]
+    assert checkpoint_sources(ckpt_dir) == [ASSETS, ckpt_dir]
+    assert checkpoint_sources(str(tiny_assets)) == [tiny_assets]

@@ -1,0 +1,56 @@
+"""The one long-audio window loop: coverage, seeds carried from window to window, the two overlap rules."""
+from __future__ import annotations
+
+import torch
+
+from gesturelsm.flows import sample_windows, window_layout
+
+
+def test_layout_covers_every_latent_with_whole_windows():
+    for n in range(1, 200):
+        starts = window_layout(n, 32, 4)
+        assert starts[0] == 0 and starts[-1] + 32 >= n
+        assert all(b - a == 28 for a, b in zip(starts, starts[1:]))
+        assert len(starts) == 1 or starts[-2] + 32 < n          # no window more than needed
+
+
+def _recording_sampler(calls):
+    def sample(i, start, seed, g):
+        calls.append((i, start, seed.clone()))
+        x = torch.full((1, 8, 2), float(i + 1))
+        x[:, :, 1] = torch.arange(8.0) + 100 * i                   # distinct values along time
+        return x
+    return sample
+
+
+def test_each_window_is_seeded_by_the_end_of_the_one_before():
+    calls = []
+    first = torch.zeros(1, 2, 2)
+    out = sample_windows(20, 8, 2, first, _recording_sampler(calls), seed=0, crossfade=False)
+    assert [c[1] for c in calls] == window_layout(20, 8, 2) == [0, 6, 12, 18]
+    assert torch.equal(calls[0][2], first)
+    for i in range(1, 4):
+        prev = torch.full((1, 8, 2), float(i))
+        prev[:, :, 1] = torch.arange(8.0) + 100 * (i - 1)
+        assert torch.equal(calls[i][2], prev[:, 6:])
+    assert out.shape == (1, 26, 2)
+    assert torch.equal(out[0, 6:8, 0], torch.tensor([1.0, 1.0]))   # keep: the overlap stays the earlier window's
+
+
+def test_crossfade_blends_the_overlap_linearly():
+    out = sample_windows(10, 8, 2, torch.zeros(1, 2, 2), _recording_sampler([]), seed=0, crossfade=True)
+    w = torch.tensor([1 / 3, 2 / 3])
+    assert torch.allclose(out[0, 6:8, 0], 1 * (1 - w) + 2 * w)      # old fades out, new fades in
+    assert torch.equal(out[0, 8:14, 0], torch.full((6,), 2.0))
+
+
+def test_noise_comes_from_one_generator_seeded_once():
+    draws = []
+
+    def sample(i, start, seed, g):
+        draws.append(torch.randn(3, generator=g))
+        return torch.zeros(1, 8, 1)
+
+    sample_windows(20, 8, 2, torch.zeros(1, 2, 1), sample, seed=5)
+    g = torch.Generator().manual_seed(5)
+    assert all(torch.equal(d, torch.randn(3, generator=g)) for d in draws)
