@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sqlalchemy import (JSON, Boolean, Column, Float, ForeignKey, Integer, MetaData, String, Table,
-                        UniqueConstraint, create_engine, event, insert, select, update)
+                        UniqueConstraint, create_engine, event, func, insert, select, update)
 from sqlalchemy.engine import Engine
 from sqlalchemy.exc import IntegrityError
 
@@ -62,6 +62,7 @@ class RaterState:
     id: int
     session: str
     shown_trial: int
+    shown_at: float
     answered: int
     code: str | None
 
@@ -79,7 +80,7 @@ def open_db(url: str) -> Engine:
         def _pragmas(conn, _record):            # noqa: ANN001 (DBAPI connection)
             cur = conn.cursor()
             cur.execute("PRAGMA journal_mode=WAL")
-            cur.execute("PRAGMA synchronous=FULL")   # an acknowledged answer survives a power cut
+            cur.execute("PRAGMA synchronous=NORMAL")   # WAL: committed answers survive a crash of the server
             cur.close()
     metadata.create_all(engine)
     return engine
@@ -89,8 +90,8 @@ def _state(conn, rater: int) -> RaterState | None:
     row = conn.execute(select(raters).where(raters.c.id == rater)).mappings().first()
     if row is None:
         return None
-    n = len(conn.execute(select(answers.c.trial).where(answers.c.rater == rater)).all())
-    return RaterState(row["id"], row["session"], row["shown_trial"], n, row["code"])
+    n = conn.execute(select(func.count()).select_from(answers).where(answers.c.rater == rater)).scalar_one()
+    return RaterState(row["id"], row["session"], row["shown_trial"], row["shown_at"], n, row["code"])
 
 
 def open_session(engine: Engine, rater: int, first_trial: int) -> RaterState:
@@ -145,19 +146,18 @@ def record(engine: Engine, rater: int, session: str, trial: int, *, choice: str 
         if trial != st.shown_trial:
             raise Refused(409, f"trial {trial} is not the one on your screen (trial {st.shown_trial}); "
                                "reload the page to continue")
-        row = conn.execute(select(raters.c.shown_at).where(raters.c.id == rater)).first()
         try:
             with conn.begin_nested():
                 conn.execute(insert(answers).values(
                     rater=rater, trial=trial, choice=choice, ratings=json.loads(json.dumps(ratings)) if ratings
-                    else None, seconds=max(0.0, now - row[0]), played=bool(played), created_at=now))
+                    else None, seconds=max(0.0, now - st.shown_at), played=bool(played), created_at=now))
         except IntegrityError:
             raise Refused(409, f"trial {trial} was already answered; it counts once") from None
         values: dict = dict(shown_trial=next_trial if next_trial is not None else n_trials, shown_at=now)
         if next_trial is None:
             values.update(code=secrets.token_hex(4).upper(), completed_at=now)
         conn.execute(update(raters).where(raters.c.id == rater).values(**values))
-        return _state(conn, rater)
+    return RaterState(rater, session, values["shown_trial"], now, st.answered + 1, values.get("code"))
 
 
 def shown_trial(engine: Engine, rater: int) -> int:
