@@ -72,16 +72,23 @@ def default_url(study: str | Path) -> str:
 
 
 def open_db(url: str) -> Engine:
-    """An engine with the tables created. SQLite gets WAL (readers do not block the writer) and a busy timeout."""
+    """An engine with the tables created. SQLite gets WAL (readers do not block the writer), a busy timeout, and
+    transactions that really begin where SQLAlchemy begins them (BEGIN IMMEDIATE: the driver's own implicit
+    transactions would let an answer's insert and the rater's update commit separately)."""
     sqlite = url.startswith("sqlite")
     engine = create_engine(url, connect_args={"timeout": 30, "check_same_thread": False} if sqlite else {})
     if sqlite:
         @event.listens_for(engine, "connect")
         def _pragmas(conn, _record):            # noqa: ANN001 (DBAPI connection)
+            conn.isolation_level = None          # the driver issues no BEGIN / COMMIT of its own
             cur = conn.cursor()
             cur.execute("PRAGMA journal_mode=WAL")
             cur.execute("PRAGMA synchronous=NORMAL")   # WAL: committed answers survive a crash of the server
             cur.close()
+
+        @event.listens_for(engine, "begin")
+        def _begin(conn):                        # noqa: ANN001
+            conn.exec_driver_sql("BEGIN IMMEDIATE")
     metadata.create_all(engine)
     return engine
 
@@ -147,11 +154,10 @@ def record(engine: Engine, rater: int, session: str, trial: int, *, choice: str 
             raise Refused(409, f"trial {trial} is not the one on your screen (trial {st.shown_trial}); "
                                "reload the page to continue")
         try:
-            with conn.begin_nested():
-                conn.execute(insert(answers).values(
-                    rater=rater, trial=trial, choice=choice, ratings=json.loads(json.dumps(ratings)) if ratings
-                    else None, seconds=max(0.0, now - st.shown_at), played=bool(played), created_at=now))
-        except IntegrityError:
+            conn.execute(insert(answers).values(
+                rater=rater, trial=trial, choice=choice, ratings=json.loads(json.dumps(ratings)) if ratings
+                else None, seconds=max(0.0, now - st.shown_at), played=bool(played), created_at=now))
+        except IntegrityError:                   # the whole transaction rolls back: nothing is written
             raise Refused(409, f"trial {trial} was already answered; it counts once") from None
         values: dict = dict(shown_trial=next_trial if next_trial is not None else n_trials, shown_at=now)
         if next_trial is None:

@@ -72,9 +72,13 @@ def _refusal(exc: db.Refused) -> JSONResponse:
 
 
 async def _json_body(request: Request) -> dict:
-    raw = await request.body()
-    if len(raw) > MAX_BODY:
+    if int(request.headers.get("content-length") or 0) > MAX_BODY:
         raise db.Refused(413, "the request is too large")
+    raw = b""
+    async for chunk in request.stream():
+        raw += chunk
+        if len(raw) > MAX_BODY:
+            raise db.Refused(413, "the request is too large")
     try:
         body = json.loads(raw)
     except (ValueError, UnicodeDecodeError):

@@ -114,3 +114,16 @@ def test_videos_stream_with_range_requests_only_for_shown_trials(folder, tmp_pat
     part = c.get(f"/api/{rater.token}/video/0/right", headers={"Range": "bytes=100-199"})
     assert part.status_code == 206 and part.content == (folder / "videos" / rater.trials[0].right).read_bytes()[100:200]
     assert c.get(f"/api/{rater.token}/video/0/up").status_code == 404
+
+
+def test_two_servers_on_one_database_count_a_doubled_answer_once(folder, tmp_path):
+    from gesturelsm.study import db
+
+    url = f"sqlite:///{tmp_path / 'r.sqlite'}"
+    rater = _tokens(folder)[1]
+    one, two = _client(folder, url), _client(folder, url)
+    session = one.post(f"/api/{rater.token}/open").json()["session"]
+    body = dict(session=session, trial=0, choice="left", played=True)
+    codes = sorted(c.post(f"/api/{rater.token}/answer", json=body).status_code for c in (one, two))
+    assert codes == [200, 409]
+    assert [(r["rater"], r["trial"]) for r in db.all_answers(db.open_db(url))] == [(1, 0)]
