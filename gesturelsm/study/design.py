@@ -144,7 +144,7 @@ def rater_trials(cond: Conditions, design: Design, rater: int) -> list[Trial]:
             checks.append(Trial(0, kind, motion_of, video, check="mismatch", expect="left"))
         else:
             checks.append(Trial(0, kind, video, motion_of, check="mismatch", expect="right"))
-    # checks go into the second half or later, so a repeat always comes after what it repeats
+    # mismatch checks go into the second half; a repeat goes at least two trials after what it repeats
     order: list[Trial] = list(trials)
     for c in checks:
         order.insert(int(rng.integers(len(order) // 2, len(order) + 1)), c)
