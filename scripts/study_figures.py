@@ -62,7 +62,7 @@ def screenshot(folder: Path, out: Path) -> None:
         time.sleep(8)
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=list(CHROMIUM_ARGS))
-            page = browser.new_page(viewport={"width": 900, "height": 560})
+            page = browser.new_page(viewport={"width": 820, "height": 640})
             page.goto(f"http://127.0.0.1:{port}/r/{token}")
             page.wait_for_selector('#trial[data-trial="0"]', timeout=60000)
             page.evaluate("""() => Promise.all([...document.querySelectorAll('video')].map(v => new Promise(ok => {
@@ -80,21 +80,23 @@ def main() -> int:
     ap.add_argument("--work", default="/tmp/study-figures")
     ap.add_argument("--raters", type=int, default=24)
     ap.add_argument("--careless", type=int, default=3, help="raters answering at random (the checks drop them)")
+    ap.add_argument("--reuse", action="store_true", help="keep an answered study in --work; redo only the figures")
     ap.add_argument("--strengths", default="gesturelsm=0.9,rectified_flow=0.5,ddim=0",
                     help="simulated Bradley-Terry log-strengths")
     args = ap.parse_args()
     from gesturelsm.cli import main as cli
 
     work = Path(args.work)
-    shutil.rmtree(work, ignore_errors=True)
-    (work / "speech").mkdir(parents=True)
-    for name in ("hello", "weekend", "pipeline"):
-        shutil.copy(REPO / "app" / "examples" / f"{name}.wav", work / "speech")
     study = work / "study"
-    assert cli(["batch", "--audio-dir", str(work / "speech"), "--out", str(study), "--raters", str(args.raters),
-                "--methods", "gesturelsm", "rectified_flow", "ddim", "--size", "256", "--attention", "0.25"]) == 0
-    strengths = {k: float(v) for k, v in (kv.split("=") for kv in args.strengths.split(","))}
-    simulate(study, strengths, args.careless)
+    if not (args.reuse and (study / "responses.sqlite").exists()):
+        shutil.rmtree(work, ignore_errors=True)
+        (work / "speech").mkdir(parents=True)
+        for name in ("hello", "weekend", "pipeline"):
+            shutil.copy(REPO / "app" / "examples" / f"{name}.wav", work / "speech")
+        assert cli(["batch", "--audio-dir", str(work / "speech"), "--out", str(study), "--raters", str(args.raters),
+                    "--methods", "gesturelsm", "rectified_flow", "ddim", "--size", "256", "--attention", "0.25"]) == 0
+        strengths = {k: float(v) for k, v in (kv.split("=") for kv in args.strengths.split(","))}
+        simulate(study, strengths, args.careless)
     assert cli(["study", "results", str(study)]) == 0
     shutil.copy(study / "results" / "results.png", REPO / "docs" / "study_results.png")
     screenshot(study, REPO / "docs" / "study_trial.png")

@@ -12,12 +12,13 @@ PAGE = r"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width,initial-scale=1">
 <meta name="referrer" content="no-referrer"><title>Gesture study</title>
 <style>
-body{font-family:system-ui,sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;color:#222}
+body{font-family:system-ui,sans-serif;max-width:1000px;margin:.5em auto;padding:0 1em;color:#222}
 header{display:flex;justify-content:space-between;align-items:baseline}
+h1{font-size:1.5em;margin:.4em 0}
 #progress{font-variant-numeric:tabular-nums;color:#555}
 .videos{display:flex;gap:1em;justify-content:center}
 .videos figure{margin:0;text-align:center;flex:1}
-video{width:100%;max-width:480px;background:#000;border-radius:6px}
+video{width:100%;max-width:400px;background:#000;border-radius:6px}
 .choices{display:flex;gap:1em;justify-content:center;margin:1.2em 0}
 button{font-size:1.05em;padding:.6em 1.4em;border-radius:6px;border:1px solid #888;background:#f4f4f4;cursor:pointer}
 button:disabled{opacity:.45;cursor:default}

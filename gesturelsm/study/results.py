@@ -3,7 +3,9 @@ and write results/ in the study folder: CSV tables, results.md and results.png.
 
 Attention rule (configurable): a rater is kept when they answered at least `min_checks` checks, chose the
 genuine video (not the mismatched speech) in at least `mismatch_pass` of the mismatch checks, and answered at
-least `repeat_pass` of the repeat checks as they answered the first time.
+least `repeat_pass` of the repeat checks as they answered the first time (0 by default: consistency is reported
+per rater, but honest preferences between two close methods change between repeats, so it drops nobody unless
+asked to).
 Pairwise: per pair of methods, wins / losses / ties, the win rate without ties with a 95% Wilson interval, a
 two-sided sign test with Holm's correction over all pairs; Bradley-Terry scores (reference method = 0) with
 95% bootstrap intervals over raters. Rating: per method and scale, the mean with a 95% bootstrap interval.
@@ -26,7 +28,7 @@ from .design import SCALES, Rater, Trial, read_conditions, read_design, read_rat
 @dataclass(frozen=True)
 class Rule:
     mismatch_pass: float = 1.0
-    repeat_pass: float = 0.5
+    repeat_pass: float = 0.0
     min_checks: int = 1
 
     def describe(self) -> str:

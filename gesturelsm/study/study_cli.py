@@ -33,8 +33,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--out", help="output folder (default STUDY_DIR/results)")
     r.add_argument("--mismatch-pass", type=float, default=1.0,
                    help="fraction of mismatch checks a rater must pass (default 1.0: all)")
-    r.add_argument("--repeat-pass", type=float, default=0.5,
-                   help="fraction of repeat checks a rater must answer consistently (default 0.5)")
+    r.add_argument("--repeat-pass", type=float, default=0.0,
+                   help="fraction of repeat checks a rater must answer consistently (default 0: reported only, "
+                        "as honest preferences between close methods change between repeats)")
     r.add_argument("--min-checks", type=int, default=1, help="attention checks a rater must have answered")
     r.add_argument("--keep-all", action="store_true", help="keep every rater (no attention rule)")
     r.add_argument("--reference", help="method whose Bradley-Terry score is 0 (default: the key's first)")

@@ -1,4 +1,6 @@
-"""Study design: every pair of methods on every speech exactly once per rater, sides balanced within a rater, mismatch checks in the second half and repeats at least two trials after what they repeat, mismatch checks pointing at the genuine video."""
+"""Study design: every pair of methods on every speech exactly once per rater, sides balanced within a rater,
+mismatch checks in the second half pointing at the genuine video, repeats at least two trials after what they
+repeat."""
 from __future__ import annotations
 
 from itertools import combinations

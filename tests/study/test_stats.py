@@ -81,4 +81,7 @@ def test_attention_checks_judge_a_rater():
     c = check_rater(rater, fooled, Rule())
     assert not c.kept and c.mismatch == (0, 1) and c.repeat == (0, 1) and "mismatch 0/1" in c.reason
     assert check_rater(rater, fooled, Rule(0.0, 0.0, 0)).kept
+    changed_mind = {0: dict(choice="left"), 1: dict(choice="left"), 2: dict(choice="left")}
+    assert check_rater(rater, changed_mind, Rule()).kept                    # repeats drop nobody by default
+    assert not check_rater(rater, changed_mind, Rule(repeat_pass=0.5)).kept
     assert not check_rater(rater, {0: dict(choice="left")}, Rule()).kept        # no check answered
