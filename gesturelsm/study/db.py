@@ -22,7 +22,9 @@ from pathlib import Path
 from sqlalchemy import (JSON, Boolean, Column, Float, ForeignKey, Integer, MetaData, String, Table,
                         UniqueConstraint, create_engine, event, func, insert, select, update)
 from sqlalchemy.engine import Engine
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import ArgumentError, IntegrityError, NoSuchModuleError, OperationalError
+
+from ..errors import UserError
 
 metadata = MetaData()
 raters = Table(
@@ -76,7 +78,10 @@ def open_db(url: str) -> Engine:
     transactions that really begin where SQLAlchemy begins them (BEGIN IMMEDIATE: the driver's own implicit
     transactions would let an answer's insert and the rater's update commit separately)."""
     sqlite = url.startswith("sqlite")
-    engine = create_engine(url, connect_args={"timeout": 30, "check_same_thread": False} if sqlite else {})
+    try:
+        engine = create_engine(url, connect_args={"timeout": 30, "check_same_thread": False} if sqlite else {})
+    except (ArgumentError, NoSuchModuleError, ImportError) as exc:
+        raise UserError(f"--db {url!r} is not a database URL this installation can open ({exc})") from None
     if sqlite:
         @event.listens_for(engine, "connect")
         def _pragmas(conn, _record):            # noqa: ANN001 (DBAPI connection)
@@ -89,7 +94,10 @@ def open_db(url: str) -> Engine:
         @event.listens_for(engine, "begin")
         def _begin(conn):                        # noqa: ANN001
             conn.exec_driver_sql("BEGIN IMMEDIATE")
-    metadata.create_all(engine)
+    try:
+        metadata.create_all(engine)
+    except OperationalError as exc:
+        raise UserError(f"cannot open the database {url!r}: {exc.orig}") from None
     return engine
 
 

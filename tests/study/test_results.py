@@ -83,6 +83,10 @@ def test_flags_change_the_rule_and_the_reference(pairwise, capsys):
     assert main(["study", "results", str(pairwise), "--reference", "delta"]) == 2
     assert "--reference 'delta'" in capsys.readouterr().err
     assert main(["study", "results", str(pairwise), "--mismatch-pass", "2"]) == 2
+    assert main(["study", "results", str(pairwise), "--db", "nope://x"]) == 2
+    assert "not a database URL" in capsys.readouterr().err
+    assert main(["study", "serve", str(pairwise.parent)]) == 2
+    assert "not a study folder" in capsys.readouterr().err
 
 
 def test_rating_study_through_the_server_gives_the_raters_means(tmp_path):
