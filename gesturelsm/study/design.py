@@ -199,7 +199,9 @@ def invite(study: str | Path, n: int) -> list[Rater]:
     start = max((r.id for r in raters.values()), default=0) + 1
     new = []
     for rid in range(start, start + n):
-        token = secrets.token_urlsafe(18)
+        token = secrets.token_urlsafe(18)            # 144 random bits; a repeat is redrawn, never reused
+        while token in raters or any(r.token == token for r in new):
+            token = secrets.token_urlsafe(18)
         new.append(Rater(rid, token, rater_trials(cond, design, rid)))
     everyone = sorted([*raters.values(), *new], key=lambda r: r.id)
     _atomic_write(study / "key" / "raters.json",
