@@ -20,7 +20,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.tokenizer.cli",
     "gesturelsm.generator.cli", "gesturelsm.pipeline_cli",
     "gesturelsm.render.cli", "gesturelsm.export.cli",
-    "gesturelsm.study.cli",
+    "gesturelsm.study.cli", "gesturelsm.study.study_cli",
     "gesturelsm.evaluation.cli",
     "gesturelsm.live.cli",
     "gesturelsm.reference.cli",

@@ -1,9 +1,25 @@
-"""User-study material: blinded videos of every speech x method, a key kept apart, a randomised order and
-a rating sheet per rater (realness, synchrony, smoothness on 1-5 scales, as in GestureLSM's study).
+"""User studies: blinded videos of every speech x method with a key kept apart (`gesturelsm batch`), a web study
+of pairwise preferences or 1-5 ratings with attention checks (`gesturelsm study serve`), responses in a
+database, and results with statistics (`gesturelsm study results`).
 
     from gesturelsm.study import make_study
     make_study(pipeline, "speech/", ["gesturelsm", "ddim"], "study/", raters=10)
-"""
-from .batch import AUDIO_EXTENSIONS, SCALES, StudyPlan, make_study, plan_study
 
-__all__ = ["AUDIO_EXTENSIONS", "SCALES", "StudyPlan", "make_study", "plan_study"]
+The rendering side (batch) is imported on first use, so the server and the analysis start without torch.
+"""
+from __future__ import annotations
+
+from .design import SCALES, Design
+
+_BATCH = ("AUDIO_EXTENSIONS", "StudyPlan", "make_study", "plan_study")
+
+
+def __getattr__(name: str):
+    if name in _BATCH:
+        from . import batch
+
+        return getattr(batch, name)
+    raise AttributeError(name)
+
+
+__all__ = ["AUDIO_EXTENSIONS", "SCALES", "Design", "StudyPlan", "make_study", "plan_study"]

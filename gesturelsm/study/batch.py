@@ -8,6 +8,9 @@ Output folder:
     raters/rater_NN/sheet.csv    the same order with empty 1-5 columns: realness, synchrony, smoothness
     raters/rater_NN/form.html    the videos in that order with 1-5 radio buttons; "Save ratings" downloads
                                  a filled sheet.csv (works offline from the folder, no server)
+    key/mismatch.csv             attention-check videos: one clip's video (motion_of) with another clip's speech
+    key/design.json, raters.json, links.csv   the web study (see design.py): mode, attention checks, one
+                                 unguessable link per rater for `gesturelsm study serve`
     study.json                   settings used
 Reruns skip videos that exist (videos are written under a temporary name and renamed when complete).
 """
@@ -30,16 +33,9 @@ from ..backends import FACTS
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
+from .design import SCALE_QUESTIONS, SCALES, Design, invite, read_raters, write_design
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
-SCALES = ("realness", "synchrony", "smoothness")
-SCALE_QUESTIONS = {
-    "realness": "How human-like and natural do the gestures look? (1 = not at all, 5 = completely)",
-    "synchrony": "How well do the gestures match the rhythm of the speech? (1 = not at all, 5 = perfectly)",
-    "smoothness": "How smooth is the motion, free of jitter and jumps? (1 = very jerky, 5 = perfectly smooth)",
-}
-
-
 @dataclass
 class StudyItem:
     video: str          # file name under videos/
@@ -101,8 +97,9 @@ def _transcript(audio: Path):
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               log: Callable[[str], None] = print) -> StudyPlan:
-    """Render what is missing and (re)write key, orders, sheets and forms; returns the plan.
+               design: Design = Design(), log: Callable[[str], None] = print) -> StudyPlan:
+    """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
+    web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
     `steps`: per method (missing: the method's default)."""
     methods = list(dict.fromkeys(methods))
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
@@ -144,12 +141,50 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))
     for r in range(1, raters + 1):
         _write_rater(plan, r, seed)
+    write_mismatch(plan, audio_files, methods)
+    write_design(out, design)
+    have = len(read_raters(out))
+    if have < raters:
+        invite(out, raters - have)
     (out / "study.json").write_text(json.dumps(dict(audio_dir=str(audio_dir), methods=methods, raters=raters,
                                                    steps=steps, cfg=cfg, seed=seed, size=size,
                                                    stand_in_place=stand_in_place, smoothing=smoothing), indent=1))
     log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
-        f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters)")
+        f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters); web study links "
+        f"(`gesturelsm study serve {out}`) in {out / 'key' / 'links.csv'}")
     return plan
+
+
+def write_mismatch(plan: StudyPlan, audio_files: list[Path], methods: list[str]) -> list[str]:
+    """Attention-check videos: the video of speech k+1 (method k mod M) with the speech of file k, muxed
+    without re-encoding the picture; key/mismatch.csv says which. Needs two speech files at least."""
+    import subprocess
+
+    import imageio_ffmpeg
+
+    rows = []
+    if len(audio_files) < 2:
+        return []
+    by = {(it.audio, it.method): it.video for it in plan.items}
+    for k, a in enumerate(audio_files):
+        b, m = audio_files[(k + 1) % len(audio_files)], methods[k % len(methods)]
+        src = plan.out / "videos" / by[(b.name, m)]
+        if not src.exists():
+            continue
+        name = blinded_name(plan.salt, a.name, f"mismatch|{m}|{b.name}")
+        dst = plan.out / "videos" / name
+        if not dst.exists():
+            tmp = dst.with_name(dst.stem + ".part.mp4")
+            subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-i", str(src), "-i", str(a),
+                            "-map", "0:v:0", "-map", "1:a:0", "-c:v", "copy", "-c:a", "aac", "-shortest",
+                            "-movflags", "+faststart", str(tmp)], check=True)
+            tmp.replace(dst)
+        rows.append((name, a.name, src.name))
+    with open(plan.out / "key" / "mismatch.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["video", "audio", "motion_of"])
+        w.writerows(rows)
+    return [r[0] for r in rows]
 
 
 def _write_key(plan: StudyPlan, settings: dict) -> None:
@@ -211,4 +246,4 @@ document.getElementById('save').onclick = () => {{
 
 
 __all__ = ["AUDIO_EXTENSIONS", "SCALES", "StudyItem", "StudyPlan", "blinded_name", "find_audio", "make_study",
-           "plan_study"]
+           "plan_study", "write_mismatch"]

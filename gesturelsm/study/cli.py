@@ -16,6 +16,7 @@ from ..presentation import steps_from_flags
 from ..motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from .batch import make_study
+from .design import MODES, Design
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -37,10 +38,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
+    p.add_argument("--design", default="pairwise", choices=MODES,
+                   help="web study: pairwise preference between methods on the same speech, or 1-5 ratings")
+    p.add_argument("--attention", type=float, default=0.15,
+                   help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if not 0 <= args.attention <= 1:
+        raise UserError("--attention must be a fraction from 0 to 1")
     if args.size % 16 or not 128 <= args.size <= 1024:
         raise UserError("--size must be a multiple of 16 from 128 to 1024")
     gens = [m for m in args.methods if m != GROUND_TRUTH]
@@ -48,5 +55,6 @@ def run(args: argparse.Namespace) -> int:
     body = load_body_model(str(resolve_model_path(args.model)))
     make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
                steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
-               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing)
+               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing,
+               design=Design(args.design, args.attention, args.seed))
     return 0

@@ -1,0 +1,219 @@
+"""`gesturelsm study results`: unblind the answers with the key, drop raters who fail the attention checks,
+and write results/ in the study folder: CSV tables, results.md and results.png.
+
+Attention rule (configurable): a rater is kept when they answered at least `min_checks` checks, chose the
+genuine video (not the mismatched speech) in at least `mismatch_pass` of the mismatch checks, and answered at
+least `repeat_pass` of the repeat checks as they answered the first time (0 by default: consistency is reported
+per rater, but honest preferences between two close methods change between repeats, so it drops nobody unless
+asked to).
+Pairwise: per pair of methods, wins / losses / ties, the win rate without ties with a 95% Wilson interval, a
+two-sided sign test with Holm's correction over all pairs; Bradley-Terry scores (reference method = 0) with
+95% bootstrap intervals over raters. Rating: per method and scale, the mean with a 95% bootstrap interval.
+Every row says how many raters and trials it rests on.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from itertools import combinations
+from pathlib import Path
+
+import numpy as np
+
+from . import db, stats
+from .design import SCALES, Rater, Trial, read_conditions, read_design, read_raters
+
+
+@dataclass(frozen=True)
+class Rule:
+    mismatch_pass: float = 1.0
+    repeat_pass: float = 0.0
+    min_checks: int = 1
+
+    def describe(self) -> str:
+        return (f"a rater is kept with >= {self.min_checks} attention checks answered, >= {self.mismatch_pass:.0%} "
+                f"of mismatch checks passed (genuine speech chosen) and >= {self.repeat_pass:.0%} of repeat checks "
+                "answered consistently")
+
+
+@dataclass
+class RaterCheck:
+    rater: int
+    answered: int
+    mismatch: tuple[int, int]      # passed, asked
+    repeat: tuple[int, int]
+    kept: bool
+    reason: str = ""
+
+
+@dataclass
+class Results:
+    mode: str
+    methods: list[str]
+    raters: list[RaterCheck]
+    rows: list[dict] = field(default_factory=list)          # pairwise pairs, or rating means
+    scores: list[dict] = field(default_factory=list)        # Bradley-Terry (pairwise only)
+    ranking: list[str] = field(default_factory=list)
+
+
+def _chosen(t: Trial, answer: dict) -> str | None:
+    return {"left": t.left, "right": t.right}.get(answer["choice"])
+
+
+def check_rater(rater: Rater, answers: dict[int, dict], rule: Rule) -> RaterCheck:
+    mm = rep = mm_ok = rep_ok = 0
+    for t in rater.trials:
+        a = answers.get(t.index)
+        if a is None or not t.check:
+            continue
+        if t.check == "mismatch":
+            mm += 1
+            mm_ok += (a["choice"] == t.expect) if t.kind == "pair" else (a["ratings"]["synchrony"] <= 2)
+        elif t.check == "repeat" and t.of in answers:
+            rep += 1
+            first, src = answers[t.of], rater.trials[t.of]
+            if t.kind == "pair":
+                rep_ok += _chosen(t, a) == _chosen(src, first)
+            else:
+                rep_ok += all(abs(a["ratings"][s] - first["ratings"][s]) <= 1 for s in SCALES)
+    reasons = []
+    if mm + rep < rule.min_checks:
+        reasons.append(f"{mm + rep} checks answered")
+    if mm and mm_ok < rule.mismatch_pass * mm:
+        reasons.append(f"mismatch {mm_ok}/{mm}")
+    if rep and rep_ok < rule.repeat_pass * rep:
+        reasons.append(f"repeat {rep_ok}/{rep}")
+    return RaterCheck(rater.id, len(answers), (mm_ok, mm), (rep_ok, rep), not reasons, ", ".join(reasons))
+
+
+def analyse(study: str | Path, url: str | None = None, rule: Rule = Rule(), reference: str | None = None,
+            n_boot: int = 1000, seed: int = 0) -> Results:
+    study = Path(study)
+    design, cond = read_design(study), read_conditions(study)
+    raters = {r.id: r for r in read_raters(study).values()}
+    by_rater: dict[int, dict[int, dict]] = {}
+    for a in db.all_answers(db.open_db(url or db.default_url(study))):
+        by_rater.setdefault(a["rater"], {})[a["trial"]] = a
+    checks = [check_rater(raters[r], by_rater[r], rule) for r in sorted(by_rater) if r in raters]
+    kept = [c.rater for c in checks if c.kept]
+    methods = cond.methods
+    if reference is not None and reference not in methods:
+        raise ValueError(f"--reference {reference!r} is not a method of this study ({', '.join(methods)})")
+    res = Results(design.mode, methods, checks)
+    if design.mode == "pairwise":
+        _pairwise(res, [(raters[r], by_rater[r]) for r in kept], cond.genuine,
+                  methods.index(reference) if reference else 0, n_boot, seed)
+    else:
+        _rating(res, [(raters[r], by_rater[r]) for r in kept], cond.genuine, n_boot, seed)
+    return res
+
+
+def _pairwise(res: Results, kept: list, genuine: dict, ref: int, n_boot: int, seed: int) -> None:
+    m = len(res.methods)
+    idx = {x: i for i, x in enumerate(res.methods)}
+    per_rater = np.zeros((max(1, len(kept)), m, m))
+    ties = np.zeros((m, m))
+    raters_on = np.zeros((m, m), int)
+    for k, (rater, answers) in enumerate(kept):
+        seen = np.zeros((m, m), bool)
+        for t in rater.trials:
+            a = answers.get(t.index)
+            if a is None or t.check:
+                continue
+            i, j = idx[genuine[t.left][1]], idx[genuine[t.right][1]]
+            seen[i, j] = seen[j, i] = True
+            if a["choice"] == "none":
+                ties[i, j] += 1
+                ties[j, i] += 1
+            else:
+                w, lo = (i, j) if a["choice"] == "left" else (j, i)
+                per_rater[k, w, lo] += 1
+        raters_on += seen
+    wins = per_rater.sum(0)
+    pairs = list(combinations(range(m), 2))
+    p = [stats.sign_test(int(wins[i, j]), int(wins[j, i])) for i, j in pairs]
+    adj = stats.holm(p) if pairs else []
+    for (i, j), pv, pa in zip(pairs, p, adj):
+        n = wins[i, j] + wins[j, i]
+        lo, hi = stats.wilson(wins[i, j], n)
+        res.rows.append(dict(method_a=res.methods[i], method_b=res.methods[j], a_wins=int(wins[i, j]),
+                             b_wins=int(wins[j, i]), ties=int(ties[i, j]), a_win_rate=wins[i, j] / n if n else
+                             float("nan"), ci_low=lo, ci_high=hi, p=pv, p_holm=pa, raters=int(raters_on[i, j]),
+                             trials=int(n + ties[i, j])))
+    sc = stats.bt_bootstrap(per_rater, ref, n_boot, seed)
+    for i, name in enumerate(res.methods):
+        res.scores.append(dict(method=name, score=sc.score[i], ci_low=sc.low[i], ci_high=sc.high[i],
+                               raters=int(raters_on[i].max(initial=0)) if m > 1 else 0,
+                               trials=int(wins[i].sum() + wins[:, i].sum() + ties[i].sum())))
+    res.ranking = [res.methods[i] for i in np.argsort(-sc.score, kind="stable")]
+
+
+def _rating(res: Results, kept: list, genuine: dict, n_boot: int, seed: int) -> None:
+    for s in SCALES:
+        for name in res.methods:
+            groups = [np.array([answers[t.index]["ratings"][s] for t in rater.trials if not t.check
+                                and t.index in answers and genuine[t.left][1] == name]) for rater, answers in kept]
+            mean, lo, hi = stats.bootstrap_mean(groups, n_boot, seed)
+            res.rows.append(dict(scale=s, method=name, mean=mean, ci_low=lo, ci_high=hi,
+                                 raters=sum(len(g) > 0 for g in groups), trials=int(sum(len(g) for g in groups))))
+    means = {name: np.mean([r["mean"] for r in res.rows if r["method"] == name]) for name in res.methods}
+    res.ranking = sorted(res.methods, key=lambda x: -np.nan_to_num(means[x], nan=-np.inf))
+
+
+def write(res: Results, out: str | Path, rule: Rule) -> Path:
+    """results/ with raters.csv, pairwise.csv + scores.csv (or ratings.csv), results.md and results.png."""
+    from .plots import plot_results
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    _csv(out / "raters.csv", [dict(rater=c.rater, answered=c.answered, mismatch_passed=c.mismatch[0],
+                                   mismatch_asked=c.mismatch[1], repeat_consistent=c.repeat[0],
+                                   repeat_asked=c.repeat[1], kept=c.kept, reason=c.reason) for c in res.raters])
+    if res.mode == "pairwise":
+        _csv(out / "pairwise.csv", res.rows)
+        _csv(out / "scores.csv", res.scores)
+    else:
+        _csv(out / "ratings.csv", res.rows)
+    (out / "results.md").write_text(markdown(res, rule))
+    plot_results(res, out / "results.png")
+    (out / "summary.json").write_text(json.dumps(dict(mode=res.mode, ranking=res.ranking,
+                                                      kept=[c.rater for c in res.raters if c.kept]), indent=1))
+    return out
+
+
+def _csv(path: Path, rows: list[dict]) -> None:
+    with open(path, "w", newline="") as fh:
+        if rows:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+
+
+def markdown(res: Results, rule: Rule) -> str:
+    kept = [c for c in res.raters if c.kept]
+    lines = [f"# Study results ({res.mode})", "", f"Attention rule: {rule.describe()}.", "",
+             f"Raters kept: {len(kept)} of {len(res.raters)}"
+             + "".join(f"; rater {c.rater} dropped ({c.reason})" for c in res.raters if not c.kept) + ".", ""]
+    if res.mode == "pairwise":
+        lines += ["## Bradley-Terry scores (log-strength, reference = 0; 95% bootstrap over raters)", "",
+                  "| rank | method | score | 95% interval | raters | trials |", "|---|---|---|---|---|---|"]
+        by = {s["method"]: s for s in res.scores}
+        lines += [f"| {k} | {m} | {by[m]['score']:+.2f} | [{by[m]['ci_low']:+.2f}, {by[m]['ci_high']:+.2f}] | "
+                  f"{by[m]['raters']} | {by[m]['trials']} |" for k, m in enumerate(res.ranking, 1)]
+        lines += ["", "## Pairwise preference (ties left out of the win rate; sign test, Holm-corrected)", "",
+                  "| A vs B | A wins | B wins | ties | A win rate [95% Wilson] | p | p (Holm) | raters | trials |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['method_a']} vs {r['method_b']} | {r['a_wins']} | {r['b_wins']} | {r['ties']} | "
+                  f"{r['a_win_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | {r['p']:.3g} | {r['p_holm']:.3g}"
+                  f"{' *' if r['p_holm'] < 0.05 else ''} | {r['raters']} | {r['trials']} |" for r in res.rows]
+    else:
+        lines += ["## Mean ratings (1-5; 95% bootstrap over raters)", "",
+                  "| scale | method | mean | 95% interval | raters | trials |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['scale']} | {r['method']} | {r['mean']:.2f} | [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
+                  f"{r['raters']} | {r['trials']} |" for r in res.rows]
+    lines += ["", "Ranking: " + " > ".join(res.ranking), ""]
+    return "\n".join(lines)
+
+
+__all__ = ["Results", "Rule", "analyse", "check_rater", "markdown", "write"]

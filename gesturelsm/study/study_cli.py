@@ -1,0 +1,86 @@
+"""`gesturelsm study serve | invite | results`: run a web study over a `gesturelsm batch` folder and analyse it.
+
+    gesturelsm batch --audio-dir speech/ --out study/ --raters 12      # videos, key, design, 12 links
+    gesturelsm study serve study/ --port 8600                          # raters open http://HOST:8600/r/<token>
+    gesturelsm study invite study/ 5                                   # 5 more links (the server picks them up)
+    gesturelsm study results study/                                    # results/ : CSV, markdown, PNG
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import UserError
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser("study", help="serve a web user study, invite raters, analyse the answers",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="study_command", metavar="ACTION", required=True)
+    s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>")
+    s.add_argument("study_dir", help="folder made by `gesturelsm batch`")
+    s.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; 0.0.0.0 opens it)")
+    s.add_argument("--port", type=int, default=8600)
+    s.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
+    s.set_defaults(func=run_serve)
+    i = sub.add_parser("invite", help="add N raters; prints their link paths")
+    i.add_argument("study_dir")
+    i.add_argument("n", type=int)
+    i.set_defaults(func=run_invite)
+    r = sub.add_parser("results", help="unblind, apply the attention rule, write STUDY_DIR/results/")
+    r.add_argument("study_dir")
+    r.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
+    r.add_argument("--out", help="output folder (default STUDY_DIR/results)")
+    r.add_argument("--mismatch-pass", type=float, default=1.0,
+                   help="fraction of mismatch checks a rater must pass (default 1.0: all)")
+    r.add_argument("--repeat-pass", type=float, default=0.0,
+                   help="fraction of repeat checks a rater must answer consistently (default 0: reported only, "
+                        "as honest preferences between close methods change between repeats)")
+    r.add_argument("--min-checks", type=int, default=1, help="attention checks a rater must have answered")
+    r.add_argument("--keep-all", action="store_true", help="keep every rater (no attention rule)")
+    r.add_argument("--reference", help="method whose Bradley-Terry score is 0 (default: the key's first)")
+    r.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples of raters")
+    r.add_argument("--seed", type=int, default=0)
+    r.set_defaults(func=run_results)
+
+
+def _folder(path: str) -> Path:
+    d = Path(path)
+    if not (d / "key" / "design.json").exists():
+        raise UserError(f"{d} is not a study folder (no key/design.json); make one with `gesturelsm batch`")
+    return d
+
+
+def run_serve(args: argparse.Namespace) -> int:
+    from .server import serve
+
+    if not 0 < args.port < 65536:
+        raise UserError("--port must be from 1 to 65535")
+    serve(_folder(args.study_dir), args.host, args.port, args.db)
+    return 0
+
+
+def run_invite(args: argparse.Namespace) -> int:
+    from .design import invite
+
+    for r in invite(_folder(args.study_dir), args.n):
+        print(f"rater {r.id}: /r/{r.token}")
+    return 0
+
+
+def run_results(args: argparse.Namespace) -> int:
+    from .results import Rule, analyse, markdown, write
+
+    for name in ("mismatch_pass", "repeat_pass"):
+        if not 0 <= getattr(args, name) <= 1:
+            raise UserError(f"--{name.replace('_', '-')} must be a fraction from 0 to 1")
+    rule = Rule(0.0, 0.0, 0) if args.keep_all else Rule(args.mismatch_pass, args.repeat_pass, args.min_checks)
+    folder = _folder(args.study_dir)
+    res = analyse(folder, args.db, rule, args.reference, args.bootstrap, args.seed)
+    if not any(c.kept for c in res.raters):
+        raise UserError(f"no rater passes the attention rule ({len(res.raters)} answered); "
+                        "see --mismatch-pass, --repeat-pass, --keep-all")
+    out = write(res, args.out or folder / "results", rule)
+    print(markdown(res, rule))
+    print(f"written to {out}")
+    return 0

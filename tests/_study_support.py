@@ -1,0 +1,57 @@
+"""Helpers for tests/study: a study folder made the way `gesturelsm batch` makes one (same key, mismatch videos, design and links), but
+with short synthetic videos instead of rendered ones, so server and browser tests take seconds."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def synthetic_video(path: Path, audio: np.ndarray, colour: tuple[int, int, int], seconds: float = 1.0,
+                    size: int = 64, fps: int = 15) -> None:
+    """`seconds` of a square of `colour` moving across a grey frame, with the speech `audio` (16 kHz)."""
+    import imageio
+    import soundfile as sf
+
+    wav = path.with_suffix(".wav")
+    sf.write(wav, audio[: int(seconds * 16000)], 16000)
+    frames = []
+    for k in range(int(seconds * fps)):
+        f = np.full((size, size, 3), 200, np.uint8)
+        x = int(k / (seconds * fps) * (size - 16))
+        f[24:40, x:x + 16] = colour
+        frames.append(f)
+    with imageio.get_writer(path, fps=fps, codec="libx264", pixelformat="yuv420p", audio_path=str(wav),
+                            audio_codec="aac", ffmpeg_params=["-movflags", "+faststart"], macro_block_size=16) as w:
+        for f in frames:
+            w.append_data(f)
+    wav.unlink()
+
+
+def make_synthetic_study(out: Path, methods=("alpha", "beta", "gamma"), speeches: int = 2, raters: int = 3,
+                         mode: str = "pairwise", attention: float = 0.4, seconds: float = 1.0) -> Path:
+    import soundfile as sf
+
+    from _support import speech_like
+    from gesturelsm.study.batch import _write_key, plan_study, write_mismatch
+    from gesturelsm.study.design import Design, invite, write_design
+
+    audio_dir = out.parent / (out.name + "_speech")
+    audio_dir.mkdir(parents=True, exist_ok=True)
+    files = []
+    for s in range(speeches):
+        f = audio_dir / f"speech{s}.wav"
+        sf.write(f, speech_like(seconds, seed=s), 16000)
+        files.append(f)
+    plan = plan_study(files, list(methods), out)
+    (out / "videos").mkdir(parents=True, exist_ok=True)
+    colours = [(200, 40, 40), (40, 160, 40), (40, 40, 200), (200, 160, 0)]
+    for it in plan.items:
+        a = sf.read(audio_dir / it.audio, dtype="float32")[0]
+        synthetic_video(out / "videos" / it.video, a, colours[list(methods).index(it.method) % 4], seconds)
+    _write_key(plan, dict(steps={m: 1 for m in methods}, cfg=2.0, seed=0))
+    write_mismatch(plan, files, list(methods))
+    write_design(out, Design(mode, attention, 0))
+    invite(out, raters)
+    return out
+
