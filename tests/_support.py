@@ -111,10 +111,10 @@ def shipped_service(workdir):
     the in-browser player's bundle (built by scripts/setup.sh with npm) are missing."""
     import pytest
 
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.constants import ASSETS
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
-    from gesturelsm.constants import ASSETS
+    from gesturelsm.webapp.motion_player import BUNDLE
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")

@@ -33,6 +33,26 @@ def test_tab_builds_with_the_latency_element(shipped_pipe):
     assert routes == []                                 # no body: Gradio's microphone, no socket to serve
 
 
+def test_with_a_body_and_the_player_built_the_tab_serves_the_socket_route_it_is_given(shipped_pipe, tmp_path):
+    """live.py names the socket's path for the player and serves the route its caller hands in (ui.py hands
+    live_socket.routes): without one, the tab is Gradio's microphone."""
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.webapp import live_socket
+    from gesturelsm.webapp.motion_player import BUNDLE
+
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    manager, body = LiveManager(shipped_pipe, config=LiveConfig(steps=1)), resolve_body(None)
+    with gr.Blocks() as demo:
+        routes = live.add_live_tab(manager, body, tmp_path, socket_routes=live_socket.routes)
+    assert [r.path for r in routes] == [live.PATH]
+    html = next(b for b in demo.blocks.values() if getattr(b, "elem_id", None) == "live-player-box")
+    assert f'data-socket="{live.PATH.lstrip("/")}"' in html.html_template
+    with gr.Blocks() as demo:
+        assert live.add_live_tab(manager, body, tmp_path) == []
+    assert "live-mic" in [getattr(b, "elem_id", None) for b in demo.blocks.values()]
+
+
 def test_stream_then_stop_gives_all_frames_and_latency(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     state, frames, seen = None, [], []
@@ -104,9 +124,9 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
 
 def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
     """`demo.close()` ends every running live session and joins its worker (none outlives the server)."""
-    from gesturelsm.webapp.ui import serve_locally
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
+    from gesturelsm.webapp.ui import serve_locally
 
     service = GestureService(shipped_pipe, ServiceSettings(workdir=str(tmp_path)))
     demo, _ = serve_locally(service)
