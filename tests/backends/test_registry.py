@@ -27,11 +27,11 @@ def test_registry_lists_ours_then_the_authors_methods_with_their_facts():
     assert all(BACKENDS[k].facts is f for k, f in FACTS.items())
 
 
-def test_backend_from_an_explicit_checkpoint_file_equals_the_folders(tiny_assets):
+def test_backend_from_an_explicit_checkpoint_file_equals_the_folders():
     """One generator file (its tokenizers found beside it) gives the same motion as the whole folder."""
-    one = GesturePipeline.from_pretrained(checkpoints=[tiny_assets / "generator" / "ddim.safetensors"], warm_up=False)
+    one = GesturePipeline.from_pretrained(checkpoints=[ASSETS / "generator" / "ddim.safetensors"], warm_up=False)
     assert one.methods == ["ddim"] and isinstance(one.backends["ddim"], FlowBackend)
-    full = GesturePipeline.from_pretrained(tiny_assets, warm_up=False)
+    full = GesturePipeline.from_pretrained(ASSETS, warm_up=False)
     assert full.methods == ["gesturelsm", "rectified_flow", "ddim"]
     y = speech_like(2.0)
     a = one.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False).motion
@@ -39,20 +39,20 @@ def test_backend_from_an_explicit_checkpoint_file_equals_the_folders(tiny_assets
     assert np.array_equal(a.poses, b.poses) and np.array_equal(a.expressions, b.expressions)
 
 
-def test_authors_methods_are_backends_without_patching(ckpt_dir, tiny_assets):
+def test_authors_methods_are_backends_without_patching(ckpt_dir):
     theirs = GesturePipeline.from_pretrained(checkpoints=[ckpt_dir], warm_up=False)
     assert theirs.methods == ["gesturelsm_authors", "meanflow_authors"]          # registry order, only what is there
     assert all(isinstance(b, AuthorsBackend) for b in theirs.backends.values())
     assert not hasattr(theirs, "reference_methods") and theirs.generators == {} and theirs.tokenizers == {}
-    both = GesturePipeline.from_pretrained(checkpoints=[tiny_assets, ckpt_dir / "reference_meanflow.safetensors"],
+    both = GesturePipeline.from_pretrained(checkpoints=[ASSETS, ckpt_dir / "reference_meanflow.safetensors"],
                                            warm_up=False)
     assert both.methods == ["gesturelsm", "rectified_flow", "ddim", "meanflow_authors"]
     res = both.generate(speech_like(1.0), 16000, steps=1, cfg=1.0, method="meanflow_authors", transcribe=False)
     assert res.motion.num_frames == 30 and np.allclose(res.motion.expressions, 0)
 
 
-def test_bounds_come_from_the_facts(tiny_assets):
-    pipe = GesturePipeline.from_pretrained(tiny_assets, warm_up=False)
+def test_bounds_come_from_the_facts():
+    pipe = GesturePipeline.from_pretrained(ASSETS, warm_up=False)
     for m in pipe.methods:
         b = pipe.bounds(m)
         assert (b.min_steps, b.max_steps, b.min_cfg, b.max_cfg) == (1, FACTS[m].max_steps, 0.0, MAX_CFG)
@@ -67,23 +67,23 @@ def test_bounds_come_from_the_facts(tiny_assets):
         pipe.check_settings("gesturelsm", 2, 2.0)
 
 
-def test_unknown_method_is_named_with_the_choices(tiny_assets):
-    pipe = GesturePipeline.from_pretrained(tiny_assets, methods=["gesturelsm"], warm_up=False)
+def test_unknown_method_is_named_with_the_choices():
+    pipe = GesturePipeline.from_pretrained(ASSETS, methods=["gesturelsm"], warm_up=False)
     with pytest.raises(InputError, match="unknown method 'meanflow_authors'; available: gesturelsm$"):
         pipe.generate(speech_like(1.0), method="meanflow_authors")
     with pytest.raises(InputError, match="unknown method 'nope'; the methods are: gesturelsm, rectified_flow"):
         backend_facts("nope")
 
 
-def test_missing_checkpoints_are_said_clearly(tmp_path, tiny_assets, ckpt_dir):
+def test_missing_checkpoints_are_said_clearly(tmp_path, ckpt_dir):
     with pytest.raises(CheckpointError, match=f"{tmp_path}: no checkpoints found"):
         GesturePipeline.from_pretrained(tmp_path, warm_up=False)               # not the shipped assets instead
     with pytest.raises(CheckpointError, match="no such checkpoint file or folder"):
         GesturePipeline.from_pretrained(tmp_path / "absent", warm_up=False)
     with pytest.raises(CheckpointError, match="not a checkpoint of any method"):
-        GesturePipeline.from_pretrained(checkpoints=[tiny_assets / "tokenizer" / "face.safetensors"], warm_up=False)
+        GesturePipeline.from_pretrained(checkpoints=[ASSETS / "tokenizer" / "face.safetensors"], warm_up=False)
     with pytest.raises(CheckpointError, match="method gesturelsm has two checkpoints"):
-        GesturePipeline.from_pretrained(checkpoints=[tiny_assets, tiny_assets / "generator" / "gesturelsm.safetensors"],
+        GesturePipeline.from_pretrained(checkpoints=[ASSETS, ASSETS / "generator" / "gesturelsm.safetensors"],
                                         warm_up=False)
     with pytest.raises(CheckpointError, match="no checkpoint for ddim in"):
         GesturePipeline.from_pretrained(ckpt_dir, methods=["ddim"], warm_up=False)
@@ -93,13 +93,13 @@ def test_missing_checkpoints_are_said_clearly(tmp_path, tiny_assets, ckpt_dir):
     with pytest.raises(CheckpointError, match="reference_rvq.safetensors is missing beside it"):
         GesturePipeline.from_pretrained(lone, warm_up=False)
     (tmp_path / "gen" / "generator").mkdir(parents=True)
-    shutil.copy(tiny_assets / "generator" / "ddim.safetensors", tmp_path / "gen" / "generator")
+    shutil.copy(ASSETS / "generator" / "ddim.safetensors", tmp_path / "gen" / "generator")
     with pytest.raises(CheckpointError, match="missing tokenizer checkpoints for upper, hands, lower, face"):
         GesturePipeline.from_pretrained(tmp_path / "gen", warm_up=False)
 
 
-def test_checkpoints_setting_puts_the_authors_beside_the_shipped_models(ckpt_dir, tiny_assets):
+def test_checkpoints_setting_puts_the_authors_beside_the_shipped_models(ckpt_dir):
     """`--checkpoints`: nothing, the shipped models; an import-reference folder, those beside them; else exactly it."""
     assert checkpoint_sources(None) == [ASSETS]
     assert checkpoint_sources(ckpt_dir) == [ASSETS, ckpt_dir]
-    assert checkpoint_sources(str(tiny_assets)) == [tiny_assets]
+    assert checkpoint_sources(str(ASSETS)) == [ASSETS] and checkpoint_sources(ckpt_dir / "reference_rvq.safetensors") == [ckpt_dir / "reference_rvq.safetensors"]
