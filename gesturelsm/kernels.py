@@ -27,6 +27,7 @@ import platform
 from typing import Callable, Hashable, TypeVar
 
 import torch
+import torch.nn as nn
 import torch.nn.functional as F
 
 _state: dict[str, bool] = {}
@@ -35,8 +36,15 @@ X86 = platform.machine().lower() in ("x86_64", "amd64", "x86", "i686")
 
 
 def onednn_linear_available() -> bool:
-    """Whether oneDNN's fused linear op exists here and agrees with F.linear (checked once per process)."""
+    """Whether oneDNN's fused linear op exists here, is worth taking (see `_check_linear`) and agrees with F.linear
+    (checked once per process)."""
     return _available("linear", _check_linear)
+
+
+def fast_path() -> bool:
+    """Whether accelerated modules take their fast path now: no gradient is being recorded and GESTURELSM_ONEDNN is
+    not 0. Off, every module `accelerate` swapped in computes exactly what the module it replaced computes."""
+    return not torch.is_grad_enabled() and os.environ.get("GESTURELSM_ONEDNN", "1") != "0"
 
 
 def _available(name: str, check) -> bool:
@@ -49,7 +57,10 @@ def _available(name: str, check) -> bool:
 
 
 def _check_linear() -> bool:
-    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")):
+    # oneDNN's edge is AVX-512, which MKL leaves unused on AMD CPUs; on an AVX2-only CPU both run AVX2 code and
+    # oneDNN was measured no faster (slower at the shipped generator's sizes), so MKL stays
+    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")
+            and "AVX512" in torch.backends.cpu.get_cpu_capability()):
         return False
     g = torch.Generator().manual_seed(0)
     x, w, b = (torch.randn(*s, generator=g) for s in ((5, 3, 24), (40, 24), (40,)))
@@ -84,12 +95,9 @@ def linear(x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor | None = No
         return torch.ops.mkldnn._linear_pointwise(x.contiguous(), weight.contiguous(), bias,
                                                   "gelu" if gelu else "none", [], "none" if gelu else "")
     y = F.linear(x, weight, bias)
+    if gelu and not torch.is_grad_enabled():
+        return torch.ops.aten.gelu_(y)           # in place: a fresh buffer's first touch costs page faults
     return F.gelu(y) if gelu else y
-
-
-def lin(module: torch.nn.Linear, x: torch.Tensor, *, gelu: bool = False) -> torch.Tensor:
-    """`linear` with an nn.Linear's weight and bias."""
-    return linear(x, module.weight, module.bias, gelu=gelu)
 
 
 class WeightsCache:
@@ -136,3 +144,96 @@ def _conv_add_onednn(out, x, weight, bias, stride, padding):
     return torch.ops.mkldnn._convolution_pointwise_.binary(out, x.contiguous(memory_format=torch.channels_last),
                                                            weight, bias, [0, padding], [1, stride], [1, 1], 1,
                                                            "add", 1.0, None, [], None)
+
+
+# ---- the module swap ------------------------------------------------------------------------------------------
+
+class LinearGELU(nn.Linear):
+    """nn.Linear followed by the exact (erf) GELU, as one module: the same parameters and state_dict keys as an
+    nn.Linear, so a model can declare a hidden layer whose activation `accelerate` fuses into the product."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return F.gelu(F.linear(x, self.weight, self.bias))
+
+
+class FastLinear(nn.Linear):
+    """nn.Linear through `linear` (oneDNN when it can, else exactly F.linear); what `accelerate` makes of one."""
+    fused_gelu = False
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return linear(x, self.weight, self.bias, gelu=self.fused_gelu)
+
+
+class FastLinearGELU(FastLinear, LinearGELU):
+    """LinearGELU through `linear(..., gelu=True)`: product and GELU in one oneDNN call (else exactly LinearGELU)."""
+    fused_gelu = True
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return FastLinear.forward(self, x)
+
+
+class FastConv1d(nn.Conv1d):
+    """nn.Conv1d run as a (1 x k) 2D convolution on channels-last tensors (`conv1d_as_2d`, oneDNN's faster kernels
+    here) when no gradient is recorded and the fast path is on; otherwise exactly nn.Conv1d. Its output is a
+    (B, C, T) view of channels-last memory, which the next such convolution takes without a copy. The
+    channels-last weight is kept until the weight changes."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if (not fast_path() or x.dim() != 3 or x.dtype != torch.float32 or x.device.type != "cpu" or not X86
+                or not torch.backends.mkldnn.enabled):
+            return super().forward(x)
+        cache = self.__dict__.setdefault("_kernels_cache", WeightsCache())
+        w = cache.get("w", [self.weight], lambda: self.weight.detach()[:, :, None].contiguous(
+            memory_format=torch.channels_last))
+        y = F.conv2d(channels_last_1d(x), w, self.bias, (1, self.stride[0]), (0, self.padding[0]),  # type: ignore[index]
+                     (1, self.dilation[0]), self.groups)
+        return y[:, :, 0]
+
+
+def _conv_swappable(m: nn.Module) -> bool:
+    return (type(m) is nn.Conv1d and m.padding_mode == "zeros" and isinstance(m.padding, tuple))
+
+
+def _fuse_gelu_pairs(seq: nn.Sequential) -> None:
+    """Linear (or FastLinear) directly followed by an exact GELU: the product takes the GELU, the GELU becomes an
+    nn.Identity (neither has parameters of its own to lose, so state_dict keys stay)."""
+    keys = list(seq._modules)
+    for a, b in zip(keys, keys[1:]):
+        lin_m, act = seq._modules[a], seq._modules[b]
+        if type(lin_m) in (nn.Linear, FastLinear) and type(act) is nn.GELU and act.approximate == "none":
+            lin_m.__class__ = FastLinearGELU
+            seq._modules[b] = nn.Identity()
+
+
+def accelerate(model: nn.Module) -> nn.Module:
+    """Swap, in place, every nn.Linear for FastLinear, every LinearGELU (and nn.Linear + nn.GELU pair inside an
+    nn.Sequential) for FastLinearGELU, every plain zero-padded nn.Conv1d for FastConv1d, and every module whose class
+    has a registered faster subclass (`faster_version_of`) for that subclass. The same parameter tensors stay in place (same state_dict keys,
+    same values), training and autograd take the default ops, and GESTURELSM_ONEDNN=0 gives the default ops'
+    output exactly. For inference loaders; idempotent. Returns `model`."""
+    for m in list(model.modules()):
+        if isinstance(m, nn.Sequential):
+            _fuse_gelu_pairs(m)
+    for m in model.modules():
+        if type(m) is nn.Linear:
+            m.__class__ = FastLinear
+        elif type(m) is LinearGELU:
+            m.__class__ = FastLinearGELU
+        elif _conv_swappable(m):
+            m.__class__ = FastConv1d
+        elif type(m) in _FASTER:
+            m.__class__ = _FASTER[type(m)]
+    return model
+
+
+_FASTER: dict[type, type] = {}
+
+
+def faster_version_of(base: type[nn.Module]) -> Callable[[type[nn.Module]], type[nn.Module]]:
+    """Class decorator: register the decorated subclass of `base` as what `accelerate` swaps `base` modules for.
+    The subclass adds no parameters or buffers, and computes exactly base.forward when `fast_path()` is off."""
+    def register(fast: type[nn.Module]) -> type[nn.Module]:
+        assert issubclass(fast, base)
+        _FASTER[base] = fast
+        return fast
+    return register
