@@ -1,24 +1,30 @@
-"""fp32 linear layers through oneDNN on the CPU: the same IEEE fp32 function as F.linear, about twice as fast here.
+"""Fast CPU kernels for inference, and the module swap that puts them into a model (`accelerate`).
 
-Why: PyTorch's CPU wheels send an fp32 `nn.Linear` to MKL's sgemm, and MKL takes its AVX2 code path on AMD CPUs.
-On this project's machines (AMD EPYC, Zen 5: full-width AVX-512 FMA units) that runs at ~100-115 GFLOP/s per core,
-while oneDNN, which PyTorch already uses for its convolutions, runs the same fp32 product with AVX-512 at
-~200-250 GFLOP/s (benchmarks/kernels_speed.py prints both). No reduced precision is involved: outputs differ from
-F.linear's by summation order only (largest relative error against a float64 product 6-9e-7, MKL's 3-4e-7),
-and the GELU fused into the product is the exact (erf) one.
+Linear layers: PyTorch's CPU wheels send an fp32 `nn.Linear` to MKL's sgemm, and MKL takes its AVX2 code path on
+AMD CPUs. On an AMD CPU with AVX-512 (Zen 4/5 EPYC) that leaves the wide FMA units idle, while oneDNN, which
+PyTorch already uses for its convolutions, runs the same fp32 product with AVX-512 at about twice the rate
+(benchmarks/kernels_speed.py prints both). No reduced precision is involved: outputs differ from F.linear's by
+summation order only, and the GELU fused into the product is the exact (erf) one. On a CPU without AVX-512 both
+libraries run AVX2 code and oneDNN was measured no faster, so MKL's product stays there.
 
-Convolutions: PyTorch's default layout runs the speech encoder's 1D convolutions at 150-240 GFLOP/s here,
-oneDNN's channels-last 2D kernels at 225-255 (1.1-1.5x; relative error against float64 1.4-1.7e-6), so
-`conv1d_as_2d` runs a 1D convolution as a (1 x k) 2D one on channels-last tensors (same function), and
-`conv1d_as_2d_add_` adds one into an existing tensor in place (a residual connection without a new buffer).
+Convolutions: oneDNN's channels-last 2D kernels run the 1D convolutions of the speech encoders and tokenizers
+faster than PyTorch's default layout (benchmarks/kernels_speed.py), so `conv1d_as_2d` runs a 1D convolution as a
+(1 x k) 2D one on channels-last tensors (same function), and `conv1d_as_2d_add_` adds one into an existing tensor
+in place (a residual connection without a new buffer).
 
 `linear(x, w, b, gelu=...)` takes oneDNN's path when it can: fp32 CPU tensors with no gradient to record, on an
-x86 machine (elsewhere oneDNN is not known to be faster), a PyTorch build that has the op with oneDNN enabled
-(torch.backends.mkldnn.enabled), and a first-use self-check against F.linear passed. Otherwise, or with
-GESTURELSM_ONEDNN=0 in the environment (to measure the difference), it is F.linear (+ F.gelu).
+x86 CPU with AVX-512, a PyTorch build that has the op with oneDNN enabled (torch.backends.mkldnn.enabled), and a
+first-use self-check against F.linear passed. Otherwise it is F.linear (+ the GELU).
 
-`WeightsCache` keeps values derived from weights (folded BatchNorms, the null condition's keys) until a weight
-changes.
+`accelerate(model)` swaps a model's modules, in place, for drop-in subclasses that take these paths: nn.Linear ->
+FastLinear, LinearGELU (and nn.Linear + nn.GELU inside an nn.Sequential) -> FastLinearGELU, nn.Conv1d ->
+FastConv1d, and any block whose model registered a faster version (`faster_version_of`). Same parameter tensors,
+same state_dict keys. With a gradient being recorded, or with GESTURELSM_ONEDNN=0 in the environment (to measure
+the difference, or to rule the fast path out), every swapped module computes exactly what the module it replaced
+computes. The model loaders (GestureGenerator.load, RVQVAE.load, the reference loaders) call it.
+
+`WeightsCache` keeps values derived from weights (folded BatchNorms, the null condition's keys, traced graphs)
+until a weight changes.
 """
 from __future__ import annotations
 
