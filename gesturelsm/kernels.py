@@ -44,7 +44,13 @@ X86 = platform.machine().lower() in ("x86_64", "amd64", "x86", "i686")
 def onednn_linear_available() -> bool:
     """Whether oneDNN's fused linear op exists here, is worth taking (see `_check_linear`) and agrees with F.linear
     (checked once per process)."""
-    return _available("linear", _check_linear)
+    return _available("linear", _check_linear) and worth_onednn()
+
+
+def worth_onednn() -> bool:
+    """Whether the CPU has AVX-512. oneDNN's edge is AVX-512, which MKL leaves unused on AMD CPUs; on an AVX2-only
+    CPU both run AVX2 code and oneDNN was measured no faster (slower at the shipped generator's sizes)."""
+    return "AVX512" in torch.backends.cpu.get_cpu_capability()
 
 
 def fast_path() -> bool:
@@ -63,10 +69,7 @@ def _available(name: str, check) -> bool:
 
 
 def _check_linear() -> bool:
-    # oneDNN's edge is AVX-512, which MKL leaves unused on AMD CPUs; on an AVX2-only CPU both run AVX2 code and
-    # oneDNN was measured no faster (slower at the shipped generator's sizes), so MKL stays
-    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")
-            and "AVX512" in torch.backends.cpu.get_cpu_capability()):
+    if not (X86 and torch.backends.mkldnn.is_available() and hasattr(torch.ops.mkldnn, "_linear_pointwise")):
         return False
     g = torch.Generator().manual_seed(0)
     x, w, b = (torch.randn(*s, generator=g) for s in ((5, 3, 24), (40, 24), (40,)))
@@ -179,14 +182,15 @@ class FastLinearGELU(FastLinear, LinearGELU):
 
 
 class FastConv1d(nn.Conv1d):
-    """nn.Conv1d run as a (1 x k) 2D convolution on channels-last tensors (`conv1d_as_2d`, oneDNN's faster kernels
-    here) when no gradient is recorded and the fast path is on; otherwise exactly nn.Conv1d. Its output is a
+    """nn.Conv1d run as a (1 x k) 2D convolution on channels-last tensors (`conv1d_as_2d`) when no gradient is
+    recorded, the fast path is on and the CPU is one where oneDNN's linear is taken (AVX-512: on an AVX2-only CPU
+    the tokenizers' encode + decode measured 1.17x slower this way); otherwise exactly nn.Conv1d. Its output is a
     (B, C, T) view of channels-last memory, which the next such convolution takes without a copy. The
     channels-last weight is kept until the weight changes."""
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        if (not fast_path() or x.dim() != 3 or x.dtype != torch.float32 or x.device.type != "cpu" or not X86
-                or not torch.backends.mkldnn.enabled):
+        if (not fast_path() or x.dim() != 3 or x.dtype != torch.float32 or x.device.type != "cpu"
+                or not onednn_linear_available()):
             return super().forward(x)
         cache = self.__dict__.setdefault("_kernels_cache", WeightsCache())
         w = cache.get("w", [self.weight], lambda: self.weight.detach()[:, :, None].contiguous(

@@ -12,7 +12,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from ..kernels import faster_version_of, fast_path
+from ..kernels import fast_path, faster_version_of
 
 
 def sinusoidal(t: torch.Tensor, dim: int, max_period: float = 1e4) -> torch.Tensor:
