@@ -1,5 +1,6 @@
 """kernels.py: oneDNN's fp32 linear and channels-last convolution compute exactly what F.linear / F.conv1d compute
-(up to summation order), the fast path is really taken where it exists, and it steps aside for autograd."""
+(up to summation order), the fast path is really taken where it exists, and it steps aside for autograd.
+The module swap (`accelerate`) is tested in tests/test_kernels_swap.py."""
 from __future__ import annotations
 
 import pytest
@@ -9,10 +10,17 @@ import torch.nn.functional as F
 from torch.profiler import profile
 
 from gesturelsm import kernels
-from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin, linear,
+from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, linear,
                                 onednn_linear_available)
 
-needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no oneDNN linear op")
+needs_onednn = pytest.mark.skipif(not kernels._available("linear", kernels._check_linear),
+                                  reason="this PyTorch build has no working oneDNN linear op")
+
+
+@pytest.fixture(autouse=True)
+def onednn_worth_taking(monkeypatch):
+    """oneDNN's path is checked on every machine, also where it is not taken for speed (no AVX-512)."""
+    monkeypatch.setattr(kernels, "worth_onednn", lambda: True)
 needs_conv_add = pytest.mark.skipif(not kernels._available("conv_add", kernels._check_conv_add),
                                     reason="this PyTorch build has no oneDNN in-place convolution op")
 
@@ -21,6 +29,10 @@ def ops_run(fn) -> set[str]:
     with profile() as p:
         fn()
     return {e.key for e in p.key_averages()}
+
+
+def lin(layer: nn.Linear, x: torch.Tensor, gelu: bool = False) -> torch.Tensor:
+    return linear(x, layer.weight, layer.bias, gelu=gelu)
 
 
 def close(a: torch.Tensor, b: torch.Tensor) -> bool:

@@ -1,4 +1,8 @@
-"""Transformer building blocks: embeddings, attention with rotary positions, cross/spatial-temporal blocks."""
+"""Transformer building blocks: embeddings, attention with rotary positions, cross/spatial-temporal blocks.
+
+The Fast* subclasses are what kernels.accelerate swaps in for inference: the same function with fewer passes over
+memory (rotations applied in place to the packed projection, cross-attention folded into the speech side once per
+window); with kernels.fast_path() off they compute exactly their parent's forward."""
 from __future__ import annotations
 
 import functools
@@ -7,6 +11,8 @@ import math
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
+
+from ..kernels import fast_path, faster_version_of
 
 
 def sinusoidal(t: torch.Tensor, dim: int, max_period: float = 1e4) -> torch.Tensor:
@@ -31,6 +37,13 @@ def apply_rotary(x: torch.Tensor, freqs: torch.Tensor) -> torch.Tensor:
     product: (x1 + i x2) e^{i a} = (x1 cos a - x2 sin a) + i (x1 sin a + x2 cos a)."""
     xc = torch.view_as_complex(x.float().reshape(*x.shape[:-1], -1, 2).contiguous())
     return torch.view_as_real(xc * freqs).flatten(-2).type_as(x)
+
+
+@functools.lru_cache(maxsize=32)
+def rotary_freqs_qk(n: int, heads: int, head_dim: int, device: torch.device) -> torch.Tensor:
+    """(n, heads * head_dim) complex: `rotary_freqs` laid out like the query and key halves of a packed (q, k, v)
+    projection seen as complex pairs (the same table for every head, for q and for k). Read-only."""
+    return rotary_freqs(n, head_dim, device).repeat(1, 2 * heads)
 
 
 class DropPath(nn.Module):
@@ -131,3 +144,52 @@ class STBlock(nn.Module):
         x = x + self.drop(self.temporal(self.norm_t(x)))
         x = x + self.drop(self.mlp(self.norm_f(x)))
         return x.reshape(B, R, t, C)
+
+
+@faster_version_of(SelfAttention)
+class FastSelfAttention(SelfAttention):
+    """The rotation is applied in place to the packed projection's q and k parts (one complex product, no copies
+    of permuted views); the same products as apply_rotary, so the same values."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if not fast_path() or x.dtype != torch.float32:
+            return super().forward(x)
+        N, L, C = x.shape
+        qkv = self.qkv(x)                                                             # (N, L, 3C), new tensor
+        if self.rotary:
+            pairs = torch.view_as_complex(qkv.view(N, L, 3 * C // 2, 2))
+            pairs[..., :C].mul_(rotary_freqs_qk(L, self.heads, C // self.heads, x.device))
+        q, k, v = qkv.view(N, L, 3, self.heads, C // self.heads).permute(2, 0, 3, 1, 4)   # (N, h, L, hd)
+        y = F.scaled_dot_product_attention(q, k, v)
+        return self.out(y.transpose(1, 2).reshape(N, L, C))
+
+
+@faster_version_of(CrossBlock)
+class FastCrossBlock(CrossBlock):
+    """The cross-attention's query and output projections folded into the speech side once per window (`kv`):
+    per head h, scores = (LN(x) Wq_h^T + bq_h) K_h^T / sqrt(hd) = LN(x) G_h^T + c_h with G_h = K_h Wq_h / sqrt(hd),
+    c_h = K_h bq_h / sqrt(hd); out = sum_h P_h V_h Wo_h^T + bo = P U + bo with U_h = V_h Wo_h^T. A step then runs
+    two batched products and one softmax instead of the projections, head reshapes and the attention call."""
+
+    def kv(self, cond: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        if not fast_path():
+            return super().kv(cond)
+        a = self.attn
+        k, v = a.project_kv(self.norm_c(cond))                                      # (N, h, S, hd)
+        N, H, S, hd = k.shape
+        C = H * hd
+        wq = a.q.weight.reshape(H, hd, C)
+        g = torch.matmul(k, wq).mul_(hd ** -0.5).reshape(N, H * S, C)              # G, heads stacked
+        c = torch.matmul(k, a.q.bias.reshape(H, hd, 1)).mul_(hd ** -0.5).reshape(N, 1, H * S)
+        u = torch.matmul(v, a.out.weight.reshape(C, H, hd).permute(1, 2, 0)).reshape(N, H * S, C)
+        return g.transpose(1, 2).contiguous(), c, u                                  # G^T (N, C, H*S)
+
+    def forward(self, x: torch.Tensor, kv) -> torch.Tensor:
+        if len(kv) != 3:                                                             # plain K, V
+            return super().forward(x, kv)
+        gt, c, u = kv
+        N, L, _ = x.shape
+        p = torch.baddbmm(c, self.norm1(x), gt)                                     # (N, L, H*S) scores
+        p = torch.softmax(p.view(N, L, self.attn.heads, -1), -1).view(N, L, -1)
+        x = x + torch.baddbmm(self.attn.out.bias, p, u)
+        return x + self.mlp(self.norm2(x))

@@ -9,6 +9,7 @@ Shapes (B batch, R regions, t = 32 latent frames per 128-frame window, D latent 
 """
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -19,6 +20,7 @@ import torch.nn.functional as F
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..features.audio import AudioEncoder
 from ..flows import method_facts
+from ..kernels import WeightsCache, accelerate, fast_path, faster_version_of, linear
 from ..flows.base import velocity_from_data
 from .config import GeneratorConfig
 from .layers import CrossBlock, STBlock, sinusoidal
@@ -55,17 +57,18 @@ class SpeechEncoder(nn.Module):
 
 class SpeechContext(NamedTuple):
     """What the denoiser reads of the speech condition, computed once per window (not at every step)."""
-    kv: list[tuple[torch.Tensor, torch.Tensor]]   # per cross block: K, V (B, heads, t, head_dim)
+    kv: list[tuple[torch.Tensor, ...]]   # per cross block: K, V (B, heads, t, head_dim), or FastCrossBlock's fold
     frames: torch.Tensor | None                   # (B, t, dim) frame-aligned speech term (config.speech_add)
 
     def rows(self, idx) -> "SpeechContext":
         """The same context for a subset of rows (an index tensor or a slice)."""
-        return SpeechContext([(k[idx], v[idx]) for k, v in self.kv], None if self.frames is None else self.frames[idx])
+        return SpeechContext([tuple(a[idx] for a in kv) for kv in self.kv],
+                             None if self.frames is None else self.frames[idx])
 
     def select(self, drop: torch.Tensor, null: "SpeechContext") -> "SpeechContext":
         """Row-wise: `null` where drop (B,), else self (null may have batch 1 and broadcasts)."""
-        m = drop.reshape(-1, 1, 1, 1)
-        kv = [(torch.where(m, ku, kc), torch.where(m, vu, vc)) for (kc, vc), (ku, vu) in zip(self.kv, null.kv)]
+        kv = [tuple(torch.where(drop.reshape(-1, *[1] * (c.dim() - 1)), u, c) for c, u in zip(kv_c, kv_u))
+              for kv_c, kv_u in zip(self.kv, null.kv)]
         frames = None if self.frames is None else torch.where(drop.reshape(-1, 1, 1), null.frames, self.frames)
         return SpeechContext(kv, frames)
 
@@ -122,6 +125,71 @@ class Denoiser(nn.Module):
         return self.out(self.out_norm(h))                                # (B, R, t, D)
 
 
+@faster_version_of(Denoiser)
+class FastDenoiser(Denoiser):
+    """Guidance stacks the same x, t, d and seed twice (conditional, then null half): everything before the first
+    cross block is computed once for both; `merge` applies its embedding half once per row, not once per token."""
+
+    def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, seed: torch.Tensor,
+                ctx: SpeechContext) -> torch.Tensor:
+        if not fast_path() or self.training or x.dtype != torch.float32:
+            return super().forward(x, t, d, seed, ctx)
+        B, R, tt, _ = x.shape
+        n = B // 2
+        twice = B % 2 == 0 and all(torch.equal(a[:n], a[n:]) for a in (x, t, d, seed))
+        if twice:
+            x, t, d, seed = x[:n], t[:n], d[:n], seed[:n]
+        C = self.c.dim
+        w_h, w_e = self._cache.get("merge", [self.merge.weight], lambda: (self.merge.weight[:, :C].contiguous(),
+                                                                          self.merge.weight[:, C:].contiguous()))
+        h = self.in_proj(x) + self.region_emb[None, :, None] + self.frame_emb[None, None, :tt]   # (b, R, t, C)
+        h = linear(h, w_h) + linear(self.embed(t, d, seed), w_e, self.merge.bias)[:, None, None]
+        if twice:
+            h = h.repeat(2, 1, 1, 1)
+        if ctx.frames is not None:
+            h = h + ctx.frames[:, None, :tt]
+        kv = [a for kv_i in ctx.kv for a in kv_i]
+        key = ("trunk", h.shape, *(a.shape for a in kv))
+        trunk = self._cache.get(key, list(self.parameters()), lambda: _trace(_Trunk(self, len(ctx.kv[0])), h, kv))
+        return trunk(h, *kv)
+
+    @property
+    def _cache(self) -> WeightsCache:
+        return self.__dict__.setdefault("_weights_cache", WeightsCache())
+
+
+class _Trunk(nn.Module):
+    """The denoiser after its input embedding: cross blocks, spatial-temporal blocks, output layer, on (B, R, t, C)
+    tokens and the speech context's tensors flattened (what tracing needs: tensors in, tensor out)."""
+
+    def __init__(self, den: Denoiser, per_block: int):
+        super().__init__()
+        self.cross, self.st, self.out_norm, self.out, self.per_block = den.cross, den.st, den.out_norm, den.out, per_block
+
+    def forward(self, h: torch.Tensor, *kv: torch.Tensor) -> torch.Tensor:
+        B, R, tt, C = h.shape
+        h = h.reshape(B, R * tt, C)
+        for i, block in enumerate(self.cross):
+            h = block(h, kv[i * self.per_block:(i + 1) * self.per_block])
+        h = h.reshape(B, R, tt, C)
+        for block in self.st:
+            h = block(h)
+        return self.out(self.out_norm(h))
+
+
+def _trace(trunk: _Trunk, h: torch.Tensor, kv: list[torch.Tensor]) -> nn.Module:
+    """The trunk recorded once for these shapes (torch.jit.trace): the same ATen calls, replayed without the
+    Python interpreter and module-call overhead between them, a sizeable share of a step at the shipped model's
+    width. The recording reads the same parameter tensors (FastDenoiser drops it when one changes). The tracer
+    cannot record oneDNN's fused linear op (taken on AVX-512 CPUs); there the trunk runs as it is."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return torch.jit.trace(trunk, (h, *kv), check_trace=False)
+    except RuntimeError:
+        return trunk
+
+
 class GestureGenerator(nn.Module):
     def __init__(self, config: GeneratorConfig, method: str = "gesturelsm"):
         super().__init__()
@@ -154,12 +222,18 @@ class GestureGenerator(nn.Module):
         them). Accepts batches that are multiples of cond's batch."""
         B = cond.shape[0]
         ctx_c, ctx_u = ctx if ctx is not None else self.contexts(cond)
+        last: list = [None, None]          # (batch, drop) of the last call without `rows`, and its context
 
         def f(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor,
               rows: torch.Tensor | None = None) -> torch.Tensor:
             idx = torch.arange(B, device=x.device) if rows is None else rows
             idx = idx.repeat(x.shape[0] // len(idx))                  # CFG stacks both halves
-            c = ctx_c.rows(idx).select(drop, ctx_u)
+            if rows is None and last[0] is not None and last[0][0] == x.shape[0] and torch.equal(last[0][1], drop):
+                c = last[1]                                           # every sampling step asks for the same rows
+            else:
+                c = ctx_c.rows(idx).select(drop, ctx_u)
+                if rows is None:
+                    last[:] = [(x.shape[0], drop.clone()), c]
             return self.output(self.denoiser(x, t, d, seed[idx], c), x, t)
 
         return f
@@ -186,9 +260,11 @@ class GestureGenerator(nn.Module):
                                half=half)
 
     @classmethod
-    def load(cls, path: str | Path) -> "GestureGenerator":
+    def load(cls, path: str | Path, accelerated: bool = True) -> "GestureGenerator":
+        """A saved generator, in eval mode, with the fast kernels and the accelerated blocks swapped in unless
+        `accelerated` is False (kernels.accelerate: the same function; training it further takes the default ops)."""
         tensors, meta = load_checkpoint(path, KIND)
         model = cls(config_from_dict(GeneratorConfig, meta["config"]), meta.get("method", "gesturelsm"))
         model.load_state_dict(tensors)
         model.meta = {k: v for k, v in meta.items() if k != "config"}
-        return model.eval()
+        return accelerate(model.eval()) if accelerated else model.eval()

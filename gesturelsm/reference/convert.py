@@ -14,6 +14,7 @@ import numpy as np
 import torch
 
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
+from ..kernels import accelerate
 from .config import REGION_DIMS, REGIONS, RELEASED_SAMPLERS, GeneratorConfig, RVQConfig
 from .model import ReferenceGenerator
 from .rvq import ReferenceRVQ
@@ -136,7 +137,7 @@ def load_generator(path: str | Path) -> tuple[ReferenceGenerator, dict[str, int]
     tensors, meta = load_checkpoint(path, kind="reference_generator")
     model = ReferenceGenerator(config_from_dict(GeneratorConfig, meta["config"]))
     model.load_state_dict(tensors, strict=True)
-    return model.eval(), json.loads(meta["word2index"])
+    return accelerate(model.eval()), json.loads(meta["word2index"])
 
 
 def load_rvqs(path: str | Path) -> tuple[dict[str, ReferenceRVQ], dict[str, torch.Tensor]]:
@@ -146,7 +147,7 @@ def load_rvqs(path: str | Path) -> tuple[dict[str, ReferenceRVQ], dict[str, torc
     for r in REGIONS:
         m = ReferenceRVQ(config_from_dict(RVQConfig, regions[r]))
         m.load_state_dict({k[len(r) + 1:]: v for k, v in tensors.items() if k.startswith(r + ".")}, strict=True)
-        rvqs[r] = m.eval()
+        rvqs[r] = accelerate(m.eval())
     stats = {k[5:]: v for k, v in tensors.items() if k.startswith("norm.")}
     return rvqs, stats
 

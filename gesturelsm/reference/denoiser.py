@@ -8,8 +8,9 @@ Quirks (all deliberate here, see ../../docs and METHOD-FACTS.md):
 - spatial-temporal blocks run temporal attention, then spatial attention, each with its own residual
   around the *rotated* input, inside the block's residual (x + [rope(h) + attn(rope(h))]);
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.
-Ours is faster than the reference code for the same function (benchmarks/reference_speed.py): linear layers run
-through oneDNN (kernels.py); the speech keys/values of the cross-attention are computed once per clip, with the
+Ours is faster than the reference code for the same function (benchmarks/reference_speed.py): loaded for inference,
+its linear layers run through oneDNN (kernels.accelerate); the hidden layers' GELU is declared with its product
+(kernels.LinearGELU) so it fuses into it; the speech keys/values of the cross-attention are computed once per clip, with the
 query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`);
 the null condition's are kept; rotary tables are cached; attention is fused.
 """
@@ -21,7 +22,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from ..kernels import WeightsCache, lin, linear
+from ..kernels import LinearGELU, WeightsCache, linear
 from .config import GeneratorConfig
 
 
@@ -71,7 +72,7 @@ class CrossBlock(nn.Module):
         self.q = nn.Linear(dim, dim, bias=False)
         self.kv = nn.Linear(dim, 2 * dim, bias=False)
         self.proj = nn.Linear(dim, dim)
-        self.fc1, self.fc2 = nn.Linear(dim, hidden), nn.Linear(hidden, dim)
+        self.fc1, self.fc2 = LinearGELU(dim, hidden), nn.Linear(hidden, dim)
 
     def context(self, ctx: torch.Tensor, fold: bool = True) -> tuple[torch.Tensor, torch.Tensor]:
         """Speech tokens (B, M, D) -> with `fold`: G (B, H*M, D) scaled score keys and U (B, H*M, D) projected
@@ -79,9 +80,9 @@ class CrossBlock(nn.Module):
         B, M, D = ctx.shape
         H, hd = self.heads, D // self.heads
         if not fold:
-            k, v = lin(self.kv, ctx).reshape(B, M, 2, H, hd).permute(2, 0, 3, 1, 4)        # (B, H, M, hd) each
+            k, v = self.kv(ctx).reshape(B, M, 2, H, hd).permute(2, 0, 3, 1, 4)        # (B, H, M, hd) each
             return k, v
-        k, v = lin(self.kv, ctx).reshape(B * M, 2, H, hd).permute(1, 2, 0, 3)           # (H, B*M, hd) each
+        k, v = self.kv(ctx).reshape(B * M, 2, H, hd).permute(1, 2, 0, 3)           # (H, B*M, hd) each
         g = torch.bmm(k, self.q.weight.reshape(H, hd, D)).mul_(hd ** -0.5)                # (H, B*M, D)
         u = torch.bmm(v, self.proj.weight.reshape(D, H, hd).permute(1, 2, 0))            # (H, B*M, D)
         return tuple(a.reshape(H, B, M, D).transpose(0, 1).reshape(B, H * M, D) for a in (g, u))
@@ -89,14 +90,14 @@ class CrossBlock(nn.Module):
     def forward(self, x: torch.Tensor, kv: tuple[torch.Tensor, torch.Tensor]) -> torch.Tensor:
         B, N, D = x.shape
         if kv[0].dim() == 4:                                                             # plain K, V
-            q = lin(self.q, self.norm1(x)).reshape(B, N, self.heads, -1).transpose(1, 2)
+            q = self.q(self.norm1(x)).reshape(B, N, self.heads, -1).transpose(1, 2)
             a = F.scaled_dot_product_attention(q, kv[0], kv[1]).transpose(1, 2).reshape(B, N, D)
-            x = x + lin(self.proj, a)
+            x = x + self.proj(a)
         else:                                                                            # folded G, U
             s = torch.bmm(self.norm1(x), kv[0].transpose(1, 2))                          # (B, N, H*M)
             p = torch.softmax(s.reshape(B, N, self.heads, -1), -1).reshape(B, N, -1)
             x = x + torch.baddbmm(self.proj.bias, p, kv[1])
-        return x + lin(self.fc2, lin(self.fc1, self.norm2(x), gelu=True))
+        return x + self.fc2(self.fc1(self.norm2(x)))
 
 
 class SelfAttention(nn.Module):
@@ -113,7 +114,7 @@ class SelfAttention(nn.Module):
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, n, D)
         B, n, D = x.shape
         q, k, v = linear(x, self.in_proj_weight, self.in_proj_bias).reshape(B, n, 3, self.heads, -1).permute(2, 0, 3, 1, 4)
-        return lin(self.out_proj, F.scaled_dot_product_attention(q, k, v).transpose(1, 2).reshape(B, n, D))
+        return self.out_proj(F.scaled_dot_product_attention(q, k, v).transpose(1, 2).reshape(B, n, D))
 
 
 class STBlock(nn.Module):
@@ -124,7 +125,7 @@ class STBlock(nn.Module):
         self.heads = heads
         self.norm_attn, self.norm_ff = nn.LayerNorm(dim), nn.LayerNorm(dim)
         self.temporal, self.spatial = SelfAttention(dim, heads), SelfAttention(dim, heads)
-        self.fc1, self.fc2 = nn.Linear(dim, hidden), nn.Linear(hidden, dim)
+        self.fc1, self.fc2 = LinearGELU(dim, hidden), nn.Linear(hidden, dim)
 
     def _rope_heads(self, x: torch.Tensor) -> torch.Tensor:  # (B, n, D): per-head rotation over positions n
         B, n, D = x.shape
@@ -138,7 +139,7 @@ class STBlock(nn.Module):
         s = self._rope_heads(h.reshape(B, R, N, D).transpose(1, 2).reshape(B * N, R, D))
         s = s + self.spatial(s)                                               # (B*N, R, D)
         x = x + s.reshape(B, N, R, D).transpose(1, 2)
-        return x + lin(self.fc2, lin(self.fc1, self.norm_ff(x), gelu=True))
+        return x + self.fc2(self.fc1(self.norm_ff(x)))
 
 
 class ReferenceDenoiser(nn.Module):
@@ -148,7 +149,7 @@ class ReferenceDenoiser(nn.Module):
         super().__init__()
         self.cfg = cfg
         C, R = cfg.latent_dim, cfg.regions
-        self.time_in, self.time_out = nn.Linear(C, C), nn.Linear(C, C)
+        self.time_in, self.time_out = LinearGELU(C, C), nn.Linear(C, C)
         self.step_proj = nn.Linear(C, C, bias=False)
         self.seed_proj = nn.Linear(cfg.input_dim * R * cfg.seed_frames, C)
         self.token_in = nn.Linear(cfg.input_dim, C)
@@ -181,9 +182,9 @@ class ReferenceDenoiser(nn.Module):
         B, _, N = x.shape
         emb = timestep_embedding(t, C)
         if d is not None:
-            emb = emb + lin(self.step_proj, timestep_embedding(d.expand(B), C))
-        emb = lin(self.time_out, lin(self.time_in, emb, gelu=True)) + lin(self.seed_proj, seed.reshape(B, -1))   # (B, C)
-        tok = lin(self.token_in, x.reshape(B, R, cfg.input_dim, N).transpose(2, 3))                # (B, R, N, C)
+            emb = emb + self.step_proj(timestep_embedding(d.expand(B), C))
+        emb = self.time_out(self.time_in(emb)) + self.seed_proj(seed.reshape(B, -1))                       # (B, C)
+        tok = self.token_in(x.reshape(B, R, cfg.input_dim, N).transpose(2, 3))                     # (B, R, N, C)
         # token_fuse(cat[emb, tok]) with the emb half applied once per row, not once per token
         w = self.token_fuse.weight
         tok = linear(tok, w[:, C:], self.token_fuse.bias) + linear(emb, w[:, :C])[:, None, None]
@@ -194,4 +195,4 @@ class ReferenceDenoiser(nn.Module):
         tok = tok.reshape(B, R, N, C)
         for blk in self.blocks:
             tok = blk(tok)
-        return lin(self.token_out, tok).transpose(2, 3).reshape(B, R * cfg.input_dim, N)
+        return self.token_out(tok).transpose(2, 3).reshape(B, R * cfg.input_dim, N)

@@ -20,7 +20,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..features.audio import envelope
-from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, lin
+from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_
 from .config import GeneratorConfig
 
 ENVELOPE_WINDOW = 1024
@@ -152,6 +152,6 @@ class ReferenceSpeechEncoder(nn.Module):
         a = self._wav(audio)                                                    # (B, A, T')
         n = self.cfg.frames
         a = a[..., :n] if a.shape[-1] >= n else torch.cat([a, a[..., -1:].expand(-1, -1, n - a.shape[-1])], -1)
-        w = lin(self.word_proj, self.word_embedding(words))                     # (B, frames, A)
-        h = lin(self.mix, torch.cat([a.transpose(1, 2), w], -1))                # (B, frames, R*C)
+        w = self.word_proj(self.word_embedding(words))                          # (B, frames, A)
+        h = self.mix(torch.cat([a.transpose(1, 2), w], -1))                     # (B, frames, R*C)
         return F.avg_pool1d(h.transpose(1, 2), 4).transpose(1, 2)               # (B, frames/4, R*C)

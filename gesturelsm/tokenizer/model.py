@@ -15,6 +15,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
+from ..kernels import accelerate
 from ..motion.normalize import Normalizer
 from .config import TokenizerConfig
 from .quantizer import QuantizedResult, ResidualVQ, quantize_stacked, same_shape
@@ -155,6 +156,8 @@ class RVQVAE(nn.Module):
 
     @classmethod
     def load(cls, path: str | Path) -> "RVQVAE":
+        """A saved tokenizer, in eval mode, with the fast kernels swapped in (kernels.accelerate: the same
+        function; training it further takes the default ops)."""
         tensors, meta = load_checkpoint(path, KIND)
         config = config_from_dict(TokenizerConfig, meta["config"])
         model = cls(config, meta.get("region", ""), Normalizer.from_state_dict(tensors))
@@ -164,7 +167,7 @@ class RVQVAE(nn.Module):
             raise ValueError(f"{path}: weights do not match the config (missing {missing}, unexpected {unexpected})")
         for layer in model.rvq.layers:  # a shipped (inference-only) file has no EMA state
             layer.initted.fill_(True)
-        return model.eval()
+        return accelerate(model.eval())
 
 
 def quantize_regions(tokenizers: list[RVQVAE], z: torch.Tensor) -> list[torch.Tensor]:
