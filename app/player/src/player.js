@@ -159,6 +159,7 @@ export class MotionPlayer {
     const gen = this.generation + 1;
     const marks = this.measure ? { start: performance.now() } : null;
     this.payload = payload;
+    delete this.element.dataset.error;
     this.pause();
     this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
     const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
@@ -168,16 +169,15 @@ export class MotionPlayer {
     motions.catch(() => {});                        // reported below, once the bodies are in
     if (!(await this.setBodies(payload.bodies, payload.fps))) return;
     if (marks) marks.bodies = performance.now() - marks.start;
-    let records;
     try {
-      records = await motions;
+      const records = await motions;
+      if (gen !== this.generation) return;
+      if (marks) marks.motion = performance.now() - marks.start;
+      records.forEach((rec, i) => this.appendRecord(i, rec, payload.bodies[i].motion));
     } catch (e) {
       this.element.dataset.error = String(e.message || e);
       throw e;
     }
-    if (gen !== this.generation) return;
-    if (marks) marks.motion = performance.now() - marks.start;
-    records.forEach((rec, i) => this.appendRecord(i, rec, payload.bodies[i].motion));
     this.audio.currentTime = 0;
     this.attachClock(this.audio);
     await this.play();
