@@ -10,7 +10,8 @@ export HF_HUB_DISABLE_TELEMETRY := 1
 .PHONY: setup test demo clean
 setup: $(STAMP)
 
-$(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/package-lock.json app/player/src/player.js
+$(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/package-lock.json \
+          app/player/package.json $(wildcard app/player/src/*)
 	VENV=$(VENV) bash scripts/setup.sh
 	touch $@
 

@@ -39,16 +39,16 @@ sys.path.insert(0, str(REPO))
 BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 TAKE = BEAT2 / "wave16k" / "2_scott_0_1_1.wav"
 FAKE_MIC = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream"]
-PAGE_STATE = """() => { const e = document.querySelector('#live-player'), v = (id) =>
-    document.querySelector(`#${id}`).textContent;
+PAGE_STATE = """() => { const e = document.querySelector('#live-player'), live = window.gesturelsmPlayer.live,
+    v = (id) => document.querySelector(`#${id}`).textContent;
   return {frames: Number(e.dataset.frames), fps: Number(e.dataset.fps || 0), state: e.dataset.state,
-          received: window.gesturelsmLive.player.frames(), gaps: Number(e.dataset.gaps || 0),
+          received: live.player.frames(), gaps: Number(e.dataset.gaps || 0),
           shown_median: Number(e.dataset.shownMedianMs || NaN), shown_p90: Number(e.dataset.shownP90Ms || NaN),
           latency: v('live-latency'), stats: v('live-stats'), status: v('live-status'),
           // seconds of speech: spoken (since recording started), at the server, motion in the browser, on screen
-          spoken: (performance.now() - window.gesturelsmLive.spoken0) / 1000,
-          server_audio: (window.gesturelsmLive.last || {}).audio_seconds || 0,
-          server_audio_age: (performance.now() - ((window.gesturelsmLive.last || {}).at || 0)) / 1000,
+          spoken: (performance.now() - live.spoken0) / 1000,
+          server_audio: (live.last || {}).audio_seconds || 0,
+          server_audio_age: (performance.now() - ((live.last || {}).at || 0)) / 1000,
           on_screen: Number(e.dataset.frame) / 30}; }"""
 
 
@@ -119,8 +119,9 @@ def run(args) -> dict:
             browser = pw.chromium.launch(executable_path=args.chromium,
                                          args=CHROMIUM_ARGS + FAKE_MIC + [f"--use-file-for-fake-audio-capture={wav}"])
             page = browser.new_page(viewport={"width": 1400, "height": 1300})
-            page.goto(url)
+            page.goto(f"{url}?measure=1")              # the live feed stamps each message's arrival (last.at)
             page.wait_for_selector("#live-player[data-ready]", timeout=60000)
+            page.wait_for_function("() => window.gesturelsmPlayer && window.gesturelsmPlayer.live", timeout=60000)
             page.locator("#live-player").scroll_into_view_if_needed()
             cpu0, bcpu0, t0 = self_cpu_s(), child_cpu_s(os.getpid()), time.perf_counter()
             page.locator("#live-record").click()

@@ -5,7 +5,8 @@ rate in the first second of play, then while the server renders the mp4 and the 
 generating again with another seed on the same page (the bodies are replaced), once after the video and once while it
 renders. Shipped checkpoints, eSpeak NG
 speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Each case runs --repeat times, every run
-transcribing its upload afresh; prints a markdown table of medians.
+transcribing its upload afresh; prints a markdown table of medians. The page is opened with the player's measurement
+hooks on (`?measure=1`, app/player/src/measure.js): its load marks and the split of its draws.
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR] [--think-s 3]
                                                   [--repeat 3]
@@ -85,7 +86,7 @@ def downloads_changed(old: str) -> str:
 
 def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path(".")) -> dict:
     page = browser.new_page(viewport={"width": 1400, "height": 1300})
-    page.goto(url)
+    page.goto(f"{url}?measure=1")                      # the player's marks (data-marks) and draw split (prof)
     page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
     for m in ALL:
         if m not in methods:

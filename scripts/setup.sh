@@ -58,8 +58,10 @@ NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/$VENV/numba-cache}" "$VENV/bin/python" 
 # and package-lock.json), bundled with esbuild into app/player/dist/player.js, which the app serves itself:
 # no CDN at run time. Without npm the page still works and shows the server-rendered video only.
 if command -v npm >/dev/null; then
-  if [ ! -f app/player/dist/player.js ] || [ app/player/src/player.js -nt app/player/dist/player.js ] \
-     || [ app/player/package-lock.json -nt app/player/dist/player.js ]; then
+  # rebuilt when missing, or older than any source file (app/player/src/*) or the pinned versions
+  if [ ! -f app/player/dist/player.js ] || [ app/player/package-lock.json -nt app/player/dist/player.js ] \
+     || [ app/player/package.json -nt app/player/dist/player.js ] \
+     || [ -n "$(find app/player/src -type f -newer app/player/dist/player.js | head -n 1)" ]; then
     echo "[setup] building the in-browser player (npm ci + esbuild)"
     (cd app/player && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build)
   fi

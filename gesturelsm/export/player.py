@@ -4,12 +4,13 @@ binary motion per method, so the bodies move seconds before the server-side mp4 
 * body: a skinned GLB of the unposed body (`export_glb` of one rest frame): mesh, 55-joint skeleton, skin
   weights and expression morph targets. Written once per body shape (betas) into a cache folder and reused
   by every request; the browser caches it by URL as well.
-* motion (`.bin`, little-endian float32, 30 fps, metres, y up, the body faces +z), frames t = 0..T-1:
+* motion (`.bin`): one record of the binary motion format (export/motion_format.py, kind quaternion, 30 fps,
+  metres, y up, the body faces +z), frames t = 0..T-1:
     rotations   (T, 55, 4)  each joint's local rotation, unit quaternion x, y, z, w (the pose plus the body
                             model's pose mean, exactly what `export_glb` animates; sign-continuous over time)
     root        (T, 3)      pelvis position = rest pelvis + trans (the GLB's node-0 translation)
     expressions (T, E)      morph-target weights, E = the body GLB's used expression directions (often 0)
-  10 s of motion is 300 x (55 x 4 + 3 + E) x 4 bytes, ~0.27 MB per method.
+  The live feed (gesturelsm/webapp/live.py) sends the same records, a chunk of frames each.
 * payload: JSON the page hands to the player: fps, frames, duration, the speech's URL and one entry per body
   {label, method, body (GLB URL), motion (bin URL), expressions (E)}.
 """
@@ -26,6 +27,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
+from .motion_format import MotionRecord, decode, encode
 from .skeleton import full_poses
 
 MAX_EXPRESSIONS = 10            # as export_glb's default: morph targets carried by the body GLB
@@ -72,28 +74,24 @@ def _continuous(q: np.ndarray) -> np.ndarray:
     return q * sign[..., None]
 
 
+def motion_record(seq: MotionSequence, body, start: int = 0, meta: dict | None = None) -> MotionRecord:
+    """`seq` on `body` as the player's record (kind quaternion), its first frame numbered `start`."""
+    a = motion_arrays(seq, body)
+    return MotionRecord(a["rotations"], a["root"], a["expressions"], fps=seq.fps, start=start, meta=meta or {})
+
+
 def write_motion(seq: MotionSequence, body, path: str | Path) -> tuple[Path, int]:
     """Write the motion `.bin` (layout in the module docstring); returns the path and E."""
-    a = motion_arrays(seq, body)
+    record = motion_record(seq, body)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    blob = b"".join(np.ascontiguousarray(a[k], "<f4").tobytes() for k in ("rotations", "root", "expressions"))
-    path.write_bytes(blob)
-    return path, a["expressions"].shape[1]
+    path.write_bytes(encode(record))
+    return path, record.expressions.shape[1]
 
 
-def read_motion(path: str | Path, frames: int, expressions: int = 0) -> dict[str, np.ndarray]:
-    """Inverse of `write_motion` (tests, tools)."""
-    data = np.frombuffer(Path(path).read_bytes(), "<f4")
-    sizes = {"rotations": (frames, NUM_JOINTS, 4), "root": (frames, 3), "expressions": (frames, expressions)}
-    out, off = {}, 0
-    for k, shape in sizes.items():
-        n = int(np.prod(shape))
-        out[k] = data[off:off + n].reshape(shape)
-        off += n
-    if off != data.size:
-        raise ValueError(f"{path}: {data.size} floats, expected {off} for {frames} frames")
-    return out
+def read_motion(path: str | Path) -> MotionRecord:
+    """Inverse of `write_motion` (tests, tools); a `MotionFormatError` naming the file when it is not one."""
+    return decode(Path(path).read_bytes(), source=str(path))
 
 
 def body_glb(body, betas: np.ndarray | None, cache: str | Path) -> Path:
@@ -131,5 +129,5 @@ def player_payload(motions: Sequence[MotionSequence], labels: Sequence[str], met
             "audio": url(audio) if audio else None, "bodies": bodies, "id": out.name}
 
 
-__all__ = ["axis_angle_to_quaternion", "body_glb", "motion_arrays", "player_payload", "read_motion", "used_expressions",
-           "write_motion"]
+__all__ = ["axis_angle_to_quaternion", "body_glb", "motion_arrays", "motion_record", "player_payload", "read_motion",
+           "used_expressions", "write_motion"]

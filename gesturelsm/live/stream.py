@@ -9,7 +9,7 @@ flows/base.py `inpainting`), so the new latents continue them and nothing final 
 st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
 motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
 defaults c = 5, lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a
-steady 1x delay must wait for the worst case (app/player/src/player.js `LiveClock`). Live settings at CFG 6, 2
+steady 1x delay must wait for the worst case (app/player/src/live_clock.js `LiveClock`). Live settings at CFG 6, 2
 held-out takes x 6 seeds, release 5 (`benchmarks/live_latency.py --skip-paced --skip-quality --pooled 6 --commit C
 --lookahead L`; loudness-following gain mean, z = mean / standard error, gains > 0, raised share; the default row
 with the seam fade below, the others with the linear fade before it), and the speech-to-

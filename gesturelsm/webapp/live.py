@@ -1,4 +1,4 @@
-"""The Live tab: microphone chunks stream in, motion chunks and latency stream out as JSON.
+"""The Live tab: microphone chunks stream in, motion chunks and latency stream out as binary motion records.
 
     with gr.Blocks() as demo:
         ...
@@ -15,19 +15,22 @@ Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket 
 button, when the tab closes (the socket closes, or Gradio deletes the state and the delete callback stops the
 session), or when no audio arrived for the session's idle timeout (network drop). When all streams are taken the
 visitor reads a "busy" line.
-The JSON for a player: {"start": first frame, "fps": 30, "frames": frames so far, "audio_seconds": audio received so
-far, "median_latency_ms", "p90_latency_ms", "real_time_factor", "status"} and the frames since the last JSON: "poses"
-([[165 axis-angle] per frame]) and "trans" ([[x, y, z] per frame]), or with a body (the page's) the in-browser
-player's arrays instead, flat: "rotations" (n * 55 * 4 quaternions x, y, z, w), "root" (n * 3, metres),
-"expressions" (n * E) (gesturelsm/export/player.py `motion_arrays`).
+Each message is one record of the binary motion format (gesturelsm/export/motion_format.py, decoded by its `decode`
+and by the page's app/player/src/motion_format.js): the frames since the last message, numbered from `start`, and a
+meta object {"frames": frames so far, "audio_seconds": audio received so far, "median_latency_ms", "p90_latency_ms",
+"real_time_factor", "status"}. With a body (the page's) the frames are the in-browser player's arrays (kind
+quaternion: 55 local rotations x, y, z, w, the root in metres, E expression weights; gesturelsm/export/player.py
+`motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3 poses and trans). Over the socket
+a record is a binary message; Gradio's microphone puts it base64-encoded in the hidden textbox `live-motion`
+(`decode(base64.b64decode(text))`).
 The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
-factor beside it. The player `live-player` (app/player/src/player.js `LiveFeed`) plays the frames at 1x one steady
+factor beside it. The player `live-player` (app/player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
 delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms).
 """
 from __future__ import annotations
 
-import json
+import base64
 from pathlib import Path
 from typing import Callable
 
@@ -35,10 +38,12 @@ import gradio as gr
 import numpy as np
 
 from gesturelsm.audio import resample, to_mono
-from gesturelsm.export.player import motion_arrays
+from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, encode
+from gesturelsm.export.player import motion_record
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.motion.sequence import MotionSequence
+from gesturelsm.motion.skeleton import NUM_JOINTS
 
 PATH = "/gesturelsm/live"    # where the page's live player opens the app's WebSocket (live_socket.routes serves it)
 STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
@@ -54,23 +59,32 @@ def to_float(sr: int, data: np.ndarray) -> np.ndarray:
     return resample(to_mono(y.astype(np.float32)), int(sr), SAMPLE_RATE).astype(np.float32)
 
 
-def payload(session: LiveSession, status: str, body=None) -> tuple[str, str, str]:
-    """(JSON for the player, text of #live-latency, text of #live-stats) from what the session produced since the
-    last call; `body` (a resolved body model) adds the in-browser player's arrays."""
+def payload(session: LiveSession, status: str, body=None) -> tuple[bytes, str, str]:
+    """(the motion record for the player, text of #live-latency, text of #live-stats) from what the session produced
+    since the last call; with `body` (a resolved body model) the record holds the in-browser player's arrays."""
     chunks = session.poll()
     st = session.stats()
-    data = {"start": chunks[0].start if chunks else session.delivered, "fps": 30, "frames": st["frames"],
-            "audio_seconds": round(st["audio_seconds"], 3), "median_latency_ms": st["median_latency_ms"],
-            "p90_latency_ms": st["p90_latency_ms"], "real_time_factor": st["real_time_factor"], "status": status}
+    start = chunks[0].start if chunks else session.delivered
+    meta = {"frames": st["frames"], "audio_seconds": round(st["audio_seconds"], 3),
+            "median_latency_ms": st["median_latency_ms"], "p90_latency_ms": st["p90_latency_ms"],
+            "real_time_factor": st["real_time_factor"], "status": status}
     seq = MotionSequence(*(np.concatenate([getattr(c.motion, k) for c in chunks])
                            for k in ("poses", "trans", "expressions"))) if chunks else None
-    if seq is None:
-        data.update(poses=[], trans=[], rotations=[], root=[])
-    elif body is None:
-        data.update(poses=seq.poses.round(4).tolist(), trans=seq.trans.round(4).tolist())
-    else:                       # only what the player draws: the JSON is a third of the size with the poses too
-        data.update({k: v.reshape(-1).round(4).tolist() for k, v in motion_arrays(seq, body).items()})
-    return json.dumps(data), _ms(st["median_latency_ms"]), _stats(st)
+    if seq is not None and body is not None:        # only what the player draws
+        record = motion_record(seq, body, start, meta)
+    elif seq is not None:
+        T = seq.num_frames
+        record = MotionRecord(seq.poses.reshape(T, NUM_JOINTS, 3), seq.trans, np.zeros((T, 0)), kind=AXIS_ANGLE,
+                              fps=seq.fps, start=start, meta=meta)
+    else:
+        record = MotionRecord(kind=QUATERNION if body is not None else AXIS_ANGLE,
+                              rotations=np.zeros((0, NUM_JOINTS, 4 if body is not None else 3)), start=start, meta=meta)
+    return encode(record), _ms(st["median_latency_ms"]), _stats(st)
+
+
+def as_text(record: bytes) -> str:
+    """A record for Gradio's hidden textbox `live-motion` (base64)."""
+    return base64.b64encode(record).decode("ascii")
 
 
 def _ms(v: float | None) -> str:
@@ -94,14 +108,15 @@ def on_chunk(manager: LiveManager, chunk, session: LiveSession | None):
         try:
             session = manager.open()
         except LiveBusy as exc:
-            return None, json.dumps({"status": str(exc)}), "", "", str(exc)
+            return None, as_text(encode(MotionRecord(meta={"status": str(exc)}))), "", "", str(exc)
     try:
         session.feed(to_float(*chunk))
         status = "streaming"
     except (LiveOverloaded, RuntimeError) as exc:
         status = str(exc)
         session.stop()
-    return session, *payload(session, status), status
+    record, latency, stats = payload(session, status)
+    return session, as_text(record), latency, stats, status
 
 
 def on_stop(session: LiveSession | None):
@@ -109,7 +124,8 @@ def on_stop(session: LiveSession | None):
     if session is None:
         return None, gr.skip(), gr.skip(), gr.skip(), "stopped"
     session.end(timeout=10.0)
-    return None, *payload(session, "stopped"), "stopped"
+    record, latency, stats = payload(session, "stopped")
+    return None, as_text(record), latency, stats, "stopped"
 
 
 def _delete(session: LiveSession | None) -> None:
@@ -134,7 +150,7 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
           ".catch((e) => { element.querySelector('#live-player').dataset.error = String(e); });")
     html = (f'<div id="live-player" data-state="empty" data-frames="0" data-frame="0" data-preload="{url}" '
             f'data-socket="{PATH.lstrip("/")}"></div>'
-            '<div class="live-bar" style="display:flex;gap:12px;align-items:center;flex-wrap:wrap;margin-top:6px">'
+            '<div class="live-bar">'
             '<button id="live-record" type="button" class="lg primary">Record</button>'
             '<button id="live-stop" type="button" class="lg secondary" disabled>Stop</button>'
             '<span>median latency <b id="live-latency"></b> ms</span><span id="live-stats"></span>'
@@ -169,7 +185,7 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
             latency = gr.Textbox(label="median latency (ms)", elem_id="live-latency", interactive=False)
             stats = gr.Textbox(label="since the stream started", elem_id="live-stats", interactive=False)
             status = gr.Textbox(label="status", elem_id="live-status", interactive=False)
-        motion = gr.Textbox(visible=False, elem_id="live-motion")            # JSON for API clients
+        motion = gr.Textbox(visible=False, elem_id="live-motion")            # base64 records for API clients
         outs = [state, motion, latency, stats, status]
         mic.stream(lambda c, s: on_chunk(manager, c, s), [mic, state], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,

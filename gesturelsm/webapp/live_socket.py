@@ -2,14 +2,16 @@
 
 Gradio's streaming microphone uploads every chunk as a file through its queue; on the 2-core machine that put the
 speech 1-2.6 s behind the voice before any generation (README, live mode). Here the page captures the microphone
-with an AudioWorklet (app/player/src/player.js `LiveMic`) and sends it as it comes, and the server sends each motion
+with an AudioWorklet (app/player/src/microphone.js `LiveMic`) and sends it as it comes, and the server sends each motion
 chunk the moment the session's worker has it (no polling):
 
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate)
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
-    server -> client   text   the JSON of live.py `payload`  per motion chunk; status "streaming", then "stopped"
-                                                                 or a message (busy, overloaded, bad input) and close
+    server -> client   binary a motion record                   per motion chunk (live.py `payload`; layout in
+                                                                 gesturelsm/export/motion_format.py): its meta's status
+                                                                 is "streaming", then "stopped" or a message (busy,
+                                                                 overloaded, bad input) and close
 
 One socket is one LiveSession (gesturelsm/live/session.py): the LiveManager's limit applies (past it the visitor reads
 the busy message), and a closed tab or a dropped connection stops the session at once. A session that ends by itself
@@ -28,6 +30,7 @@ from starlette.routing import WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gesturelsm.audio import MAX_SAMPLE_RATE
+from gesturelsm.export.motion_format import MotionRecord, encode
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
 from .live import PATH, payload, to_float
@@ -78,12 +81,12 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
                 if session.running or last["closing"]:
                     continue
                 # the session ended by itself (no audio for its idle timeout, or generation failed): say so, close
-                await ws.send_text(payload(session, session.error or "this live stream has ended", body)[0])
+                await ws.send_bytes(payload(session, session.error or "this live stream has ended", body)[0])
                 await ws.close()
                 return
             ready.clear()
             final = last["final"]
-            await ws.send_text(payload(session, last["status"], body)[0])
+            await ws.send_bytes(payload(session, last["status"], body)[0])
             if final:
                 return
 
@@ -107,7 +110,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
         try:
             session = manager.open(on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         except LiveBusy as exc:
-            await ws.send_text(json.dumps({"status": str(exc)}))
+            await ws.send_bytes(encode(MotionRecord(meta={"status": str(exc)})))
             return
         pusher = asyncio.create_task(push())
         while True:
@@ -122,7 +125,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
             except (Refused, LiveOverloaded, RuntimeError) as exc:   # bad input, too slow, or the session ended
                 return await finish(str(exc), end=False)
     except Refused as exc:
-        await ws.send_text(json.dumps({"status": str(exc)}))
+        await ws.send_bytes(encode(MotionRecord(meta={"status": str(exc)})))
     except (WebSocketDisconnect, RuntimeError):   # the tab closed or the network dropped mid-send
         pass
     finally:

@@ -1,10 +1,12 @@
 """The page's in-browser motion player: the Gradio side of app/player/ (three.js, bundled offline).
 
 `player_component()` puts the player (element id `motion-player`) in the page; its JavaScript bundle
-(app/player/dist/player.js in a checkout, built by scripts/setup.sh with npm + esbuild, no CDN; `player/player.js`
-inside this package in a wheel built with it) is served by the app itself.
-`payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB once per shape, one
-compact motion file per method) and returns the JSON the page hands to `gesturelsmPlayer.load(payload)`.
+(app/player/dist/player.js in a checkout, built from app/player/src/ by scripts/setup.sh with npm + esbuild, no CDN,
+its stylesheet player.css bundled in; `player/player.js` inside this package in a wheel built with it) is served by the
+app itself. `payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB once per shape, one
+motion record per method, gesturelsm/export/motion_format.py) and returns the JSON the page hands to
+`window.gesturelsmPlayer.load(payload)`, the page's one global player API (app/player/src/index.js; the Live tab's
+feed is its `.live`).
 """
 from __future__ import annotations
 

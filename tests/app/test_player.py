@@ -28,7 +28,9 @@ def test_motion_file_round_trip_matches_the_glb_animation(tmp_path):
                          expressions=rng.normal(0, 1, (T, 100)))
     body = resolve_body(None)
     path, E = write_motion(seq, body, tmp_path / "m.bin")
-    got = read_motion(path, T, E)
+    rec = read_motion(path)
+    assert (rec.kind, rec.frames, rec.start, rec.fps, rec.expressions.shape[1]) == ("quaternion", T, 0, 30, E)
+    got = {"rotations": rec.rotations, "root": rec.root, "expressions": rec.expressions}
     gltf, blob = read_glb(export_glb(seq, tmp_path / "m.glb", body=body))
     chans = gltf["animations"][0]["channels"]
     samplers = gltf["animations"][0]["samplers"]
@@ -53,7 +55,9 @@ def _motion(url: str, frames: int, expressions: int) -> np.ndarray:
     """(frames, 55, 4) rotations of a motion file the page was given (the app serves files by path)."""
     from gesturelsm.export.player import read_motion
 
-    return read_motion(url.split("file=", 1)[1], frames, expressions)["rotations"]
+    rec = read_motion(url.split("file=", 1)[1])
+    assert rec.frames == frames and rec.expressions.shape[1] == expressions
+    return rec.rotations
 
 
 def _shown(page, i: int) -> np.ndarray:
@@ -69,6 +73,7 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
         page.locator("#generate").click()
         page.wait_for_selector(f"{PLAYER}[data-state=playing]", timeout=120000)
+        assert page.evaluate("() => window.gesturelsmPlayer.measure") is False    # no timings unless asked
         payload = page.evaluate("() => window.gesturelsmPlayer.payload")
         T, fps = payload["frames"], payload["fps"]
         assert [b["method"] for b in payload["bodies"]] == ["gesturelsm", "rectified_flow"]
@@ -95,3 +100,65 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
             for i in range(2):                           # each body shows its own method's frame exactly
                 np.testing.assert_allclose(shown[i], motions[i][frame], atol=1e-6)
             assert np.abs(shown[0] - shown[1]).max() > 1e-3      # and the methods differ
+
+
+DECODE_JS = """async () => {
+    const m = await import('/player.js');
+    const buf = await (await fetch('/m.bin')).arrayBuffer();
+    const r = m.decodeMotion(buf, 'm.bin');
+    const errors = [];
+    for (const [name, bytes] of [['cut.bin', buf.slice(0, buf.byteLength - 6)], ['head.bin', buf.slice(0, 12)],
+                                 ['wav.bin', new TextEncoder().encode('RIFF' + 'x'.repeat(40)).buffer]]) {
+      try { m.decodeMotion(bytes, name); errors.push(null); } catch (e) { errors.push(e.message); }
+    }
+    return {kind: r.kind, joints: r.joints, fps: r.fps, start: r.start, frames: r.frames, meta: r.meta,
+            rotations: Array.from(r.rotations), root: Array.from(r.root), expressions: Array.from(r.expressions),
+            errors};
+}"""
+
+
+@pytest.mark.browser
+def test_the_page_decodes_what_python_encodes(tmp_path):
+    """A live-style record (a chunk from frame 42, meta) written by gesturelsm/export/motion_format.py and decoded by
+    the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame; cut or foreign
+    bytes give the decoder's message naming the source."""
+    from playwright.sync_api import sync_playwright
+
+    from _support import CHROMIUM
+    from app.motion_player import BUNDLE
+    from app.screenshot import CHROMIUM_ARGS
+    from gesturelsm.export.motion_format import MotionRecord, encode
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    rng = np.random.default_rng(3)
+    T, E = 9, 4
+    rec = MotionRecord(rng.normal(size=(T, 55, 4)).astype(np.float32), rng.normal(size=(T, 3)).astype(np.float32),
+                       rng.normal(size=(T, E)).astype(np.float32), start=42,
+                       meta={"status": "streaming", "frames": 51, "audio_seconds": 1.75, "median_latency_ms": None})
+    files = {"/index.html": (b"<!doctype html><title>decode</title>", "text/html"),
+             "/player.js": (BUNDLE.read_bytes(), "text/javascript"), "/m.bin": (encode(rec), "application/octet-stream")}
+
+    def serve(route):
+        body, kind = files[route.request.url.split("player.test", 1)[1]]
+        route.fulfill(status=200, body=body, content_type=kind)
+
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            page.route("http://player.test/**", serve)
+            page.goto("http://player.test/index.html")
+            got = page.evaluate(DECODE_JS)
+        finally:
+            browser.close()
+    assert (got["kind"], got["joints"], got["fps"], got["start"], got["frames"]) == ("quaternion", 55, 30, 42, T)
+    assert got["meta"] == rec.meta
+    for k in ("rotations", "root", "expressions"):             # float32 -> JS number -> float32: bit for bit
+        np.testing.assert_array_equal(np.asarray(got[k], np.float32).reshape(getattr(rec, k).shape), getattr(rec, k))
+    cut, head, wav = got["errors"]
+    assert cut.startswith("cut.bin: ") and "cut or padded" in cut
+    assert head.startswith("head.bin: 12 bytes, shorter than the 28-byte header")
+    assert wav.startswith("wav.bin: not a GestureLSM motion record")

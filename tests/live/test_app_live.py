@@ -1,13 +1,14 @@
-"""The Live tab's server side: the tab builds inside a Blocks; microphone chunks (int16, 48 kHz) stream motion JSON
-and the median latency out; the stop button ends the stream; a busy message past the limit; a closed tab stops it."""
+"""The Live tab's server side: the tab builds inside a Blocks; microphone chunks (int16, 48 kHz) stream motion records
+(base64 in the hidden textbox) and the median latency out; the stop button ends the stream; a busy message past the limit; a closed tab stops it."""
 from __future__ import annotations
 
-import json
+import base64
 import threading
 
 import numpy as np
 import pytest
 
+from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, decode
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
@@ -23,6 +24,11 @@ def mic_chunks(seconds: float, sr: int = 48000, every: float = 0.2):
     y = scipy.signal.resample_poly(speech_like(seconds, seed=7), 3, 1)
     n = int(sr * every)
     return [(sr, (y[a:a + n] * 32767).astype(np.int16)) for a in range(0, len(y), n)]
+
+
+def record(text: str) -> MotionRecord:
+    """The hidden textbox's value: one motion record, base64."""
+    return decode(base64.b64decode(text), "live-motion")
 
 
 def test_tab_builds_with_the_latency_element(shipped_pipe):
@@ -57,16 +63,17 @@ def test_stream_then_stop_gives_all_frames_and_latency(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     state, frames, seen = None, [], []
     for ch in mic_chunks(3.0):
-        state, js, lat, stats, status = live.on_chunk(mgr, ch, state)
-        d = json.loads(js)
-        assert d["start"] == sum(len(f) for f in frames)              # chunks continue where the last ended
-        frames.append(d["poses"])
+        state, text, lat, stats, status = live.on_chunk(mgr, ch, state)
+        r = record(text)
+        assert r.start == sum(frames)                                   # chunks continue where the last ended
+        assert r.kind == AXIS_ANGLE and r.rotations.shape[1:] == (55, 3)   # SMPL-X poses, 165 numbers per frame
+        frames.append(r.frames)
         seen.append(lat)
-    state, js, lat, stats, status = live.on_stop(state)
-    d = json.loads(js)
-    frames.append(d["poses"])
-    total = sum(len(f) for f in frames)
-    assert total == 90 and all(len(p) == 165 for f in frames for p in f)     # 3 s at 30 fps
+    state, text, lat, stats, status = live.on_stop(state)
+    r = record(text)
+    frames.append(r.frames)
+    d = r.meta
+    assert sum(frames) == 90 == d["frames"]                                 # 3 s at 30 fps
     assert float(lat) > 0 and d["median_latency_ms"] == pytest.approx(float(lat), abs=1)
     assert f"p90 {d['p90_latency_ms']:.0f} ms" in stats and "real-time factor" in stats
     assert state is None and mgr.active == 0
@@ -77,14 +84,14 @@ def test_busy_message_and_closed_tab(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     ch = mic_chunks(0.4)[0]
     s1, *_ = live.on_chunk(mgr, ch, None)
-    s2, js, lat, stats, status = live.on_chunk(mgr, ch, None)
-    assert s2 is None and "in use" in status and "in use" in json.loads(js)["status"]
+    s2, text, lat, stats, status = live.on_chunk(mgr, ch, None)
+    assert s2 is None and "in use" in status and "in use" in record(text).meta["status"]
     live._delete(s1)                                                   # what Gradio calls when the tab closes
     assert mgr.active == 0 and not s1.running
 
 
 def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
-    """With the page's body, each JSON carries the in-browser player's arrays for exactly the frames the same stream
+    """With the page's body, each record carries the in-browser player's arrays for exactly the frames the same stream
     gives without a body (streams are deterministic): quaternions that rotate like the axis-angle poses (plus the
     body's pose mean) and the root = trans + rest pelvis."""
     from gesturelsm.body.model import resolve_body
@@ -98,27 +105,25 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
         got = []
         for ch in mic_chunks(2.0):
             session.feed(live.to_float(*ch))
-            got.append(json.loads(live.payload(session, "streaming", b)[0]))
+            got.append(decode(live.payload(session, "streaming", b)[0]))
         session.end(timeout=10.0)
-        runs.append(got + [json.loads(live.payload(session, "stopped", b)[0])])
+        runs.append(got + [decode(live.payload(session, "stopped", b)[0])])
     plain, player = runs
     n_all = 0
     for p, d in zip(plain, player):
-        n = len(p["poses"])
-        assert d["start"] == p["start"] and not d.get("poses")
-        assert len(d["rotations"]) == n * 55 * 4 and len(d["root"]) == n * 3
+        n = p.frames
+        assert d.start == p.start and d.frames == n and (p.kind, d.kind) == (AXIS_ANGLE, QUATERNION)
         n_all += n
         if not n:
             continue
-        seq = MotionSequence(poses=np.asarray(p["poses"], np.float32), trans=np.asarray(p["trans"], np.float32),
+        seq = MotionSequence(poses=p.rotations.reshape(n, 165), trans=p.root,
                              expressions=np.zeros((n, 100), np.float32))
         want = motion_arrays(seq, body)
-        q = np.asarray(d["rotations"]).reshape(n, 55, 4)
-        dots = np.abs((q * want["rotations"]).sum(-1))                      # q and -q are the same rotation
-        np.testing.assert_allclose(dots, 1.0, atol=1e-3)
-        np.testing.assert_allclose(np.asarray(d["root"]).reshape(n, 3), want["root"], atol=1e-3)
+        dots = np.abs((d.rotations * want["rotations"]).sum(-1))            # q and -q are the same rotation
+        np.testing.assert_allclose(dots, 1.0, atol=1e-5)
+        np.testing.assert_allclose(d.root, want["root"], atol=1e-5)
     assert n_all == 60
-    first = np.asarray(next(d for d in player if d["root"])["root"]).reshape(-1, 3)[0]
+    first = next(d for d in player if d.frames).root[0]
     np.testing.assert_allclose(first[[0, 2]], body.rest_joints()[0][[0, 2]], atol=1e-4)   # starts at x = z = 0
 
 

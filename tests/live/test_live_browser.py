@@ -73,9 +73,10 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
         page.locator("#live-stop").click()
         page.wait_for_function("() => document.querySelector('#live-status').textContent === 'stopped'",
                                timeout=30000)
-        page.wait_for_function("() => window.gesturelsmLive.ws === null", timeout=5000)   # the server closed it
+        live = "window.gesturelsmPlayer.live"                       # the page's one global API
+        page.wait_for_function(f"() => {live}.ws === null", timeout=5000)   # the server closed it
         # every frame of the speech the server received reached the page: 30 per second of audio
-        received, last = page.evaluate("() => [window.gesturelsmLive.player.frames(), window.gesturelsmLive.last]")
+        received, last = page.evaluate(f"() => [{live}.player.frames(), {live}.last]")
         assert last["audio_seconds"] > 2 and received == last["frames"]
         assert abs(received - last["audio_seconds"] * 30) <= 1
         deadline = time.monotonic() + 10

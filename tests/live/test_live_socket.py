@@ -1,5 +1,6 @@
 """The Live tab's WebSocket (gesturelsm/webapp/live_socket.py), driven by Starlette's test client: int16 PCM in,
-motion JSON out as soon as it exists; every frame of the speech arrives once, in order, whatever the sample rate; Stop generates the rest
+motion records (gesturelsm/export/motion_format.py) out as soon as they exist; every frame of the speech arrives once,
+in order, whatever the sample rate; Stop generates the rest
 and closes; busy, bad messages and dropped connections end cleanly (no live worker left)."""
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
+from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, decode
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
@@ -49,15 +51,20 @@ def pcm_blocks(seconds: float, sr: int, block_s: float = 0.1) -> list[bytes]:
     return [(np.clip(y[a:a + n], -1, 1) * 32767).astype("<i2").tobytes() for a in range(0, len(y), n)]
 
 
-def stream(client, blocks, sr: int) -> list[dict]:
+def receive(ws) -> MotionRecord:
+    """The next message: one binary motion record."""
+    return decode(ws.receive_bytes(), "socket message")
+
+
+def stream(client, blocks, sr: int) -> list[MotionRecord]:
     with client.websocket_connect(live_socket.PATH) as ws:
         ws.send_text(json.dumps({"sample_rate": sr}))
         for b in blocks:
             ws.send_bytes(b)
         ws.send_text(json.dumps({"end": True}))
         out = []
-        while not out or out[-1]["status"] == "streaming":
-            out.append(json.loads(ws.receive_text()))
+        while not out or out[-1].meta["status"] == "streaming":
+            out.append(receive(ws))
     return out
 
 
@@ -65,16 +72,17 @@ def stream(client, blocks, sr: int) -> list[dict]:
 def test_streamed_speech_comes_back_as_every_frame_once_in_order(client_for, sr):
     mgr, client = client_for()
     msgs = stream(client, pcm_blocks(3.0, sr), sr)
-    assert msgs[-1]["status"] == "stopped"
-    assert all(m["status"] == "streaming" for m in msgs[:-1])
+    assert msgs[-1].meta["status"] == "stopped"
+    assert all(m.meta["status"] == "streaming" for m in msgs[:-1])
     n = 0
     for m in msgs:
-        assert m["start"] == n                                        # contiguous: no gap, no overlap
-        n += len(m["poses"])
-        assert all(len(p) == 165 for p in m["poses"]) and len(m["trans"]) == len(m["poses"])
-    assert n == 90 == msgs[-1]["frames"]                                   # 3 s at 30 fps, as offline
-    assert msgs[-1]["audio_seconds"] == pytest.approx(3.0, abs=1e-3)
-    assert msgs[-1]["median_latency_ms"] > 0 and msgs[-1]["p90_latency_ms"] >= msgs[-1]["median_latency_ms"]
+        assert m.start == n                                           # contiguous: no gap, no overlap
+        n += m.frames
+        assert m.kind == AXIS_ANGLE and m.rotations.shape[1:] == (55, 3) and m.root.shape == (m.frames, 3)
+    last = msgs[-1].meta
+    assert n == 90 == last["frames"]                                       # 3 s at 30 fps, as offline
+    assert last["audio_seconds"] == pytest.approx(3.0, abs=1e-3)
+    assert last["median_latency_ms"] > 0 and last["p90_latency_ms"] >= last["median_latency_ms"]
     wait_idle(mgr)
 
 
@@ -85,8 +93,8 @@ def test_motion_arrives_while_the_speech_is_still_streaming(client_for):
         ws.send_text(json.dumps({"sample_rate": 16000}))
         for b in pcm_blocks(2.0, 16000):
             ws.send_bytes(b)
-        first = json.loads(ws.receive_text())                         # blocks until the worker publishes
-        assert first["status"] == "streaming" and first["start"] == 0 and len(first["poses"]) > 0
+        first = receive(ws)                                           # blocks until the worker publishes
+        assert first.meta["status"] == "streaming" and first.start == 0 and first.frames > 0
     wait_idle(mgr)                                                      # closing the socket stopped the session
 
 
@@ -95,9 +103,8 @@ def test_the_page_body_gets_the_players_arrays(client_for):
 
     mgr, client = client_for(body=resolve_body(None))
     msgs = stream(client, pcm_blocks(1.5, 16000), 16000)
-    n = sum(len(m["root"]) // 3 for m in msgs)
-    assert n == 45 and sum(len(m["rotations"]) for m in msgs) == n * 55 * 4
-    assert not any(m.get("poses") for m in msgs)
+    n = sum(m.frames for m in msgs)
+    assert n == 45 and all(m.kind == QUATERNION and m.rotations.shape[1:] == (55, 4) for m in msgs)
     wait_idle(mgr)
 
 
@@ -111,7 +118,7 @@ def test_past_the_limit_the_visitor_reads_busy(client_for):
             time.sleep(0.01)
         with client.websocket_connect(live_socket.PATH) as second:
             second.send_text(json.dumps({"sample_rate": 16000}))
-            assert "in use" in json.loads(second.receive_text())["status"]
+            assert "in use" in receive(second).meta["status"]
         assert mgr.active == 1                                          # the first stream is untouched
     wait_idle(mgr)
 
@@ -131,7 +138,7 @@ def test_bad_messages_get_a_clear_message_and_end_the_stream(client_for, hello, 
             ws.send_bytes(then)
         elif then is not None:
             ws.send_text(then)
-        assert says in json.loads(ws.receive_text())["status"]
+        assert says in receive(ws).meta["status"]
     wait_idle(mgr)
 
 
@@ -142,8 +149,7 @@ def test_a_stream_that_goes_quiet_is_closed_with_its_reason(shipped_pipe):
     with client.websocket_connect(live_socket.PATH) as ws:
         ws.send_text(json.dumps({"sample_rate": 16000}))
         ws.send_bytes(pcm_blocks(0.1, 16000)[0])
-        msg = json.loads(ws.receive_text())
-        assert "no audio" in msg["status"]
+        assert "no audio" in receive(ws).meta["status"]
         assert ws.receive()["type"] == "websocket.close"
     wait_idle(mgr)
 
@@ -152,5 +158,5 @@ def test_a_socket_that_names_no_sample_rate_is_closed(client_for, monkeypatch):
     monkeypatch.setattr(live_socket, "HELLO_TIMEOUT_S", 0.2)
     mgr, client = client_for()
     with client.websocket_connect(live_socket.PATH) as ws:
-        assert "no sample rate" in json.loads(ws.receive_text())["status"]
+        assert "no sample rate" in receive(ws).meta["status"]
     assert mgr.active == 0

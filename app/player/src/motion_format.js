@@ -1,0 +1,59 @@
+// The page's decoder of the binary motion format (layout and encoder: gesturelsm/export/motion_format.py): the
+// offline player's motion files and the live feed's WebSocket messages are both one record,
+//   header (28 bytes, little-endian): magic "GLSM", version u16, kind u16 (1 quaternion, 2 axis-angle),
+//     joints u16, expressions u16, fps f32, start u32, frames u32, meta bytes u32
+//   float32 rotations (frames, joints, 4 or 3), root (frames, 3), expressions (frames, E); meta (UTF-8 JSON).
+// The float arrays are views into the buffer (no copy) on little-endian machines (all browsers' platforms).
+
+export const MAGIC = 'GLSM';
+export const VERSION = 1;
+export const HEADER_BYTES = 28;
+const KINDS = { 1: 'quaternion', 2: 'axis-angle' };
+const CHANNELS = { quaternion: 4, 'axis-angle': 3 };
+const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
+
+// ArrayBuffer -> {version, kind, joints, expressionCount, fps, start, frames, rotations, root, expressions, meta};
+// throws an Error naming `source` and what is wrong when the bytes are not a record this decoder knows.
+export function decodeMotion(buffer, source = 'motion data') {
+  if (ArrayBuffer.isView(buffer)) buffer = buffer.buffer.slice(buffer.byteOffset, buffer.byteOffset + buffer.byteLength);
+  const size = buffer.byteLength;
+  if (size < HEADER_BYTES) {
+    throw new Error(`${source}: ${size} bytes, shorter than the ${HEADER_BYTES}-byte header of a GestureLSM motion record`);
+  }
+  const v = new DataView(buffer);
+  const magic = String.fromCharCode(...new Uint8Array(buffer, 0, 4));
+  if (magic !== MAGIC) throw new Error(`${source}: not a GestureLSM motion record (it starts with ${JSON.stringify(magic)}, not "${MAGIC}")`);
+  const version = v.getUint16(4, true);
+  if (version !== VERSION) {
+    throw new Error(`${source}: motion format version ${version}; this player knows version ${VERSION} (reload the page)`);
+  }
+  const code = v.getUint16(6, true), kind = KINDS[code];
+  if (!kind) throw new Error(`${source}: unknown motion kind ${code} (1 = quaternion, 2 = axis-angle)`);
+  const joints = v.getUint16(8, true), E = v.getUint16(10, true), fps = v.getFloat32(12, true);
+  const start = v.getUint32(16, true), frames = v.getUint32(20, true), metaBytes = v.getUint32(24, true);
+  const widths = [joints * CHANNELS[kind], 3, E];
+  const want = HEADER_BYTES + 4 * frames * (widths[0] + widths[1] + widths[2]) + metaBytes;
+  if (size !== want) {
+    throw new Error(`${source}: ${size} bytes, but its header says ${want} (${frames} frames of ${joints} joints and ` +
+      `${E} expressions, ${metaBytes} bytes of meta): the data is cut or padded`);
+  }
+  let off = HEADER_BYTES;
+  const [rotations, root, expressions] = widths.map((w) => {
+    const n = frames * w, at = off;
+    off += 4 * n;
+    if (LITTLE_ENDIAN) return new Float32Array(buffer, at, n);
+    const a = new Float32Array(n);
+    for (let k = 0; k < n; k++) a[k] = v.getFloat32(at + 4 * k, true);
+    return a;
+  });
+  let meta = {};
+  if (metaBytes) {
+    try {
+      meta = JSON.parse(new TextDecoder('utf-8', { fatal: true }).decode(new Uint8Array(buffer, off, metaBytes)));
+    } catch (e) {
+      throw new Error(`${source}: its meta block is not UTF-8 JSON`);
+    }
+    if (!meta || typeof meta !== 'object' || Array.isArray(meta)) throw new Error(`${source}: its meta block is not a JSON object`);
+  }
+  return { version, kind, joints, expressionCount: E, fps, start, frames, rotations, root, expressions, meta };
+}

@@ -1,0 +1,124 @@
+"""The one binary motion format of the in-browser player: the offline player's motion files (`.bin`, one per
+method, export/player.py) and the live feed's WebSocket messages (gesturelsm/webapp/live.py `payload`) are both one record.
+The page decodes it in app/player/src/motion_format.js.
+
+A record, little-endian throughout:
+
+    header (28 bytes)
+      0  magic        4 bytes  b"GLSM"
+      4  version      uint16   1
+      6  kind         uint16   1 = quaternion: rotations are each joint's local rotation x, y, z, w and root is the
+                               pelvis position (what the player draws, export/player.py `motion_arrays`);
+                               2 = axis-angle: rotations are SMPL-X poses (3 per joint) and root is trans
+      8  joints       uint16   J (55 for SMPL-X)
+     10  expressions  uint16   E (weights per frame, often 0)
+     12  fps          float32  frames per second (30)
+     16  start        uint32   index of the first frame in its stream (0 for a whole motion)
+     20  frames       uint32   T, frames in this record (0: a message with meta only)
+     24  meta_bytes   uint32   length of the meta block
+    data, float32
+      rotations    (T, J, 4) or (T, J, 3)
+      root         (T, 3)      metres
+      expressions  (T, E)
+    meta: meta_bytes of UTF-8 JSON, an object (the live feed's status and latency; empty in files)
+
+The header is a multiple of 4 bytes, so the page views the floats in place (no copy). 10 s of the player's
+motion at 30 fps is 28 + 300 x (55 x 4 + 3 + E) x 4 bytes, ~0.27 MB per method.
+"""
+from __future__ import annotations
+
+import json
+import struct
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..motion.skeleton import NUM_JOINTS
+
+MAGIC = b"GLSM"
+VERSION = 1
+HEADER = struct.Struct("<4sHHHHfIII")
+QUATERNION, AXIS_ANGLE = "quaternion", "axis-angle"
+KINDS = {QUATERNION: 1, AXIS_ANGLE: 2}          # kind -> its code in the header
+CHANNELS = {QUATERNION: 4, AXIS_ANGLE: 3}       # numbers per joint and frame
+
+
+class MotionFormatError(InputError):
+    """Bytes that are not a motion record this reader understands; the message says what is wrong."""
+
+
+def _empty(*shape: int) -> np.ndarray:
+    return np.zeros(shape, np.float32)
+
+
+@dataclass(frozen=True)
+class MotionRecord:
+    """Frames `start .. start + frames - 1` of a motion, with an optional meta object (JSON-serialisable)."""
+    rotations: np.ndarray = field(default_factory=lambda: _empty(0, NUM_JOINTS, 4))   # (T, J, 4) or (T, J, 3)
+    root: np.ndarray = field(default_factory=lambda: _empty(0, 3))                    # (T, 3)
+    expressions: np.ndarray = field(default_factory=lambda: _empty(0, 0))             # (T, E)
+    kind: str = QUATERNION
+    fps: float = 30.0
+    start: int = 0
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def frames(self) -> int:
+        return int(self.rotations.shape[0])
+
+
+def encode(record: MotionRecord) -> bytes:
+    """The record's bytes (layout in the module docstring)."""
+    if record.kind not in KINDS:
+        raise ValueError(f"unknown motion kind {record.kind!r} (use {' or '.join(KINDS)})")
+    rot = np.asarray(record.rotations, "<f4")
+    T = rot.shape[0]
+    root = np.asarray(record.root, "<f4")
+    expr = np.asarray(record.expressions, "<f4")
+    if rot.ndim != 3 or rot.shape[2] != CHANNELS[record.kind]:
+        raise ValueError(f"{record.kind} rotations must be (frames, joints, {CHANNELS[record.kind]}), got {rot.shape}")
+    if root.shape != (T, 3) or expr.ndim != 2 or expr.shape[0] != T:
+        raise ValueError(f"root must be ({T}, 3) and expressions ({T}, E), got {root.shape} and {expr.shape}")
+    meta = json.dumps(record.meta, separators=(",", ":")).encode() if record.meta else b""
+    head = HEADER.pack(MAGIC, VERSION, KINDS[record.kind], rot.shape[1], expr.shape[1], float(record.fps),
+                       int(record.start), T, len(meta))
+    return b"".join([head, rot.tobytes(), root.tobytes(), expr.tobytes(), meta])
+
+
+def decode(data: bytes, source: str = "motion data") -> MotionRecord:
+    """The record in `data`; a `MotionFormatError` naming `source` when the bytes are not one."""
+    if len(data) < HEADER.size:
+        raise MotionFormatError(f"{source}: {len(data)} bytes, shorter than the {HEADER.size}-byte header of a "
+                                "GestureLSM motion record")
+    magic, version, code, J, E, fps, start, T, n_meta = HEADER.unpack_from(data)
+    if magic != MAGIC:
+        raise MotionFormatError(f"{source}: not a GestureLSM motion record (it starts with {magic!r}, "
+                                f"not {MAGIC!r})")
+    if version != VERSION:
+        raise MotionFormatError(f"{source}: motion format version {version}; this reader knows version {VERSION} "
+                                "(update the app or rewrite the file)")
+    kind = next((k for k, c in KINDS.items() if c == code), None)
+    if kind is None:
+        raise MotionFormatError(f"{source}: unknown motion kind {code} (1 = quaternion, 2 = axis-angle)")
+    widths = (J * CHANNELS[kind], 3, E)
+    want = HEADER.size + 4 * T * sum(widths) + n_meta
+    if len(data) != want:
+        raise MotionFormatError(f"{source}: {len(data)} bytes, but its header says {want} ({T} frames of {J} "
+                                f"joints and {E} expressions, {n_meta} bytes of meta): the data is cut or padded")
+    floats = np.frombuffer(data, "<f4", T * sum(widths), HEADER.size)
+    rot, root, expr = np.split(floats, np.cumsum([T * w for w in widths[:2]]))
+    meta = {}
+    if n_meta:
+        try:
+            meta = json.loads(bytes(data[want - n_meta:]).decode())
+        except (UnicodeDecodeError, ValueError):
+            raise MotionFormatError(f"{source}: its meta block is not UTF-8 JSON") from None
+        if not isinstance(meta, dict):
+            raise MotionFormatError(f"{source}: its meta block is not a JSON object")
+    return MotionRecord(rot.reshape(T, J, CHANNELS[kind]), root.reshape(T, 3), expr.reshape(T, E), kind=kind,
+                        fps=float(fps), start=int(start), meta=meta)
+
+
+__all__ = ["AXIS_ANGLE", "HEADER", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",
+           "encode"]

@@ -1,0 +1,82 @@
+"""The binary motion format shared by the player's files and the live feed: encoding then decoding gives back the
+record bit for bit; the header sits where the page's decoder reads it; bytes that are not a record this reader knows
+give a one-line message naming the source."""
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+
+from gesturelsm.errors import InputError
+from gesturelsm.export.motion_format import (AXIS_ANGLE, HEADER, QUATERNION, MotionFormatError, MotionRecord,
+                                             decode, encode)
+
+
+def _record(kind: str = QUATERNION, T: int = 7, E: int = 3, seed: int = 0) -> MotionRecord:
+    rng = np.random.default_rng(seed)
+    C = 4 if kind == QUATERNION else 3
+    return MotionRecord(rng.normal(size=(T, 55, C)).astype(np.float32), rng.normal(size=(T, 3)).astype(np.float32),
+                        rng.normal(size=(T, E)).astype(np.float32), kind=kind, fps=30.0, start=123456,
+                        meta={"status": "streaming", "frames": 99, "median_latency_ms": 812.5, "note": "süß"})
+
+
+@pytest.mark.parametrize("kind, T, E", [(QUATERNION, 7, 3), (AXIS_ANGLE, 5, 0), (QUATERNION, 0, 0)])
+def test_round_trip_gives_back_every_field(kind, T, E):
+    rec = _record(kind, T, E)
+    data = encode(rec)
+    got = decode(data)
+    assert (got.kind, got.fps, got.start, got.frames, got.meta) == (kind, 30.0, 123456, T, rec.meta)
+    for k in ("rotations", "root", "expressions"):
+        assert getattr(got, k).dtype == np.float32 and getattr(got, k).shape == getattr(rec, k).shape
+        np.testing.assert_array_equal(getattr(got, k), getattr(rec, k))
+    assert encode(got) == data
+
+
+def test_header_layout_is_the_documented_one():
+    """Byte offsets the page's decoder (app/player/src/motion_format.js) reads: magic, version, kind, joints,
+    expressions, fps, start, frames, meta length, then the floats at byte 28."""
+    rec = _record(QUATERNION, T=2, E=3)
+    data = encode(rec)
+    assert HEADER.size == 28 and data[:4] == b"GLSM"
+    version, kind, J, E, fps, start, T, n_meta = struct.unpack_from("<HHHHfIII", data, 4)
+    assert (version, kind, J, E, fps, start, T) == (1, 1, 55, 3, 30.0, 123456, 2)
+    first = np.frombuffer(data, "<f4", 4, 28)
+    np.testing.assert_array_equal(first, rec.rotations[0, 0])
+    assert len(data) == 28 + 4 * 2 * (55 * 4 + 3 + 3) + n_meta
+
+
+def test_a_record_with_only_meta():
+    got = decode(encode(MotionRecord(meta={"status": "busy"})))
+    assert got.frames == 0 and got.meta == {"status": "busy"} and got.rotations.shape == (0, 55, 4)
+
+
+@pytest.mark.parametrize("mutate, says", [
+    (lambda b: b[:10], "shorter than the 28-byte header"),
+    (lambda b: b"RIFF" + b[4:], "not a GestureLSM motion record"),
+    (lambda b: b[:4] + struct.pack("<H", 9) + b[6:], "motion format version 9"),
+    (lambda b: b[:6] + struct.pack("<H", 7) + b[8:], "unknown motion kind 7"),
+    (lambda b: b[:-5], "the data is cut or padded"),
+    (lambda b: b + b"\0\0\0\0", "the data is cut or padded"),
+    (lambda b: b[:-2] + b"\xff\xfe", "meta block is not UTF-8 JSON"),
+])
+def test_bad_bytes_say_what_is_wrong(mutate, says):
+    data = mutate(encode(_record()))
+    with pytest.raises(MotionFormatError, match=says) as err:
+        decode(data, source="m.bin")
+    assert str(err.value).startswith("m.bin: ") and "\n" not in str(err.value)
+    assert isinstance(err.value, InputError)                # the app and CLI show it as a message, not a traceback
+
+
+def test_meta_must_be_an_object():
+    head = encode(MotionRecord(meta={"a": 1}))
+    data = head[:24] + struct.pack("<I", 3) + b"[1]"
+    with pytest.raises(MotionFormatError, match="not a JSON object"):
+        decode(data)
+
+
+def test_encoding_checks_the_shapes():
+    with pytest.raises(ValueError, match="rotations must be"):
+        encode(MotionRecord(np.zeros((2, 55, 3)), np.zeros((2, 3)), np.zeros((2, 0))))       # 3 numbers: axis-angle
+    with pytest.raises(ValueError, match="root must be"):
+        encode(MotionRecord(np.zeros((2, 55, 4)), np.zeros((3, 3)), np.zeros((2, 0))))
