@@ -1,8 +1,8 @@
 // The bundle's entry (esbuild -> ../dist/player.js): mounts the page's players and publishes the one global API,
 //   window.gesturelsmPlayer        the page's MotionPlayer (#motion-player; player.js documents its methods)
 //   window.gesturelsmPlayer.live   the Live tab's LiveFeed (#live-player; live_feed.js), null without one
-// The page imports this module and calls mount(element) / mountLive(element, box) (app/motion_player.py,
-// app/live.py); the other exports are for tools and tests that import the bundle.
+// The page imports this module and calls mount(element) / mountLive(element, box) (gesturelsm/webapp/motion_player.py,
+// gesturelsm/webapp/live.py); the other exports are for tools and tests that import the bundle.
 import { LiveFeed } from './live_feed.js';
 import { MotionPlayer } from './player.js';
 

@@ -1,4 +1,4 @@
-// The live player of the Live tab (app/live.py): a MotionPlayer with one body, on a LiveClock, fed the motion
+// The live player of the Live tab (gesturelsm/webapp/live.py): a MotionPlayer with one body, on a LiveClock, fed the motion
 // records (motion_format.js) the server pushes over the app's WebSocket (protocol in app/live_socket.py).
 // start() opens the microphone (microphone.js) and the socket (element data-socket), streams the speech and plays
 // the motion that comes back; stop() sends the end (the server generates the rest, then closes). push(buffer)
