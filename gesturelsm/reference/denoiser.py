@@ -33,6 +33,12 @@ def timestep_embedding(t: torch.Tensor, dim: int) -> torch.Tensor:
     return torch.cat([torch.cos(arg), torch.sin(arg)], dim=-1)
 
 
+def rope_inv_freq(dim: int) -> torch.Tensor:
+    """(dim/2,) rotary frequencies 10000**(-2i/dim): the `inv_freq` buffers of the reference's rotary modules,
+    which the port computes instead of loading (reference/convert.py checks a file's buffers against them)."""
+    return 1.0 / (10000 ** (torch.arange(0, dim, 2, dtype=torch.float32) / dim))
+
+
 _ROPE_CACHE: dict[tuple[int, int, str], tuple[torch.Tensor, torch.Tensor]] = {}
 
 
@@ -40,7 +46,7 @@ def rope_tables(n: int, dim: int, device: torch.device) -> tuple[torch.Tensor, t
     """cos, sin (n, dim) for positions 0..n-1; frequencies 10000**(-2i/dim), duplicated over both halves."""
     key = (n, dim, str(device))
     if key not in _ROPE_CACHE:
-        inv = 1.0 / (10000 ** (torch.arange(0, dim, 2, dtype=torch.float32) / dim))
+        inv = rope_inv_freq(dim)
         f = torch.einsum("i,j->ij", torch.arange(n, dtype=torch.float32), inv)
         f = torch.cat([f, f], -1).to(device)
         _ROPE_CACHE[key] = (f.cos(), f.sin())

@@ -1,12 +1,14 @@
 """Reading the released files without executing anything they contain.
 
 Tensors: torch.load(weights_only=True) (torch's own allow-list: tensors, dicts, lists, numbers, strings).
-Vocabulary pickle: a restricted unpickler that builds only numpy arrays, plain containers and the
-reference's `Vocab` class (as an inert attribute bag); any other global (os.system, builtins.eval, ...)
-is refused before it is called.
+Vocabulary pickle (any protocol, 0-5): a restricted unpickler that builds only numpy arrays, plain containers,
+bytes (`_codecs.encode`, how protocols 0-2 store them) and the reference's `Vocab` class (as an inert attribute
+bag, also through `copyreg._reconstructor`, how protocols 0-1 store an instance); any other global (os.system,
+builtins.eval, ...) is refused before it is called.
 """
 from __future__ import annotations
 
+import _compat_pickle
 import io
 import pickle
 from pathlib import Path
@@ -29,7 +31,8 @@ NUMPY_GLOBALS = {
     ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer"),
 }
 BUILTINS = {("collections", "OrderedDict"), ("collections", "defaultdict"), ("builtins", "set"),
-            ("builtins", "frozenset"), ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple")}
+            ("builtins", "frozenset"), ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple"),
+            ("_codecs", "encode")}
 
 
 class VocabRecord:
@@ -41,10 +44,24 @@ class VocabRecord:
         self.__dict__.update(state)
 
 
+def _reconstruct_vocab(cls: Any, base: Any, state: Any) -> VocabRecord:
+    """`copyreg._reconstructor` limited to what protocols 0-1 write for a plain instance of `Vocab`."""
+    if cls is not VocabRecord or base is not object or state is not None:
+        raise pickle.UnpicklingError("copyreg._reconstructor is allowed only for the Vocab class")
+    return VocabRecord()
+
+
 class _RestrictedUnpickler(pickle.Unpickler):
     def find_class(self, module: str, name: str) -> Any:
+        # protocols 0-2 name Python 2 modules (__builtin__, copy_reg); compare under their Python 3 names
+        module, name = _compat_pickle.NAME_MAPPING.get((module, name), (module, name))
+        module = _compat_pickle.IMPORT_MAPPING.get(module, module)
         if (module, name) in NUMPY_GLOBALS or (module, name) in BUILTINS:
             return super().find_class(module, name)
+        if (module, name) == ("builtins", "object"):
+            return object
+        if (module, name) == ("copyreg", "_reconstructor"):
+            return _reconstruct_vocab
         if name == "Vocab" and module in VOCAB_CLASS_MODULES:
             return VocabRecord
         raise pickle.UnpicklingError(f"refers to {module}.{name}, which is not allowed")
