@@ -217,9 +217,8 @@ def _output_column(service: GestureService) -> tuple:
     motion_player.player_component(service)
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
-    # sharing. A <video> on screen, even paused, held headless Chromium's software-composited page at ~20 redraws
-    # per second (a one-off probe hiding the page's parts in turn: only the video mattered, ~60 without it), so it
-    # opens on request (benchmarks/player_latency.py before and after: 17.4 and 29.9 fps idle with one body).
+    # sharing. A <video> on screen, even paused, holds headless Chromium's software-composited page at ~20 redraws
+    # per second (the player with it), so it opens on request (benchmarks/player_latency.py measures the player).
     with (gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
                        elem_id="video-box") if motion_player.BUNDLE.exists() else contextlib.nullcontext()):
         video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)

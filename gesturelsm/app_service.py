@@ -52,7 +52,7 @@ TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling"
                   "real-time factor"]                   # seconds, except the real-time factor
 
 
-ServiceError = GestureError      # the old name: a problem with the request that the visitor can fix
+ServiceError = GestureError      # alias: a problem with the request that the visitor can fix
 
 @dataclass(frozen=True)
 class ServiceSettings:

@@ -1,10 +1,10 @@
 """The reference denoiser (GestureDenoiser at fe124e0), with its quirks kept because the weights learned them.
 
-Quirks (all deliberate here, see ../../docs and METHOD-FACTS.md):
+Quirks (all deliberate here, see docs/AUTHORS-CODE.md):
 - rotary position encoding is applied to the *token features* (values too), once over frames per region
   before the cross-attention, and again per head inside each spatial-temporal attention;
 - the (B, 3, 32, C) tokens are reshaped with a raw view to (B, 32, 3C) for cross-attention, so one
-  "frame token" mixes three consecutive frames of one region (the bug noted in METHOD-FACTS.md);
+  "frame token" mixes three consecutive frames of one region (a bug of their code that the weights learned);
 - spatial-temporal blocks run temporal attention, then spatial attention, each with its own residual
   around the *rotated* input, inside the block's residual (x + [rope(h) + attn(rope(h))]);
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.

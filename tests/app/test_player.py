@@ -1,4 +1,4 @@
-"""The in-browser motion player (app/player, issue 18), driven in headless Chromium on the shipped checkpoints:
+"""The in-browser motion player (app/player), driven in headless Chromium on the shipped checkpoints:
 it plays before the mp4 exists, shows exactly the generated frames of each method, follows the speech's clock,
 and scrubbing keeps speech and motion within one frame. Skips, saying why, without chromium, the player bundle
 (scripts/setup.sh builds it with npm) or the shipped checkpoints."""
