@@ -54,7 +54,7 @@ def test_generate_accepts_the_types_view_api_reports(app_url, speech_wav):
     assert args[[p["parameter_name"] for p in params].index("size")] == str(size["parameter_default"])
     video, table, summary, files, glb = _client(app_url).predict(*args, api_name="/generate")
     assert Path(video).stat().st_size > 1000 and Path(glb).suffix == ".glb"
-    assert len(table["data"]) == 1 and summary
+    assert len(table["data"]) == 2 and summary                          # the method, then the total row
 
 
 @pytest.mark.parametrize("field", ["size", "smoothing"])
@@ -71,7 +71,7 @@ def test_every_listed_choice_is_accepted(app_url, speech_wav, field):
         args = list(base)
         args[names.index(field)] = choice
         payload, table, summary, text = client.predict(*args, api_name="/generate_motion")
-        assert len(table["data"]) == 1, (field, choice, summary)
+        assert len(table["data"]) == 2, (field, choice, summary)
 
 
 def test_a_size_outside_the_list_is_refused_with_the_fields_message(app_url, speech_wav):
