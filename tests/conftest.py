@@ -106,6 +106,7 @@ def tiny_pipeline(tiny_assets):
 # seconds on 2 cores or reads the real data; `make test` runs them all.
 HEAVY_FIXTURES = {
     "app_url": "serves the web app",
+    "service": "the web app's request service over trained checkpoints (renders videos)",
     "shipped_pipe": "streams through the shipped network",
     "recognizer": "loads Whisper",
     "beat2_root": "reads the real BEAT2 take",
