@@ -1,4 +1,5 @@
 # make test  - create .venv, install everything, run the test suite
+# make test-fast - the same without slow and browser tests (the edit-test loop)
 # make demo  - create .venv, install everything, start the web app on http://127.0.0.1:7860
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -7,7 +8,7 @@ export NUMBA_CACHE_DIR ?= $(CURDIR)/$(VENV)/numba-cache
 export GRADIO_ANALYTICS_ENABLED := False
 export HF_HUB_DISABLE_TELEMETRY := 1
 
-.PHONY: setup test demo clean
+.PHONY: setup test test-fast demo clean
 setup: $(STAMP)
 
 $(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/package-lock.json \
@@ -17,6 +18,9 @@ $(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/p
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -m "not slow and not browser"
 
 demo: $(STAMP)
 	$(PY) -m app

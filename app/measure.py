@@ -21,7 +21,7 @@ from pathlib import Path  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
 
 # Varied sentences, none repeated within 30 s: Whisper re-decodes a 30 s window whose text compresses too well
-# (a repeated sentence) at five more temperatures, which made 60 s of the old one-sentence loop take 21 s to
+# (a repeated sentence) at five more temperatures, so 60 s of one repeated sentence takes ~21 s to
 # transcribe instead of ~3.5 s per minute of real speech (benchmarks/transcribe_accuracy.py).
 SENTENCES = (
     "When we talk about the weather, we often move our hands to show the clouds, the wind and the sun.",

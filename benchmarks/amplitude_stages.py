@@ -1,4 +1,4 @@
-"""Where is gesture amplitude lost? Each stage measured on held-out speech (issue 16).
+"""Where is gesture amplitude lost? Each stage measured on held-out speech.
 
     .venv/bin/python benchmarks/amplitude_stages.py [--checkpoints assets] [--seeds 2] [--stages all]
 

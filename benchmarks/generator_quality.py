@@ -4,7 +4,7 @@
 
 Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth) and the audio-only takes
 2_scott_0_2_2 and 2_scott_0_3_3, with their TextGrids (all from ../shared). Per method and step count:
-- BC: beat consistency with the speech the motion was generated for (METHOD-FACTS definition, speeds
+- BC: beat consistency with the speech the motion was generated for (docs/AUTHORS-CODE.md definition, speeds
   normalised by the ground truth's mean joint speeds on the same body);
 - BC shuffled: the same motion scored against another take's speech beats. Motion that follows its
   speech scores higher on its own audio than on foreign audio;
@@ -20,7 +20,7 @@ Held-out speech: the last 20% of BEAT2 2_scott_0_1_1 (its motion is ground truth
   the same seeds generate again; the upper-body speed inside the gaps (from 1 s after the gap starts) over
   the speed in the same spans with speech. 1 means the motion does not notice that the speaker stopped;
 - speed: mean upper-body joint speed (m/s) (static motion is ~0), jitter: mean joint acceleration (m/s^2);
-- amplitude (metrics.amplitude, issue 16): raised share (a wrist above pelvis + 0.25 m), wrist height p50/p95,
+- amplitude (metrics.amplitude): raised share (a wrist above pelvis + 0.25 m), wrist height p50/p95,
   wrist speed, hand spread, upper-body jerk, pooled over clips x seeds (with the transcript), beside the
   speaker's whole take, and the replay guard (novelty of 1 s windows against the training motion, over the
   speaker's held-out motion's; copies of training clips score ~0). Audio-only: benchmarks/amplitude_stages.py.

@@ -1,4 +1,4 @@
-"""How fast, and in how much memory, hostile uploads are refused (issue 21). Each case runs in a fresh
+"""How fast, and in how much memory, hostile uploads are refused. Each case runs in a fresh
 Python process (so the peak RSS is that case alone) and prints one markdown row.
 
     PYTHONPATH=.:tests .venv/bin/python benchmarks/hostile_uploads.py [--hours 10] [--max-seconds 300]

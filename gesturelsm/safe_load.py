@@ -9,13 +9,16 @@ is an executable. Here:
   are pickled object arrays (SMPL-X files carry a few, e.g. dicts of joint names) are unpickled by
   `PlainDataUnpickler`.
 - `PlainDataUnpickler`: the one allow-list for pickles, `ALLOWED_GLOBALS`: numpy's array/dtype/scalar
-  reconstruction and plain containers (dicts, lists, strings and numbers need no global), plus the stand-in
-  classes a caller names (the authors' vocabulary, `reference/safe_load.py`, becomes an inert record). A pickle
-  naming any other global is refused (`UnsafePickleError`) before that global is looked up, so its code never
-  runs.
+  reconstruction, plain containers (dicts, lists, strings and numbers need no global) and bytes as protocols 0-2
+  store them (`_codecs.encode`), plus the stand-in classes a caller names (the authors' vocabulary,
+  `reference/safe_load.py`, becomes an inert record), also when built through `copyreg._reconstructor` (how
+  protocols 0-1 store an instance). Python 2 names (`__builtin__`, `copy_reg`) are compared under their Python 3
+  names. A pickle naming any other global is refused (`UnsafePickleError`) before that global is looked up, so its
+  code never runs.
 """
 from __future__ import annotations
 
+import _compat_pickle
 import ast
 import io
 import pickle
@@ -32,7 +35,7 @@ ALLOWED_GLOBALS = {
     ("numpy", "ndarray"), ("numpy", "dtype"),
     ("numpy.core.numeric", "_frombuffer"), ("numpy._core.numeric", "_frombuffer"),
     ("collections", "OrderedDict"), ("collections", "defaultdict"), ("builtins", "set"), ("builtins", "frozenset"),
-    ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple"),
+    ("builtins", "dict"), ("builtins", "list"), ("builtins", "tuple"), ("_codecs", "encode"),
 }
 
 
@@ -49,12 +52,24 @@ class PlainDataUnpickler(pickle.Unpickler):
         self.stand_ins = dict(stand_ins or {})
 
     def find_class(self, module: str, name: str) -> Any:
+        module, name = _compat_pickle.NAME_MAPPING.get((module, name), (module, name))
+        module = _compat_pickle.IMPORT_MAPPING.get(module, module)
         if (module, name) in self.stand_ins:
             return self.stand_ins[module, name]
+        if (module, name) == ("builtins", "object"):
+            return object
+        if (module, name) == ("copyreg", "_reconstructor"):
+            return self._reconstruct
         if (module, name) not in ALLOWED_GLOBALS:
             raise UnsafePickleError(f"it contains a pickled reference to {module}.{name}, which is not allowed "
                                     "(only plain data is read)")
         return super().find_class(module, name)
+
+    def _reconstruct(self, cls: Any, base: Any, state: Any) -> Any:
+        """`copyreg._reconstructor` limited to what protocols 0-1 write for a plain instance of a stand-in class."""
+        if cls not in self.stand_ins.values() or base is not object or state is not None:
+            raise UnsafePickleError("copyreg._reconstructor is allowed only for a plain instance of a stand-in class")
+        return cls()
 
 
 def load_tensors(path: str | Path, map_location: Any = "cpu") -> Any:

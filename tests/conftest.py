@@ -100,3 +100,22 @@ def tiny_pipeline(tiny_assets):
     from gesturelsm.pipeline import GesturePipeline
 
     return GesturePipeline.from_pretrained(tiny_assets)
+
+
+# Fixtures whose tests leave the fast tier (`make test-fast`, `-m "not slow and not browser"`): each costs tens of
+# seconds on 2 cores or reads the real data; `make test` runs them all.
+HEAVY_FIXTURES = {
+    "app_url": "serves the web app",
+    "service": "the web app's request service over trained checkpoints (renders videos)",
+    "shipped_pipe": "streams through the shipped network",
+    "recognizer": "loads Whisper",
+    "beat2_root": "reads the real BEAT2 take",
+    "beat2": "reads the real BEAT2 take",
+    "eval_assets": "trains models for the evaluation runners",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if HEAVY_FIXTURES.keys() & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)

@@ -1,4 +1,4 @@
-"""Operator-supplied files (issue 21, item 7): checkpoints load as tensors only, SMPL-X .npz files read their
+"""Operator-supplied files: checkpoints load as tensors only, SMPL-X .npz files read their
 pickled members through an allow-list; a pickle that would run code is refused and the code never runs."""
 from __future__ import annotations
 

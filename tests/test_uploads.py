@@ -1,4 +1,4 @@
-"""Hostile audio uploads (issue 21): long files are refused before they are decoded, decoding is bounded by
+"""Hostile audio uploads: long files are refused before they are decoded, decoding is bounded by
 the limit even when the header lies, and nothing but an allow-listed container reaches a decoder."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Amplitude of generated motion on held-out speech, and the inference-time options that change it (issue 16).
+"""Amplitude of generated motion on held-out speech, and the inference-time options that change it.
 
     data = AmplitudeData.load("../shared/data/beat2")           # held-out clips, the speaker's train / test motion
     row = data.generated(pipe, "gesturelsm", steps=8, cfg=2.0, text=True, seeds=[0, 1])

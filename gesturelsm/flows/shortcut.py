@@ -9,7 +9,7 @@ ordinary (instantaneous) flow-matching velocity. One batch mixes two kinds of ro
       v1 = f(x_t, t, d);  v2 = f(x_t + d v1, t + d, d);  target(x_t, t, 2d) = (v1 + v2) / 2.
   t for these rows lies on the grid of 2d (t + 2d <= 1), drawn with the same Beta skew. The smallest d is
   queried as d = 0, its instantaneous limit, which the flow rows train directly.
-Deliberate choices where the reference has bugs (METHOD-FACTS): the loss is a plain mean squared error
+Deliberate choices where the reference has bugs (docs/AUTHORS-CODE.md): the loss is a plain mean squared error
 over all rows (no division by t); condition dropout is the same p = 0.1 on every row, and the consistency
 targets use exactly the row's own condition (kept or dropped); targets may come from an EMA teacher.
 `loss_space="data"` measures the same errors on the implied clean sample x_t + (1 - t) v (see base.flow_loss),

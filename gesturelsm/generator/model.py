@@ -91,7 +91,7 @@ class Denoiser(nn.Module):
         self.speech_in = nn.Sequential(nn.LayerNorm(c.cond_dim), nn.Linear(c.cond_dim, C)) if c.speech_add else None
         self.out_norm = nn.LayerNorm(C)
         self.out = nn.Linear(C, D)
-        nn.init.zeros_(self.d_embed.weight)   # d enters through a zero-initialised layer (METHOD-FACTS)
+        nn.init.zeros_(self.d_embed.weight)   # d enters through a zero-initialised layer, as in the authors' code
         nn.init.zeros_(self.d_embed.bias)
         nn.init.zeros_(self.out.weight)       # start as the zero velocity
         nn.init.zeros_(self.out.bias)

@@ -3,35 +3,23 @@
 Windows (t = 32 latents = 128 frames, seed s = 4 latents, as offline in generator/sampling.py): window i
 *finalises* latents [st, st + c) with st = i c (4 <= c <= t - s; offline is c = t - s = 28) and runs as soon as the
 audio reaches latent e = st + c + `lookahead`. It covers [e - t, e) (from latent 0 while e < t): it *ends* at the
-newest audio, so the network sees real speech all through the window, as in training. Its latents before st are
+newest audio, so the network sees real speech all through the window, as in training (windows anchored at st, with
+silence after the look-ahead, lose the loudness following: tests/live/test_stream.py). Its latents before st are
 already final: they are the seed (first s) and are kept fixed while sampling (replacement inpainting,
-flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. (Anchoring windows at
-st instead, with silence after the look-ahead, lost the loudness following: tests/live/test_stream.py.) So the
-motion of a moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the
-defaults c = 5, lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a
-steady 1x delay must wait for the worst case (app/player/src/live_clock.js `LiveClock`). Live settings at CFG 6, 2
-held-out takes x 6 seeds, release 5 (`benchmarks/live_latency.py --skip-paced --skip-quality --pooled 6 --commit C
---lookahead L`; loudness-following gain mean, z = mean / standard error, gains > 0, raised share; the default row
-with the seam fade below, the others with the linear fade before it), and the speech-to-
-screen delay through real Chromium (`benchmarks/live_browser.py --seconds 30 --commit C --lookahead L`, median):
-    c, L = 6, 2: +0.186, 6.5, 12/12, 21.1 %, 1.25 s      c, L = 6, 1: +0.153, 6.1, 12/12, 20.9 %, 1.07 s
-    c, L = 5, 2: +0.137, 4.2, 10/12, 20.2 %              c, L = 5, 1: +0.131, 4.3, 11/12, 19.5 %, 0.95 s (default)
-    c, L = 4, 2: +0.091, 3.0,  8/12, 19.5 %
-so 5 and 1 is the largest commit inside the 1 s goal for the delay the visitor sees. (With release 4 at CFG 2:
-c = 4 followed the speech's loudness weakly (+0.04, 1.7 SE; look-ahead 4, 8 steps, blend_frames 0,
-decode_lag 4, or holding only 8 known latents (a one-off edit) did not help: +0.03 to +0.05); c = 6 gave +0.11 (3.2
-SE), c = 8 +0.12 (4.4 SE).) Small commits extend the motion a few latents at a time from a long fixed past, which
-carries its momentum more than the new speech's loudness. With lookahead 0 the decoder has no latent right of a
-chunk: jerk at seams 13x inside. Streamed motion is calmer than offline: at
-the offline CFG 2 a hand is raised in 7.5 % of frames (12 streams, c = 6) against 17-39 % offline on these takes, and the
-share grows with the commit (2 seeds: c = 12 in an 18-latent window, a one-off edit: 11.8 %; c = 28: 16.9 %), so
-every window start pulls the motion towards the mean. Stronger guidance pays most of it back: CFG 3 / 4 / 5 / 6 give
-11.1 / 14.7 / 18.3 / 21.2 % raised (the speaker: 27.9 %; p95 wrist height 0.27 -> 0.30 / 0.34 / 0.37 / 0.38 m, the
-speaker's 0.42) and loudness following +0.14 / +0.17 / +0.18 / +0.18 (4.3 / 5.4 / 6.0 / 6.3 SE; 12 of 12 positive
-from CFG 4), upper-body jitter +2 / +5 / +7 / +8 % over CFG 2, seams unchanged; so the live default is CFG 6
-(README, live mode). With lookahead >= t - c each window starts at st, is seeded with the previous window's latents
-there and cross-fades them exactly as offline: the windows, seeds, noise draws and latents are the offline ones
-(same seed -> same noise sequence).
+flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. So the motion of a
+moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 5,
+lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a steady 1x delay must
+wait for the worst case (app/player/src/live_clock.js `LiveClock`).
+
+Why these defaults (figures and the commands that measure them: docs/BENCHMARKS.md, live mode): c = 5,
+lookahead = 1 is the largest commit whose speech-to-screen delay stays under the 1 s goal; smaller commits extend
+the motion a few latents at a time from a long fixed past, which carries its momentum more than the new speech's
+loudness, so they follow the loudness less. With lookahead 0 the decoder has no latent right of a chunk (jerk at
+seams many times the inside). Streamed motion is calmer than offline (every window start pulls the motion towards
+the mean, more so the shorter the commit); stronger guidance pays most of it back, so the live default is CFG 6.
+With lookahead >= t - c each window starts at st, is seeded with the previous window's latents there and
+cross-fades them exactly as offline: the windows, seeds, noise draws and latents are the offline ones (same seed ->
+same noise sequence).
 
 Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
 - envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of
@@ -45,9 +33,9 @@ left and the window's own not-yet-final latents on the right (so no waiting); `d
 many final latents on the right. The next decode sees final values there and differs a little near the seam, so the
 first `blend_frames` frames of each chunk fade (in feature space, cosine weights) from the previous decode of those
 frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames
-past the chunk; beyond them its last offset fades out. (The plain linear fade over only those frames left the jerk
-at seams 1.53 / 1.47x inside at look-ahead 1, against 1.06 / 1.03x now: `benchmarks/live_latency.py --skip-paced`,
-the two held-out takes; the old figure at commit 61304c2 with `--commit 5 --lookahead 1`.) Root translation is integrated across chunks (motion/translation.py convention).
+past the chunk; beyond them its last offset fades out (a fade over only those frames leaves seams rougher than the
+inside: `benchmarks/live_latency.py --skip-paced` prints the seam jerk). Root translation is integrated across chunks
+(motion/translation.py convention).
 Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
 offline frame count floor(N * 30 / 16000).
 """

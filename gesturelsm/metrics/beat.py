@@ -1,4 +1,5 @@
-"""Beat consistency (BC) between speech and motion, as defined by the reference evaluation (METHOD-FACTS).
+"""Beat consistency (BC) between speech and motion, as the reference evaluation defines it
+(docs/AUTHORS-CODE.md, beat consistency).
 
 - Audio beats: librosa onsets of the 16 kHz speech (hop 512), in seconds; beats in the first 2 s skipped.
 - Motion beats, per upper-body joint: joint speed (m/s, from positions at 30 fps) divided by that joint's

@@ -22,9 +22,9 @@ from .sequence import MotionSequence
 SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}     # frames at 30 fps
 # The default of the app, `gesturelsm generate` and the study batch. "light" because the tokenizers' decoders still
 # add some frame-to-frame jitter the speaker does not have (the real held-out motion's round trip: jerk 27 -> 36
-# m/s^3 with the release-5 decoders tuned against it, 58 before); on the shipped GestureLSM (8 steps, held-out
+# m/s^3); on the shipped GestureLSM (8 steps, held-out
 # speech) it takes jerk from 34 to 27 (the speaker: 30) and leaves the raised share, wrist height and speed unchanged
-# (assets/MODEL_CARD.md, issue 16). "off" gives the raw decoder output.
+# (assets/MODEL_CARD.md). "off" gives the raw decoder output.
 DEFAULT_SMOOTHING = "light"
 
 

@@ -3,7 +3,7 @@
 A frame of motion is the 433-d *feature vector* (layout below); every region owns a set of its
 columns, and the regions partition all 433 columns. Each region is tokenised by its own RVQ-VAE and
 is one token per latent frame in the generator. `eyes` is the one region that is not generated:
-BEAT2's eye rotations are (near) constant, so they are set to the identity (METHOD-FACTS).
+BEAT2's eye rotations are (near) constant, so they are set to the identity (docs/AUTHORS-CODE.md).
 
 Feature layout (per frame):
     [0, 330)    55 joints x 6D rotation, joint-major (joint j at 6j..6j+5), SMPL-X joint order
@@ -52,7 +52,7 @@ class Region:
         return tuple(JOINT_NAMES[j] for j in self.joints)
 
 
-# The declared table (METHOD-FACTS / paper): upper 13 joints, hands 30, lower 9 + translation, face.
+# The declared table (docs/AUTHORS-CODE.md, the paper): upper 13 joints, hands 30, lower 9 + translation, face.
 REGIONS: dict[str, Region] = {
     "upper": Region("upper", (3, 6, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21)),      # 78
     "hands": Region("hands", tuple(range(25, 55))),                                     # 180

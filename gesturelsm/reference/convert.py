@@ -9,6 +9,7 @@ import dataclasses
 import json
 import re
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import torch
@@ -16,6 +17,7 @@ import torch
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..kernels import accelerate
 from .config import REGION_DIMS, REGIONS, RELEASED_SAMPLERS, GeneratorConfig, RVQConfig
+from .denoiser import rope_inv_freq
 from .model import ReferenceGenerator
 from .rvq import ReferenceRVQ
 from .safe_load import ReferenceFileError
@@ -44,14 +46,41 @@ _RENAMES: tuple[tuple[str, str | None], ...] = (
     (r"denoiser\.mytimmblocks\.(\d+)\.norm1\..*", None),                  # built but never called
     (r"denoiser\.mytimmblocks\.(\d+)\.norm2\.", r"denoiser.blocks.\1.norm_attn."),
     (r"denoiser\.mytimmblocks\.(\d+)\.norm3\.", r"denoiser.blocks.\1.norm_ff."),
-    (r"denoiser\.mytimmblocks\.(\d+)\.spatial_temporal_attn\.(temporal|spatial)_pos\..*", None),
+    # rotary frequencies per head inside each spatial-temporal attention: recomputed, checked (_check_rotary)
+    (r"denoiser\.mytimmblocks\.(\d+)\.spatial_temporal_attn\.(temporal|spatial)_pos\.inv_freq$", None),
     (r"denoiser\.mytimmblocks\.(\d+)\.spatial_temporal_attn\.temporal_attention\.", r"denoiser.blocks.\1.temporal."),
     (r"denoiser\.mytimmblocks\.(\d+)\.spatial_temporal_attn\.spatial_attention\.", r"denoiser.blocks.\1.spatial."),
     (r"denoiser\.mytimmblocks\.(\d+)\.mlp\.", r"denoiser.blocks.\1."),
     (r"denoiser\.output_process\.poseFinal\.", "denoiser.token_out."),
     (r"denoiser\.null_cond_embed$", "denoiser.null_cond"),
-    (r"denoiser\.(sequence_pos_encoder|embed_timestep|rel_pos)\..*", None),  # unused in the forward pass
+    # rotary frequencies over frames per region, applied to the tokens before the cross-attention: recomputed by the
+    # port (denoiser.rope_inv_freq), checked against the file (_check_rotary)
+    (r"denoiser\.rel_pos\.inv_freq$", None),
+    # a sinusoid table and a timestep MLP that the forward pass never calls (its time embedding is time_embedding)
+    (r"denoiser\.(sequence_pos_encoder|embed_timestep)\..*", None),
 )
+
+# reference buffers the forward pass reads but the port recomputes: key pattern -> rotary width (C = latent width)
+_ROTARY: tuple[tuple[str, Callable[[int, int], int]], ...] = (
+    (r"denoiser\.rel_pos\.inv_freq", lambda C, heads: C),
+    (r"denoiser\.mytimmblocks\.\d+\.spatial_temporal_attn\.(temporal|spatial)_pos\.inv_freq", lambda C, heads: C // heads),
+)
+
+
+def _check_rotary(state: dict[str, torch.Tensor], heads: int) -> None:
+    """Refuse a file whose rotary `inv_freq` buffers are not the frequencies the port computes: they are dropped on
+    conversion, so a file that differs there would otherwise give other motion than its authors' code."""
+    width = state.get("denoiser.input_process.poseEmbedding.weight")
+    if width is None:
+        return                                  # not a generator of the known layout: refused by the renaming
+    C = width.shape[0]
+    for key, v in state.items():
+        for pat, dim in _ROTARY:
+            if re.fullmatch(pat, key):
+                want = rope_inv_freq(dim(C, heads))
+                if v.shape != want.shape or not torch.allclose(v.float(), want, rtol=1e-5, atol=1e-8):
+                    raise ReferenceFileError(f"{key} is not the rotary frequencies 10000**(-2i/{dim(C, heads)}) "
+                                             "that the conversion recomputes: refusing the file")
 
 
 def rename_generator_keys(state: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
@@ -88,6 +117,7 @@ def generator_config(state: dict[str, torch.Tensor], method: str, heads: int = 4
 
 def generator_from_state(state: dict[str, torch.Tensor], method: str, heads: int = 4) -> ReferenceGenerator:
     """A released generator state dict (DataParallel prefix already removed) -> our module, eval mode."""
+    _check_rotary(state, heads)
     ours = rename_generator_keys(state)
     model = ReferenceGenerator(generator_config(ours, method, heads))
     try:

@@ -1,10 +1,10 @@
 """The reference denoiser (GestureDenoiser at fe124e0), with its quirks kept because the weights learned them.
 
-Quirks (all deliberate here, see ../../docs and METHOD-FACTS.md):
+Quirks (all deliberate here, see docs/AUTHORS-CODE.md):
 - rotary position encoding is applied to the *token features* (values too), once over frames per region
   before the cross-attention, and again per head inside each spatial-temporal attention;
 - the (B, 3, 32, C) tokens are reshaped with a raw view to (B, 32, 3C) for cross-attention, so one
-  "frame token" mixes three consecutive frames of one region (the bug noted in METHOD-FACTS.md);
+  "frame token" mixes three consecutive frames of one region (a bug of their code that the weights learned);
 - spatial-temporal blocks run temporal attention, then spatial attention, each with its own residual
   around the *rotated* input, inside the block's residual (x + [rope(h) + attn(rope(h))]);
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.
@@ -34,6 +34,12 @@ def timestep_embedding(t: torch.Tensor, dim: int) -> torch.Tensor:
     return torch.cat([torch.cos(arg), torch.sin(arg)], dim=-1)
 
 
+def rope_inv_freq(dim: int) -> torch.Tensor:
+    """(dim/2,) rotary frequencies 10000**(-2i/dim): the `inv_freq` buffers of the reference's rotary modules,
+    which the port computes instead of loading (reference/convert.py checks a file's buffers against them)."""
+    return 1.0 / (10000 ** (torch.arange(0, dim, 2, dtype=torch.float32) / dim))
+
+
 _ROPE_CACHE: dict[tuple[int, int, str], tuple[torch.Tensor, torch.Tensor]] = {}
 
 
@@ -41,7 +47,7 @@ def rope_tables(n: int, dim: int, device: torch.device) -> tuple[torch.Tensor, t
     """cos, sin (n, dim) for positions 0..n-1; frequencies 10000**(-2i/dim), duplicated over both halves."""
     key = (n, dim, str(device))
     if key not in _ROPE_CACHE:
-        inv = 1.0 / (10000 ** (torch.arange(0, dim, 2, dtype=torch.float32) / dim))
+        inv = rope_inv_freq(dim)
         f = torch.einsum("i,j->ij", torch.arange(n, dtype=torch.float32), inv)
         f = torch.cat([f, f], -1).to(device)
         _ROPE_CACHE[key] = (f.cos(), f.sin())

@@ -1,8 +1,10 @@
 """Reading the released files without executing anything they contain.
 
 Tensors: `gesturelsm.safe_load.load_tensors` (torch's weights_only allow-list: tensors, dicts, lists, numbers,
-strings). Vocabulary pickle: `gesturelsm.safe_load.PlainDataUnpickler`, which builds only numpy arrays, plain
-containers and the reference's `Vocab` class (as an inert attribute bag); any other global (os.system,
+strings). Vocabulary pickle (any protocol, 0-5): `gesturelsm.safe_load.PlainDataUnpickler`, which builds only numpy
+arrays, plain containers, bytes (`_codecs.encode`, how protocols 0-2 store them) and the reference's `Vocab` class
+(as an inert attribute bag, also through `copyreg._reconstructor`, how protocols 0-1 store an instance); any other
+global (os.system,
 builtins.eval, ...) is refused before it is called.
 """
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Features (per 16 kHz sample, 2 channels), as the reference's data cache computed them:
   0: amplitude envelope = max |y| over the next 1024 samples (the last 1023 samples repeat the last value);
   1: onset "impulses" = librosa onset-detector *frame indices* (hop 512) written as if they were sample
-     indices, so the ones sit in the first ~1/512 of the clip (METHOD-FACTS.md marks this as a bug; the
+     indices, so the ones sit in the first ~1/512 of the clip (a bug of their code, docs/AUTHORS-CODE.md; the
      released weights were trained on it, so it is reproduced here; our own models use real positions).
 The reference computes them after loading the file at 22.05 kHz and resampling to 16 kHz (librosa's
 defaults); `features_from_file` does the same, `speech_features` starts from 16 kHz samples.

@@ -6,7 +6,7 @@ first shares the CPU fairly between sessions (a terminal, a desktop app, a brows
 thread's niceness only inside its session. A browser playing the page on the same 2-core machine is a session of its
 own, so a render thread niced 19 inside the server still took half the CPU: the player drew 15-17 fps with three
 bodies, as with two plain busy loops at niceness 19 or SCHED_IDLE, against 28-29 with the same loops in a session
-of their own at autogroup niceness 19 (a one-off probe, 2026-11-25; benchmarks/player_latency.py measures the page).
+of their own at autogroup niceness 19 (benchmarks/player_latency.py measures the page).
 So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
 in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before it renders; its
 GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the

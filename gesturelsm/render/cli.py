@@ -37,7 +37,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
     p.add_argument("--frame", type=int, help="write only this frame as a PNG")
     p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, whole lines otherwise)")
     p.add_argument("--progress-json", action="store_true",
                    help='progress as JSON lines on stdout ({"fraction": 0.5, "message": "..."}) for programs')
     p.set_defaults(func=run)
@@ -98,8 +98,9 @@ def run(args: argparse.Namespace) -> int:
                 out.parent.mkdir(parents=True, exist_ok=True)
                 iio.imwrite(out, frame)
             else:
-                bar = None
-                if not args.quiet and not args.progress_json:
+                bar, tenths = None, [-1]
+                # a bar redrawn in place on a terminal; in a file or a pipe, one whole line per tenth of the frames
+                if not args.quiet and not args.progress_json and sys.stderr.isatty():
                     from tqdm import tqdm
 
                     bar = tqdm(total=1000, dynamic_ncols=True, mininterval=0.5,
@@ -112,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
                         bar.n = int(fraction * 1000)
                         bar.set_description_str(message, refresh=False)
                         bar.refresh()
+                    elif not args.quiet and not args.progress_json and int(fraction * 10) > tenths[0]:
+                        tenths[0] = int(fraction * 10)
+                        print(f"render {tenths[0] * 10:3d}% {message}", file=sys.stderr, flush=True)
 
                 try:
                     render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,

@@ -32,7 +32,7 @@ class TokenizerConfig:
 PRESETS: dict[str, TokenizerConfig] = {
     # tests: a few channels, small codebooks
     "tiny": TokenizerConfig(width=32, code_dim=16, res_depth=2, num_quantizers=3, codebook_size=32, groups=2),
-    # the reference's sizes (METHOD-FACTS): 512 channels, 6 x 1024 x 128
+    # the reference's sizes (docs/AUTHORS-CODE.md): 512 channels, 6 x 1024 x 128
     "paper": TokenizerConfig(),
     # what we ship: narrower convs and smaller codebooks (one speaker's data cannot use 1024 codes),
     # same latent size as the paper so the generator keeps its shape

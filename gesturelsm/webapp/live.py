@@ -185,9 +185,10 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
             latency = gr.Textbox(label="median latency (ms)", elem_id="live-latency", interactive=False)
             stats = gr.Textbox(label="since the stream started", elem_id="live-stats", interactive=False)
             status = gr.Textbox(label="status", elem_id="live-status", interactive=False)
-        motion = gr.Textbox(visible=False, elem_id="live-motion")            # base64 records for API clients
+        motion = gr.Textbox(visible=False, elem_id="live-motion",
+                            label="motion chunk (base64 motion record)")   # for API clients
         outs = [state, motion, latency, stats, status]
-        mic.stream(lambda c, s: on_chunk(manager, c, s), [mic, state], outs,
+        mic.stream(lambda microphone, s: on_chunk(manager, microphone, s), [mic, state], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
                    api_name="live_chunk", show_progress="hidden")
         mic.stop_recording(on_stop, [state], outs, api_name="live_stop")

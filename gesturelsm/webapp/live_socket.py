@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 
 import numpy as np
 from starlette.routing import WebSocketRoute
@@ -35,6 +36,7 @@ from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
 from .live import PATH, payload, to_float
 
+log = logging.getLogger(__name__)
 RATES = (8000, MAX_SAMPLE_RATE)  # sample rates accepted from a page (an AudioContext's range is 3000-768000)
 MAX_MESSAGE_S = 5.0             # longest audio in one message
 HELLO_TIMEOUT_S = 10.0          # a socket that names no sample rate by then is closed
@@ -81,13 +83,12 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
                 if session.running or last["closing"]:
                     continue
                 # the session ended by itself (no audio for its idle timeout, or generation failed): say so, close
-                await ws.send_bytes(payload(session, session.error or "this live stream has ended", body)[0])
-                await ws.close()
+                await say(ws, payload(session, session.error or "this live stream has ended", body)[0])
+                await shut(ws)
                 return
             ready.clear()
             final = last["final"]
-            await ws.send_bytes(payload(session, last["status"], body)[0])
-            if final:
+            if not await say(ws, payload(session, last["status"], body)[0]) or final:
                 return
 
     async def finish(status: str, end: bool) -> None:
@@ -110,7 +111,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
         try:
             session = manager.open(on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         except LiveBusy as exc:
-            await ws.send_bytes(encode(MotionRecord(meta={"status": str(exc)})))
+            await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
             return
         pusher = asyncio.create_task(push())
         while True:
@@ -125,18 +126,34 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
             except (Refused, LiveOverloaded, RuntimeError) as exc:   # bad input, too slow, or the session ended
                 return await finish(str(exc), end=False)
     except Refused as exc:
-        await ws.send_bytes(encode(MotionRecord(meta={"status": str(exc)})))
-    except (WebSocketDisconnect, RuntimeError):   # the tab closed or the network dropped mid-send
-        pass
+        await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
+    except (WebSocketDisconnect, RuntimeError):   # the tab closed or the network dropped mid-receive
+        log.debug("live socket: the client left")
     finally:
         if pusher is not None and not pusher.done():
             pusher.cancel()
         if session is not None:
             session.stop()
-        try:
-            await ws.close()
-        except RuntimeError:                        # already closed by the client
-            pass
+        await shut(ws)
+
+
+async def say(ws: WebSocket, message: str | bytes) -> bool:
+    """Send `message` (text or a binary motion record); False when the client has gone (a visitor who leaves at any moment is a normal event, not a
+    server error, so it is never raised into the ASGI server's log)."""
+    try:
+        await (ws.send_bytes(message) if isinstance(message, bytes) else ws.send_text(message))
+        return True
+    except (WebSocketDisconnect, RuntimeError):
+        log.debug("live socket: the client left before a message could be sent")
+        return False
+
+
+async def shut(ws: WebSocket) -> None:
+    """Close the socket unless the client has gone or closed it first (then there is nothing to close)."""
+    try:
+        await ws.close()
+    except (WebSocketDisconnect, RuntimeError):
+        pass
 
 
 def control(text: str | None) -> dict:

@@ -9,7 +9,7 @@ CheckboxGroup / Radio / Dropdown / Checkbox for the page (same block name and cl
 """
 from __future__ import annotations
 
-from typing import Any, TypeVar
+from typing import Any, Sequence, TypeVar
 
 C = TypeVar("C")
 
@@ -21,4 +21,18 @@ def _unchanged(payload: Any) -> Any:
 def pass_through(component: C) -> C:
     """`component` with preprocessing switched off (Gradio looks `preprocess` up on the instance)."""
     component.preprocess = _unchanged          # type: ignore[attr-defined]
+    return component
+
+
+def numeric_choices(component: C, values: Sequence[int]) -> C:
+    """`component` (a Dropdown over whole numbers) passing values through, except that the text of a choice
+    ('256' for 256) becomes the number: the API schema of a Dropdown lists its choices as strings
+    (`Literal['256', ...]`), so a client that sends exactly what `view_api()` shows gets the same result as the
+    page. Anything else reaches the field checks unchanged and is refused there with their message."""
+    by_text = {str(v): v for v in values}
+
+    def preprocess(payload: Any) -> Any:
+        return by_text.get(payload, payload) if isinstance(payload, str) else payload
+
+    component.preprocess = preprocess          # type: ignore[attr-defined]
     return component

@@ -25,7 +25,7 @@ from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES,
 from gesturelsm.serve.service import GestureService
 
 from . import live, live_socket, motion_player
-from .raw_inputs import pass_through
+from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
 QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
@@ -208,8 +208,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
     with gr.Accordion("Options", open=False):
         in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
         smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULT_SMOOTHING, label="Smoothing"))
-        size = pass_through(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
-                                        label="Video size"))
+        size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+                                           label="Video size"), VIDEO_SIZES)
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
     ex = _examples()
     if ex:
@@ -220,15 +220,14 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
 def _output_column(service: GestureService) -> tuple:
     """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
     motion_player.player_component(service)
-    payload = gr.JSON(visible=False)
+    payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
-    # sharing. A <video> on screen, even paused, held headless Chromium's software-composited page at ~20 redraws
-    # per second (a one-off probe hiding the page's parts in turn: only the video mattered, ~60 without it), so it
-    # opens on request (benchmarks/player_latency.py before and after: 17.4 and 29.9 fps idle with one body).
+    # sharing. A <video> on screen, even paused, holds headless Chromium's software-composited page at ~20 redraws
+    # per second (the player with it), so it opens on request (benchmarks/player_latency.py measures the player).
     with (gr.Accordion("Video with the speech (mp4, rendered on the server after the motion plays)", open=False,
                        elem_id="video-box") if motion_player.BUNDLE.exists() else contextlib.nullcontext()):
         video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
-    summary = gr.Markdown(elem_id="summary")
+    summary = gr.Markdown(elem_id="summary", label="summary")
     table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
                          label="Timing per method and stage (seconds; real-time factor = speech seconds per "
                                "generation second)")
@@ -290,9 +289,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             .then(h.add_exports, state, [files, view, summary, state], api_name="add_exports",
                   api_visibility="private", **render)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
-        show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False) \
+        show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False,
+                     api_visibility="private") \
             .then(lambda out: str(out.glb) if out is not None and out.glb else None, glb, view, queue=False,
-                  js=VIEWER_MOUNTED_JS)
+                  js=VIEWER_MOUNTED_JS, api_visibility="private")
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)

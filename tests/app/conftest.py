@@ -67,6 +67,3 @@ def app_url(service):
     with served(service) as url:
         yield url
 
-
-def pytest_configure(config):
-    config.addinivalue_line("markers", "browser: drives the served page in headless Chromium (runs in CI)")

@@ -1,4 +1,4 @@
-"""The served app against hostile or careless requests (issue 21): every field checked before any work with
+"""The served app against hostile or careless requests: every field checked before any work with
 one line each (service and gradio_client), work bounded by the speech's length, TextGrids that miss the
 audio, unguessable output names, files swept on a timer and at shutdown, one log line per refused request,
 and a bounded loopback load test that sees "Queue is full" past the queue's size."""

@@ -1,4 +1,4 @@
-"""The in-browser motion player (app/player, issue 18), driven in headless Chromium on the shipped checkpoints:
+"""The in-browser motion player (app/player), driven in headless Chromium on the shipped checkpoints:
 it plays before the mp4 exists, shows exactly the generated frames of each method, follows the speech's clock,
 and scrubbing keeps speech and motion within one frame. Skips, saying why, without chromium, the player bundle
 (scripts/setup.sh builds it with npm) or the shipped checkpoints."""
@@ -125,7 +125,7 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     from playwright.sync_api import sync_playwright
 
     from _support import CHROMIUM
-    from app.motion_player import BUNDLE
+    from gesturelsm.webapp.motion_player import BUNDLE
     from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.export.motion_format import MotionRecord, encode
 

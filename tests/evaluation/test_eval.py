@@ -49,7 +49,7 @@ def test_evaluating_ground_truth_against_itself(tiny_beat2):
     assert gt["bc"] is not None and h["bc"] == pytest.approx(gt["bc"])
     assert gt["diversity"] > 0 and h["diversity"] == pytest.approx(gt["diversity"])
     assert h["expr_mse"] == 0.0
-    for k in ("raised_share", "height_p95", "wrist_speed", "hand_spread"):       # wrist amplitude (issue 16)
+    for k in ("raised_share", "height_p95", "wrist_speed", "hand_spread"):       # wrist amplitude
         assert gt[k] is not None and h[k] == pytest.approx(gt[k])
     assert row["audio_only"]["wrist_speed"] == 0.0 and gt["hand_spread"] > 0
     assert row["audio_only"]["diversity"] == 0.0                   # the still pose of the audio-only take

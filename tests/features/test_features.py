@@ -97,3 +97,18 @@ def test_text_vectors_are_contextual_and_frames_follow_words():
 def test_missing_text_model_falls_back_to_audio_only(tmp_path):
     emb = TextEmbedder(model_dir=str(tmp_path / "nowhere"))
     assert not emb.available and "unavailable" in emb.error
+
+
+def test_loading_the_text_encoder_prints_no_progress_bar():
+    """A command that loads the text encoder prints no third-party progress bar (transformers draws one while it
+    loads the weights unless told not to)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = "from gesturelsm.features.text import TextEmbedder; print(TextEmbedder().available)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
+                         cwd=Path(__file__).resolve().parents[2])
+    if out.stdout.strip() != "True":
+        pytest.skip(f"text encoder not installed: {out.stderr.strip()[-200:]}")
+    assert "Loading weights" not in out.stderr and "it/s" not in out.stderr and "\r" not in out.stderr

@@ -106,9 +106,8 @@ def test_shipped_gesturelsm_moves_with_the_loudness_of_new_speech(beat2_root):
     shifted by >= 2 s (metrics.speech_response). Motion that ignores the speech gains 0 on average (spread ~0.13
     per clip), so one clip says little: the gain is pooled over 2 takes x 6 seeds and must be both clearly
     positive on average (> 0.08) and significant (mean > 2.5 standard errors).
-    Measured (takes x seeds 0-5): release 4 mean +0.119, 3.2 standard errors, 9 of 12 positive; release 3
-    +0.122, 5.3 standard errors, 12 of 12. (Until release 4 this test took seeds 0, 1 and asked every one of the
-    4 gains to be positive; release 4 has -0.012 at take 1 seed 1, see assets/MODEL_CARD.md.)"""
+    Measured on the shipped models (takes x seeds 0-5): mean +0.119, 3.2 standard errors, 9 of 12 positive (one
+    clip is slightly negative, so the bar is on the pooled gain, not on every clip; assets/MODEL_CARD.md)."""
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
     from gesturelsm.body import load_body_model

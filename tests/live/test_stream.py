@@ -141,10 +141,9 @@ def test_final_latents_are_never_rewritten(shipped_pipe):
 def test_streamed_motion_follows_the_loudness_of_new_speech_and_raises_the_hands(shipped_pipe, beat2_root):
     """The offline speech-response test (tests/generator/test_shipped.py) on the same two held-out takes and 6 seeds,
     streamed with the live defaults (audio only: live mode has no transcript), with the same pooled bar.
-    Measured with release 4 (take x seeds 0-5): the defaults (commit 6, look-ahead 2, CFG 6) mean +0.182, 6.3
-    standard errors, 12 of 12 positive; CFG 2: +0.108 (3.2 SE); the earlier defaults commit 4 / look-ahead 2 / CFG 2
-    gave +0.042 (1.7 SE) and fail, as did windows anchored at their start with silence after the look-ahead (the
-    first design, +0.02 to +0.05).
+    Measured (take x seeds 0-5; docs/BENCHMARKS.md, live mode): the defaults pool well above the bar; commit 4 /
+    look-ahead 2 / CFG 2 (+0.042, 1.7 SE) fails, as do windows anchored at their start with silence after the
+    look-ahead (+0.02 to +0.05).
     Streamed motion is calmer than offline; the live CFG 6 raises a hand above navel height in 21.2 % of the frames
     of these 12 streams (CFG 2 / 4: 7.5 / 14.7 %, offline 17-39 %, the speaker 27.9 %): held to > 15 %."""
     from gesturelsm.body import load_body_model

@@ -13,6 +13,7 @@ import torch
 from gesturelsm.cli import main as cli_main
 from gesturelsm.reference.config import GeneratorConfig, RVQConfig
 from gesturelsm.reference.convert import generator_from_state, load_generator, load_rvqs, rvq_from_state
+from gesturelsm.reference.denoiser import rope_inv_freq
 from gesturelsm.reference.model import ReferenceGenerator
 from gesturelsm.reference.rvq import ReferenceRVQ
 from gesturelsm.reference.safe_load import ReferenceFileError, load_state, load_vocab
@@ -92,6 +93,30 @@ def test_unknown_weight_names_are_refused():
         generator_from_state(state, "shortcut")
 
 
+ROTARY_BUFFERS = ["denoiser.rel_pos.inv_freq", "denoiser.mytimmblocks.1.spatial_temporal_attn.temporal_pos.inv_freq",
+                  "denoiser.mytimmblocks.0.spatial_temporal_attn.spatial_pos.inv_freq"]
+
+
+@pytest.mark.parametrize("key", ROTARY_BUFFERS)
+def test_a_tampered_rotary_buffer_is_refused_naming_it(key):
+    """The converter drops the rotary `inv_freq` buffers and recomputes them: the recorded file's agree (it
+    converts), and a file where one differs is refused with a message that names the tensor."""
+    state = load_state(FIX / "generator.bin", ("model_state",))
+    assert key in state
+    generator_from_state(dict(state), "shortcut")
+    state[key] = state[key] * 1.01
+    with pytest.raises(ReferenceFileError) as err:
+        generator_from_state(state, "shortcut")
+    assert key in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_rotary_buffer_of_another_width_is_refused():
+    state = load_state(FIX / "generator.bin", ("model_state",))
+    state["denoiser.rel_pos.inv_freq"] = rope_inv_freq(2 * state["denoiser.rel_pos.inv_freq"].numel() + 2)
+    with pytest.raises(ReferenceFileError, match="denoiser.rel_pos.inv_freq"):
+        generator_from_state(state, "shortcut")
+
+
 def _to_reference_names(ours: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
     """Invert the converter's renames for a full-size, reference-shaped state dict (plus its unused entries)."""
     inv = {"speech.wav.{}.a.conv.": "modality_encoder.WavEncoder.feat_extractor.{}.conv1.",
@@ -128,7 +153,7 @@ def _to_reference_names(ours: dict[str, torch.Tensor]) -> dict[str, torch.Tensor
         out["module." + nk] = v
     C = ours["denoiser.token_in.weight"].shape[0]
     out["module.denoiser.sequence_pos_encoder.pe"] = torch.zeros(5000, 1, C)        # unused entries of the release
-    out["module.denoiser.rel_pos.inv_freq"] = torch.zeros(C // 2)
+    out["module.denoiser.rel_pos.inv_freq"] = rope_inv_freq(C)                        # as the release holds it
     out["module.denoiser.embed_timestep.time_embed.0.weight"] = torch.zeros(C, C)
     out["module.denoiser.mytimmblocks.0.norm1.weight"] = torch.ones(C)
     return out
@@ -142,7 +167,7 @@ def test_full_size_release_converts_and_runs(tmp_path):
     g = generator_from_state(load_state(tmp_path / "shortcut_reflow.bin", ("model_state",)), "shortcut")
     assert g.cfg == GeneratorConfig()
     n_params = sum(p.numel() for p in g.denoiser.parameters())
-    assert 30e6 < n_params < 31.5e6          # "denoiser about 30.6M parameters" (METHOD-FACTS.md)
+    assert 30e6 < n_params < 31.5e6          # the authors' paper-size denoiser has about 30.6M parameters
     audio = torch.rand(1, 533 * 128, 2)
     words = torch.randint(0, 11195, (1, 128))
     lat = g.sample(audio, words, torch.randn(1, 4, 384), torch.randn(1, 384, 32), steps=1)

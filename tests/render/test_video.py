@@ -111,3 +111,22 @@ def test_cli_render_and_errors(tmp_path, make_pose, capsys):
     assert main(["render", str(npz), "--audio", str(bad), "--out", str(out), "--quiet"]) == 2
     assert "bad.wav" in capsys.readouterr().err
     assert main(["render", str(npz), str(npz), "--labels", "one", "--out", str(out), "--quiet"]) == 2
+
+
+def test_cli_render_progress_is_whole_lines_when_not_a_terminal(tmp_path, make_pose, capsys):
+    """Progress written to a file or a pipe (here captured, not a terminal) comes as whole lines, at most one per
+    tenth of the frames, ending at 100 %; no carriage-return redraws."""
+    motion, y = step_clip(make_pose, frames=30, step=6)
+    npz = motion.save(tmp_path / "m.npz")
+    wav = tmp_path / "s.wav"
+    sf.write(wav, y[: SR], SR)
+    capsys.readouterr()
+    assert main(["render", str(npz), "--audio", str(wav), "--out", str(tmp_path / "o.mp4"), "--size", "64x64"]) == 0
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    lines = [ln for ln in err.splitlines() if ln.startswith("render")]
+    percents = [int(ln.split()[1].rstrip("%")) for ln in lines]
+    assert 2 <= len(lines) <= 11 and percents == sorted(set(percents)) and percents[-1] == 100
+    assert main(["render", str(npz), "--audio", str(wav), "--out", str(tmp_path / "q.mp4"), "--size", "64x64",
+                 "--quiet"]) == 0
+    assert "render" not in capsys.readouterr().err

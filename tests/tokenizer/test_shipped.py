@@ -32,8 +32,8 @@ def test_shipped_tokenizer_reconstructs_held_out_motion(region, beat2_root):
 
 def test_shipped_decoders_add_little_jitter_to_real_motion(beat2_root):
     """The speaker's held-out motion through encode -> re-quantise -> decode keeps its amplitude and gains little
-    jerk (third difference of the upper-body joints). Measured: the speaker 27 m/s^3, the round trip 36 with the
-    decoders tuned with the acceleration term (release 5), 58 with the decoders before it."""
+    jerk (third difference of the upper-body joints). Measured: the speaker 27 m/s^3, the round trip 36 (the
+    decoders are tuned with an acceleration term; without it the round trip has 58)."""
     from gesturelsm.evaluation.amplitude import AmplitudeData
     from gesturelsm.generator.data import encode_regions
     from gesturelsm.generator.sampling import decode_latents

@@ -1,0 +1,154 @@
+"""Visitors who leave: a live-socket client that drops its connection at any stage of the socket's life (before
+naming its sample rate, after it, while motion streams, right after Stop, after being refused or told the server is
+busy) leaves no traceback and no error in the server's log, and no live worker behind. Served by uvicorn as the app
+serves it: Starlette's test client does not reproduce a client that is gone while the server still sends."""
+from __future__ import annotations
+
+import json
+import logging
+import socket
+import struct
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from gesturelsm.live import LiveConfig
+from gesturelsm.live.session import LiveManager
+
+from _support import speech_like
+
+pytest.importorskip("gradio")
+uvicorn = pytest.importorskip("uvicorn")
+live_socket = pytest.importorskip("app.live_socket")
+from starlette.applications import Starlette  # noqa: E402
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture()
+def served(shipped_pipe):
+    """(manager, port): the socket route served by uvicorn in a thread, at most one live stream."""
+    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+    port = _free_port()
+    server = uvicorn.Server(uvicorn.Config(Starlette(routes=live_socket.routes(mgr)), host="127.0.0.1", port=port,
+                                           log_config=None, log_level="debug"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 20
+    while not server.started and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert server.started
+    yield mgr, port
+    server.should_exit = True
+    thread.join(10)
+    mgr.stop_all()
+
+
+class RawClient:
+    """A bare WebSocket client over a socket, so it can vanish without a closing handshake."""
+
+    def __init__(self, port: int):
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+        self.sock.sendall((f"GET {live_socket.PATH} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+                           "Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                           "Sec-WebSocket-Version: 13\r\n\r\n").encode())
+        head = b""
+        while b"\r\n\r\n" not in head:
+            head += self.sock.recv(1)
+        assert b" 101 " in head.split(b"\r\n")[0], head
+
+    def send(self, data: bytes | str) -> None:
+        opcode, data = (1, data.encode()) if isinstance(data, str) else (2, data)
+        n = len(data)
+        head = bytes([0x80 | opcode]) + (bytes([0x80 | n]) if n < 126 else bytes([0x80 | 126]) + struct.pack(">H", n))
+        mask = b"\x01\x02\x03\x04"
+        self.sock.sendall(head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(data)))
+
+    def drop(self) -> None:
+        """Leave at once: reset the connection (no close frame, unread data discarded)."""
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        self.sock.close()
+
+
+def _pcm(seconds: float) -> list[bytes]:
+    y = (np.clip(speech_like(seconds, seed=7), -1, 1) * 32767).astype("<i2")
+    return [y[a:a + 1600].tobytes() for a in range(0, len(y), 1600)]
+
+
+HELLO = json.dumps({"sample_rate": 16000})
+
+
+def _no_hello(port, mgr):
+    RawClient(port).drop()
+
+
+def _after_hello(port, mgr):
+    c = RawClient(port)
+    c.send(HELLO)
+    time.sleep(0.3)
+    c.drop()
+
+
+def _while_streaming(port, mgr):
+    c = RawClient(port)
+    c.send(HELLO)
+    for b in _pcm(3.0):
+        c.send(b)
+    time.sleep(1.5)                      # motion chunks are being pushed to a client that reads none
+    c.drop()
+
+
+def _right_after_stop(port, mgr):
+    c = RawClient(port)
+    c.send(HELLO)
+    for b in _pcm(2.0):
+        c.send(b)
+    c.send(json.dumps({"end": True}))    # the server generates the rest, then sends to a client that is gone
+    c.drop()
+
+
+def _refused(port, mgr):
+    c = RawClient(port)
+    c.send(json.dumps({"sample_rate": 1}))   # refused: the server sends the reason and closes
+    c.drop()
+
+
+def _busy(port, mgr):
+    first = RawClient(port)
+    first.send(HELLO)
+    deadline = time.monotonic() + 10
+    while mgr.active < 1 and time.monotonic() < deadline:
+        time.sleep(0.02)
+    second = RawClient(port)
+    second.send(HELLO)                   # past the limit: the server sends "busy" to a client that is gone
+    second.drop()
+    time.sleep(0.3)
+    first.drop()
+
+
+STAGES = [_no_hello, _after_hello, _while_streaming, _right_after_stop, _refused, _busy]
+
+
+@pytest.mark.parametrize("stage", STAGES, ids=[s.__name__.strip("_") for s in STAGES])
+def test_a_client_that_leaves_leaves_no_traceback(served, caplog, stage):
+    mgr, port = served
+    caplog.set_level(logging.DEBUG)
+    for _ in range(3):
+        stage(port, mgr)
+    deadline = time.monotonic() + 15
+    while mgr.active and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)                      # the server's handlers finish after the last drop
+    import gc
+
+    gc.collect()                         # "Task exception was never retrieved" is logged when a task is collected
+    bad = [f"{r.name} {r.levelname}: {r.getMessage()}" for r in caplog.records
+           if r.exc_info or r.levelno > logging.INFO or "Traceback" in r.getMessage()]
+    assert bad == []
+    assert mgr.active == 0
