@@ -21,6 +21,7 @@ from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from gesturelsm.evaluation.sweep import SweepGrid, SweepLimits, SweepResult, check_grid, parse_numbers, run_sweep
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, label, sweep_plot, write_sweep
+from gesturelsm.pipeline import ALL_FACTS
 
 from . import motion_player
 
@@ -101,6 +102,15 @@ class SweepHandlers:
         except GestureError as exc:
             self._refuse(f"The audio could not be used: {exc}")
 
+    def _server_steps(self, grid: SweepGrid) -> None:
+        """This server's step limits (its sliders' ends, ServiceSettings) on top of the methods' own bounds."""
+        st = self.service.settings
+        for m in grid.methods:
+            facts = ALL_FACTS.get(m)
+            hi = st.max_ddim_steps if facts is not None and facts.steps_setting == "ddim_steps" else st.max_steps
+            if any(s > hi for s in grid.steps):
+                self._refuse(f"This server runs {label(m)} with at most {hi} steps (got {max(grid.steps)}).")
+
     def run(self, audio_path, methods, steps, cfgs, seeds, metric, text, request: gr.Request = None,
             progress=gr.Progress()):
         """-> table html, plot, downloads, run choices, state."""
@@ -111,6 +121,7 @@ class SweepHandlers:
         try:
             grid = SweepGrid(tuple(methods or ()), parse_numbers(steps or "", int, "Steps"),
                              parse_numbers(cfgs or "", float, "CFG"), int(seeds or 0))
+            self._server_steps(grid)
             audio = self._audio(audio_path)
             pipe = self.service.pipeline
             check_grid(pipe, grid, len(audio) / SAMPLE_RATE, self.limits)

@@ -64,10 +64,11 @@ def main() -> int:
     grid = SweepGrid(tuple(args.methods or pipe.methods), tuple(args.steps), tuple(args.cfg), args.seeds)
     check_grid(pipe, grid, args.seconds, SweepLimits())
     load0 = os.getloadavg()[0]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     speech = pipe.prepare_speech(audio, 16000, transcribe=False)
-    result = run_sweep(pipe, speech, grid, keep_motions=True)
-    wall = time.perf_counter() - t0
+    result = run_sweep(pipe, speech, grid, keep_motions=True,
+                       progress=lambda f, m: print(f"[{100 * f:3.0f} %] {m}", file=sys.stderr, flush=True))
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     gen = sum(r.seconds for r in result.runs)
     load1 = os.getloadavg()[0]
 
@@ -75,24 +76,25 @@ def main() -> int:
     shown = {}
     for r in result.runs:                                  # one motion per method, as the page shows them
         shown.setdefault(r.method, r.motion)
-    times = []
+    times, cpus = [], []
     for _ in range(args.repeats):
-        s0 = time.perf_counter()
+        s0, p0 = time.perf_counter(), time.process_time()
         ctx = SpeechContext.of(speech.audio, ref.mean_speed if ref else None)
         for m in shown.values():
             motion_statistics(m, None, ctx)
         times.append(time.perf_counter() - s0)
+        cpus.append(time.process_time() - p0)
 
     print(f"\n{cpu_model()}, torch threads {torch.get_num_threads()}, {os.cpu_count()} cores; "
           f"load average {load0:.1f} before, {load1:.1f} after (other jobs share this machine)")
     print(f"speech: {args.seconds:g} s of {name}; grid: {', '.join(grid.methods)} x steps {list(grid.steps)} x "
           f"CFG {list(grid.cfgs)} x {grid.seeds} seeds = {len(result.runs)} motions\n")
-    print("| part | seconds |\n|---|---|")
-    print(f"| whole sweep (features once, generate + measure every motion) | {wall:.1f} |")
-    print(f"| generation (sum of the pipeline's generation times) | {gen:.1f} |")
-    print(f"| speech features, statistics and the rest (whole - generation) | {wall - gen:.1f} |")
+    print("| part | wall seconds | process CPU seconds (all threads) |\n|---|---|---|")
+    print(f"| whole sweep (features once, generate + measure every motion) | {wall:.1f} | {cpu:.1f} |")
+    print(f"| generation (sum of the pipeline's generation times) | {gen:.1f} | |")
+    print(f"| speech features, statistics and the rest (whole - generation) | {wall - gen:.1f} | |")
     print(f"| page statistics, {len(shown)} motions of {args.seconds:g} s (median of {args.repeats}; "
-          f"min {min(times):.3f}) | {statistics.median(times):.3f} |")
+          f"min {min(times):.3f}) | {statistics.median(times):.3f} | {statistics.median(cpus):.3f} |")
     print(f"\nunder 2 minutes: {'yes' if wall < 120 else 'no'} ({wall:.1f} s)")
     if args.out:
         files = write_sweep(result, Path(args.out), args.metric)

@@ -93,7 +93,8 @@ def test_a_new_statistic_replots_without_generating(page_sweep):
 
 @pytest.mark.parametrize("args, message", [
     (("", "2", 1), "Give at least one step count."),
-    (("1 40", "2", 1), "from 1 to"),
+    (("1 40", "2", 1), "at most 32 steps (got 40)"),
+    (("1 200", "2", 1), "at most 32 steps (got 200)"),
     (("1", "11", 1), "CFG scale must be between 0 and"),
     (("1 2 3 4 5 6 7", "0 1 2 3 4 5", 1), "a sweep takes at most 36"),
     (("1", "2", 5), "Seeds must be from 1 to 3"),
@@ -126,3 +127,16 @@ def test_cancel_stops_the_sweep_before_its_next_motion(service, speech_wav):
     with pytest.raises(gr.Error, match="cancelled"):
         h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "2", 1, "bc", "", progress=progress)
     assert len(calls) == 3 and set(service.workdir.glob("req-*")) == before
+
+
+def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service):
+    from app.ui import build_demo
+
+    demo = build_demo(service)
+    deps = {d.get("api_name"): d for d in demo.get_config_file()["dependencies"]}
+    gen = deps["generate_motion"]["id"]
+    assert deps["motion_stats"]["trigger_after"] == gen                  # right after the motions exist ...
+    player = [d for d in deps.values() if d["trigger_after"] == gen and d.get("js") and "gesturelsmPlayer" in d["js"]]
+    assert len(player) == 1                                              # ... beside the player's step, not before it
+    pools = {f.api_name: f.concurrency_id for f in (demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)}
+    assert pools["motion_stats"] == "stats" and pools["sweep"] == "generation"

@@ -58,7 +58,8 @@ def test_sweep_cli_writes_one_row_per_cell_and_a_plot(cli_run):
         for k in ("time", "wrist_speed", "diversity"):
             v = [r[k] for r in runs]
             assert row[k] == pytest.approx(np.mean(v)) and row[f"{k}_std"] == pytest.approx(np.std(v))
-        assert row["seed_spread"] > 0             # two seeds, two different motions
+        assert row["seed_spread"] >= 0
+    assert all(r["seed_spread"] > 0 for r in rep["rows"] if r["method"] == "gesturelsm")   # seeds differ
 
 
 def test_a_sweep_cell_is_the_motion_that_setting_and_seed_generate_alone(cli_run, pipe, wav):
@@ -86,7 +87,7 @@ def test_parse_numbers_reads_lists_and_refuses_words():
 
 @pytest.mark.parametrize("grid, seconds, message", [
     (SweepGrid(("gesturelsm",), (), (2.0,)), 5, "Give at least one step count."),
-    (SweepGrid(("gesturelsm",), (1, 99), (2.0,)), 5, "must be a whole number from 1 to"),
+    (SweepGrid(("gesturelsm",), (1, 200), (2.0,)), 5, "must be a whole number from 1 to 128"),
     (SweepGrid(("gesturelsm",), (1,), (-1.0,)), 5, "CFG scale must be between 0 and"),
     (SweepGrid(("nope",), (1,), (2.0,)), 5, "unknown method 'nope'"),
     (SweepGrid(("gesturelsm",), tuple(range(1, 11)), tuple(range(8)), 1), 1, "a sweep takes at most 72"),
