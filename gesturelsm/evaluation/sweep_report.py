@@ -69,7 +69,8 @@ def markdown_text(result: SweepResult) -> str:
 
 
 def sweep_plot(result: SweepResult, out: str | Path, metric: str = "wrist_speed") -> Path:
-    """`metric` (mean over seeds, bars: spread) against generation time (log scale), one line per method and CFG
+    """`metric` (mean over seeds, bars: spread) against generation time (log scale when it spans more than a
+    decade), one line per method and CFG
     through its step counts (labels: steps); the speaker's value as a dashed line when it has one."""
     import matplotlib
 
@@ -96,10 +97,13 @@ def sweep_plot(result: SweepResult, out: str | Path, metric: str = "wrist_speed"
                 ax.annotate(str(si), (xi, yi), textcoords="offset points", xytext=(3, 3), fontsize=7)
     if result.reference is not None and metric in result.reference.statistics:
         ax.axhline(result.reference.statistics[metric], color="k", ls="--", lw=1, label="speaker")
-    ax.set_xscale("log")
-    ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel(f"generation time for {result.speech_seconds:.1f} s of speech, s (log scale)")
+    times = [r["time"] for r in rows if np.isfinite(r["time"]) and r["time"] > 0]
+    log_x = bool(times) and max(times) / min(times) > 10           # a log axis only where it spans a decade
+    if log_x:
+        ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%.3g"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel(f"generation time for {result.speech_seconds:.1f} s of speech, s{' (log scale)' if log_x else ''}")
     ax.set_ylabel(f"{stat.label} ({stat.unit})")
     ax.set_title(f"{stat.label} vs time (labels: steps); better: {stat.better}", fontsize=8)
     ax.grid(alpha=0.3, which="both")

@@ -48,14 +48,14 @@ def test_page_statistics_are_empty_without_motion():
 @pytest.fixture(scope="module")
 def page_sweep(service, speech_wav):
     h = SweepHandlers(service)
-    return h, h.run(str(speech_wav), ["gesturelsm", "rectified_flow"], "1 2", "0 2", 2, "hand_spread", "",
+    return h, h.run(str(speech_wav), ["gesturelsm", "rectified_flow"], "1 2", "2", 2, "hand_spread", "",
                     progress=quiet)
 
 
 def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, app_assets, speech_wav, tmp_path):
     _, (table, plot, files, pick, state) = page_sweep
     assert main(["sweep", str(speech_wav), "--checkpoints", str(app_assets), "--methods", "gesturelsm",
-                 "rectified_flow", "--steps", "1", "2", "--cfg", "0", "2", "--seeds", "2", "--no-transcribe",
+                 "rectified_flow", "--steps", "1", "2", "--cfg", "2", "--seeds", "2", "--no-transcribe",
                  "--out", str(tmp_path / "cli")]) == 0
     cli = json.loads((tmp_path / "cli" / "sweep.json").read_text())["rows"]
     rows = re.findall(r'<tr data-method="(\w+)" data-steps="(\d+)" data-cfg="([\d.]+)">(.*?)</tr>', table)
@@ -68,7 +68,7 @@ def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, app_as
         assert got["seed_spread"] == pytest.approx(want["seed_spread"], rel=1e-6)
     assert plot.endswith("sweep.png") and sorted(p.rsplit("/", 1)[1] for p in files) == \
         ["sweep.csv", "sweep.json", "sweep.md", "sweep.png"]
-    assert len(pick["choices"]) == 16 and pick["value"] == "0"
+    assert len(pick["choices"]) == 8 and pick["value"] == "0"
 
 
 def test_a_sweep_run_opens_in_the_player_as_its_own_motion(page_sweep):
@@ -125,7 +125,7 @@ def test_cancel_stops_the_sweep_before_its_next_motion(service, speech_wav):
 
     before = set(service.workdir.glob("req-*"))
     with pytest.raises(gr.Error, match="cancelled"):
-        h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "2", 1, "bc", "", progress=progress)
+        h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "0", 1, "bc", "", progress=progress)
     assert len(calls) == 3 and set(service.workdir.glob("req-*")) == before
 
 
