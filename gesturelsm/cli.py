@@ -22,6 +22,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.render.cli", "gesturelsm.export.cli",
     "gesturelsm.study.cli", "gesturelsm.study.study_cli",
     "gesturelsm.evaluation.cli",
+    "gesturelsm.evaluation.sweep_cli",
     "gesturelsm.live.cli",
     "gesturelsm.reference.cli",
     "gesturelsm.webapp.cli",

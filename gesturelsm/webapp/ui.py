@@ -24,7 +24,7 @@ from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_second
 from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 
-from . import live, live_socket, motion_player
+from . import live, live_socket, motion_player, stats_view, sweep_tab
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
@@ -231,6 +231,7 @@ def _output_column(service: GestureService) -> tuple:
     table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
                          label="Timing per method and stage (seconds; real-time factor = speech seconds per "
                                "generation second)")
+    stats = stats_view.component()                 # motion statistics per method, filled after the player starts
     files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
                     elem_id="downloads")
     # Mounted only when asked for: its viewer redraws continuously (it would slow the player's software WebGL), and a
@@ -238,7 +239,7 @@ def _output_column(service: GestureService) -> tuple:
     show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")
     view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420, elem_id="view3d",
                       visible=False)
-    return payload, video, summary, table, files, view, show3d
+    return payload, video, summary, table, files, view, show3d, stats
 
 
 # Runs in the browser before the GLB is requested (Gradio awaits it): waits until the viewer shown by the step
@@ -265,12 +266,13 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             with gr.Column(scale=1):
                 inputs, button = _input_column(service)
             with gr.Column(scale=2):
-                payload, video, summary, table, files, view, show3d = _output_column(service)
+                payload, video, summary, table, files, view, show3d, stats = _output_column(service)
         manager, routes = None, []
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes)
+        sweep_tab.add_sweep_tab(service)
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())
@@ -282,8 +284,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
             uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",
                      concurrency_limit=1, concurrency_id="prefetch")
-        button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion", **gen) \
-            .then(None, payload, None, js=motion_player.LOAD_JS) \
+        shown = button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion",
+                             **gen)
+        stats_view.attach(shown, state, stats)         # beside the chain below: neither waits for the other
+        shown.then(None, payload, None, js=motion_player.LOAD_JS) \
             .then(h.show_video, state, [video, table, summary, state], api_name="show_video",
                   api_visibility="private", show_progress="hidden", **render) \
             .then(h.add_exports, state, [files, view, summary, state], api_name="add_exports",

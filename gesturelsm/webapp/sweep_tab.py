@@ -1,0 +1,206 @@
+"""The page's Sweep tab: methods x steps x CFG x seeds on one speech (gesturelsm.evaluation.sweep, the library
+behind `gesturelsm sweep`), shown as a table with tooltips (`#sweep-table`), a plot of a chosen statistic against
+generation time (`#sweep-plot`) and the CSV / markdown / JSON / PNG downloads; any run opens in the page's
+in-browser player (`window.gesturelsmPlayer.load`). A progress bar carries the estimate of the time left; Cancel
+stops the sweep before its next motion. Sweeps share the generation queue with requests and are bounded by
+`PAGE_LIMITS` (said in the tab).
+"""
+from __future__ import annotations
+
+import html
+import logging
+import secrets
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+import gradio as gr
+
+from gesturelsm.audio import SAMPLE_RATE, load_audio
+from gesturelsm.errors import GestureError
+from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
+from gesturelsm.evaluation.sweep import SweepGrid, SweepLimits, SweepResult, check_grid, parse_numbers, run_sweep
+from gesturelsm.evaluation.sweep_report import PLOT_METRICS, label, sweep_plot, write_sweep
+from gesturelsm.presentation import steps_setting
+
+from . import motion_player
+
+log = logging.getLogger("gesturelsm.app")
+PAGE_LIMITS = SweepLimits(max_cells=36, max_seeds=3, max_work=720.0)
+# hands a cell's payload to the player and brings the player into view (the tab sits below it)
+OPEN_JS = ("(p) => { if (p && window.gesturelsmPlayer) { window.gesturelsmPlayer.load(p); "
+           "document.querySelector('#motion-player')?.scrollIntoView({block: 'center'}); } }")
+
+
+@dataclass
+class PageSweep:
+    """One finished sweep of a page: the result (with its motions), its folder and the speech file."""
+    result: SweepResult
+    folder: Path
+    wav: Path | None
+
+
+def table_html(result: SweepResult) -> str:
+    """`#sweep-table`: time and statistics per cell (mean ± spread over seeds), the speaker's row last."""
+    cols = [("time", "time", "s", "Generation time: sampling + decoding, features shared. Better: lower.")] + \
+           [(s.key, s.label, s.unit, s.tooltip) for s in (*STATISTICS, SEED_SPREAD)]
+    head = "<tr><th>method</th><th>steps</th><th>CFG</th>" + "".join(
+        f'<th title="{html.escape(t)}" data-key="{k}">{html.escape(n)}<br><small>{html.escape(u)}</small></th>'
+        for k, n, u, t in cols) + "</tr>"
+
+    def cell(key: str, v: float, sd: float = float("nan")) -> str:
+        text = f"{v:.3f}" if key == "time" else format_value(key, v)
+        if sd == sd:                                           # not NaN
+            text += f" ± {f'{sd:.3f}' if key == 'time' else format_value(key, sd)}"
+        return f'<td data-key="{key}" data-value="{v!r}">{text}</td>'
+
+    body = []
+    for r in result.rows():
+        body.append(f'<tr data-method="{r["method"]}" data-steps="{r["steps"]}" data-cfg="{r["cfg"]:g}">'
+                    f'<td>{html.escape(label(r["method"]))}</td><td>{r["steps"]}</td><td>{r["cfg"]:g}</td>' +
+                    "".join(cell(k, r[k], r.get(f"{k}_std", float("nan"))) for k, *_ in cols) + "</tr>")
+    if result.reference is not None:
+        st = result.reference.statistics
+        body.append(f'<tr data-method="speaker" title="{html.escape(result.reference.source)}"><td>speaker '
+                    f'(reference)</td><td></td><td></td><td></td>' +
+                    "".join(cell(s.key, st[s.key]) for s in STATISTICS) + "<td></td></tr>")
+    return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><table>'
+            f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table><p><small>'
+            f"{len(result.runs)} motions of {result.speech_seconds:.1f} s in {result.seconds:.1f} s; mean ± standard "
+            f"deviation over {result.grid.seeds} seed(s). Hover a heading for what it measures.</small></p></div>")
+
+
+def run_labels(result: SweepResult) -> list[tuple[str, str]]:
+    return [(f"{label(r.method)}, {r.steps} steps, CFG {r.cfg:g}, seed {r.seed}", str(i))
+            for i, r in enumerate(result.runs)]
+
+
+class SweepHandlers:
+    def __init__(self, service, limits: SweepLimits = PAGE_LIMITS):
+        self.service = service
+        self.limits = limits
+        self._stop: dict[str, threading.Event] = {}
+        self._lock = threading.Lock()
+
+    def _flag(self, request: gr.Request | None) -> threading.Event:
+        key = request.session_hash if request is not None else ""
+        with self._lock:
+            return self._stop.setdefault(key, threading.Event())
+
+    @staticmethod
+    def _refuse(msg: str):
+        raise gr.Error(msg, duration=None, print_exception=False)
+
+    def _audio(self, path):
+        if not path or not Path(path).is_file():
+            self._refuse("Please upload speech for the sweep first.")
+        mb = Path(path).stat().st_size / 2 ** 20
+        if mb > self.service.settings.max_upload_mb:
+            self._refuse(f"The audio file is {mb:.0f} MB; the limit is {self.service.settings.max_upload_mb:.0f} MB.")
+        try:
+            return load_audio(path, max_seconds=self.service.settings.max_seconds)
+        except GestureError as exc:
+            self._refuse(f"The audio could not be used: {exc}")
+
+    def _server_steps(self, grid: SweepGrid) -> None:
+        """This server's step limits (its sliders' ends, ServiceSettings) on top of the methods' own bounds."""
+        st = self.service.settings
+        for m in grid.methods:
+            hi = st.max_ddim_steps if steps_setting(m) == "ddim_steps" else st.max_steps
+            if any(s > hi for s in grid.steps):
+                self._refuse(f"This server runs {label(m)} with at most {hi} steps (got {max(grid.steps)}).")
+
+    def run(self, audio_path, methods, steps, cfgs, seeds, metric, text, request: gr.Request = None,
+            progress=gr.Progress()):
+        """-> table html, plot, downloads, run choices, state."""
+        import soundfile as sf
+
+        stop = self._flag(request)
+        stop.clear()
+        try:
+            grid = SweepGrid(tuple(methods or ()), parse_numbers(steps or "", int, "Steps"),
+                             parse_numbers(cfgs or "", float, "CFG"), int(seeds or 0))
+            self._server_steps(grid)
+            audio = self._audio(audio_path)
+            pipe = self.service.pipeline
+            check_grid(pipe, grid, len(audio) / SAMPLE_RATE, self.limits)
+            progress(0.0, desc="speech features")
+            speech = pipe.prepare_speech(audio, SAMPLE_RATE, text=text or None, transcribe=False)
+            result = run_sweep(pipe, speech, grid, progress=lambda f, m: progress(f, desc=m), cancelled=stop.is_set)
+        except GestureError as exc:
+            log.info("sweep refused: %s", " | ".join(str(exc).splitlines()))
+            self._refuse(str(exc))
+        folder = self.service.workdir / f"req-{secrets.token_hex(16)}"    # cleaned up like the page's requests
+        files = write_sweep(result, folder / "sweep", metric if metric in PLOT_METRICS else "wrist_speed")
+        wav = folder / "speech.wav"
+        sf.write(wav, speech.audio, SAMPLE_RATE, subtype="PCM_16")
+        choices = run_labels(result)
+        return (table_html(result), str(files["sweep.png"]), [str(p) for p in files.values()],
+                gr.update(choices=choices, value=choices[0][1] if choices else None), PageSweep(result, folder, wav))
+
+    def cancel(self, request: gr.Request = None) -> str:
+        self._flag(request).set()
+        return "Cancelled: the sweep stops before its next motion; nothing is written."
+
+    def replot(self, state: PageSweep | None, metric: str):
+        if state is None or metric not in BY_KEY:
+            return gr.skip()
+        return str(sweep_plot(state.result, state.folder / f"sweep-{metric}.png", metric))
+
+    def open_run(self, state: PageSweep | None, run: str | None) -> dict | None:
+        """The player's payload for one run of the sweep (written once into the sweep's folder)."""
+        from gesturelsm.export.player import player_payload
+
+        if state is None or run is None:
+            self._refuse("Run a sweep first, then choose one of its motions.")
+        r = state.result.runs[int(run)]
+        if r.motion is None:
+            self._refuse("This sweep kept no motions to play.")
+        return player_payload([r.motion], [f"{label(r.method)} {r.steps} steps CFG {r.cfg:g} seed {r.seed}"],
+                              [r.method], self.service.body, state.folder / f"run-{int(run)}",
+                              self.service.workdir / "player-bodies", url=motion_player.file_url, audio=state.wav)
+
+
+def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
+    """The Sweep tab (call inside `with gr.Blocks()`, after the player)."""
+    h = SweepHandlers(service, limits)
+    methods = [m for m in service.methods if m in service.pipeline.methods]
+    with gr.Tab("Sweep", elem_id="sweep-tab"):
+        gr.Markdown("Tune steps and CFG by the numbers: every combination of the methods, step counts and CFG scales "
+                    "is generated once per seed from this speech (its features computed once), timed and measured. "
+                    f"Size of a sweep on this server: {limits.describe()}. The command line does the same with "
+                    "`gesturelsm sweep` (docs/SWEEP.md).")
+        with gr.Row():
+            with gr.Column(scale=1):
+                audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech", elem_id="sweep-speech")
+                text = gr.Textbox(label="Transcript (optional; audio-only without it)", lines=2, elem_id="sweep-text")
+                chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=methods[:3], label="Methods",
+                                          elem_id="sweep-methods")
+                steps = gr.Textbox("1 2 4 8", label="Steps (space-separated)", elem_id="sweep-steps")
+                cfgs = gr.Textbox("1 2 3", label="CFG scales (space-separated)", elem_id="sweep-cfg")
+                seeds = gr.Number(1, precision=0, minimum=1, maximum=limits.max_seeds, label="Seeds per setting",
+                                  elem_id="sweep-seeds")
+                metric = gr.Dropdown([(BY_KEY[k].label, k) for k in PLOT_METRICS], value="wrist_speed",
+                                     label="Statistic to plot against time", elem_id="sweep-metric")
+                with gr.Row():
+                    run = gr.Button("Run sweep", variant="primary", elem_id="sweep-run")
+                    cancel = gr.Button("Cancel", elem_id="sweep-cancel")
+                status = gr.Markdown(elem_id="sweep-status")
+            with gr.Column(scale=2):
+                table = gr.HTML('<div id="sweep-table" data-state="empty"></div>', elem_id="sweep-table-box")
+                plot = gr.Image(type="filepath", label="Statistic vs generation time", elem_id="sweep-plot",
+                                interactive=False)
+                with gr.Row():
+                    pick = gr.Dropdown([], label="Open one motion of the sweep in the player above", elem_id="sweep-cell")
+                    show = gr.Button("Open in player", elem_id="sweep-open", size="sm")
+                files = gr.File(label="Sweep table and plot (CSV, markdown, JSON, PNG)", file_count="multiple",
+                                elem_id="sweep-files")
+        state, payload = gr.State(), gr.JSON(visible=False)
+        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text], [table, plot, files, pick, state],
+                       api_name="sweep", concurrency_limit=service.settings.concurrency, concurrency_id="generation")
+        cancel.click(h.cancel, None, status, queue=False, api_visibility="private")
+        run.click(lambda: "", None, status, queue=False, api_visibility="private")
+        metric.change(h.replot, [state, metric], plot, api_visibility="private", show_progress="hidden")
+        show.click(h.open_run, [state, pick], payload, api_name="sweep_open", api_visibility="private") \
+            .then(None, payload, None, js=OPEN_JS)
+    return h

@@ -1,0 +1,134 @@
+"""`gesturelsm sweep` (evaluation/sweep.py, sweep_report.py, sweep_cli.py) on tiny checkpoints: the table and plot
+hold exactly the grid's cells, each cell's numbers are those of its motions generated alone, bad grids are refused
+with one line each and leave nothing behind, a cancelled sweep writes nothing."""
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from _support import speech_like
+from gesturelsm.cli import main
+from gesturelsm.errors import InputError
+from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, motion_statistics, speaker_reference
+from gesturelsm.evaluation.sweep import SweepCancelled, SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
+from gesturelsm.evaluation.sweep_report import write_sweep
+from gesturelsm.pipeline import GesturePipeline
+
+
+@pytest.fixture(scope="module")
+def pipe(eval_assets):
+    return GesturePipeline.from_pretrained(eval_assets, warm_up=False)
+
+
+@pytest.fixture(scope="module")
+def wav(tmp_path_factory):
+    path = tmp_path_factory.mktemp("sweep") / "speech.wav"
+    sf.write(path, speech_like(5.0, seed=3), 16000, subtype="FLOAT")
+    return path
+
+
+@pytest.fixture(scope="module")
+def cli_run(eval_assets, wav, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep_cli") / "run"
+    rc = main(["sweep", str(wav), "--checkpoints", str(eval_assets), "--methods", "gesturelsm", "ddim",
+               "--steps", "1", "2", "--cfg", "2", "--seeds", "2", "--no-transcribe", "--metric", "bc",
+               "--out", str(out)])
+    assert rc == 0
+    return out
+
+
+def test_sweep_cli_writes_one_row_per_cell_and_a_plot(cli_run):
+    assert sorted(p.name for p in cli_run.iterdir()) == ["sweep.csv", "sweep.json", "sweep.md", "sweep.png"]
+    rows = list(csv.DictReader((cli_run / "sweep.csv").open()))
+    cells = [(r["method"], r["steps"], r["cfg"]) for r in rows]
+    assert cells == [("gesturelsm", "1", "2"), ("gesturelsm", "2", "2"), ("ddim", "1", "2"), ("ddim", "2", "2"),
+                     ("speaker", "", "")]
+    assert all(r["seeds"] == "2" and float(r["time"]) > 0 for r in rows[:-1])
+    assert (cli_run / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    md = (cli_run / "sweep.md").read_text()
+    assert md.count("| GestureLSM |") == 2 and md.count("| DDIM |") == 2 and "speaker (reference)" in md
+    rep = json.loads((cli_run / "sweep.json").read_text())
+    assert len(rep["runs"]) == 8 and {r["seed"] for r in rep["runs"]} == {0, 1}
+    for row in rep["rows"]:                       # the table's means and spreads are those of the runs
+        runs = [r for r in rep["runs"] if (r["method"], r["steps"], r["cfg"]) == (row["method"], row["steps"], row["cfg"])]
+        for k in ("time", "wrist_speed", "diversity"):
+            v = [r[k] for r in runs]
+            assert row[k] == pytest.approx(np.mean(v)) and row[f"{k}_std"] == pytest.approx(np.std(v))
+        assert row["seed_spread"] >= 0
+    assert all(r["seed_spread"] > 0 for r in rep["rows"] if r["method"] == "gesturelsm")   # seeds differ
+
+
+def test_a_sweep_cell_is_the_motion_that_setting_and_seed_generate_alone(cli_run, pipe, wav):
+    from gesturelsm.audio import load_audio
+
+    audio = load_audio(wav)
+    speech = pipe.prepare_speech(audio, 16000, transcribe=False)
+    res = pipe.generate(speech, steps=2, cfg=2.0, seed=1, method="ddim")
+    want = motion_statistics(res.motion.slice(0, speech.num_frames), None,
+                             SpeechContext.of(speech.audio, speaker_reference().mean_speed))
+    got = next(r for r in json.loads((cli_run / "sweep.json").read_text())["runs"]
+               if (r["method"], r["steps"], r["seed"]) == ("ddim", 2, 1))
+    for s in STATISTICS:
+        assert (got[s.key] is None and not np.isfinite(want[s.key])) or got[s.key] == pytest.approx(want[s.key]), s.key
+
+
+def test_parse_numbers_reads_lists_and_refuses_words():
+    assert parse_numbers("1 2, 4 2", int, "steps") == (1, 2, 4)
+    assert parse_numbers(["1.5", "2"], float, "cfg") == (1.5, 2.0)
+    with pytest.raises(InputError, match="not a whole number"):
+        parse_numbers("1 2.5", int, "steps")
+    with pytest.raises(InputError, match="'x' is not a number"):
+        parse_numbers("1 x", float, "cfg")
+
+
+@pytest.mark.parametrize("grid, seconds, message", [
+    (SweepGrid(("gesturelsm",), (), (2.0,)), 5, "Give at least one step count."),
+    (SweepGrid(("gesturelsm",), (1, 200), (2.0,)), 5, "must be a whole number from 1 to 128"),
+    (SweepGrid(("gesturelsm",), (1,), (-1.0,)), 5, "CFG scale must be between 0 and"),
+    (SweepGrid(("nope",), (1,), (2.0,)), 5, "unknown method 'nope'"),
+    (SweepGrid(("gesturelsm",), tuple(range(1, 11)), tuple(range(8)), 1), 1, "a sweep takes at most 72"),
+    (SweepGrid(("gesturelsm",), (1, 2), (1.0, 2.0), 3), 200, "2400 s of motion; a sweep makes at most 1500 s"),
+    (SweepGrid(("gesturelsm",), (1,), (2.0,), 9), 5, "Seeds must be from 1 to 4"),
+])
+def test_bad_grids_are_refused_with_a_clear_line(pipe, grid, seconds, message):
+    with pytest.raises(InputError, match=message.replace("(", r"\(")):
+        check_grid(pipe, grid, seconds, SweepLimits())
+
+
+def test_sweep_cli_refuses_silence_and_bad_steps_leaving_no_output(eval_assets, tmp_path, capsys):
+    silent = tmp_path / "silence.wav"
+    sf.write(silent, np.zeros(32000, np.float32), 16000)
+    for audio, extra, msg in [(silent, [], "silent"), (silent, ["--steps", "0"], "from 1 to")]:
+        out = tmp_path / "out"
+        rc = main(["sweep", str(audio), "--checkpoints", str(eval_assets), "--methods", "gesturelsm", "--no-transcribe",
+                   "--out", str(out), *extra])
+        err = capsys.readouterr().err
+        assert rc == 2 and msg in err and "Traceback" not in err
+        assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["silence.wav"]
+
+
+def test_a_cancelled_sweep_stops_before_the_next_motion_and_writes_nothing(pipe, wav, tmp_path):
+    from gesturelsm.audio import load_audio
+
+    speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
+    asked = []
+    with pytest.raises(SweepCancelled):
+        run_sweep(pipe, speech, SweepGrid(("gesturelsm",), (1, 2), (2.0,), 1), cancelled=lambda: asked.append(1) or
+                  len(asked) > 1)
+    assert len(asked) == 2 and list(tmp_path.iterdir()) == []
+
+
+def test_write_sweep_replaces_an_earlier_sweep_in_place(pipe, wav, tmp_path):
+    from gesturelsm.audio import load_audio
+
+    speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
+    res = run_sweep(pipe, speech, SweepGrid(("rectified_flow",), (1,), (0.0,), 1))
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "sweep.csv").write_text("old")
+    write_sweep(res, tmp_path / "out", metric="jerk")
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]            # no temporary folder left
+    assert (tmp_path / "out" / "sweep.csv").read_text().startswith("method,steps,cfg")
