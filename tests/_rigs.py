@@ -143,3 +143,40 @@ def direction_errors(result, to_smplx: np.ndarray, smplx_joints: np.ndarray) -> 
 
 
 __all__ = ["FINGERS", "Y_UP_TO_Z_UP", "build_rig", "direction_errors", "posed_world", "trs_matrix"]
+
+
+def write_gltf(skel: Skeleton, path, humanoid: dict[str, str] | None = None, vrm: str = "1",
+               names: list[str] | None = None) -> dict:
+    """A .glb of the skeleton: one node per joint (its rest TRS), a skin over all of them, no mesh; with
+    `humanoid` ({VRM bone: joint name}) a VRM 1.0 (`vrm="1"`) or 0.x (`"0"`) humanoid map. Returns the JSON."""
+    import json
+    import struct
+
+    names = names or skel.names
+    nodes = []
+    for i in range(len(skel)):
+        node = {"name": names[i], "translation": [float(x) for x in skel.translation[i]],
+                "rotation": [float(x) for x in Rotation.from_matrix(skel.rotation[i]).as_quat()]}
+        kids = [c for c in range(len(skel)) if skel.parents[c] == i]
+        if kids:
+            node["children"] = kids
+        nodes.append(node)
+    roots = [i for i in range(len(skel)) if skel.parents[i] < 0]
+    gltf = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": roots}], "nodes": nodes,
+            "skins": [{"joints": list(range(len(skel)))}]}
+    if humanoid is not None:
+        idx = {n: i for i, n in enumerate(names)}
+        if vrm == "1":
+            gltf["extensionsUsed"] = ["VRMC_vrm"]
+            gltf["extensions"] = {"VRMC_vrm": {"specVersion": "1.0", "humanoid": {
+                "humanBones": {b: {"node": idx[n]} for b, n in humanoid.items()}}}}
+        else:
+            gltf["extensionsUsed"] = ["VRM"]
+            gltf["extensions"] = {"VRM": {"humanoid": {
+                "humanBones": [{"bone": b, "node": idx[n]} for b, n in humanoid.items()]}}}
+    js = json.dumps(gltf).encode()
+    js += b" " * (-len(js) % 4)
+    with open(path, "wb") as fh:
+        fh.write(struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js)))
+        fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
+    return gltf
