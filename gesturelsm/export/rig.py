@@ -136,3 +136,17 @@ def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n" + body_text + "\n")
     return path
+
+
+def export_rig(seq, character: Character, beside: str | Path, body=None) -> Path:
+    """The motion on the character next to `beside` (e.g. the motion's .npz): STEM_CHARACTER.vrm for a VRM,
+    .glb for a glTF, .bvh for a BVH skeleton. Returns the path written."""
+    beside = Path(beside)
+    if character.document is None:
+        suffix = ".bvh"
+    else:
+        suffix = ".vrm" if character.skeleton.kind.startswith("vrm") else ".glb"
+    path = beside.with_name(f"{beside.stem}_{character.path.stem}{suffix}")
+    if suffix == ".bvh":
+        return export_rig_bvh(seq, character, path, body)
+    return export_rig_glb(seq, character, path, body)

@@ -36,6 +36,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
+    p.add_argument("--rig", help="your character (.vrm / .glb): each video also gets its motion on the character "
+                   "(same blinded name, .vrm / .glb); the videos keep the mannequin")
     p.set_defaults(func=run)
 
 
@@ -43,9 +45,22 @@ def run(args: argparse.Namespace) -> int:
     if args.size % 16 or not 128 <= args.size <= 1024:
         raise UserError("--size must be a multiple of 16 from 128 to 1024")
     gens = [m for m in args.methods if m != GROUND_TRUTH]
+    rig = _character(args.rig)
     pipe = GesturePipeline.from_pretrained(args.checkpoints, methods=gens or None)
     body = load_body_model(str(resolve_model_path(args.model)))
     make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
                steps=steps_from_flags(args.steps, args.ddim_steps), cfg=args.cfg, seed=args.seed, size=args.size,
-               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing)
+               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing, rig=rig)
     return 0
+
+
+def _character(path: str | None):
+    """--rig, loaded before any work so a bad file stops the batch at once."""
+    if not path:
+        return None
+    from ..retarget import load_character
+
+    rig = load_character(path)
+    if rig.document is None:
+        raise UserError(f"--rig {rig.name}: a BVH skeleton has no mesh; give a .vrm, .glb or .gltf")
+    return rig
