@@ -6,8 +6,8 @@ Motion: the real BEAT2 take from ../shared, repeated to the length asked (smooth
 absent). Characters: cryptovoxels.vrm (../shared, VRM 0.x, 43 humanoid bones of 58 joints) and skeletons built
 from the SMPL-X rest pose (all 52 body and finger bones; an A-pose Z-up centimetre rig without fingers). Times
 are the retargeting alone (SMPL-X forward kinematics + solving + local rotations), median of the repeats, after
-one warm-up run; loading the character and writing files are not included. Other processes share this machine's
-CPUs, so compare rows of one run rather than runs.
+one warm-up run; loading the character and writing files are not included. Wall seconds depend on what else
+runs on the machine; CPU seconds (this process's) much less, so both are printed. Compare rows of one run.
 """
 from __future__ import annotations
 
@@ -63,17 +63,19 @@ def main() -> None:
                  build_rig(source.rest_joints, apose=40, world=Y_UP_TO_Z_UP, units=100, fingers=False)[0]))
     print(f"{seq.num_frames} frames ({seq.duration:.0f} s, {kind}), torch threads {args.threads}, "
           f"median of {args.repeats}\n")
-    print("| character | joints | humanoid bones | seconds | frames per second |")
-    print("|---|---:|---:|---:|---:|")
+    print("| character | joints | humanoid bones | wall s | CPU s | frames per wall second |")
+    print("|---|---:|---:|---:|---:|---:|")
     for name, skel in rigs:
         retarget(seq, skel, source)                                            # warm-up
-        times = []
+        wall, cpu = [], []
         for _ in range(args.repeats):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             retarget(seq, skel, source)
-            times.append(time.perf_counter() - t0)
-        med = float(np.median(times))
-        print(f"| {name} | {len(skel)} | {len(skel.bones)} | {med:.3f} | {seq.num_frames / med:,.0f} |")
+            wall.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
+        med = float(np.median(wall))
+        print(f"| {name} | {len(skel)} | {len(skel.bones)} | {med:.3f} | {float(np.median(cpu)):.3f} | "
+              f"{seq.num_frames / med:,.0f} |")
 
 
 if __name__ == "__main__":

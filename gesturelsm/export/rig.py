@@ -105,8 +105,9 @@ def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
     for i, p in enumerate(skel.parents):
         if p >= 0:
             kids[int(p)].append(i)
-    rel = np.swapaxes(r.delta[:, skel.parents], -1, -2) @ r.delta                    # (T, N, 3, 3)
-    rel[:, root] = r.delta[:, root]
+    D = r.delta                                                                      # (T, N, 3, 3)
+    rel = np.swapaxes(D[:, skel.parents], -1, -2) @ D
+    rel[:, root] = D[:, root]
     eul = np.degrees(continuous_euler(matrix_to_euler_zxy(rel)))
     lines, order = ["HIERARCHY"], []
 

@@ -70,7 +70,7 @@ class Retargeted:
     """A motion on a character (all arrays per frame, in the character's own world frame and units)."""
     skeleton: Skeleton
     fps: int
-    delta: np.ndarray              # (T, N, 3, 3) world rotation of each joint relative to its rest
+    aligned_delta: np.ndarray      # (T, N, 3, 3) rotation of each joint relative to its rest, `align`ed axes
     positions: np.ndarray          # (T, N, 3) world joint positions
     local_rotation: np.ndarray     # (T, N, 3, 3) local rotation of each joint (its file's convention)
     root: int                      # the hips joint, the one whose translation moves
@@ -80,7 +80,12 @@ class Retargeted:
 
     @property
     def num_frames(self) -> int:
-        return len(self.delta)
+        return len(self.aligned_delta)
+
+    @property
+    def delta(self) -> np.ndarray:
+        """(T, N, 3, 3) world rotation of each joint relative to its rest, in the character's world axes."""
+        return self.align.T @ self.aligned_delta @ self.align
 
 
 def _snap(v: np.ndarray, degrees: float = 25.0) -> np.ndarray:
@@ -128,44 +133,72 @@ def _is_below(parents: np.ndarray, child: int, ancestor: int) -> bool:
     return False
 
 
-def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G: np.ndarray) -> np.ndarray:
-    """(T, N, 3, 3) world rotations relative to rest, in the aligned frame (see the module docstring)."""
-    T, N = len(P), len(skel)
+@dataclass
+class _Plan:
+    """Per humanoid bone, what its Δ is made of (rest-pose data only; computed once per character)."""
+    chain: list[tuple[int, int, int, np.ndarray, np.ndarray]]       # (i, j, child j, c unit, C)
+    frames: list[tuple[int, int, int, int, int, np.ndarray]]        # (i, j, child j, pair a, pair b, Fe)
+    leaves: list[tuple[int, int, np.ndarray]]                        # (i, j, C)
+    copy_of: np.ndarray                                              # (N,) the bone whose Δ a joint takes; -1: none
+
+
+def _plan(skel: Skeleton, q: np.ndarray, J: np.ndarray) -> _Plan:
     joint_of = {i: j for j, i in skel.bones.items()}
-    delta = np.empty((T, N, 3, 3))
     corr: dict[int, np.ndarray] = {}
-    eye = np.broadcast_to(np.eye(3), (T, 3, 3))
-    for i in range(N):
+    chain, frames, leaves = [], [], []
+    copy_of = np.full(len(skel), -1)
+    for i in range(len(skel)):
         p = int(skel.parents[i])
         name = joint_of.get(i)
         if name is None:
-            delta[:, i] = eye if p < 0 else delta[:, p]
-            if p >= 0 and p in corr:
+            copy_of[i] = -1 if p < 0 else copy_of[p]
+            if p in corr:
                 corr[i] = corr[p]
             continue
+        copy_of[i] = i
         j = JOINT_INDEX[name]
-        Gj = G[:, j]
         kids = [c for c in CHAIN.get(name, ()) if c in skel.bones and _is_below(skel.parents, skel.bones[c], i)
                 and np.linalg.norm(q[skel.bones[c]] - q[i]) > 1e-9]
         if not kids:
-            C = corr.get(p, np.eye(3)) if p >= 0 else np.eye(3)
-            delta[:, i] = Gj @ C
-            corr[i] = C
+            corr[i] = corr.get(p, np.eye(3))
+            leaves.append((i, j, corr[i]))
             continue
         jc, ic = JOINT_INDEX[kids[0]], skel.bones[kids[0]]
-        e1, c1, d1 = q[ic] - q[i], J[jc] - J[j], P[:, jc] - P[:, j]
+        e1, c1 = q[ic] - q[i], J[jc] - J[j]
         pair = next(((a, b) for a, b in PAIRS.get(name, ()) if a in skel.bones and b in skel.bones), None)
         if pair is not None:
-            ia, ib = skel.bones[pair[0]], skel.bones[pair[1]]
             ja, jb = JOINT_INDEX[pair[0]], JOINT_INDEX[pair[1]]
-            Fe = frame(e1[None], (q[ia] - q[ib])[None])[0]
-            delta[:, i] = frame(d1, P[:, ja] - P[:, jb]) @ Fe.T
+            Fe = frame(e1[None], (q[skel.bones[pair[0]]] - q[skel.bones[pair[1]]])[None])[0]
             corr[i] = frame(c1[None], (J[ja] - J[jb])[None])[0] @ Fe.T
+            frames.append((i, j, jc, ja, jb, Fe))
         else:
-            C = rotation_between(unit(e1)[None], unit(c1)[None])[0]
-            delta[:, i] = rotation_between(Gj @ unit(c1), unit(d1)) @ Gj @ C
-            corr[i] = C
-    return delta
+            corr[i] = rotation_between(unit(e1)[None], unit(c1)[None])[0]
+            chain.append((i, j, jc, unit(c1), corr[i]))
+    return _Plan(chain, frames, leaves, copy_of)
+
+
+def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """(T, N, 3, 3) world rotations relative to rest, in the aligned frame (see the module docstring); each
+    kind of bone is solved for all its bones at once."""
+    plan = _plan(skel, q, J)
+    T, N = len(P), len(skel)
+    delta = np.empty((T, N + 1, 3, 3))
+    delta[:, N] = np.eye(3)                                          # the joints above every humanoid bone
+    if plan.chain:
+        i, j, jc, c, C = (np.array(x) for x in zip(*plan.chain))
+        Gj = G[:, j]
+        Gc = np.einsum("tbxy,by->tbx", Gj, c)
+        delta[:, i] = rotation_between(Gc, unit(P[:, jc] - P[:, j])) @ Gj @ C
+    if plan.frames:
+        i, j, jc, ja, jb, Fe = (np.array(x) for x in zip(*plan.frames))
+        delta[:, i] = frame(P[:, jc] - P[:, j], P[:, ja] - P[:, jb]) @ np.swapaxes(Fe, -1, -2)
+    if plan.leaves:
+        i, j, C = (np.array(x) for x in zip(*plan.leaves))
+        delta[:, i] = G[:, j] @ C
+    copy = np.where(plan.copy_of < 0, N, plan.copy_of)
+    unmapped = np.nonzero(copy != np.arange(N))[0]
+    delta[:, unmapped] = delta[:, copy[unmapped]]
+    return delta[:, :N]
 
 
 def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
@@ -197,13 +230,18 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
     disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
     below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(N)])
     pos[:, below] += disp[:, None]
-    # back to the character's world frame
-    delta_w = A.T @ delta @ A
+    # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
+    # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
+    V = A @ W
+    Vbase = A @ world_rotation(skel.base)
+    moving = np.array(sorted(set(skel.bones.values()) | {hips}))
+    par = skel.parents[moving]
+    Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
+    dp = np.where((par >= 0)[None, :, None, None], delta[:, np.maximum(par, 0)], np.eye(3))
+    local = np.empty((T, N, 3, 3))
+    local[:] = skel.rotation
+    local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
     pos_w = pos @ A
-    Wp = np.stack([W[p] if p >= 0 else world_rotation(skel.base) for p in skel.parents])
-    dp = np.stack([delta_w[:, p] if p >= 0 else np.broadcast_to(np.eye(3), (T, 3, 3))
-                   for p in skel.parents], 1)
-    local = np.swapaxes(Wp, -1, -2) @ np.swapaxes(dp, -1, -2) @ delta_w @ W
     parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
     root_t = (np.linalg.inv(parent_world) @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
-    return Retargeted(skel, int(seq.fps), delta_w, pos_w, local, hips, root_t, A, float(scale))
+    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale))
