@@ -4,6 +4,8 @@ independent check of a retargeted motion (forward kinematics from the written lo
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -180,3 +182,23 @@ def write_gltf(skel: Skeleton, path, humanoid: dict[str, str] | None = None, vrm
         fh.write(struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js)))
         fh.write(struct.pack("<I4s", len(js), b"JSON") + js)
     return gltf
+
+
+PLAYER = Path(__file__).resolve().parents[1] / "app" / "player"
+
+
+def bundle_character_js(folder: Path) -> Path | None:
+    """app/player/src/character.js bundled (esbuild, iife) so a page gets `window.C`; None when the player's
+    npm packages are not installed."""
+    import json
+    import subprocess
+
+    esbuild = PLAYER / "node_modules" / ".bin" / "esbuild"
+    if not esbuild.exists() or not (PLAYER / "node_modules" / "@pixiv" / "three-vrm").is_dir():
+        return None
+    entry = folder / "entry.js"
+    entry.write_text(f"import * as C from {json.dumps(str(PLAYER / 'src' / 'character.js'))};\nwindow.C = C;\n")
+    out = folder / "character_bundle.js"
+    subprocess.run([str(esbuild), str(entry), "--bundle", "--format=iife", f"--outfile={out}"],
+                   check=True, capture_output=True, timeout=120, cwd=PLAYER)
+    return out

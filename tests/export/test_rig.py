@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from _rigs import bundle_character_js
 from gesturelsm.cli import main
 from gesturelsm.export.bvh import euler_zxy_to_matrix
 from gesturelsm.export.glb import accessor_array, read_glb
@@ -122,29 +123,28 @@ CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", 
 @pytest.mark.browser
 @pytest.mark.skipif(CHROMIUM is None or NODE is None, reason="chromium and node are needed for the three-vrm check")
 def test_three_vrm_loads_it_and_the_wrist_moves_as_the_motion_says(exported, tmp_path):
-    esbuild = PLAYER / "node_modules" / ".bin" / "esbuild"
-    if not esbuild.exists() or not (PLAYER / "node_modules" / "@pixiv" / "three-vrm").is_dir():
+    bundle = bundle_character_js(tmp_path)
+    if bundle is None:
         pytest.skip("the player's npm packages are not installed (cd app/player && npm ci)")
     from playwright.sync_api import sync_playwright
 
     seq, result, out = exported
-    entry = tmp_path / "entry.js"
-    entry.write_text(f"import * as C from {json.dumps(str(PLAYER / 'src' / 'character.js'))};\nwindow.C = C;\n")
-    subprocess.run([str(esbuild), str(entry), "--bundle", "--format=iife", f"--outfile={tmp_path / 'b.js'}"],
-                   check=True, capture_output=True, timeout=120, cwd=PLAYER)
     data = base64.b64encode((out / "take.vrm").read_bytes()).decode()
     frames = [0, 45, 89]
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         page = browser.new_page()
         page.set_content("<html><body></body></html>")
-        page.add_script_tag(content=(tmp_path / "b.js").read_text())
+        page.add_script_tag(content=bundle.read_text())
         got = page.evaluate("""async ([b64, times]) => {
             const bytes = Uint8Array.from(atob(b64), c => c.charCodeAt(0)).buffer;
             const ch = await window.C.loadCharacter(bytes);
             const out = {vrm: !!ch.vrm, version: ch.vrm ? ch.vrm.meta.metaVersion : null,
                          clip: ch.clip ? ch.clip.name : null, wrist: []};
-            for (const t of times) { window.C.seek(ch, t); out.wrist.push(window.C.boneWorldPosition(ch, 'rightHand')); }
+            for (const t of times) {
+                window.C.seek(ch, t);
+                out.wrist.push(window.C.boneWorldPosition(ch, 'rightHand'));
+            }
             return out;
         }""", [data, [f / 30 for f in frames]])
         browser.close()

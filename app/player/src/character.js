@@ -39,18 +39,50 @@ export function boneWorldPosition(character, name) {
   return [v.x, v.y, v.z];
 }
 
-/**
- * Apply one frame of streamed rotations: `bones` lists node names, `quats` is a Float32Array of
- * (x, y, z, w) per bone, `root` (optional) the hips' local translation [x, y, z].
- */
-export function applyFrame(character, bones, quats, root) {
-  bones.forEach((name, k) => {
-    const node = character.scene.getObjectByName(name);
-    if (node) node.quaternion.set(quats[4 * k], quats[4 * k + 1], quats[4 * k + 2], quats[4 * k + 3]);
-  });
-  if (root && bones.length) {
-    const hips = character.scene.getObjectByName(bones[0]);
-    if (hips) hips.position.set(root[0], root[1], root[2]);
+/** The three.js object of each glTF node index (GLTFLoader's associations; names may have been rewritten). */
+export function nodeObjects(character) {
+  if (!character.nodes) {
+    character.nodes = new Map();
+    character.gltf.parser.associations.forEach((v, obj) => {
+      if (v && v.nodes !== undefined && !character.nodes.has(v.nodes)) character.nodes.set(v.nodes, obj);
+    });
   }
+  return character.nodes;
+}
+
+/**
+ * Apply one frame of streamed rotations: `nodes` lists glTF node indices (hips first), `quats` holds
+ * (x, y, z, w) per node, `root` (optional) the hips' local translation [x, y, z].
+ */
+export function applyFrame(character, nodes, quats, root) {
+  const objects = nodeObjects(character);
+  nodes.forEach((n, k) => {
+    const obj = objects.get(n);
+    if (obj) obj.quaternion.set(quats[4 * k], quats[4 * k + 1], quats[4 * k + 2], quats[4 * k + 3]);
+  });
+  const hips = nodes.length ? objects.get(nodes[0]) : null;
+  if (root && hips) hips.position.set(root[0], root[1], root[2]);
   character.scene.updateMatrixWorld(true);
+}
+
+/** Decode a base64 float32 array from app/character.py's payload. */
+export function decodeFloats(b64) {
+  const bin = atob(b64);
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  return new Float32Array(bytes.buffer);
+}
+
+/**
+ * Pose the character at `frame` of one method of the server's payload
+ * ({name, bones, nodes, fps, frames, methods: {method: {quats, root}}}); decoded arrays are cached on it.
+ * The player sets #motion-player[data-character] = payload.name when it shows the character.
+ */
+export function showPayloadFrame(character, payload, method, frame) {
+  const m = payload.methods[method];
+  if (!m) return;
+  if (!m._q) { m._q = decodeFloats(m.quats); m._r = decodeFloats(m.root); }
+  const B = payload.nodes.length;
+  const f = Math.max(0, Math.min(payload.frames - 1, frame | 0));
+  applyFrame(character, payload.nodes, m._q.subarray(4 * B * f, 4 * B * (f + 1)), m._r.subarray(3 * f, 3 * f + 3));
 }
