@@ -4,11 +4,12 @@ to apply with three-vrm (app/player/src/character.js `applyFrame`).
 
     upload = character_upload()                        # gr.File(elem_id="character") beside the methods
     character = read_upload(path)                      # Character, or gr.Error with one line
-    payload = character_payload(character, motions)    # JSON-able: bones, fps, per method rotations
+    payload = character_payload(character, motions)    # JSON-able: bones, nodes, fps, per-method rotations
 
-The payload per method holds base64 float32 arrays: `quats` (frames, bones, 4) local rotations (x, y, z, w) of
-the bone nodes in `nodes` (glTF node indices, hips first; `bones` their names), `root` (frames, 3) the hips' local translation; the player sets
-`#motion-player[data-character]` to `name`. A bad file raises gr.Error and the mannequin stays.
+The payload per method holds base64 float32 arrays: `quats` (frames, bones, 4), local rotations (x, y, z, w)
+of the bone nodes in `nodes` (glTF node indices, hips first; `bones` are their names), and `root` (frames, 3),
+the hips' local translation. The player sets `#motion-player[data-character]` to `name`. A file that cannot
+be used raises gr.Error and the mannequin stays.
 """
 from __future__ import annotations
 
