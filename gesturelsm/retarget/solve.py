@@ -217,9 +217,15 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
     T, N = delta.shape[:2]
     # joint positions with the root at its rest place: each offset turns with its parent
     pos = np.empty((T, N, 3))
-    for i in range(N):
-        pp = int(skel.parents[i])
-        pos[:, i] = q[i] if pp < 0 else pos[:, pp] + delta[:, pp] @ (q[i] - q[pp])
+    depth = np.zeros(N, np.int64)
+    for i, pp in enumerate(skel.parents):
+        depth[i] = 0 if pp < 0 else depth[pp] + 1
+    roots = np.nonzero(skel.parents < 0)[0]
+    pos[:, roots] = q[roots]
+    for d in range(1, int(depth.max()) + 1):                         # one level of the tree at a time
+        idx = np.nonzero(depth == d)[0]
+        par = skel.parents[idx]
+        pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
     hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
     disp = scale * (pelvis - pelvis[:1])
