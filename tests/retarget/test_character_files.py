@@ -148,3 +148,31 @@ def test_cli_reports_a_bad_character_in_one_line(tmp_path, capsys, real_motion):
                  str(tmp_path / "o.glb")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "c.vrm: not a glTF / VRM file" in err
+
+
+def test_gltf_json_with_embedded_buffer_exports_as_glb(tmp_path, take, source):
+    """A .gltf text file: its data: URI buffer goes into the GLB's binary chunk; one with a separate .bin file
+    is read for its skeleton but refused for --glb with a message."""
+    import base64
+
+    from gesturelsm.export.glb import accessor_array, read_glb
+    from gesturelsm.export.rig import export_rig_glb
+
+    skel, _ = build_rig(source.rest_joints, fingers=False)
+    g = write_gltf(skel, tmp_path / "c.glb")
+    payload = np.arange(6, dtype=np.float32).tobytes()
+    g["buffers"] = [{"byteLength": len(payload), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(payload).decode()}]
+    g["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": len(payload)}]
+    g["accessors"] = [{"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}]
+    (tmp_path / "c.gltf").write_text(json.dumps(g))
+    character = load_character(tmp_path / "c.gltf")
+    export_rig_glb(take, character, tmp_path / "out.glb")
+    gltf, blob = read_glb(tmp_path / "out.glb")
+    assert "uri" not in gltf["buffers"][0] and gltf["buffers"][0]["byteLength"] == len(blob)
+    np.testing.assert_array_equal(accessor_array(gltf, blob, 0).reshape(-1), np.arange(6))   # its data kept
+    assert gltf["animations"][0]["channels"]
+    g["buffers"] = [{"byteLength": len(payload), "uri": "c.bin"}]
+    (tmp_path / "d.gltf").write_text(json.dumps(g))
+    with pytest.raises(CharacterError, match="separate files"):
+        export_rig_glb(take, load_character(tmp_path / "d.gltf"), tmp_path / "out2.glb")
