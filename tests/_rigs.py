@@ -202,3 +202,24 @@ def bundle_character_js(folder: Path) -> Path | None:
     subprocess.run([str(esbuild), str(entry), "--bundle", "--format=iife", f"--outfile={out}"],
                    check=True, capture_output=True, timeout=120, cwd=PLAYER)
     return out
+
+
+def gltf_validator_errors(path: Path, folder: Path) -> tuple[int, list] | None:
+    """(number of errors, their messages) from the Khronos glTF validator (npm gltf-validator run by node), or
+    None when node or the package is not installed."""
+    import json
+    import shutil
+    import subprocess
+
+    node, package = shutil.which("node"), PLAYER / "node_modules" / "gltf-validator"
+    if node is None or not package.is_dir():
+        return None
+    script = folder / "validate.cjs"
+    script.write_text(
+        "const v = require(process.argv[2]); const fs = require('fs');\n"
+        "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[3])), {maxIssues: 100}).then(r => "
+        "console.log(JSON.stringify({errors: r.issues.numErrors, messages: r.issues.messages"
+        ".filter(m => m.severity === 0)})));\n")
+    run = subprocess.run([node, str(script), str(package), str(path)], capture_output=True, text=True, timeout=120)
+    report = json.loads(run.stdout)
+    return report["errors"], report["messages"]

@@ -7,7 +7,7 @@ import struct
 
 import numpy as np
 
-from _rigs import build_rig, write_gltf
+from _rigs import build_rig, gltf_validator_errors, write_gltf
 from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_glb
@@ -30,7 +30,7 @@ def _vrm_with_mouth(tmp_path, version: str):
     g["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36,
                                                                            "byteLength": 36}]
     g["accessors"] = [{"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0],
-                       "max": [1, 1, 0]} for v in (0, 1)]
+                       "max": hi} for v, hi in ((0, [1, 1, 0]), (1, [0, np.float32(0.1).item(), 0]))]
     g["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0}, "targets": [{"POSITION": 1}]}], "weights": [0]}]
     g["nodes"].append({"name": "face", "mesh": 0})
     g["scenes"][0]["nodes"].append(len(g["nodes"]) - 1)
@@ -64,3 +64,5 @@ def test_mouth_opens_with_the_jaw(tmp_path):
         np.testing.assert_allclose(w, jaw_open(poses), atol=1e-6)
         assert w[0] == 0.0 and w[-1] == 1.0 and np.all(np.diff(w) >= 0)
         np.testing.assert_allclose(accessor_array(gltf, blob, 1), [[0, 0, 0], [0, 0.1, 0], [0, 0, 0]])  # mesh kept
+        report = gltf_validator_errors(tmp_path / f"out{version}.vrm", tmp_path)
+        assert report is None or report[0] == 0, report                  # checked where node is installed
