@@ -9,7 +9,9 @@ from .audio import load_audio
 from .constants import SAMPLE_RATE
 from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, postprocess
 from .backends import FACTS, checkpoint_sources
+from .export.rig import export_rig
 from .pipeline import GesturePipeline
+from .retarget import load_character
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -30,11 +32,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help=f"post-processing (motion/postprocess.py); 'off' writes the raw model output (default {DEFAULT_SMOOTHING})")
     g.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
+    g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
+                   "character's suffix, the motion on it (docs/CHARACTERS.md)")
     g.set_defaults(func=run_generate)
 
 
 def run_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
+    rig = load_character(args.rig) if getattr(args, "rig", None) else None     # a bad file stops before the work
     audio = load_audio(args.audio)
     words = None
     if args.textgrid:
@@ -43,7 +48,10 @@ def run_generate(args: argparse.Namespace) -> int:
     steps = args.steps or FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method, transcribe=not args.no_transcribe)
-    path = postprocess(res.motion, args.stand_in_place, args.smoothing).save(args.out)
+    motion = postprocess(res.motion, args.stand_in_place, args.smoothing)
+    path = motion.save(args.out)
+    if rig is not None:
+        print(f"wrote {export_rig(motion, rig, path)}")
     for w in res.warnings:
         print(f"warning: {w}")
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())

@@ -3,6 +3,7 @@
     gesturelsm export take.npz --bvh take.bvh --glb take.glb --keypoints take_keypoints/
     gesturelsm export take.npz --keypoints take_keypoints.json --size 768x512   # one file, all frames
     gesturelsm export take.npz --npz clean.npz                                    # BEAT2 / Blender add-on npz
+    gesturelsm export take.npz --rig avatar.vrm --glb avatar_take.vrm --bvh avatar_take.bvh   # your character
 """
 from __future__ import annotations
 
@@ -29,6 +30,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--names", choices=["animator", "smplx"], default="animator",
                    help="joint names: animator (Hips, LeftArm, ...) or smplx (pelvis, left_shoulder, ...)")
     p.add_argument("--size", default="512x512", help="keypoint image size, as the render's (default 512x512)")
+    p.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): --glb writes its own file animated "
+                   "(a VRM stays a VRM), --bvh its skeleton")
+    p.add_argument("--bone-map", help="with --rig: bone names as 'mixamo', 'smplx' or a JSON file {SMPL-X joint: "
+                   "bone} (default: the VRM humanoid map, else the preset that fits)")
     p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style` "
                    "(default | upper ...)")
     p.set_defaults(func=run)
@@ -40,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
     if not Path(args.motion).exists():
         raise UserError(f"motion file not found: {args.motion}")
     seq = MotionSequence.load(args.motion)
+    if getattr(args, "rig", None):
+        return _run_rig(args, seq)
     body = None
     if args.bvh or args.glb or args.keypoints:
         body = resolve_body(args.model)
@@ -57,4 +64,22 @@ def run(args: argparse.Namespace) -> int:
                                      style=STYLES[args.style]))
     for p in done:
         print(f"wrote {p}")
+    return 0
+
+
+def _run_rig(args: argparse.Namespace, seq: MotionSequence) -> int:
+    """--rig: the motion on the user's character, as its own animated file and / or its skeleton's BVH."""
+    from ..retarget import load_character, retarget_motion
+    from .rig import export_rig_bvh, export_rig_glb
+
+    if args.keypoints or args.npz or not (args.glb or args.bvh):
+        raise UserError("with --rig, give --glb OUT.glb (or .vrm) and / or --bvh OUT.bvh")
+    character = load_character(args.rig, args.bone_map)
+    if args.glb and character.document is None:
+        raise UserError(f"--rig {character.name}: a BVH skeleton has no mesh to animate; use --bvh only")
+    result = retarget_motion(seq, character, args.model)
+    if args.glb:
+        print(f"wrote {export_rig_glb(seq, character, args.glb, result=result)}")
+    if args.bvh:
+        print(f"wrote {export_rig_bvh(seq, character, args.bvh, result=result)}")
     return 0

@@ -97,10 +97,12 @@ def _transcript(audio: Path):
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print) -> StudyPlan:
+               design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
     """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
     web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
-    `steps`: per method (missing: the method's default)."""
+    `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then gets
+    the motion on that character beside it (VIDEO.vrm / .glb, the same blinded name; the video shows the
+    mannequin)."""
     methods = list(dict.fromkeys(methods))
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
@@ -136,6 +138,11 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                 continue
             render_video([gen.motions[it.method]], speech.audio, out / "videos" / it.video, size=(size, size),
                          body=body)
+            if rig is not None:
+                from ..export.rig import export_rig_glb
+
+                export_rig_glb(gen.motions[it.method], rig, (out / "videos" / it.video).with_suffix(
+                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
     _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))

@@ -42,6 +42,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="web study: pairwise preference between methods on the same speech, or 1-5 ratings")
     p.add_argument("--attention", type=float, default=0.15,
                    help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
+    p.add_argument("--rig", help="your character (.vrm / .glb): each video also gets its motion on the character "
+                   "(same blinded name, .vrm / .glb); the videos keep the mannequin")
     p.set_defaults(func=run)
 
 
@@ -51,10 +53,23 @@ def run(args: argparse.Namespace) -> int:
     if args.size % 16 or not 128 <= args.size <= 1024:
         raise UserError("--size must be a multiple of 16 from 128 to 1024")
     gens = [m for m in args.methods if m != GROUND_TRUTH]
+    rig = _character(args.rig)
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=gens or None)
     body = load_body_model(str(resolve_model_path(args.model)))
     make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
                steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
                body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing,
-               design=Design(args.design, args.attention, args.seed))
+               design=Design(args.design, args.attention, args.seed), rig=rig)
     return 0
+
+
+def _character(path: str | None):
+    """--rig, loaded before any work so a bad file stops the batch at once."""
+    if not path:
+        return None
+    from ..retarget import load_character
+
+    rig = load_character(path)
+    if rig.document is None:
+        raise UserError(f"--rig {rig.name}: a BVH skeleton has no mesh; give a .vrm, .glb or .gltf")
+    return rig

@@ -1,0 +1,88 @@
+// The user's character in the browser: a VRM (0.x or 1.0) or a skinned glTF loaded with three.js'
+// GLTFLoader and @pixiv/three-vrm, animated either by the glTF animation the server wrote into the file
+// (`gesturelsm export --rig`) or by per-bone rotations streamed from the server (app/character.py).
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { VRMLoaderPlugin } from '@pixiv/three-vrm';
+
+/** Parse a .vrm / .glb file's bytes. Resolves to {gltf, vrm (null for plain glTF), scene, mixer, clip}. */
+export async function loadCharacter(bytes) {
+  const loader = new GLTFLoader();
+  loader.register((parser) => new VRMLoaderPlugin(parser, { autoUpdateHumanBones: false }));
+  const gltf = await loader.parseAsync(bytes, '');
+  const vrm = gltf.userData.vrm || null;
+  const scene = vrm ? vrm.scene : gltf.scene;
+  const mixer = new THREE.AnimationMixer(scene);
+  const clip = gltf.animations.find((a) => a.name === 'gesturelsm') || gltf.animations[0] || null;
+  if (clip) mixer.clipAction(clip).play();
+  return { gltf, vrm, scene, mixer, clip };
+}
+
+/** Pose the character at time t (seconds) of its animation and update world matrices. */
+export function seek(character, t) {
+  if (character.clip) character.mixer.setTime(Math.min(t, character.clip.duration));
+  character.scene.updateMatrixWorld(true);
+}
+
+/** The raw (file) node of a VRM humanoid bone ('rightHand', ...), or a node found by name in plain glTF. */
+export function boneNode(character, name) {
+  if (character.vrm) return character.vrm.humanoid.getRawBoneNode(name);
+  return character.scene.getObjectByName(name) || null;
+}
+
+/** World position [x, y, z] of a humanoid bone after `seek`. */
+export function boneWorldPosition(character, name) {
+  const node = boneNode(character, name);
+  if (!node) return null;
+  const v = new THREE.Vector3();
+  node.getWorldPosition(v);
+  return [v.x, v.y, v.z];
+}
+
+/** The three.js object of each glTF node index (GLTFLoader's associations; names may have been rewritten). */
+export function nodeObjects(character) {
+  if (!character.nodes) {
+    character.nodes = new Map();
+    character.gltf.parser.associations.forEach((v, obj) => {
+      if (v && v.nodes !== undefined && !character.nodes.has(v.nodes)) character.nodes.set(v.nodes, obj);
+    });
+  }
+  return character.nodes;
+}
+
+/**
+ * Apply one frame of streamed rotations: `nodes` lists glTF node indices (hips first), `quats` holds
+ * (x, y, z, w) per node, `root` (optional) the hips' local translation [x, y, z].
+ */
+export function applyFrame(character, nodes, quats, root) {
+  const objects = nodeObjects(character);
+  nodes.forEach((n, k) => {
+    const obj = objects.get(n);
+    if (obj) obj.quaternion.set(quats[4 * k], quats[4 * k + 1], quats[4 * k + 2], quats[4 * k + 3]);
+  });
+  const hips = nodes.length ? objects.get(nodes[0]) : null;
+  if (root && hips) hips.position.set(root[0], root[1], root[2]);
+  character.scene.updateMatrixWorld(true);
+}
+
+/** Decode a base64 float32 array from app/character.py's payload. */
+export function decodeFloats(b64) {
+  const bin = atob(b64);
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  return new Float32Array(bytes.buffer);
+}
+
+/**
+ * Pose the character at `frame` of one method of the server's payload
+ * ({name, bones, nodes, fps, frames, methods: {method: {quats, root}}}); decoded arrays are cached on it.
+ * The player sets #motion-player[data-character] = payload.name when it shows the character.
+ */
+export function showPayloadFrame(character, payload, method, frame) {
+  const m = payload.methods[method];
+  if (!m) return;
+  if (!m._q) { m._q = decodeFloats(m.quats); m._r = decodeFloats(m.root); }
+  const B = payload.nodes.length;
+  const f = Math.max(0, Math.min(payload.frames - 1, frame | 0));
+  applyFrame(character, payload.nodes, m._q.subarray(4 * B * f, 4 * B * (f + 1)), m._r.subarray(3 * f, 3 * f + 3));
+}

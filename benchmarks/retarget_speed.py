@@ -1,0 +1,82 @@
+"""Speed of `gesturelsm.retarget`: 60 s of motion (1800 frames at 30 fps) onto characters (markdown table out).
+
+    .venv/bin/python benchmarks/retarget_speed.py [--seconds 60] [--repeats 5] [--threads 1]
+
+Motion: the real BEAT2 take from ../shared, repeated to the length asked (smooth random motion when the take is
+absent). Characters: cryptovoxels.vrm (../shared, VRM 0.x, 43 humanoid bones of 58 joints) and skeletons built
+from the SMPL-X rest pose (all 52 body and finger bones; an A-pose Z-up centimetre rig without fingers). Times
+are the retargeting alone (SMPL-X forward kinematics + solving + local rotations), median of the repeats, after
+one warm-up run; loading the character and writing files are not included. Wall seconds depend on what else
+runs on the machine; CPU seconds (this process's) much less, so both are printed. Compare rows of one run.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+sys.path.insert(0, str(REPO / "tests"))
+
+from _rigs import Y_UP_TO_Z_UP, build_rig  # noqa: E402
+from gesturelsm.body.model import resolve_body  # noqa: E402
+from gesturelsm.motion import MotionSequence  # noqa: E402
+from gesturelsm.retarget import SourceBody, load_character, retarget  # noqa: E402
+
+SHARED = REPO.parent / "shared"
+TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"
+
+
+def motion(seconds: float) -> tuple[MotionSequence, str]:
+    frames = int(round(seconds * 30))
+    if TAKE.exists():
+        seq = MotionSequence.load(TAKE)
+        reps = -(-frames // seq.num_frames)
+        tile = lambda a: np.concatenate([a] * reps)[:frames]  # noqa: E731
+        return MotionSequence(tile(seq.poses), tile(seq.trans), tile(seq.expressions), seq.betas), "BEAT2 take"
+    rng = np.random.default_rng(0)
+    t = np.arange(frames)[:, None] / 30
+    poses = 0.3 * np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 165)) * t + rng.uniform(0, 6, (1, 165)))
+    return MotionSequence(poses, np.tile([0, 1.3, 0], (frames, 1)), np.zeros((frames, 100))), "synthetic"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    seq, kind = motion(args.seconds)
+    source = SourceBody.of(resolve_body(None), seq.betas)
+    rigs = []
+    if VRM.exists():
+        rigs.append(("cryptovoxels.vrm", load_character(VRM).skeleton))
+    rigs.append(("built T-pose, fingers", build_rig(source.rest_joints)[0]))
+    rigs.append(("built A-pose Z-up cm, no fingers",
+                 build_rig(source.rest_joints, apose=40, world=Y_UP_TO_Z_UP, units=100, fingers=False)[0]))
+    print(f"{seq.num_frames} frames ({seq.duration:.0f} s, {kind}), torch threads {args.threads}, "
+          f"median of {args.repeats}\n")
+    print("| character | joints | humanoid bones | wall s | CPU s | frames per wall second |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for name, skel in rigs:
+        retarget(seq, skel, source)                                            # warm-up
+        wall, cpu = [], []
+        for _ in range(args.repeats):
+            t0, c0 = time.perf_counter(), time.process_time()
+            retarget(seq, skel, source)
+            wall.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
+        med = float(np.median(wall))
+        print(f"| {name} | {len(skel)} | {len(skel.bones)} | {med:.3f} | {float(np.median(cpu)):.3f} | "
+              f"{seq.num_frames / med:,.0f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,45 @@
+"""One entry point for a character file: `load_character(path)` -> Character (skeleton, and for glTF / VRM
+the document the animated GLB is written into), `retarget_motion(seq, character)` -> Retargeted."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..body.model import resolve_body
+from .bvh_read import read_bvh_skeleton
+from .errors import CharacterError
+from .gltf import MAX_BYTES, GltfDocument, gltf_skeleton, read_gltf
+from .skeleton import Skeleton
+from .solve import Retargeted, SourceBody, retarget
+
+SUFFIXES = (".vrm", ".glb", ".gltf", ".bvh")
+
+
+@dataclass
+class Character:
+    path: Path
+    skeleton: Skeleton
+    document: GltfDocument | None = None      # None for a BVH skeleton
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+
+def load_character(path: str | Path, bone_map: str | dict | None = None, limit: int = MAX_BYTES) -> Character:
+    """A .vrm / .glb / .gltf / .bvh file -> Character. bone_map: None (VRM humanoid map or the best-fitting
+    preset), "mixamo", "smplx", a JSON file {SMPL-X joint: bone name}, or such a dict."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise CharacterError(f"{path.name}: not a character file; use a .vrm, .glb, .gltf or .bvh")
+    if suffix == ".bvh":
+        return Character(path, read_bvh_skeleton(path, bone_map, limit=limit))
+    doc = read_gltf(path, limit)
+    return Character(path, gltf_skeleton(doc, bone_map), doc)
+
+
+def retarget_motion(seq, character: Character | Skeleton, body=None) -> Retargeted:
+    """`seq` (MotionSequence on `body`: None = $GESTURELSM_SMPLX_MODEL or the mannequin) on the character."""
+    skel = character.skeleton if isinstance(character, Character) else character
+    return retarget(seq, skel, SourceBody.of(resolve_body(body), seq.betas))

@@ -1,0 +1,253 @@
+"""Retargeting SMPL-X motion onto a character by matching world bone directions.
+
+For each humanoid bone of the character (joint i, SMPL-X joint j) the solver finds its world rotation
+relative to its rest pose, Δ_i, so that the bone's direction (joint -> next mapped joint down the chain)
+points where SMPL-X's points in that frame:
+* a bone with a chain: Δ_i = S(G_j c -> d) · G_j · S(e -> c), with G_j SMPL-X's world rotation of j, c and d
+  SMPL-X's rest and posed chain directions, e the character's rest direction, S(a -> b) the shortest
+  rotation. S(e -> c) absorbs the different rest pose (T / A pose, bent elbows); S(G_j c -> d) absorbs the
+  rotations of joints the character lacks (a 2-segment spine follows spine1 -> spine3); G_j carries twist.
+* the hips, the upper chest and the hands also match a secondary direction (left hip -> right hip,
+  left collar -> right collar, index -> little finger): Δ_i = F(d, d2) F(e, e2)^T with F an orthonormal frame.
+* a bone with no chain (head, hands without fingers, finger tips, toes) turns as SMPL-X's joint does, after
+  the rest-pose correction of its nearest mapped ancestor.
+* a joint with no humanoid bone keeps its rest rotation relative to its parent.
+All of it happens in an aligned frame (the character's left, up and forward turned onto SMPL-X's +x, +y,
++z), so Y-up or Z-up, facing +z or -z, and each joint's own local axes do not matter. Local rotations
+follow as L_i = W_p^-1 Δ_p^-1 Δ_i W_i (W: rest world rotations). The root moves as SMPL-X's pelvis scaled by
+the ratio of leg lengths (so centimetre rigs move in centimetres), starting at the character's place, and
+its height keeps the lowest foot joint as far above the character's floor as SMPL-X's is above its own.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from ..body.fk import forward_kinematics
+from ..motion.rotations import axis_angle_to_matrix
+from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS, PARENTS
+from .errors import CharacterError
+from .skeleton import Skeleton, world_rotation
+from .vectors import frame, rotation_between, unit
+
+CHAIN: dict[str, tuple[str, ...]] = {
+    "pelvis": ("spine1", "spine2", "spine3", "neck"), "spine1": ("spine2", "spine3", "neck"),
+    "spine2": ("spine3", "neck"), "spine3": ("neck", "head"), "neck": ("head",),
+}
+PAIRS: dict[str, tuple[tuple[str, str], ...]] = {
+    "pelvis": (("left_hip", "right_hip"),),
+    "spine3": (("left_collar", "right_collar"), ("left_shoulder", "right_shoulder")),
+}
+for _s in ("left", "right"):
+    CHAIN.update({f"{_s}_hip": (f"{_s}_knee", f"{_s}_ankle"), f"{_s}_knee": (f"{_s}_ankle",),
+                  f"{_s}_ankle": (f"{_s}_foot",), f"{_s}_collar": (f"{_s}_shoulder", f"{_s}_elbow"),
+                  f"{_s}_shoulder": (f"{_s}_elbow", f"{_s}_wrist"), f"{_s}_elbow": (f"{_s}_wrist",),
+                  f"{_s}_wrist": tuple(f"{_s}_{f}1" for f in ("middle", "ring", "index", "pinky"))})
+    PAIRS[f"{_s}_wrist"] = ((f"{_s}_index1", f"{_s}_pinky1"), (f"{_s}_index1", f"{_s}_ring1"),
+                            (f"{_s}_middle1", f"{_s}_pinky1"))
+    for _f in ("index", "middle", "ring", "pinky", "thumb"):
+        CHAIN[f"{_s}_{_f}1"] = (f"{_s}_{_f}2", f"{_s}_{_f}3")
+        CHAIN[f"{_s}_{_f}2"] = (f"{_s}_{_f}3",)
+FEET = ("left_ankle", "right_ankle", "left_foot", "right_foot")
+
+
+@dataclass
+class SourceBody:
+    """The SMPL-X body the motion is on: rest joints (55, 3) metres, and the pose mean its model adds."""
+    rest_joints: np.ndarray
+    pose_mean: np.ndarray = field(default_factory=lambda: np.zeros(NUM_JOINTS * 3))
+
+    @classmethod
+    def of(cls, body, betas=None) -> "SourceBody":
+        return cls(np.asarray(body.rest_joints(betas), np.float64),
+                   body.module.pose_mean.detach().cpu().numpy().astype(np.float64).reshape(-1))
+
+
+@dataclass
+class Retargeted:
+    """A motion on a character (all arrays per frame, in the character's own world frame and units)."""
+    skeleton: Skeleton
+    fps: int
+    aligned_delta: np.ndarray      # (T, N, 3, 3) rotation of each joint relative to its rest, `align`ed axes
+    positions: np.ndarray          # (T, N, 3) world joint positions
+    local_rotation: np.ndarray     # (T, N, 3, 3) local rotation of each joint (its file's convention)
+    root: int                      # the hips joint, the one whose translation moves
+    root_translation: np.ndarray   # (T, 3) the hips' local translation
+    align: np.ndarray              # (3, 3) the character's world -> SMPL-X's axes (left +x, up +y, forward +z)
+    scale: float                   # character units per SMPL-X metre (leg-length ratio)
+
+    @property
+    def num_frames(self) -> int:
+        return len(self.aligned_delta)
+
+    @property
+    def delta(self) -> np.ndarray:
+        """(T, N, 3, 3) world rotation of each joint relative to its rest, in the character's world axes."""
+        return self.align.T @ self.aligned_delta @ self.align
+
+
+def _snap(v: np.ndarray, degrees: float = 25.0) -> np.ndarray:
+    """v turned onto the nearest world axis (+-x, +-y, +-z) when within `degrees` of it, else unit(v): a
+    character's head sits a little forward of its hips, yet its up is a world axis."""
+    u = unit(v)
+    k = int(np.argmax(np.abs(u)))
+    if abs(u[k]) >= np.cos(np.radians(degrees)):
+        u = np.zeros(3)
+        u[k] = np.sign(v[k])
+    return u
+
+
+def alignment(skel: Skeleton, p: np.ndarray) -> np.ndarray:
+    """(3, 3) rotation taking the character's rest world to SMPL-X's axes (rows: its left, up, forward),
+    from its hips (left) and head (up), each snapped onto the nearest world axis when close to one."""
+    b = skel.bones
+    left = p[b["left_hip"]] - p[b["right_hip"]]
+    up = p[b["head"]] - p[b["pelvis"]]
+    if np.linalg.norm(left) < 1e-9 or np.linalg.norm(up) < 1e-9:
+        raise CharacterError(f"{skel.source}: hips and head coincide; the rest pose is degenerate")
+    F = frame(_snap(up)[None], _snap(left)[None])[0]   # columns: up, left (orthogonalised), up x left
+    return np.stack([F[:, 1], F[:, 0], -F[:, 2]])       # rows: left, up, forward = left x up
+
+
+def _leg(x: np.ndarray, idx: dict[str, int]) -> float:
+    legs = [np.linalg.norm(x[idx[f"{s}_hip"]] - x[idx[f"{s}_knee"]]) +
+            np.linalg.norm(x[idx[f"{s}_knee"]] - x[idx[f"{s}_ankle"]]) for s in ("left", "right")]
+    return float(np.mean(legs))
+
+
+def _smplx_fk(seq, src: SourceBody) -> tuple[np.ndarray, np.ndarray]:
+    """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3)."""
+    T = seq.num_frames
+    aa = torch.from_numpy((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
+    J, Gm = forward_kinematics(axis_angle_to_matrix(aa.float()), torch.from_numpy(src.rest_joints).float(), PARENTS)
+    return J.numpy().astype(np.float64), Gm[..., :3, :3].numpy().astype(np.float64)
+
+
+def _is_below(parents: np.ndarray, child: int, ancestor: int) -> bool:
+    while child >= 0:
+        child = int(parents[child])
+        if child == ancestor:
+            return True
+    return False
+
+
+@dataclass
+class _Plan:
+    """Per humanoid bone, what its Δ is made of (rest-pose data only; computed once per character)."""
+    chain: list[tuple[int, int, int, np.ndarray, np.ndarray]]       # (i, j, child j, c unit, C)
+    frames: list[tuple[int, int, int, int, int, np.ndarray]]        # (i, j, child j, pair a, pair b, Fe)
+    leaves: list[tuple[int, int, np.ndarray]]                        # (i, j, C)
+    copy_of: np.ndarray                                              # (N,) the bone whose Δ a joint takes; -1: none
+
+
+def _plan(skel: Skeleton, q: np.ndarray, J: np.ndarray) -> _Plan:
+    joint_of = {i: j for j, i in skel.bones.items()}
+    corr: dict[int, np.ndarray] = {}
+    chain, frames, leaves = [], [], []
+    copy_of = np.full(len(skel), -1)
+    for i in range(len(skel)):
+        p = int(skel.parents[i])
+        name = joint_of.get(i)
+        if name is None:
+            copy_of[i] = -1 if p < 0 else copy_of[p]
+            if p in corr:
+                corr[i] = corr[p]
+            continue
+        copy_of[i] = i
+        j = JOINT_INDEX[name]
+        kids = [c for c in CHAIN.get(name, ()) if c in skel.bones and _is_below(skel.parents, skel.bones[c], i)
+                and np.linalg.norm(q[skel.bones[c]] - q[i]) > 1e-9]
+        if not kids:
+            corr[i] = corr.get(p, np.eye(3))
+            leaves.append((i, j, corr[i]))
+            continue
+        jc, ic = JOINT_INDEX[kids[0]], skel.bones[kids[0]]
+        e1, c1 = q[ic] - q[i], J[jc] - J[j]
+        pair = next(((a, b) for a, b in PAIRS.get(name, ()) if a in skel.bones and b in skel.bones), None)
+        if pair is not None:
+            ja, jb = JOINT_INDEX[pair[0]], JOINT_INDEX[pair[1]]
+            Fe = frame(e1[None], (q[skel.bones[pair[0]]] - q[skel.bones[pair[1]]])[None])[0]
+            corr[i] = frame(c1[None], (J[ja] - J[jb])[None])[0] @ Fe.T
+            frames.append((i, j, jc, ja, jb, Fe))
+        else:
+            corr[i] = rotation_between(unit(e1)[None], unit(c1)[None])[0]
+            chain.append((i, j, jc, unit(c1), corr[i]))
+    return _Plan(chain, frames, leaves, copy_of)
+
+
+def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """(T, N, 3, 3) world rotations relative to rest, in the aligned frame (see the module docstring); each
+    kind of bone is solved for all its bones at once."""
+    plan = _plan(skel, q, J)
+    T, N = len(P), len(skel)
+    delta = np.empty((T, N + 1, 3, 3))
+    delta[:, N] = np.eye(3)                                          # the joints above every humanoid bone
+    if plan.chain:
+        i, j, jc, c, C = (np.array(x) for x in zip(*plan.chain))
+        Gj = G[:, j]
+        Gc = np.einsum("tbxy,by->tbx", Gj, c)
+        delta[:, i] = rotation_between(Gc, unit(P[:, jc] - P[:, j])) @ Gj @ C
+    if plan.frames:
+        i, j, jc, ja, jb, Fe = (np.array(x) for x in zip(*plan.frames))
+        delta[:, i] = frame(P[:, jc] - P[:, j], P[:, ja] - P[:, jb]) @ np.swapaxes(Fe, -1, -2)
+    if plan.leaves:
+        i, j, C = (np.array(x) for x in zip(*plan.leaves))
+        delta[:, i] = G[:, j] @ C
+    copy = np.where(plan.copy_of < 0, N, plan.copy_of)
+    unmapped = np.nonzero(copy != np.arange(N))[0]
+    delta[:, unmapped] = delta[:, copy[unmapped]]
+    return delta[:, :N]
+
+
+def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
+    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring)."""
+    Mw = skel.world()
+    p_rest, W = Mw[:, :3, 3], world_rotation(Mw)
+    A = alignment(skel, p_rest)
+    q = p_rest @ A.T                                                   # rest positions, aligned frame
+    Jr = source.rest_joints
+    scale = _leg(q, skel.bones) / _leg(Jr, JOINT_INDEX)
+    if not 1e-3 <= scale <= 1e4:
+        raise CharacterError(f"{skel.source}: absurd scale: the legs are {scale * _leg(Jr, JOINT_INDEX):.3g} "
+                             "units long (a humanoid's are about 0.8 m, 80 cm or 800 mm)")
+    P, G = _smplx_fk(seq, source)
+    delta = _solve_deltas(skel, q, Jr, P, G)
+    T, N = delta.shape[:2]
+    # joint positions with the root at its rest place: each offset turns with its parent
+    pos = np.empty((T, N, 3))
+    depth = np.zeros(N, np.int64)
+    for i, pp in enumerate(skel.parents):
+        depth[i] = 0 if pp < 0 else depth[pp] + 1
+    roots = np.nonzero(skel.parents < 0)[0]
+    pos[:, roots] = q[roots]
+    for d in range(1, int(depth.max()) + 1):                         # one level of the tree at a time
+        idx = np.nonzero(depth == d)[0]
+        par = skel.parents[idx]
+        pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
+    hips = skel.bones["pelvis"]
+    pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
+    disp = scale * (pelvis - pelvis[:1])
+    feet = [f for f in FEET if f in skel.bones]
+    smplx_low = (P[:, [JOINT_INDEX[f] for f in feet], 1] + np.asarray(seq.trans, np.float64)[:, 1:2]).min(1)
+    lift = smplx_low - smplx_low.min()                                # SMPL-X's lowest foot above its floor
+    rest_low = q[[skel.bones[f] for f in feet], 1].min()
+    disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
+    below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(N)])
+    pos[:, below] += disp[:, None]
+    # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
+    # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
+    V = A @ W
+    Vbase = A @ world_rotation(skel.base)
+    moving = np.array(sorted(set(skel.bones.values()) | {hips}))
+    par = skel.parents[moving]
+    Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
+    dp = np.where((par >= 0)[None, :, None, None], delta[:, np.maximum(par, 0)], np.eye(3))
+    local = np.empty((T, N, 3, 3))
+    local[:] = skel.rotation
+    local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
+    pos_w = pos @ A
+    parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
+    root_t = (np.linalg.inv(parent_world) @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
+    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale))

@@ -1,0 +1,42 @@
+"""`gesturelsm generate --rig`: the generated motion is also written onto the user's character, and a bad
+character file stops the command with one line before any generation."""
+from __future__ import annotations
+
+import numpy as np
+import soundfile as sf
+from scipy.spatial.transform import Rotation
+
+from _rigs import build_rig, write_gltf
+from _support import speech_like
+from gesturelsm.body.model import resolve_body
+from gesturelsm.cli import main
+from gesturelsm.export.glb import accessor_array, read_glb
+from gesturelsm.motion import MotionSequence
+from gesturelsm.retarget import load_character, retarget_motion
+
+
+def test_generate_with_rig_writes_the_motion_on_the_character(tiny_assets, tmp_path, capsys):
+    sf.write(tmp_path / "s.wav", speech_like(1.5, seed=4), 16000)
+    skel, _ = build_rig(resolve_body(None).rest_joints(), fingers=False)
+    write_gltf(skel, tmp_path / "me.glb")
+    assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                 "--no-transcribe", "--out", str(tmp_path / "take.npz"), "--rig", str(tmp_path / "me.glb")]) == 0
+    out = tmp_path / "take_me.glb"
+    assert f"wrote {out}" in capsys.readouterr().out
+    motion = MotionSequence.load(tmp_path / "take.npz")
+    want = retarget_motion(motion, load_character(tmp_path / "me.glb"))
+    gltf, blob = read_glb(out)
+    anim = gltf["animations"][0]
+    ch = next(c for c in anim["channels"] if c["target"]["node"] == skel.bones["left_elbow"])
+    got = Rotation.from_quat(accessor_array(gltf, blob, anim["samplers"][ch["sampler"]]["output"])).as_matrix()
+    np.testing.assert_allclose(got, want.local_rotation[:, skel.bones["left_elbow"]], atol=1e-5)
+    assert len(got) == motion.num_frames == 45
+
+
+def test_generate_refuses_a_bad_character_before_generating(tmp_path, capsys):
+    sf.write(tmp_path / "s.wav", speech_like(1.0), 16000)
+    (tmp_path / "me.vrm").write_bytes(b"\x00" * 64)
+    assert main(["generate", str(tmp_path / "s.wav"), "--out", str(tmp_path / "t.npz"), "--rig",
+                 str(tmp_path / "me.vrm")]) == 2
+    assert "me.vrm: not a glTF / VRM file" in capsys.readouterr().err
+    assert not (tmp_path / "t.npz").exists()
