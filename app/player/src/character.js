@@ -1,6 +1,6 @@
 // The user's character in the browser: a VRM (0.x or 1.0) or a skinned glTF loaded with three.js'
 // GLTFLoader and @pixiv/three-vrm, animated either by the glTF animation the server wrote into the file
-// (`gesturelsm export --rig`) or by per-bone rotations streamed from the server (app/character.py).
+// (`gesturelsm export --rig`) or by per-bone rotations streamed from the server (gesturelsm/webapp/character.py).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import { VRMLoaderPlugin } from '@pixiv/three-vrm';
@@ -65,7 +65,7 @@ export function applyFrame(character, nodes, quats, root) {
   character.scene.updateMatrixWorld(true);
 }
 
-/** Decode a base64 float32 array from app/character.py's payload. */
+/** Decode a base64 float32 array from gesturelsm/webapp/character.py's payload. */
 export function decodeFloats(b64) {
   const bin = atob(b64);
   const bytes = new Uint8Array(bin.length);
