@@ -77,7 +77,8 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     r = service.render(a)
     assert a.video is None and [row[col] for row in a.rows] == [0.0] * 3 and a.seconds == a.motion_seconds
     assert r.video == a.job.folder / "gestures.mp4" and r.video.read_bytes() == b"mp4"
-    assert all(row[col] > 0 for row in r.rows) and r.seconds > a.seconds and r.rows[-1][7] == round(r.seconds, 3)
+    assert r.timings["gesturelsm"]["rendering"] > 0 and a.timings["gesturelsm"]["rendering"] == 0.0
+    assert r.seconds > a.seconds and r.rows[-1][7] == round(r.seconds, 3) and a.rows[-1][7] == round(a.seconds, 3)
     assert drawn == [(2, list(a.job.labels), (256, 256), len(a.job.audio))]
     assert service.render(r) is r and len(drawn) == 1                      # rendered once
     e = service.export(r)
