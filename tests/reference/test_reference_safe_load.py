@@ -71,11 +71,11 @@ def test_a_pickle_with_code_is_refused_at_every_protocol(tmp_path, protocol):
 
 
 def test_the_allowed_reconstructor_builds_nothing_but_a_vocabulary(tmp_path):
-    """copyreg._reconstructor (protocols 0-1) is allowed only for the Vocab class: asking it for another class
-    (here a list built from object) is refused."""
+    """copyreg._reconstructor (protocols 0-1) is allowed only for the stand-in classes (here the Vocab record):
+    asking it for another class (a list built from object) is refused."""
     p = tmp_path / "vocab.pkl"
     p.write_bytes(b"ccopy_reg\n_reconstructor\n(c__builtin__\nlist\nc__builtin__\nobject\nNtR.")
-    with pytest.raises(ReferenceFileError, match="only for the Vocab class"):
+    with pytest.raises(ReferenceFileError, match="only for a plain instance of a stand-in class"):
         load_vocab(p)
 
 
