@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
-    from .ui import serve_locally
+    from gesturelsm.webapp.ui import serve_locally
 
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
     service.warmup()

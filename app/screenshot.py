@@ -32,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="/tmp/gesturelsm_page.png")
     p.add_argument("--checkpoints")
-    p.add_argument("--example", default="hello", help="name of a file in app/examples (without .wav)")
+    p.add_argument("--example", default="hello", help="name of a file in gesturelsm/webapp/examples (without .wav)")
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--seek", type=float, default=2.0, help="show the video at this second")
     args = p.parse_args(argv)
@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
-    from .ui import EXAMPLES, serve_locally
+    from gesturelsm.webapp.ui import EXAMPLES, serve_locally
 
     text = {m["audio"]: m["text"] for m in json.loads((EXAMPLES / "examples.json").read_text())}[f"{args.example}.wav"]
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints))

@@ -2,13 +2,11 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pytest
 
 from gesturelsm.pipeline import ASSETS
-
-EXAMPLES = Path(__file__).resolve().parents[2] / "app" / "examples"
+from gesturelsm.webapp.ui import EXAMPLES
 
 
 def test_shipped_checkpoints_serve_an_example(tmp_path):

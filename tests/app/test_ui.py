@@ -72,7 +72,7 @@ def _walk(node):
 
 
 def test_app_entry_flags_and_env(monkeypatch):
-    from app.__main__ import build_parser
+    from gesturelsm.webapp.cli import build_parser
 
     monkeypatch.setenv("GESTURELSM_PORT", "9001")
     monkeypatch.setenv("GESTURELSM_BEAT2", "/data/beat2")
