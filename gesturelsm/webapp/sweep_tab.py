@@ -187,7 +187,8 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                     cancel = gr.Button("Cancel", elem_id="sweep-cancel")
                 status = gr.Markdown(elem_id="sweep-status")
             with gr.Column(scale=2):
-                table = gr.HTML('<div id="sweep-table" data-state="empty"></div>', elem_id="sweep-table-box")
+                table = gr.HTML('<div id="sweep-table" data-state="empty"></div>', elem_id="sweep-table-box",
+                                label="sweep table (HTML)")
                 plot = gr.Image(type="filepath", label="Statistic vs generation time", elem_id="sweep-plot",
                                 interactive=False)
                 with gr.Row():
