@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import torch
 
+from gesturelsm.kernels import accelerate
 from gesturelsm.reference.convert import (generator_from_state, load_generator, load_rvqs, rvq_from_state,
                                           save_generator, save_rvqs)
 from gesturelsm.reference.safe_load import load_state, load_vocab
@@ -97,14 +98,15 @@ def test_speech_features_from_wav_as_trained(io):
 def test_converted_checkpoints_round_trip(tmp_path, io, window, state):
     """Released files -> our safetensors -> the same outputs."""
     audio, words, seed = window
-    g = generator_from_state(state, "shortcut")
+    g = accelerate(generator_from_state(state, "shortcut"))   # the loader accelerates: compare like with like
     w2i, _ = load_vocab(FIX / "vocab.pkl")
     save_generator(tmp_path / "g.safetensors", g, w2i, "fixture")
     g2, w2i2 = load_generator(tmp_path / "g.safetensors")
     assert w2i2 == w2i and g2.cfg == g.cfg
     noise = io["shortcut_2_noise"][:, :, 0]
     assert torch.equal(g2.sample(audio, words, seed, noise), g.sample(audio, words, seed, noise))
-    rvqs = {r: rvq_from_state(load_state(FIX / f"net_300000_{r}.pth", ("net",))) for r in ("upper", "hands", "lower")}
+    rvqs = {r: accelerate(rvq_from_state(load_state(FIX / f"net_300000_{r}.pth", ("net",))))
+            for r in ("upper", "hands", "lower")}
     stats = {"mean": np.arange(330.0), "std": np.ones(330), "trans_mean": np.zeros(3), "trans_std": np.ones(3)}
     save_rvqs(tmp_path / "r.safetensors", rvqs, stats, "fixture")
     rvqs2, stats2 = load_rvqs(tmp_path / "r.safetensors")

@@ -25,7 +25,7 @@ def plain_cross(blk: CrossBlock, x: torch.Tensor, ctx: torch.Tensor) -> torch.Te
     k, v = (split(t) for t in (ctx @ blk.kv.weight.T).chunk(2, -1))
     a = torch.softmax(q @ k.transpose(-1, -2) / (D // H) ** 0.5, -1) @ v
     x = x + blk.proj(a.transpose(1, 2).reshape(B, N, D))
-    return x + blk.fc2(F.gelu(blk.fc1(blk.norm2(x))))
+    return x + blk.fc2(F.gelu(F.linear(blk.norm2(x), blk.fc1.weight, blk.fc1.bias)))   # fc1: product, then GELU
 
 
 @pytest.mark.parametrize("fold", [True, False])
