@@ -21,7 +21,7 @@ from _support import speech_like
 
 pytest.importorskip("gradio")
 uvicorn = pytest.importorskip("uvicorn")
-live_socket = pytest.importorskip("app.live_socket")
+live_socket = pytest.importorskip("gesturelsm.webapp.live_socket")
 from starlette.applications import Starlette  # noqa: E402
 
 
