@@ -147,6 +147,16 @@ def direction_errors(result, to_smplx: np.ndarray, smplx_joints: np.ndarray) -> 
 __all__ = ["FINGERS", "Y_UP_TO_Z_UP", "build_rig", "direction_errors", "posed_world", "trs_matrix"]
 
 
+def vrm_body_bones() -> dict[str, str]:
+    """VRM humanoid bone -> node name of `build_rig`'s (Mixamo-named) skeleton, body only (no fingers)."""
+    human = {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "upperChest": "Spine2", "neck": "Neck",
+             "head": "Head"}
+    for s, S in (("left", "Left"), ("right", "Right")):
+        human.update({f"{s}UpperLeg": f"{S}UpLeg", f"{s}LowerLeg": f"{S}Leg", f"{s}Foot": f"{S}Foot",
+                      f"{s}UpperArm": f"{S}Arm", f"{s}LowerArm": f"{S}ForeArm", f"{s}Hand": f"{S}Hand"})
+    return human
+
+
 def write_gltf(skel: Skeleton, path, humanoid: dict[str, str] | None = None, vrm: str = "1",
                names: list[str] | None = None) -> dict:
     """A .glb of the skeleton: one node per joint (its rest TRS), a skin over all of them, no mesh; with

@@ -7,7 +7,7 @@ import struct
 
 import numpy as np
 
-from _rigs import build_rig, gltf_validator_errors, write_gltf
+from _rigs import build_rig, gltf_validator_errors, vrm_body_bones, write_gltf
 from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_glb
@@ -19,11 +19,7 @@ from gesturelsm.retarget.face import jaw_open
 
 def _vrm_with_mouth(tmp_path, version: str):
     skel, _ = build_rig(resolve_body(None).rest_joints(), fingers=False)
-    human = {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "upperChest": "Spine2", "neck": "Neck",
-             "head": "Head"}
-    for s, S in (("left", "Left"), ("right", "Right")):
-        human.update({f"{s}UpperLeg": f"{S}UpLeg", f"{s}LowerLeg": f"{S}Leg", f"{s}Foot": f"{S}Foot",
-                      f"{s}UpperArm": f"{S}Arm", f"{s}LowerArm": f"{S}ForeArm", f"{s}Hand": f"{S}Hand"})
+    human = vrm_body_bones()
     g = write_gltf(skel, tmp_path / "plain.vrm", human, vrm=version)
     blob = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 0], [0, 0.1, 0], [0, 0, 0]], np.float32).tobytes()
     g["buffers"] = [{"byteLength": len(blob)}]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import soundfile as sf
 
-from _rigs import build_rig, write_gltf
+from _rigs import build_rig, vrm_body_bones, write_gltf
 from _support import speech_like
 from gesturelsm.body.model import resolve_body
 from gesturelsm.cli import main
@@ -15,11 +15,7 @@ def test_batch_with_rig_writes_a_character_file_per_video(tiny_assets, tmp_path,
     d.mkdir()
     sf.write(d / "alpha.wav", speech_like(1.0, seed=1), 16000)
     skel, _ = build_rig(resolve_body(None).rest_joints(), fingers=False)
-    human = {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "upperChest": "Spine2", "neck": "Neck",
-             "head": "Head"}
-    for s, S in (("left", "Left"), ("right", "Right")):
-        human.update({f"{s}UpperLeg": f"{S}UpLeg", f"{s}LowerLeg": f"{S}Leg", f"{s}Foot": f"{S}Foot",
-                      f"{s}UpperArm": f"{S}Arm", f"{s}LowerArm": f"{S}ForeArm", f"{s}Hand": f"{S}Hand"})
+    human = vrm_body_bones()
     write_gltf(skel, tmp_path / "me.vrm", human, vrm="1")
     out = tmp_path / "study"
     assert main(["batch", "--audio-dir", str(d), "--methods", "gesturelsm", "ddim", "--out", str(out), "--raters",
