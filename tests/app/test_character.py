@@ -118,11 +118,12 @@ def test_a_broken_character_is_a_warning_and_the_mannequin_stays(service, speech
 
 def test_a_chosen_character_gets_every_method_in_the_payload_and_the_downloads(service, speech_wav, tmp_path):
     from _rigs import build_rig, write_gltf
+    from gesturelsm.body.model import resolve_body
     from gesturelsm.export.glb import read_glb
     from gesturelsm.webapp.character import choose
     from gesturelsm.webapp.ui import _Handlers
 
-    skel, _ = build_rig(service.body.rest_joints(), fingers=False, axes=True)
+    skel, _ = build_rig(resolve_body(service.body).rest_joints(), fingers=False, axes=True)
     write_gltf(skel, tmp_path / "me.glb")
     chosen, upload = choose(str(tmp_path / "me.glb"))
     assert chosen.name == "me.glb" and "me.glb" in upload["label"]
