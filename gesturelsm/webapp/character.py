@@ -8,12 +8,17 @@ to apply with three-vrm (app/player/src/character.js `applyFrame`).
 
 The payload per method holds base64 float32 arrays: `quats` (frames, bones, 4), local rotations (x, y, z, w)
 of the bone nodes in `nodes` (glTF node indices, hips first; `bones` are their names), and `root` (frames, 3),
-the hips' local translation. The player sets `#motion-player[data-character]` to `name`. A file that cannot
-be used raises gr.Error and the mannequin stays.
+the hips' local translation; `align` (x, y, z, w) turns the character's world into the player's (SMPL-X axes)
+and `scale` is its units per metre. The player sets `#motion-player[data-character]` to `name`. A file that
+cannot be used raises gr.Error (`choose`, the upload's event: a warning) and the mannequin stays.
+
+    files = rig_downloads(character, motions, folder)  # each method's motion in the character's own file
 """
 from __future__ import annotations
 
 import base64
+import hashlib
+import shutil
 from pathlib import Path
 
 import gradio as gr
@@ -21,16 +26,19 @@ import numpy as np
 
 from gesturelsm.errors import GestureError
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
+from gesturelsm.export.rig import export_rig
 from gesturelsm.retarget import Character, load_character, retarget_motion
 
 MAX_CHARACTER_BYTES = 32 * 1024 * 1024        # a page upload; the CLI takes up to 64 MB
 PAGE_SUFFIXES = (".vrm", ".glb", ".gltf")
 
 
+LABEL = "Character (.vrm / .glb / .gltf, optional): every method is shown on it instead of the mannequin"
+
+
 def character_upload() -> gr.File:
     """The Character upload shown beside the methods."""
-    return gr.File(label="Character (.vrm / .glb / .gltf, optional)", file_types=list(PAGE_SUFFIXES),
-                   elem_id="character")
+    return gr.File(label=LABEL, file_types=list(PAGE_SUFFIXES), elem_id="character")
 
 
 def read_upload(path: str | Path | None) -> Character | None:
@@ -44,10 +52,27 @@ def read_upload(path: str | Path | None) -> Character | None:
         character = load_character(path, limit=MAX_CHARACTER_BYTES)
     except GestureError as exc:
         raise gr.Error(str(exc), print_exception=False) from None
-    if character.document is None or (character.document.gltf.get("buffers") and not character.document.blob):
-        raise gr.Error(f"{path.name}: its buffers are separate files; upload a .glb or .vrm",
+    gltf = character.document.gltf if character.document is not None else {}
+    if character.document is None or (gltf.get("buffers") and not character.document.blob) or any(
+            "uri" in im and not str(im["uri"]).startswith("data:") for im in gltf.get("images", [])):
+        raise gr.Error(f"{path.name}: its buffers or textures are separate files; upload a .glb or .vrm",
                        print_exception=False)
     return character
+
+
+def choose(path: str | Path | None) -> tuple[Character | None, dict]:
+    """The upload's change event: (the page session's character, the upload's update: its label says what was
+    loaded). A file that cannot be used gives a warning with its one-line reason, the mannequin (None) and an
+    emptied upload."""
+    try:
+        character = read_upload(path)
+    except gr.Error as exc:
+        gr.Warning(exc.message)
+        return None, gr.update(value=None, label=LABEL)
+    if character is None:
+        return None, gr.update(label=LABEL)
+    return character, gr.update(label=f"Character: {character.name} ({len(character.skeleton.bones)} humanoid "
+                                      f"bones); clear it for the mannequin")
 
 
 def _b64(a: np.ndarray) -> str:
@@ -64,8 +89,28 @@ def character_payload(character: Character, motions: dict, body=None) -> dict:
         r = retarget_motion(seq, character, body)
         q = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation[:, order]))
         out["methods"][method] = {"quats": _b64(q), "root": _b64(r.root_translation)}
-        out["fps"], out["frames"] = r.fps, r.num_frames
+        out["fps"], out["frames"] = r.fps, min(out.get("frames", r.num_frames), r.num_frames)
+        out["align"] = matrix_to_quaternion_xyzw(r.align).tolist()
+        out["scale"] = float(r.scale)
+    out["head"] = order.index(skel.bones["head"]) if "head" in skel.bones else 0
     return out
+
+
+def page_character(character: Character, motions: dict, folder: Path, url, body=None) -> dict:
+    """`character_payload` plus the file the player loads: copied into the request's folder (`url(path)` is its
+    address) and `key`, a hash of its bytes, so the browser parses one character once whatever the request."""
+    data = character.path.read_bytes()
+    path = Path(folder) / f"character{character.path.suffix.lower()}"
+    shutil.copyfile(character.path, path)
+    return {**character_payload(character, motions, body), "url": url(path),
+            "key": hashlib.sha1(data).hexdigest()}
+
+
+def rig_downloads(character: Character | None, motions: dict, folder: Path, body=None) -> list[Path]:
+    """Each method's motion in the character's own file (`gesturelsm export --rig`): METHOD_NAME.vrm / .glb."""
+    if character is None:
+        return []
+    return [export_rig(seq, character, Path(folder) / f"{method}.npz", body) for method, seq in motions.items()]
 
 
 def decode(b64: str, shape: tuple[int, ...]) -> np.ndarray:

@@ -20,6 +20,8 @@ from gesturelsm.motion.sequence import NUM_BETAS
 from gesturelsm.serve.request import Result
 from gesturelsm.serve.service import GestureService
 
+from .character import page_character
+
 
 def _bundle() -> Path:
     """The built player: inside an installed wheel it is this package's `player/player.js` (setup.py maps the
@@ -65,8 +67,9 @@ def player_component(service: GestureService) -> gr.HTML:
                    elem_id="motion-player-box", padding=False)
 
 
-def payload(service: GestureService, out: Result) -> dict | None:
-    """Write the player's files for a generated request (its folder) and return the player's payload."""
+def payload(service: GestureService, out: Result, character=None) -> dict | None:
+    """Write the player's files for a generated request (its folder) and return the player's payload; with a
+    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it."""
     import soundfile as sf
 
     if not out.motions:
@@ -74,5 +77,8 @@ def payload(service: GestureService, out: Result) -> dict | None:
     folder = out.job.folder
     wav = folder / "speech.wav"
     sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
-    return player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
-                          service.workdir / "player-bodies", url=file_url, audio=wav)
+    p = player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
+                       service.workdir / "player-bodies", url=file_url, audio=wav)
+    if character is not None:
+        p["character"] = page_character(character, out.motions, folder, file_url, service.body)
+    return p

@@ -25,6 +25,7 @@ from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES,
 from gesturelsm.serve.service import GestureService
 
 from . import live, live_socket, motion_player, stats_view, sweep_tab
+from .character import character_upload, choose, rig_downloads
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
@@ -131,15 +132,16 @@ class _Handlers:
             self.service.prefetch(audio)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, request: gr.Request = None, progress=gr.Progress()):
+                    auto_text, character=None, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
-        first; the video (`show_video`) and the downloads (`add_exports`) follow in chained events. (Parameters are
-        named, not *args: Gradio passes the request and progress only to positional parameters.)"""
+        first (on the page session's `character` when one is loaded); the video (`show_video`) and the downloads
+        (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes the request and
+        progress only to positional parameters.)"""
         args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text)
         out = self._run(self.request(*args, exports=False, render=False), progress)
         self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return motion_player.payload(self.service, out), out.rows, out.summary, out, recognised
+        return motion_player.payload(self.service, out, character), out.rows, out.summary, out, recognised
 
     def _kept(self, request: gr.Request | None, out: Result):
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
@@ -163,11 +165,14 @@ class _Handlers:
             self._refuse(exc)
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
-    def add_exports(self, out: Result | None, request: gr.Request = None):
+    def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
+        """The downloads; with a character, each method's motion in the character's own file too."""
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
-        return *self._files(out), out.summary, self._kept(request, out)
+        files, glb = self._files(out)
+        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body)]
+        return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=True, progress=gr.Progress()):
@@ -177,8 +182,9 @@ class _Handlers:
         return (str(out.video), out.rows, out.summary, *self._files(out))
 
 
-def _input_column(service: GestureService) -> tuple[list, gr.Button]:
-    """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order and the button."""
+def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
+    """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order, the button and
+    the Character upload."""
     settings = service.settings
     choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
     default_methods = [m for m in FACTS if m in service.methods and not FACTS[m].imported][:3]     # ours
@@ -196,6 +202,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
         info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
               "long speech uses our windowing with a neutral first seed."
               if any(m in FACTS and FACTS[m].imported for m in service.methods) else None)))
+    character = character_upload()
     with gr.Row():
         steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
                                        value=FACTS["gesturelsm"].default_steps, step=1,
@@ -214,7 +221,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button]:
     ex = _examples()
     if ex:
         gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
-    return [audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text], button
+    return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text], button,
+            character)
 
 
 def _output_column(service: GestureService) -> tuple:
@@ -264,7 +272,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         gr.Markdown(INTRO)
         with gr.Row():
             with gr.Column(scale=1):
-                inputs, button = _input_column(service)
+                inputs, button, upload = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view, show3d, stats = _output_column(service)
         manager, routes = None, []
@@ -279,18 +287,19 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             gr.Markdown(f"Limits of this server: speech up to {settings.max_seconds / 60:g} minutes, uploads up to "
                         f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
-        text, state = inputs[1], gr.State()
+        text, state, character = inputs[1], gr.State(), gr.State()     # character: the page session's (None: mannequin)
+        upload.change(choose, upload, [character, upload], api_visibility="private")
         audio, auto_text = inputs[0], inputs[-1]
         for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
             uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",
                      concurrency_limit=1, concurrency_id="prefetch")
-        shown = button.click(h.show_motion, inputs, [payload, table, summary, state, text], api_name="generate_motion",
-                             **gen)
+        shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
+                             api_name="generate_motion", **gen)
         stats_view.attach(shown, state, stats)         # beside the chain below: neither waits for the other
         shown.then(None, payload, None, js=motion_player.LOAD_JS) \
             .then(h.show_video, state, [video, table, summary, state], api_name="show_video",
                   api_visibility="private", show_progress="hidden", **render) \
-            .then(h.add_exports, state, [files, view, summary, state], api_name="add_exports",
+            .then(h.add_exports, [state, character], [files, view, summary, state], api_name="add_exports",
                   api_visibility="private", **render)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
         show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False,

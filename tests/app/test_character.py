@@ -93,3 +93,98 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
     r = retarget_motion(motions["ddim"], character)
     want = r.positions[frames, r.skeleton.bones["right_wrist"]]
     np.testing.assert_allclose(np.asarray(got), want, atol=1e-3)
+
+
+def quiet(*args, **kwargs) -> None:
+    """Stands in for gr.Progress outside a Gradio event."""
+
+
+def _request(wav, methods) -> tuple:
+    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
+    return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False)
+
+
+def test_a_broken_character_is_a_warning_and_the_mannequin_stays(service, speech_wav, tmp_path):
+    from gesturelsm.webapp.character import choose
+    from gesturelsm.webapp.ui import _Handlers
+
+    (tmp_path / "me.vrm").write_bytes(b"\x00" * 100)
+    with pytest.warns(UserWarning, match="me.vrm: not a glTF / VRM file"):
+        chosen, upload = choose(str(tmp_path / "me.vrm"))
+    assert chosen is None and upload["value"] is None                 # the upload is emptied
+    payload = _Handlers(service).show_motion(*_request(speech_wav, ["gesturelsm"]), chosen, progress=quiet)[0]
+    assert "character" not in payload and payload["bodies"][0]["method"] == "gesturelsm"
+
+
+def test_a_chosen_character_gets_every_method_in_the_payload_and_the_downloads(service, speech_wav, tmp_path):
+    from _rigs import build_rig, write_gltf
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.export.glb import read_glb
+    from gesturelsm.webapp.character import choose
+    from gesturelsm.webapp.ui import _Handlers
+
+    skel, _ = build_rig(resolve_body(service.body).rest_joints(), fingers=False, axes=True)
+    write_gltf(skel, tmp_path / "me.glb")
+    chosen, upload = choose(str(tmp_path / "me.glb"))
+    assert chosen.name == "me.glb" and "me.glb" in upload["label"]
+    h, methods = _Handlers(service), list(service.methods)[:2]
+    payload, _, _, out, _ = h.show_motion(*_request(speech_wav, methods), chosen, progress=quiet)
+    c = payload["character"]
+    assert c["name"] == "me.glb" and list(c["methods"]) == [b["method"] for b in payload["bodies"]] == methods
+    assert c["frames"] == payload["frames"] and c["nodes"][0] == skel.bones["pelvis"]
+    served = Path(c["url"].split("file=", 1)[1])
+    assert served.parent == out.job.folder and served.read_bytes() == (tmp_path / "me.glb").read_bytes()
+    B, by_node = len(c["nodes"]), {n: i for i, n in enumerate(skel.nodes)}
+    for method in methods:
+        r = retarget_motion(out.motions[method], chosen, service.body)
+        q = decode(c["methods"][method]["quats"], (r.num_frames, B, 4))
+        got = Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(r.num_frames, B, 3, 3)
+        np.testing.assert_allclose(got, r.local_rotation[:, [by_node[n] for n in c["nodes"]]], atol=1e-5)
+    files = h.add_exports(out, chosen)[0]
+    rigged = [Path(f) for f in files if Path(f).name.endswith("_me.glb")]
+    assert sorted(p.name for p in rigged) == sorted(f"{m}_me.glb" for m in methods)
+    gltf, _ = read_glb(rigged[0])
+    assert [a["name"] for a in gltf["animations"]] == ["gesturelsm"]
+
+
+PAGE_NODES_JS = """() => { const p = window.gesturelsmPlayer, c = p.payload.character;
+    return {frame: Number(p.element.dataset.frame), nodes: c.nodes, methods: p.bodies.map((b) => b.method),
+            shown: p.bodies.map((b) => c.nodes.map((n) => b.character.nodes.get(n).quaternion.toArray())),
+            quats: Object.fromEntries(Object.entries(c.methods).map(([m, v]) => [m, v.quats]))}; }"""
+
+
+@pytest.mark.browser
+def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, tmp_path):
+    import soundfile as sf
+
+    from _support import player_page, speech_like
+    from gesturelsm.webapp.motion_player import BUNDLE
+
+    if not VRM.exists():
+        pytest.skip(f"the shared character is not at {VRM} (../shared beside the repo)")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+    sf.write(tmp_path / "speech.wav", speech_like(8.0, seed=2), 16000)
+    player = "#motion-player"
+    with player_page(app_url, player) as page:
+        page.locator("#methods input[type=checkbox]").first.wait_for()
+        page.locator("#character input[type=file]").set_input_files(str(VRM))
+        page.locator("#character", has_text="43 humanoid bones").wait_for(timeout=60000)
+        page.locator("#speech input[type=file]").first.set_input_files(str(tmp_path / "speech.wav"))
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        page.locator("#generate").click()
+        page.wait_for_selector(f"{player}[data-state=playing][data-character='cryptovoxels.vrm']", timeout=180000)
+        n0 = int(page.get_attribute(player, "data-frames"))
+        page.wait_for_function(f"() => Number(document.querySelector('{player}').dataset.frames) > {n0}",
+                               timeout=30000)                            # frames advance on the speech's clock
+        page.evaluate("() => window.gesturelsmPlayer.pause()")
+        page.evaluate("() => window.gesturelsmPlayer.seek(1.5)")
+        page.wait_for_function("""() => { const p = window.gesturelsmPlayer;
+            return Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                               timeout=10000)
+        got = page.evaluate(PAGE_NODES_JS)
+    B = len(got["nodes"])
+    assert got["frame"] == 45 and len(got["shown"]) == len(got["methods"]) >= 1
+    for method, shown in zip(got["methods"], got["shown"]):       # each instance shows its own method's frame
+        want = decode(got["quats"][method], (-1, B, 4))[got["frame"]]
+        np.testing.assert_allclose(np.abs(np.sum(np.asarray(shown) * want, axis=1)), 1.0, atol=1e-5)

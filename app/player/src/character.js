@@ -3,6 +3,7 @@
 // (`gesturelsm export --rig`) or by per-bone rotations streamed from the server (gesturelsm/webapp/character.py).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import * as SkeletonUtils from 'three/examples/jsm/utils/SkeletonUtils.js';
 import { VRMLoaderPlugin } from '@pixiv/three-vrm';
 
 /** Parse a .vrm / .glb file's bytes. Resolves to {gltf, vrm (null for plain glTF), scene, mixer, clip}. */
@@ -85,4 +86,48 @@ export function showPayloadFrame(character, payload, method, frame) {
   const B = payload.nodes.length;
   const f = Math.max(0, Math.min(payload.frames - 1, frame | 0));
   applyFrame(character, payload.nodes, m._q.subarray(4 * B * f, 4 * B * (f + 1)), m._r.subarray(3 * f, 3 * f + 3));
+}
+
+const characters = new Map();  // payload key (a hash of the file) -> Promise<character>
+
+/** The page's character of a payload ({url, key}), fetched and parsed once per file. */
+export function fetchCharacter(spec) {
+  if (!characters.has(spec.key)) {
+    const p = fetch(spec.url).then((r) => {
+      if (!r.ok) throw new Error(`${spec.url}: HTTP ${r.status}`);
+      return r.arrayBuffer();
+    }).then(loadCharacter);
+    p.catch(() => characters.delete(spec.key));          // a failed load is tried again by the next request
+    characters.set(spec.key, p);
+  }
+  return characters.get(spec.key);
+}
+
+/**
+ * One method of the player on the character (player.js draws these instead of the mannequin's Body): a clone of
+ * the loaded character turned into the player's world (`align`, `1 / scale`: SMPL-X axes, metres), posed at
+ * frame f from the payload's rotations of `method`.
+ */
+export class CharacterBody {
+  constructor(base, payload, method, offset) {
+    const scene = SkeletonUtils.clone(base.scene);
+    const copies = [], of = new Map();
+    scene.traverse((o) => { copies.push(o); o.frustumCulled = false; });
+    let k = 0;
+    base.scene.traverse((o) => of.set(o, copies[k++]));      // a clone keeps the order of the hierarchy
+    const nodes = new Map();
+    nodeObjects(base).forEach((obj, n) => { if (of.has(obj)) nodes.set(n, of.get(obj)); });
+    this.character = { gltf: base.gltf, vrm: null, scene, nodes };
+    scene.quaternion.fromArray(payload.align);
+    scene.scale.setScalar(1 / payload.scale);
+    this.root = new THREE.Group();
+    this.root.add(scene);
+    this.root.position.x = offset;
+    this.head = nodes.get(payload.nodes[payload.head]) || scene;     // the label stands above it
+    this.payload = payload; this.method = method; this.frames = payload.frames;
+  }
+
+  append() {}                    // the character's frames all come with the payload
+
+  pose(f) { showPayloadFrame(this.character, this.payload, this.method, f); }
 }

@@ -6,6 +6,7 @@
 // API (also for a live tab that streams motion, live_feed.js):
 //   const p = new MotionPlayer(element)                   // builds canvas, controls, labels inside element
 //   await p.setBodies([{label, body: glbUrl}], fps=30)     // rest bodies (GLB cached per URL), frames cleared
+//   await p.setBodies(specs, fps, payload.character)      // the methods on the visitor's character (character.js)
 //   p.appendFrames(i, rotations, root, expressions)       // Float32Arrays: (n, 55, 4) x,y,z,w; (n, 3); (n, E)
 //   p.appendRecord(i, record)                             // a decoded motion record (motion_format.js)
 //   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
@@ -15,10 +16,12 @@
 // Frame shown = floor(clock.currentTime * fps), clamped to the frames received so far, so motion and speech
 // stay within one frame of each other whatever the clock does (play, scrub, seek, stall).
 // Test contract on the element: data-state = empty | loading | playing | paused, data-frames = motion frames
-// drawn so far, data-frame = index of the frame on screen, data-fps = draws in the last second.
+// drawn so far, data-frame = index of the frame on screen, data-fps = draws in the last second, data-character =
+// the file name of the character on screen (absent: the mannequin).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { Body, JOINTS, clayMatcap, loadGlb } from './body.js';
+import { CharacterBody, fetchCharacter } from './character.js';
 import { adoptStyles, el } from './dom.js';
 import { drawProfile, lap, requested } from './measure.js';
 import { decodeMotion } from './motion_format.js';
@@ -78,18 +81,25 @@ export class MotionPlayer {
     if (!on) { this.marks = null; delete this.element.dataset.marks; }
   }
 
-  async setBodies(specs, fps = 30) {
+  async setBodies(specs, fps = 30, character = null) {
     const gen = ++this.generation;
     this._setState('loading');
     const gltfs = await Promise.all(specs.map((s) => loadGlb(s.body)));
+    const ch = character ? await fetchCharacter(character).catch((e) => {     // it cannot load: the mannequin
+      this.element.dataset.characterError = String(e.message || e);
+      return null;
+    }) : null;
     if (gen !== this.generation) return false;            // a newer request replaced these bodies
     for (const b of this.bodies) this.scene.remove(b.root);
     this.labelBox.innerHTML = '';
     this.fps = fps; this.shown = -1; this.drawn = 0;
     const n = specs.length;
     this.labelBox.style.setProperty('--mp-bodies', String(Math.max(n, 1)));
+    if (ch) this.element.dataset.character = character.name;
+    else delete this.element.dataset.character;
     this.bodies = specs.map((s, i) => {
-      const b = new Body(gltfs[i], s.label, (i - (n - 1) / 2) * SPACING, this.material);
+      const x = (i - (n - 1) / 2) * SPACING;
+      const b = ch ? new CharacterBody(ch, character, s.method, x) : new Body(gltfs[i], s.label, x, this.material);
       this.scene.add(b.root);
       b.tag = el('div', { class: 'mp-label' }, this.labelBox);
       // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
@@ -159,7 +169,7 @@ export class MotionPlayer {
     const gen = this.generation + 1;
     const marks = this.measure ? { start: performance.now() } : null;
     this.payload = payload;
-    delete this.element.dataset.error;
+    delete this.element.dataset.error; delete this.element.dataset.characterError;
     this.pause();
     this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
     const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
@@ -167,7 +177,7 @@ export class MotionPlayer {
       return r.arrayBuffer();
     }).then((buf) => decodeMotion(buf, b.motion))));
     motions.catch(() => {});                        // reported below, once the bodies are in
-    if (!(await this.setBodies(payload.bodies, payload.fps))) return;
+    if (!(await this.setBodies(payload.bodies, payload.fps, payload.character))) return;
     if (marks) marks.bodies = performance.now() - marks.start;
     try {
       const records = await motions;
@@ -238,7 +248,7 @@ export class MotionPlayer {
     const v = this._v || (this._v = new THREE.Vector3());
     if (!this.stageH || this.dirtyLayout) { this.stageH = this.renderer.domElement.clientHeight; this.dirtyLayout = false; }
     for (const b of this.bodies) {                // layout read once above, writes only here (no forced layout)
-      b.bones[15].getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
+      (b.head || b.bones[15]).getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
       const left = Math.round(((v.x + 1) / 2) * 1000) / 10, top = Math.round(((1 - v.y) / 2) * this.stageH);
       if (left === b.left && top === b.top) continue;                            // unchanged: no style write
       b.left = left; b.top = top;
