@@ -5,7 +5,7 @@ statistics step (all statistics of three 10 s motions, what runs after the playe
     .venv/bin/python benchmarks/sweep_speed.py [--seconds 10] [--steps 1 2 4 8] [--cfg 1 2 3] [--seeds 2]
                                                [--threads N] [--out DIR] [--metric wrist_speed] [--repeats 5]
 
-Speech: the first `--seconds` of the BEAT2 take 2_scott_0_2_2 (../shared) when present, else app/examples'
+Speech: the first `--seconds` of the BEAT2 take 2_scott_0_2_2 (../shared) when present, else gesturelsm/webapp/examples'
 weekend.wav looped. Rows: wall time of the whole sweep (speech features once, then every motion generated and
 measured), the sum of the pipeline's generation times, the statistics' share, and the median over `--repeats` of
 the page's statistics for three methods' motions. One run; the machine may be shared with other jobs (the load
@@ -25,7 +25,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 SHARED = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
-EXAMPLE = REPO / "app" / "examples" / "weekend.wav"
+EXAMPLE = REPO / "gesturelsm" / "webapp" / "examples" / "weekend.wav"
 
 
 def clip(seconds: float) -> tuple[np.ndarray, str]:

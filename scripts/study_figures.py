@@ -1,5 +1,5 @@
 """The figures of docs/STUDY.md: a trial page (docs/study_trial.png) of a real study made by `gesturelsm batch`
-from the shipped checkpoints and two of app/examples' speech files, shot in headless Chromium; and the results
+from the shipped checkpoints and two of gesturelsm/webapp/examples' speech files, shot in headless Chromium; and the results
 plot (docs/study_results.png) of that study answered by simulated raters (Bradley-Terry preferences with
 strengths --strengths, a few raters answering at random), analysed by `gesturelsm study results`.
 
@@ -92,7 +92,7 @@ def main() -> int:
         shutil.rmtree(work, ignore_errors=True)
         (work / "speech").mkdir(parents=True)
         for name in ("hello", "weekend", "pipeline"):
-            shutil.copy(REPO / "app" / "examples" / f"{name}.wav", work / "speech")
+            shutil.copy(REPO / "gesturelsm" / "webapp" / "examples" / f"{name}.wav", work / "speech")
         assert cli(["batch", "--audio-dir", str(work / "speech"), "--out", str(study), "--raters", str(args.raters),
                     "--methods", "gesturelsm", "rectified_flow", "ddim", "--size", "256", "--attention", "0.25"]) == 0
         strengths = {k: float(v) for k, v in (kv.split("=") for kv in args.strengths.split(","))}

@@ -10,7 +10,7 @@ import pytest
 
 from _support import player_page, served
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "app" / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "gesturelsm" / "webapp" / "examples"
 PLAYER = "#motion-player"
 
 

@@ -72,12 +72,19 @@ def _walk(node):
 
 
 def test_app_entry_flags_and_env(monkeypatch):
-    from gesturelsm.webapp.cli import build_parser
+    from gesturelsm.serve.service import GestureService
+    from gesturelsm.webapp.cli import build_parser, run_demo
 
     monkeypatch.setenv("GESTURELSM_PORT", "9001")
     monkeypatch.setenv("GESTURELSM_BEAT2", "/data/beat2")
     args = build_parser().parse_args(["--checkpoints", "/ckpt"])
     assert (args.host, args.port, args.beat2, args.checkpoints) == ("127.0.0.1", 9001, "/data/beat2", "/ckpt")
+    # the demo switches analytics and telemetry off before it loads anything (stopped here at its first load)
+    monkeypatch.delenv("GRADIO_ANALYTICS_ENABLED", raising=False)
+    monkeypatch.delenv("HF_HUB_DISABLE_TELEMETRY", raising=False)
+    monkeypatch.setattr(GestureService, "from_settings", classmethod(lambda cls, s: (_ for _ in ()).throw(
+        ValueError("stopped by the test"))))
+    assert run_demo(args, "python -m app") == 2
     assert os.environ["GRADIO_ANALYTICS_ENABLED"] == "False" and os.environ["HF_HUB_DISABLE_TELEMETRY"] == "1"
 
 
