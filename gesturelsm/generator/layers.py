@@ -26,10 +26,12 @@ def sinusoidal(t: torch.Tensor, dim: int, max_period: float = 1e4) -> torch.Tens
 @functools.lru_cache(maxsize=32)
 def rotary_freqs(n: int, head_dim: int, device: torch.device, base: float = 1e4) -> torch.Tensor:
     """(n, head_dim / 2) complex rotations e^{i pos * base^(-2k / head_dim)}; cached (inference calls the same
-    shapes at every step). Read-only: never modify the returned tensor in place."""
-    inv = 1.0 / base ** (torch.arange(0, head_dim, 2, device=device, dtype=torch.float32) / head_dim)
-    ang = torch.arange(n, device=device, dtype=torch.float32)[:, None] * inv[None]   # (n, hd/2)
-    return torch.polar(torch.ones_like(ang), ang)
+    shapes at every step). Read-only: never modify the returned tensor in place. Made outside inference mode even
+    when first asked for inside it, so that training in the same process can still use the cached table."""
+    with torch.inference_mode(False):
+        inv = 1.0 / base ** (torch.arange(0, head_dim, 2, device=device, dtype=torch.float32) / head_dim)
+        ang = torch.arange(n, device=device, dtype=torch.float32)[:, None] * inv[None]   # (n, hd/2)
+        return torch.polar(torch.ones_like(ang), ang)
 
 
 def apply_rotary(x: torch.Tensor, freqs: torch.Tensor) -> torch.Tensor:
@@ -42,8 +44,10 @@ def apply_rotary(x: torch.Tensor, freqs: torch.Tensor) -> torch.Tensor:
 @functools.lru_cache(maxsize=32)
 def rotary_freqs_qk(n: int, heads: int, head_dim: int, device: torch.device) -> torch.Tensor:
     """(n, heads * head_dim) complex: `rotary_freqs` laid out like the query and key halves of a packed (q, k, v)
-    projection seen as complex pairs (the same table for every head, for q and for k). Read-only."""
-    return rotary_freqs(n, head_dim, device).repeat(1, 2 * heads)
+    projection seen as complex pairs (the same table for every head, for q and for k). Read-only; like
+    `rotary_freqs`, never an inference tensor."""
+    with torch.inference_mode(False):
+        return rotary_freqs(n, head_dim, device).repeat(1, 2 * heads)
 
 
 class DropPath(nn.Module):

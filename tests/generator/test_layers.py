@@ -20,3 +20,18 @@ def test_rotary_rotates_interleaved_pairs_by_position():
     rq = apply_rotary(q.expand(7, 8), rotary_freqs(7, 8, x.device))
     rk = apply_rotary(k.expand(7, 8), rotary_freqs(7, 8, x.device))
     assert torch.allclose(rq[3] @ rk[1], rq[5] @ rk[3], atol=1e-5)
+
+
+def test_rotary_tables_first_made_in_inference_mode_still_train():
+    """The cached tables are shared by inference and training in one process (the app generates, `train` fine-tunes;
+    tests do both): one first made under torch.inference_mode must still take part in a backward pass."""
+    from gesturelsm.generator.layers import rotary_freqs_qk
+
+    rotary_freqs.cache_clear()
+    rotary_freqs_qk.cache_clear()
+    with torch.inference_mode():
+        f, fqk = rotary_freqs(5, 4, torch.device("cpu")), rotary_freqs_qk(5, 2, 4, torch.device("cpu"))
+    assert not f.is_inference() and not fqk.is_inference()
+    x = torch.randn(5, 4, requires_grad=True)
+    apply_rotary(x, rotary_freqs(5, 4, x.device)).square().sum().backward()
+    assert x.grad is not None and torch.isfinite(x.grad).all()
