@@ -87,8 +87,6 @@ def run(args: argparse.Namespace) -> int:
     for m in args.motions:
         if not Path(m).exists():
             raise UserError(f"motion file not found: {m}")
-    if args.audio is None and args.frame is None:
-        print("note: no --audio given, the video will be silent", file=sys.stderr)
     character = None
     if args.rig:
         from ..retarget import load_character
@@ -96,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
         character = load_character(args.rig, args.bone_map)          # CharacterError: one line, before any work
     elif args.bone_map:
         raise UserError("--bone-map goes with --rig CHARACTER")
+    if args.audio is None and args.frame is None:
+        print("note: no --audio given, the video will be silent", file=sys.stderr)
     out = Path(args.out)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RenderWarning)
