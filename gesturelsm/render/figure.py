@@ -8,7 +8,7 @@ figure facing +z, its left on +x).
 A character is retargeted (`retarget_motion`), its meshes skinned per frame in numpy (`retarget.skinning`),
 its VRM mouth and blink expressions set from the generated face (`retarget.face`), and its world turned into
 the renderer's with the retargeting's alignment (left, up, forward -> +x, +y, +z); glTF units are metres.
-A character without a mesh (a BVH skeleton) is drawn as the mannequin.
+A character without a mesh (a BVH skeleton, a glTF of bones only) is drawn as the mannequin, with a note.
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ import numpy as np
 from ..motion.sequence import MotionSequence
 from ..retarget import Character, retarget_motion
 from ..retarget.face import driven_presets, face_weights, morph_weights
-from ..retarget.mesh import character_mesh
+from ..retarget.mesh import character_mesh, has_mesh
 from ..retarget.skinning import joint_world, pose_mesh, rest_world
 from .surfaces import Surface
 
@@ -104,10 +104,11 @@ class CharacterFigure:
 
 
 def make_figure(seqs: list[MotionSequence], body=None, character: Character | None = None):
-    """CharacterFigure for a character with a mesh, else BodyFigure (the body model, mannequin by default)."""
+    """CharacterFigure for a character with a mesh, else BodyFigure (the body model, mannequin by default; with
+    a note in `notes` when a character without a mesh was given)."""
     from ..body.model import resolve_body
 
-    if character is not None and character.document is not None:
+    if character is not None and has_mesh(character.document):
         return CharacterFigure(character, seqs, body)
     figure = BodyFigure(resolve_body(body), seqs)
     if character is not None:

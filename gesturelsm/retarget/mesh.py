@@ -130,6 +130,21 @@ def _scene_nodes(g: dict) -> list[tuple[int, np.ndarray]]:
     return out
 
 
+def has_mesh(doc: GltfDocument | None) -> bool:
+    """Whether the document's scene has a triangle primitive to draw (a skeleton-only file has none)."""
+    if doc is None:
+        return False
+    g = doc.gltf
+    meshes = g.get("meshes") or []
+    for n, _ in _scene_nodes(g):
+        m = g["nodes"][n].get("mesh")
+        if isinstance(m, int) and 0 <= m < len(meshes) and any(
+                int(p.get("mode", TRIANGLES)) == TRIANGLES and "POSITION" in p.get("attributes", {})
+                for p in meshes[m].get("primitives", [])):
+            return True
+    return False
+
+
 def character_mesh(doc: GltfDocument, skel: Skeleton) -> CharacterMesh:
     """Every drawable triangle primitive of the document's scene (module docstring); CharacterError when the
     file has none."""
