@@ -131,3 +131,33 @@ def test_a_mesh_without_skin_weights_is_refused(built, tmp_path):
     doc.gltf["nodes"] = [n for n in doc.gltf["nodes"] if "mesh" not in n]
     with pytest.raises(CharacterError, match="no triangle mesh"):
         character_mesh(doc, character.skeleton)
+
+
+def test_accessors_with_stride_sparse_values_and_normalised_integers():
+    from gesturelsm.retarget.gltf import GltfDocument
+    from gesturelsm.retarget.mesh import accessor
+
+    base = np.arange(12, dtype=np.float32).reshape(4, 3)
+    strided = np.zeros((4, 4), np.float32)
+    strided[:, :3] = base                                                    # 16-byte stride, 12 bytes used
+    idx, vals = np.array([1, 3], np.uint16), np.array([[9, 9, 9], [7, 7, 7]], np.float32)
+    norm = np.array([[0, 255], [51, 255]], np.uint8)
+    blob = strided.tobytes() + idx.tobytes() + vals.tobytes() + norm.tobytes()
+    views = [{"buffer": 0, "byteOffset": 0, "byteLength": 64, "byteStride": 16},
+             {"buffer": 0, "byteOffset": 64, "byteLength": 4}, {"buffer": 0, "byteOffset": 68, "byteLength": 24},
+             {"buffer": 0, "byteOffset": 92, "byteLength": 4}]
+    accessors = [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+                 {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "sparse": {
+                     "count": 2, "indices": {"bufferView": 1, "componentType": 5123},
+                     "values": {"bufferView": 2}}},
+                 {"componentType": 5126, "count": 4, "type": "VEC3", "sparse": {
+                     "count": 2, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 2}}},
+                 {"bufferView": 3, "componentType": 5121, "count": 2, "type": "VEC2", "normalized": True}]
+    doc = GltfDocument({"asset": {"version": "2.0"}, "bufferViews": views, "accessors": accessors}, blob, "t.glb")
+    np.testing.assert_array_equal(accessor(doc, 0), base)
+    np.testing.assert_array_equal(accessor(doc, 1), [[0, 1, 2], [9, 9, 9], [6, 7, 8], [7, 7, 7]])
+    np.testing.assert_array_equal(accessor(doc, 2), [[0, 0, 0], [9, 9, 9], [0, 0, 0], [7, 7, 7]])
+    np.testing.assert_allclose(accessor(doc, 3), [[0, 1], [0.2, 1]])
+    short = GltfDocument(doc.gltf, blob[:59], "t.glb")                      # the last vertex needs 60 bytes
+    with pytest.raises(CharacterError, match="truncated"):
+        accessor(short, 0)
