@@ -161,3 +161,27 @@ def test_accessors_with_stride_sparse_values_and_normalised_integers():
     short = GltfDocument(doc.gltf, blob[:59], "t.glb")                      # the last vertex needs 60 bytes
     with pytest.raises(CharacterError, match="truncated"):
         accessor(short, 0)
+
+
+def test_an_unskinned_mesh_follows_its_parent_bone_rigidly(built):
+    _, character, _ = built
+    doc = copy.deepcopy(character.document)
+    skel = character.skeleton
+    head = skel.bones["head"]
+    g = doc.gltf
+    g["nodes"].append({"name": "hat", "mesh": 0, "translation": [0.0, 0.2, 0.0]})   # no skin: an accessory
+    g["nodes"][skel.nodes[head]].setdefault("children", []).append(len(g["nodes"]) - 1)
+    mesh = character_mesh(doc, skel)
+    hat = next(p for p in mesh.parts if p.joints is None)
+    assert hat.rigid_joint == head
+    rest = skel.world()
+    rot = skel.rotation.copy()
+    rot[skel.bones["neck"]] = rot[skel.bones["neck"]] @ Rotation.from_rotvec([0.4, 0.2, -0.3]).as_matrix()
+    world = world_from_local(skel, local_matrices(skel, rot[None]))[0]
+    v_rest, _ = pose_part(hat, rest)
+    lift = np.eye(4)
+    lift[1, 3] = 0.2
+    np.testing.assert_allclose(v_rest, hat.positions @ (rest[head] @ lift)[:3, :3].T + (rest[head] @ lift)[:3, 3],
+                               atol=1e-9)
+    moved = world[head] @ np.linalg.inv(rest[head])                           # the head's own motion
+    np.testing.assert_allclose(pose_part(hat, world)[0], v_rest @ moved[:3, :3].T + moved[:3, 3], atol=1e-9)
