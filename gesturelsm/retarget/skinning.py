@@ -82,7 +82,8 @@ def _morphed(part: MeshPart, weights: np.ndarray | None) -> tuple[np.ndarray, np
     return pos, nrm
 
 
-def pose_part(part: MeshPart, world: np.ndarray, morph: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+def pose_part(part: MeshPart, world: np.ndarray,
+              morph: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
     """One part's (V, 3) vertices and (V, 3) unit normals (None when the file has none) in the character's
     world, for joint world matrices `world` (N, 4, 4) and this part's mesh's morph weights (K,) or None."""
     pos, nrm = _morphed(part, morph)

@@ -121,7 +121,7 @@ def test_only_the_presets_a_character_defines_get_weights(tmp_path, body):
     expected = face_weights(body, poses, ex)
     for version in ("1", "0"):
         path = tmp_path / f"oh_aa{version}.vrm"
-        g = write_skinned_glb(skel, path, vrm_body_bones(), vrm=version, presets=("oh", "aa"))
+        write_skinned_glb(skel, path, vrm_body_bones(), vrm=version, presets=("oh", "aa"))
         export_rig_glb(seq, load_character(path), tmp_path / f"out{version}.vrm")
         gltf, blob = read_glb(tmp_path / f"out{version}.vrm")
         anim = gltf["animations"][0]
@@ -131,7 +131,6 @@ def test_only_the_presets_a_character_defines_get_weights(tmp_path, body):
         np.testing.assert_allclose(W, np.stack([expected["oh"], expected["aa"]], 1), atol=1e-6)
         report = gltf_validator_errors(tmp_path / f"out{version}.vrm", tmp_path)
         assert report is None or report[0] == 0, report
-        del g
     plain = tmp_path / "plain.vrm"
     write_skinned_glb(skel, plain, vrm_body_bones())                         # no expressions at all
     export_rig_glb(seq, load_character(plain), tmp_path / "out_plain.vrm")
