@@ -101,3 +101,24 @@ def test_cryptovoxels_draws_whole_and_inside_the_frame(real_motion):
         assert not (m[0].any() or m[-1].any() or m[:, 0].any() or m[:, -1].any())   # nothing cut off
         rows = np.nonzero(m.any(1))[0]
         assert rows[-1] - rows[0] > 0.6 * 192                                 # framed on the character's height
+
+
+def test_the_generated_mouth_moves_the_characters_morph_targets(tmp_path, body, make_pose):
+    """Jaw open vs closed on a character whose `aa` preset is a morph of its head box: the drawn vertices differ
+    by exactly `aa`'s weight times the target's delta (turned into the renderer's axes), and nowhere else."""
+    from gesturelsm.motion.skeleton import JOINT_INDEX
+    from gesturelsm.render.figure import make_figure
+    from gesturelsm.retarget.face import face_weights
+
+    skel, _ = build_rig(body.rest_joints(), fingers=False)
+    write_skinned_glb(skel, tmp_path / "mouth.vrm", vrm_body_bones(), presets=("aa",))
+    character = load_character(tmp_path / "mouth.vrm")
+    closed = make_pose(6, -1.2)
+    opened = make_pose(6, -1.2)
+    opened.poses[:, 3 * JOINT_INDEX["jaw"]] = np.linspace(0.0, 0.35, 6)
+    figure = make_figure([closed, opened], body, character)
+    a, b = (figure.pose(k, np.arange(6)).vertices.astype(np.float64) for k in (0, 1))
+    aa = face_weights(body, opened.poses)["aa"]
+    delta = figure.mesh.parts[0].targets[0] @ figure.align.T
+    np.testing.assert_allclose(b - a, aa[:, None, None] * delta[None], atol=1e-5)
+    assert aa[0] == 0 and aa[-1] == pytest.approx(1.0)
