@@ -59,10 +59,10 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
     return out
 
 
-def _sample_vertices(figure, num: int, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
+def _sample_vertices(figure, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
     """Per motion: (k, V, 3) vertices at k <= max_frames evenly spaced frames (first and last included)."""
     out = []
-    for k, s in enumerate(figure.seqs[:num]):
+    for k, s in enumerate(figure.seqs):
         idx = np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
         out.append(figure.pose(k, idx).vertices)
     return out
@@ -104,8 +104,8 @@ def _hull(points: np.ndarray) -> np.ndarray:
 
 
 def _layout(figure, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
-    seqs = figure.seqs
-    samples = _sample_vertices(figure, len(seqs))                  # per motion (k, V, 3)
+    """The camera framing every motion's figure over the clip, and the floor height (figure.py's figures)."""
+    samples = _sample_vertices(figure)                             # per motion (k, V, 3)
     floor_y = min(float(v[..., 1].min()) for v in samples)
     pts = []
     for k, v in enumerate(samples):
