@@ -48,10 +48,12 @@ def _pad(b: bytes) -> bytes:
 
 def write_skinned_glb(skel, path, humanoid: dict[str, str] | None = None, vrm: str = "1",
                       presets: tuple[str, ...] = (), color=(0.8, 0.2, 0.1, 1.0), texture: np.ndarray | None = None,
-                      half: float = 0.03) -> dict:
+                      half: float = 0.03, badge: np.ndarray | None = None) -> dict:
     """A .glb / .vrm of the skeleton with a skinned box mesh (see `box_mesh`); `presets`: VRM expressions, each
     a morph target of the head box (target k moves its vertices 1 cm along -y, +x, +z... by k); `texture`:
-    (H, W, 4) uint8 base colour texture (TEXCOORD_0 maps each box face to the whole image). Returns the JSON."""
+    (H, W, 4) uint8 base colour texture (TEXCOORD_0 maps each box face to the whole image); `badge`: an (H, W, 4)
+    image on an unskinned 30 cm square 25 cm in front of the chest joint (a child node of it, facing +z, the
+    image's top row at its top edge, as glTF's v = 0). Returns the JSON."""
     g = write_gltf(skel, path, humanoid, vrm=vrm)
     pos, faces, joint = box_mesh(skel, half)
     V = len(pos)
@@ -121,6 +123,30 @@ def write_skinned_glb(skel, path, humanoid: dict[str, str] | None = None, vrm: s
         g["extensions"]["VRM"]["blendShapeMaster"] = {"blendShapeGroups": [
             {"name": p, "presetName": names.get(p, p), "binds": [{"mesh": 0, "index": k, "weight": 100}]}
             for k, p in enumerate(presets)]}
+    if badge is not None:
+        import io
+
+        from PIL import Image
+
+        quad = np.array([[-0.15, 0.15, 0.25], [0.15, 0.15, 0.25], [0.15, -0.15, 0.25], [-0.15, -0.15, 0.25]],
+                        np.float32)
+        quv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)          # v = 0: the image's top row
+        qa = {"POSITION": add(quad, 5126, "VEC3", 34962, True), "TEXCOORD_0": add(quv, 5126, "VEC2", 34962)}
+        qi = add(np.array([0, 2, 1, 0, 3, 2], np.uint32), 5125, "SCALAR", 34963)
+        buf = io.BytesIO()
+        Image.fromarray(badge).save(buf, format="PNG")
+        chunks.append((buf.getvalue(), None))
+        g["bufferViews"].append({"buffer": 0, "byteOffset": sum(len(_pad(c)) for c, _ in chunks[:-1]),
+                                 "byteLength": len(buf.getvalue())})
+        g.setdefault("images", []).append({"bufferView": len(g["bufferViews"]) - 1, "mimeType": "image/png"})
+        g.setdefault("textures", []).append({"source": len(g["images"]) - 1})
+        g["materials"].append({"pbrMetallicRoughness": {"baseColorTexture": {"index": len(g["textures"]) - 1}},
+                               "doubleSided": True})
+        g["meshes"].append({"name": "badge", "primitives": [{"attributes": qa, "indices": qi,
+                                                             "material": len(g["materials"]) - 1}]})
+        g["nodes"].append({"name": "badge", "mesh": len(g["meshes"]) - 1})
+        chest = skel.nodes[skel.bones["spine3"]]
+        g["nodes"][chest].setdefault("children", []).append(len(g["nodes"]) - 1)
     blob = b"".join(_pad(c) for c, _ in chunks)
     g["buffers"] = [{"byteLength": len(blob)}]
     js = json.dumps(g).encode()

@@ -122,3 +122,18 @@ def test_the_generated_mouth_moves_the_characters_morph_targets(tmp_path, body, 
     delta = figure.mesh.parts[0].targets[0] @ figure.align.T
     np.testing.assert_allclose(b - a, aa[:, None, None] * delta[None], atol=1e-5)
     assert aa[0] == 0 and aa[-1] == pytest.approx(1.0)
+
+
+def test_a_texture_is_drawn_upright(tmp_path, body, arms_down):
+    """glTF's v = 0 is the image's top row: a badge whose image is red above green shows red above green."""
+    skel, _ = build_rig(body.rest_joints(), fingers=False)
+    img = np.zeros((8, 8, 4), np.uint8)
+    img[:4, :, 0], img[4:, :, 1], img[..., 3] = 255, 255, 255
+    write_skinned_glb(skel, tmp_path / "badge.vrm", vrm_body_bones(), color=(0.02, 0.02, 0.02, 1), badge=img)
+    style = replace(STYLE, size=(256, 256))
+    frame = render_frames([arms_down], [0], style=style, character=load_character(tmp_path / "badge.vrm"))[0]
+    f = frame.astype(int)
+    red = (f[..., 0] > f[..., 1] + 80) & (f[..., 0] > f[..., 2] + 80)
+    green = (f[..., 1] > f[..., 0] + 80) & (f[..., 1] > f[..., 2] + 80)
+    assert red.sum() > 100 and green.sum() > 100
+    assert np.nonzero(red)[0].max() < np.nonzero(green)[0].min() + 2                 # red rows above green rows
