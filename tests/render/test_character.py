@@ -1,7 +1,8 @@
 """Rendering the user's character's own mesh instead of the mannequin (`render_frames(..., character=)`,
 `gesturelsm render --rig`): a box character the test builds has another silhouette than the mannequin, its
-silhouette follows the motion (raised arms reach above the head), its texture colours it, a skeleton without
-a mesh keeps the mannequin, and the shared cryptovoxels.vrm draws whole and inside the frame."""
+silhouette follows the motion (raised arms reach above the head), its texture colours it and is upright, the
+generated mouth moves its morph targets, a skeleton without a mesh keeps the mannequin, and the shared
+cryptovoxels.vrm draws whole and inside the frame."""
 from __future__ import annotations
 
 from dataclasses import replace
