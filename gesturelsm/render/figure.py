@@ -71,18 +71,20 @@ class CharacterFigure:
         self.morph = [morph_weights(doc.gltf, {p: w for p, w in face_weights(body, s.poses, s.expressions,
                                                                              s.betas).items() if p in presets})
                       if presets else {} for s in seqs]
-        starts = np.cumsum([0] + [len(p.positions) for p in self.mesh.parts])
-        self.num_vertices = int(starts[-1])
-        self.faces = np.concatenate([p.faces + s for p, s in zip(self.mesh.parts, starts)])
+        parts = self.mesh.parts
+        self._own = [i for i, p in enumerate(parts) if p.shares < 0]         # the parts skinned (vertex owners)
+        starts = dict(zip(self._own, np.cumsum([0] + [len(parts[i].positions) for i in self._own]).tolist()))
+        start = [starts[i if p.shares < 0 else p.shares] for i, p in enumerate(parts)]
+        self.num_vertices = self.mesh.num_vertices
+        self.faces = np.concatenate([p.faces + s for p, s in zip(parts, start)])
         self.surfaces = [Surface(int(s), len(p.positions), p.faces, p.color, p.texture, p.uv, p.wrap, p.alpha_mode,
-                                 p.alpha_cutoff, p.double_sided, roughness=0.6)
-                         for p, s in zip(self.mesh.parts, starts)]
-        self._normals = all(p.normals is not None for p in self.mesh.parts)
+                                 p.alpha_cutoff, p.double_sided, roughness=0.6) for p, s in zip(parts, start)]
+        self._normals = all(p.normals is not None for p in parts)
 
     def _frame(self, world: np.ndarray, morph: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray | None]:
         verts, normals = pose_mesh(self.mesh, world, morph)
-        v = np.concatenate(verts) @ self.align.T
-        n = np.concatenate(normals) @ self.align.T if self._normals else None
+        v = np.concatenate([verts[i] for i in self._own]) @ self.align.T
+        n = np.concatenate([normals[i] for i in self._own]) @ self.align.T if self._normals else None
         return v, n
 
     def pose(self, k: int, ids: np.ndarray) -> Posed:

@@ -6,7 +6,8 @@ the material's base colour factor and base colour texture).
     mesh = character_mesh(doc, skeleton)         # CharacterMesh: parts (MeshPart) + notes
     mesh.parts[0].positions, .joints, .weights, .inverse_bind, .faces, .color, .texture, .uv
 
-A mesh node without a skin moves rigidly with its nearest ancestor among the skeleton's joints (an accessory
+Primitives of one mesh that share their vertex attributes (one primitive per material over a common vertex
+buffer, as VRM exporters write them) are skinned once (`MeshPart.shares`). A mesh node without a skin moves rigidly with its nearest ancestor among the skeleton's joints (an accessory
 parented to a bone); with none, it stays at its rest place. A texture that cannot be decoded, or that lives in
 a separate file, leaves the material's colour factor and a note (nothing fails). VRM 0.x materials whose glTF
 entry has no texture take MToon's `_MainTex` / `_Color` from the VRM extension.
@@ -15,7 +16,8 @@ from __future__ import annotations
 
 import base64
 import io
-from dataclasses import dataclass, field
+import json
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -52,6 +54,7 @@ class MeshPart:
     alpha_mode: str = "OPAQUE"                  # OPAQUE | MASK | BLEND
     alpha_cutoff: float = 0.5
     double_sided: bool = False
+    shares: int = -1                            # >= 0: draws the vertices of that earlier part (same attributes)
 
 
 @dataclass
@@ -61,7 +64,8 @@ class CharacterMesh:
 
     @property
     def num_vertices(self) -> int:
-        return sum(len(p.positions) for p in self.parts)
+        """Vertices to skin per frame (parts that share another's vertices add none)."""
+        return sum(len(p.positions) for p in self.parts if p.shares < 0)
 
 
 def accessor(doc: GltfDocument, index: int) -> np.ndarray:
@@ -154,6 +158,7 @@ def character_mesh(doc: GltfDocument, skel: Skeleton) -> CharacterMesh:
     rest = skel.world()
     textures = _Textures(doc)
     parts: list[MeshPart] = []
+    first: dict[tuple, int] = {}            # primitives sharing vertex attributes are skinned once
     for n, world in _scene_nodes(g):
         node = g["nodes"][n]
         if "mesh" not in node:
@@ -171,11 +176,22 @@ def character_mesh(doc: GltfDocument, skel: Skeleton) -> CharacterMesh:
         for k, prim in enumerate(g["meshes"][m].get("primitives", [])):
             if int(prim.get("mode", TRIANGLES)) != TRIANGLES or "POSITION" not in prim.get("attributes", {}):
                 continue
-            part = _part(doc, prim, f"{g['meshes'][m].get('name', f'mesh{m}')}[{k}]", m, textures)
+            name = f"{g['meshes'][m].get('name', f'mesh{m}')}[{k}]"
+            key = (m, skin if skin is not None else -1 - n, tuple(sorted(prim["attributes"].items())),
+                   json.dumps(prim.get("targets") or [], sort_keys=True))
+            if key in first:                    # the same vertices as an earlier primitive, other triangles
+                owner = parts[first[key]]
+                part = replace(owner, name=name, faces=_faces(doc, prim, name, len(owner.positions)),
+                               shares=first[key])
+                textures.material(part, prim.get("material"))
+                parts.append(part)
+                continue
+            part = _part(doc, prim, name, m, textures)
             if skin is not None:
                 _attach_skin(doc, part, prim, g["skins"][int(skin)], joint_of)
             else:
                 part.rigid_joint, part.rigid_offset = rigid, offset
+            first[key] = len(parts)
             parts.append(part)
     if not parts:
         raise CharacterError(f"{src}: the file has no triangle mesh to draw")
@@ -186,15 +202,8 @@ def _part(doc: GltfDocument, prim: dict, name: str, mesh: int, textures: "_Textu
     at = prim["attributes"]
     pos = accessor(doc, at["POSITION"]).astype(np.float64)
     V = len(pos)
-    if "indices" in prim:
-        idx = accessor(doc, prim["indices"]).reshape(-1).astype(np.int64)
-    else:
-        idx = np.arange(V, dtype=np.int64)
-    idx = idx[: len(idx) // 3 * 3]
-    if idx.size and (idx.min() < 0 or idx.max() >= V):
-        raise CharacterError(f"{doc.source}: mesh {name} has indices beyond its {V} vertices")
     part = MeshPart(name, mesh, pos, accessor(doc, at["NORMAL"]).astype(np.float64) if "NORMAL" in at else None,
-                    idx.reshape(-1, 3))
+                    _faces(doc, prim, name, V))
     if "TEXCOORD_0" in at:
         part.uv = accessor(doc, at["TEXCOORD_0"]).astype(np.float32)
     targets = prim.get("targets") or []
@@ -206,6 +215,18 @@ def _part(doc: GltfDocument, prim: dict, name: str, mesh: int, textures: "_Textu
                                             else np.zeros((V, 3)) for t in targets])
     textures.material(part, prim.get("material"))
     return part
+
+
+def _faces(doc: GltfDocument, prim: dict, name: str, V: int) -> np.ndarray:
+    """(F, 3) triangles of a primitive (its indices, or its vertices in order)."""
+    if "indices" in prim:
+        idx = accessor(doc, prim["indices"]).reshape(-1).astype(np.int64)
+    else:
+        idx = np.arange(V, dtype=np.int64)
+    idx = idx[: len(idx) // 3 * 3]
+    if idx.size and (idx.min() < 0 or idx.max() >= V):
+        raise CharacterError(f"{doc.source}: mesh {name} has indices beyond its {V} vertices")
+    return idx.reshape(-1, 3)
 
 
 def _attach_skin(doc: GltfDocument, part: MeshPart, prim: dict, skin: dict, joint_of: dict[int, int]) -> None:
@@ -243,7 +264,8 @@ class _Textures:
 
     def material(self, part: MeshPart, index: int | None) -> None:
         g = self.doc.gltf
-        if index is None:
+        part.color, part.texture, part.alpha_mode, part.double_sided = (1.0, 1.0, 1.0, 1.0), None, "OPAQUE", False
+        if index is None:                       # glTF's default material
             return
         try:
             mat = g["materials"][int(index)]

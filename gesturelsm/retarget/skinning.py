@@ -103,7 +103,10 @@ def pose_part(part: MeshPart, world: np.ndarray,
 
 def pose_mesh(mesh: CharacterMesh, world: np.ndarray, morph: dict[int, np.ndarray] | None = None
               ) -> tuple[list[np.ndarray], list[np.ndarray | None]]:
-    """Every part posed (see `pose_part`); `morph`: {mesh index: (K,) weights} for this frame."""
+    """Every part posed (see `pose_part`; a part that shares another's vertices gets that part's arrays);
+    `morph`: {mesh index: (K,) weights} for this frame."""
     morph = morph or {}
-    out = [pose_part(p, world, morph.get(p.mesh)) for p in mesh.parts]
+    out: list[tuple[np.ndarray, np.ndarray | None]] = []
+    for p in mesh.parts:
+        out.append(out[p.shares] if p.shares >= 0 else pose_part(p, world, morph.get(p.mesh)))
     return [v for v, _ in out], [n for _, n in out]

@@ -138,3 +138,20 @@ def test_a_texture_is_drawn_upright(tmp_path, body, arms_down):
     green = (f[..., 1] > f[..., 0] + 80) & (f[..., 1] > f[..., 2] + 80)
     assert red.sum() > 100 and green.sum() > 100
     assert np.nonzero(red)[0].max() < np.nonzero(green)[0].min() + 2                 # red rows above green rows
+
+
+def test_primitives_sharing_vertices_draw_one_vertex_range(boxes, body, arms_down):
+    """A second primitive over the same vertices (another material) is a second surface over the same range."""
+    import copy
+
+    from gesturelsm.render.figure import CharacterFigure
+
+    doc = copy.deepcopy(boxes.document)
+    prims = doc.gltf["meshes"][0]["primitives"]
+    prims.append({**prims[0], "material": len(doc.gltf["materials"])})
+    doc.gltf["materials"].append({"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 1.0, 1.0]}})
+    figure = CharacterFigure(Character(boxes.path, boxes.skeleton, doc), [arms_down], body)
+    V = len(figure.mesh.parts[0].positions)
+    assert figure.num_vertices == V and [(s.start, s.count) for s in figure.surfaces] == [(0, V), (0, V)]
+    assert figure.faces.max() == V - 1
+    assert figure.pose(0, np.arange(2)).vertices.shape == (2, V, 3)

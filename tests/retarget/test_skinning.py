@@ -185,3 +185,17 @@ def test_an_unskinned_mesh_follows_its_parent_bone_rigidly(built):
                                atol=1e-9)
     moved = world[head] @ np.linalg.inv(rest[head])                           # the head's own motion
     np.testing.assert_allclose(pose_part(hat, world)[0], v_rest @ moved[:3, :3].T + moved[:3, 3], atol=1e-9)
+
+
+def test_primitives_sharing_vertices_are_skinned_once_and_drawn_with_their_own_material(built):
+    _, character, _ = built
+    doc = copy.deepcopy(character.document)
+    prims = doc.gltf["meshes"][0]["primitives"]
+    prims.append({**prims[0], "material": len(doc.gltf["materials"])})      # same attributes, another material
+    doc.gltf["materials"].append({"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 1.0, 1.0]}})
+    mesh = character_mesh(doc, character.skeleton)
+    a, b = mesh.parts
+    assert b.shares == 0 and b.positions is a.positions and mesh.num_vertices == len(a.positions)
+    assert b.color == (0.0, 0.0, 1.0, 1.0) and b.texture is None and a.texture is not None
+    verts, _ = pose_mesh(mesh, rest_world(character.skeleton))
+    assert verts[1] is verts[0]
