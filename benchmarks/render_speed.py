@@ -3,6 +3,7 @@
 10 s and 60 s clips with speech into a browser-playable mp4.
 
     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/render_speed.py [--frames 90] [--size 512] [--quick]
+        [--rig ../shared/assets/characters/cryptovoxels.vrm]
 
 fps = 1 / median time per frame over `--frames` consecutive frames (posing, normals, upload, render
 passes, read-back, labels; the first frame, with camera fitting and shader compilation, is left out).
@@ -14,6 +15,8 @@ Motion: the real BEAT2 take 2_scott_0_1_1 (../shared) when present, else smooth 
 The 10k body is the mannequin with its largest faces split (trimesh.remesh.subdivide) until it has
 10,475 vertices (SMPL-X's count; ~21k faces) and small non-zero pose correctives, so its geometry,
 fill and posing cost are SMPL-X-like (the random-face synthetic model of tests/body would not be).
+With `--rig CHARACTER` the same rows and clips are measured for the character's own mesh (retargeting, numpy
+skinning and its materials; `gesturelsm render --rig`), beside the mannequin's in the same run.
 """
 from __future__ import annotations
 
@@ -87,11 +90,11 @@ def load_motion(frames: int):
     return MotionSequence(poses, np.tile([0.0, 1.3, 0.0], (frames, 1)), np.zeros((frames, 100))), "synthetic"
 
 
-def measure_fps(seqs, body, size: int, labels) -> tuple[float, float]:
+def measure_fps(seqs, body, size: int, labels, character=None) -> tuple[float, float]:
     """(fps from the median frame time, CPU ms per frame) over all frames but the first."""
     from gesturelsm.render import iter_frames
 
-    it = iter_frames(seqs, body=body, size=(size, size), labels=labels)
+    it = iter_frames(seqs, body=body, size=(size, size), labels=labels, character=character)
     next(it)
     dts, c0 = [], time.process_time()
     t = time.perf_counter()
@@ -108,6 +111,7 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=90, help="frames per fps measurement")
     ap.add_argument("--size", type=int, default=512)
     ap.add_argument("--quick", action="store_true", help="skip the 60 s clip")
+    ap.add_argument("--rig", help="a character (.vrm / .glb): also measure its own mesh")
     args = ap.parse_args()
 
     from gesturelsm.body import load_body_model
@@ -123,23 +127,32 @@ def main() -> None:
         print(f"backend {backend}, {cores} cores, load average {os.getloadavg()[0]:.2f}, motion: {source}\n")
         print("| body | bodies | size | fps | cpu ms/frame | fps if idle |")
         print("|---|---|---|---|---|---|")
-        for name, body in bodies.items():
+        figures = [(name, body, None) for name, body in bodies.items()]
+        if args.rig:
+            from gesturelsm.retarget import load_character
+            from gesturelsm.retarget.mesh import character_mesh
+
+            character = load_character(args.rig)
+            v = character_mesh(character.document, character.skeleton).num_vertices
+            figures.append((f"{character.name} ({v:,} v)", bodies["mannequin (7,534 v)"], character))
+        for name, body, character in figures:
             for n in (1, 3):
                 seqs = [part] * n if n == 1 else [part, part.mirrored(), part.slice(0, part.num_frames)]
                 labels = None if n == 1 else ["GestureLSM 8 steps", "rectified flow 8", "ground truth"]
-                fps, cpu = measure_fps(seqs, body, args.size, labels)
+                fps, cpu = measure_fps(seqs, body, args.size, labels, character)
                 print(f"| {name} | {n} | {args.size * n}x{args.size} | {fps:.1f} | {cpu:.0f} | "
                       f"{1000 * cores / cpu:.0f} |", flush=True)
-        print("\n| clip | bodies | size | render + encode s | x real time |")
-        print("|---|---|---|---|---|")
+        print("\n| clip | figure | bodies | size | render + encode s | x real time |")
+        print("|---|---|---|---|---|---|")
         y = (0.1 * np.sin(np.arange(60 * 16000) / 16000 * 2 * np.pi * 220)).astype(np.float32)
-        for secs in (10,) if args.quick else (10, 60):
-            clip = seq.slice(0, secs * 30)
-            t0 = time.perf_counter()
-            render_video([clip], y[: secs * 16000], Path(tmp) / f"clip{secs}.mp4", size=(args.size, args.size),
-                         body=bodies["mannequin (7,534 v)"])
-            dt = time.perf_counter() - t0
-            print(f"| {secs} s | 1 | {args.size}x{args.size} | {dt:.1f} | {secs / dt:.2f} |", flush=True)
+        for name, body, character in [f for f in figures if f[0] != "SMPL-X-sized (10,475 v)"]:
+            for secs in (10,) if args.quick else (10, 60):
+                clip = seq.slice(0, secs * 30)
+                t0 = time.perf_counter()
+                render_video([clip], y[: secs * 16000], Path(tmp) / f"clip{secs}.mp4", size=(args.size, args.size),
+                             body=body, character=character)
+                dt = time.perf_counter() - t0
+                print(f"| {secs} s | {name} | 1 | {args.size}x{args.size} | {dt:.1f} | {secs / dt:.2f} |", flush=True)
         print(f"\nload average after: {os.getloadavg()[0]:.2f}")
 
 

@@ -22,7 +22,8 @@ FLOORS: list[set[str]] = [
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
-    {"tokenizer", "render", "retarget"},                       # RVQ-VAEs; offscreen video; motion onto characters
+    {"retarget"},                                              # motion onto characters (their skeletons and meshes)
+    {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
     {"backends"},                                              # every method (ours, the authors') behind one call
     {"pipeline"},                                              # speech -> motion, one request flow

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from ..retarget import Character, CharacterError, Retargeted, retarget_motion
-from ..retarget.face import jaw_open, morph_binds
+from ..body.model import resolve_body
+from ..retarget.face import driven_presets, face_weights, morph_weights
 from .bvh import continuous_euler, matrix_to_euler_zxy
 from .glb import FLOAT, _Builder, _write_glb, continuous_quaternions, matrix_to_quaternion_xyzw
 
@@ -28,32 +29,29 @@ def _start_builder(gltf: dict, blob: bytes) -> _Builder:
     return b
 
 
-def _face_channel(b: _Builder, gltf: dict, seq, a_time: int) -> list[tuple[dict, dict]]:
-    """Morph-weight channels that open the mouth with the jaw, for each mesh node the `aa` preset binds."""
-    binds = morph_binds(gltf)
-    if not binds:
+def _face_channels(b: _Builder, gltf: dict, seq, a_time: int, body) -> list[tuple[dict, dict]]:
+    """Morph-weight channels for the VRM presets the character defines (visemes and blink, `retarget.face`), one
+    per mesh node that a driven preset binds; no channel when the character defines none of them."""
+    presets = driven_presets(gltf)
+    if not presets:
         return []
-    weight = jaw_open(seq.poses)                                                     # (T,)
+    weights = face_weights(resolve_body(body), seq.poses, seq.expressions, seq.betas)
+    per_mesh = morph_weights(gltf, {p: weights[p] for p in presets})
     out = []
     for n, node in enumerate(gltf.get("nodes", [])):
-        mesh = node.get("mesh")
-        mine = [(k, w) for m, k, w in binds if m == mesh]
-        if mesh is None or not mine:
+        W = per_mesh.get(node.get("mesh"))
+        if W is None or W.shape[1] == 0:
             continue
-        targets = len((gltf["meshes"][mesh]["primitives"][0]).get("targets", []))
-        W = np.zeros((seq.num_frames, targets), np.float32)
-        for k, w in mine:
-            if k < targets:
-                W[:, k] = np.clip(W[:, k] + w * weight, 0.0, 1.0)
-        out.append(({"input": a_time, "output": b.add(W.reshape(-1), FLOAT, "SCALAR"), "interpolation": "LINEAR"},
-                    {"target": {"node": n, "path": "weights"}}))
+        out.append(({"input": a_time, "output": b.add(W.astype(np.float32).reshape(-1), FLOAT, "SCALAR"),
+                     "interpolation": "LINEAR"}, {"target": {"node": n, "path": "weights"}}))
     return out
 
 
 def export_rig_glb(seq, character: Character, path: str | Path, body=None,
                    result: Retargeted | None = None, name: str = "gesturelsm") -> Path:
     """The character's file plus an animation `name`: rotations of its humanoid bones, the hips'
-    translation and, for a VRM with an `aa` (0.x `a`) expression, the mouth. Returns the path."""
+    translation and, for a VRM with viseme (`aa`, `ih`, `ou`, `ee`, `oh`) or `blink` expressions, their morph
+    targets' weights from the generated face (`retarget.face`). Returns the path."""
     if character.document is None:
         raise CharacterError(f"{character.name}: a BVH skeleton has no mesh; export it with --bvh")
     doc = character.document
@@ -80,7 +78,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
                  "interpolation": "LINEAR"}, {"target": {"node": skel.nodes[i], "path": "rotation"}})
     channel({"input": a_time, "output": b.add(r.root_translation.astype(np.float32), FLOAT, "VEC3"),
              "interpolation": "LINEAR"}, {"target": {"node": skel.nodes[r.root], "path": "translation"}})
-    for sampler, target in _face_channel(b, gltf, seq, a_time):
+    for sampler, target in _face_channels(b, gltf, seq, a_time, body):
         channel(sampler, target)
     gltf["animations"] = [{"name": name, "samplers": samplers, "channels": channels}] + \
         [a for a in gltf.get("animations", []) if a.get("name") != name]

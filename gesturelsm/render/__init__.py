@@ -5,6 +5,7 @@
     render_video([a, b, gt], audio, "cmp.mp4", labels=["GestureLSM 8 steps", "DDIM 20", "ground truth"],
                  gen_seconds=[0.4, 2.1, None])                                   # side by side, 1536 x 512
     frames = render_frames([seq], frame_indices=[0, 15])                           # (2, 512, 512, 3) uint8
+    render_video([seq], "speech.wav", "avatar.mp4", character=load_character("avatar.vrm"))  # its own mesh
 
 Importing this package loads no OpenGL but already chooses the backend (OSMesa or EGL, see `backend.py`)
 by setting PYOPENGL_PLATFORM, so code that imports pyrender afterwards gets an offscreen context too; if

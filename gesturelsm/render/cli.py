@@ -4,6 +4,7 @@
     gesturelsm render lsm.npz rf.npz ddim.npz gt.npz --audio speech.wav --out cmp.mp4 \\
         --labels "GestureLSM 8 steps" "rectified flow 8" "DDIM 20" "ground truth" --gen-times 0.4 0.4 2.1 -
     gesturelsm render out.npz --audio speech.wav --out frame.png --frame 120     # one still frame
+    gesturelsm render out.npz --audio speech.wav --out avatar.mp4 --rig avatar.vrm  # on your character's mesh
 """
 from __future__ import annotations
 
@@ -35,6 +36,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--supersample", type=int, choices=[1, 2, 3], help="antialiasing: render k x larger and "
                    "average down (2 = smoother edges, ~3x slower)")
     p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
+    p.add_argument("--rig", help="your character (.vrm / .glb / .gltf): its own mesh is drawn, posed by the motion "
+                   "(retargeted), instead of the mannequin; a .bvh skeleton has no mesh and keeps the mannequin")
+    p.add_argument("--bone-map", help="with --rig: bone names as 'mixamo', 'smplx' or a JSON file {SMPL-X joint: "
+                   "bone name} (a VRM brings its own)")
     p.add_argument("--frame", type=int, help="write only this frame as a PNG")
     p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
     p.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, whole lines otherwise)")
@@ -82,6 +87,13 @@ def run(args: argparse.Namespace) -> int:
     for m in args.motions:
         if not Path(m).exists():
             raise UserError(f"motion file not found: {m}")
+    character = None
+    if args.rig:
+        from ..retarget import load_character
+
+        character = load_character(args.rig, args.bone_map)          # CharacterError: one line, before any work
+    elif args.bone_map:
+        raise UserError("--bone-map goes with --rig CHARACTER")
     if args.audio is None and args.frame is None:
         print("note: no --audio given, the video will be silent", file=sys.stderr)
     out = Path(args.out)
@@ -94,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
                 if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
                     raise UserError("--frame writes an image: give --out NAME.png")
                 frame = render_frames(args.motions, [args.frame], body=args.model, style=style, labels=labels,
-                                      gen_seconds=gen)[0]
+                                      gen_seconds=gen, character=character)[0]
                 out.parent.mkdir(parents=True, exist_ok=True)
                 iio.imwrite(out, frame)
             else:
@@ -119,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
 
                 try:
                     render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,
-                                 gen_seconds=gen, progress=progress, crf=args.crf)
+                                 gen_seconds=gen, progress=progress, crf=args.crf, character=character)
                 finally:
                     if bar is not None:
                         bar.close()

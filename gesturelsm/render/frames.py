@@ -17,6 +17,7 @@ import numpy as np
 from ..body.model import resolve_body
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera
+from .figure import make_figure
 from .labels import LabelPatch, label_lines, make_label
 from .scene import SceneRenderer
 from .style import RenderStyle
@@ -58,12 +59,12 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
     return out
 
 
-def _sample_vertices(seqs: list[MotionSequence], body, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
+def _sample_vertices(figure, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
     """Per motion: (k, V, 3) vertices at k <= max_frames evenly spaced frames (first and last included)."""
     out = []
-    for s in seqs:
+    for k, s in enumerate(figure.seqs):
         idx = np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
-        out.append(body.forward(s.poses[idx], s.trans[idx], s.expressions[idx], s.betas).vertices)
+        out.append(figure.pose(k, idx).vertices)
     return out
 
 
@@ -74,7 +75,7 @@ def clip_layout(motions: Sequence[MotionLike] | MotionLike, body=None, style: Re
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
     patches = _label_patches(len(seqs), labels, gen_seconds, style)
-    return _layout(seqs, resolve_body(body), style, _reserve(patches, style))
+    return _layout(make_figure(seqs, body), style, _reserve(patches, style))
 
 
 def fit_camera(motions: Sequence[MotionLike] | MotionLike, body=None, style: RenderStyle | None = None,
@@ -102,15 +103,15 @@ def _hull(points: np.ndarray) -> np.ndarray:
         return points
 
 
-def _layout(seqs: list[MotionSequence], body, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
-    samples = _sample_vertices(seqs, body)                        # per motion (k, V, 3)
+def _layout(figure, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
+    """The camera framing every motion's figure over the clip, and the floor height (figure.py's figures)."""
+    samples = _sample_vertices(figure)                             # per motion (k, V, 3)
     floor_y = min(float(v[..., 1].min()) for v in samples)
     pts = []
-    for s, v in zip(seqs, samples):
+    for k, v in enumerate(samples):
         p = v.reshape(-1, 3).astype(np.float64)
         if style.framing == "upper":
-            hips = float(body.joints(s.poses[:1], s.trans[:1], s.betas)[0, 0, 1])
-            p = p[p[:, 1] > hips - 0.12]
+            p = p[p[:, 1] > figure.hips_y(k) - 0.12]
         elif style.shadow and style.floor != "none":   # keep each frame's contact shadow around the feet in view
             feet = v[:, :, [0, 2]] + np.where(v[:, :, 1:2] < floor_y + 0.05, 0.0, np.nan)
             with warnings.catch_warnings():                         # frames with no foot down: all NaN
@@ -158,36 +159,42 @@ def compose(tiles: list[np.ndarray], patches: list[LabelPatch | None], style: Re
 def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style: RenderStyle | None = None,
                 size: tuple[int, int] | None = None, labels: Sequence[str] | None = None,
                 gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
-                frame_indices: Sequence[int] | None = None, chunk: int = 32) -> Iterator[np.ndarray]:
-    """Yield (H, N * W, 3) uint8 frames, one per motion frame (or per index in `frame_indices`)."""
+                frame_indices: Sequence[int] | None = None, chunk: int = 32,
+                character=None) -> Iterator[np.ndarray]:
+    """Yield (H, N * W, 3) uint8 frames, one per motion frame (or per index in `frame_indices`).
+    character: a retarget.Character whose own mesh is drawn instead of the body (None: the body; a skeleton
+    without a mesh: the body, with a RenderWarning)."""
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
-    body = resolve_body(body)
+    figure = make_figure(seqs, body, character)
+    for note in figure.notes:
+        warnings.warn(note, RenderWarning, stacklevel=2)
     patches = _label_patches(len(seqs), labels, gen_seconds, style)
-    cam, floor_y = _layout(seqs, body, style, _reserve(patches, style))
+    cam, floor_y = _layout(figure, style, _reserve(patches, style))
     if camera is not None:
         cam = camera if (camera.width, camera.height) == style.size else camera.resized(*style.size)
     T = seqs[0].num_frames
     idx = np.arange(T) if frame_indices is None else np.asarray(frame_indices, np.int64).reshape(-1)
     if idx.size and (idx.min() < 0 or idx.max() >= T):
         raise ValueError(f"frame indices must be in 0..{T - 1}")
-    rest = body.forward(np.zeros((1, 165)), np.zeros((1, 3)), betas=seqs[0].betas).vertices[0]
-    with SceneRenderer(body.faces, body.num_vertices, len(seqs), cam, style, floor_y, rest) as renderer:
+    with SceneRenderer(figure.faces, figure.num_vertices, len(seqs), cam, style, floor_y, figure.rest_vertices(),
+                       figure.surfaces) as renderer:
         for s in range(0, len(idx), chunk):
             ids = idx[s:s + chunk]
-            outs = [body.forward(q.poses[ids], q.trans[ids], q.expressions[ids], q.betas) for q in seqs]
+            outs = [figure.pose(k, ids) for k in range(len(seqs))]
             for k in range(len(ids)):
-                tiles = renderer.render([o.vertices[k] for o in outs], [o.joints[k, 0, [0, 2]] for o in outs])
+                normals = None if outs[0].normals is None else [o.normals[k] for o in outs]
+                tiles = renderer.render([o.vertices[k] for o in outs], [o.root_xz[k] for o in outs], normals)
                 yield compose(tiles, patches, style)
 
 
 def render_frames(motions: Sequence[MotionLike] | MotionLike, frame_indices: Sequence[int] | None = None, *,
                   body=None, style: RenderStyle | None = None, size: tuple[int, int] | None = None,
                   labels: Sequence[str] | None = None, gen_seconds: Sequence[float | None] | None = None,
-                  camera: Camera | None = None) -> np.ndarray:
+                  camera: Camera | None = None, character=None) -> np.ndarray:
     """(K, H, N * W, 3) uint8: the frames at `frame_indices` (all frames when None)."""
     frames = list(iter_frames(motions, body=body, style=style, size=size, labels=labels, gen_seconds=gen_seconds,
-                              camera=camera, frame_indices=frame_indices))
+                              camera=camera, frame_indices=frame_indices, character=character))
     if not frames:
         st = (style or RenderStyle()).with_size(size)
         return np.zeros((0, st.height, st.width, 3), np.uint8)

@@ -33,6 +33,7 @@ from .backend import PACKAGES, RenderError, select_platform
 from .camera import Camera
 from .shaders import program_cache
 from .style import RenderStyle
+from .surfaces import Surface, material
 
 SHADOW_TEXELS = 64
 
@@ -122,7 +123,10 @@ class SceneRenderer:
     """Renders tiles of N bodies (same faces) through one camera. Not thread-safe; one GL context."""
 
     def __init__(self, faces: np.ndarray, num_vertices: int, num_bodies: int, camera: Camera,
-                 style: RenderStyle, floor_y: float, rest_vertices: np.ndarray | None = None):
+                 style: RenderStyle, floor_y: float, rest_vertices: np.ndarray | None = None,
+                 surfaces: Sequence[Surface] | None = None):
+        """faces (F, 3) over all num_vertices vertices of a figure; surfaces: how its vertex ranges are drawn
+        (None: one surface, the style's body colour)."""
         self.backend = select_platform()
         import pyrender
         from OpenGL import GL
@@ -155,17 +159,20 @@ class SceneRenderer:
         target = np.asarray(camera.target)
         if style.floor != "none":
             self._add_floor(floor_y, target)
-        base = np.asarray(style.body_color, np.float64) ** 2.2                   # factor is linear
-        material = pyrender.MetallicRoughnessMaterial(baseColorFactor=[*base, 1.0], metallicFactor=0.0,
-                                                      roughnessFactor=float(style.body_roughness))
-        zeros = np.zeros((num_vertices, 3), np.float32)
+        faces = self._faces
+        self._surfaces = list(surfaces) if surfaces else [Surface(0, num_vertices, faces)]
+        self._uv = [sf.texcoords() for sf in self._surfaces]
+        materials = [material(pyrender, GL, sf, style.body_color, style.body_roughness) for sf in self._surfaces]
         self._bodies, self._body_meshes = [], []
         for _ in range(num_bodies):
-            prim = pyrender.Primitive(positions=zeros, normals=zeros + np.float32([0, 0, 1]),
-                                      indices=self._faces.astype(np.uint32), material=material)
-            mesh = pyrender.Mesh([prim])
+            prims = []
+            for sf, mat, uv in zip(self._surfaces, materials, self._uv):
+                zeros = np.zeros((sf.count, 3), np.float32)
+                prims.append(pyrender.Primitive(positions=zeros, normals=zeros + np.float32([0, 0, 1]), texcoord_0=uv,
+                                                indices=np.asarray(sf.faces, np.uint32), material=mat))
+            mesh = pyrender.Mesh(prims)
             scene.add(mesh)
-            self._bodies.append(prim)
+            self._bodies.append(prims)
             self._body_meshes.append(mesh)
         self._shadows: list = []
         if style.shadow and rest_vertices is not None:
@@ -236,18 +243,19 @@ class SceneRenderer:
         return node, mesh, tex, floor_y + 0.002
 
     # ---- per frame ----------------------------------------------------------------------------------
-    def _upload_body(self, i: int, v: np.ndarray) -> None:
-        prim = self._bodies[i]
+    def _upload_body(self, i: int, v: np.ndarray, normals: np.ndarray | None = None) -> None:
         v = np.asarray(v, np.float32)
-        n = self._normals(v).astype(np.float32)
-        if prim._vaid is None:                               # not yet in the context: first upload by pyrender
-            prim.positions, prim.normals = v, n
-            return
+        n = (self._normals(v) if normals is None else np.asarray(normals)).astype(np.float32)
         GL = self._GL
-        data = np.ascontiguousarray(np.concatenate([v, n], 1))
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, prim._buffers[0])
-        GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, data.nbytes, data)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+        for prim, sf, uv in zip(self._bodies[i], self._surfaces, self._uv):
+            pv, pn = v[sf.start:sf.stop], n[sf.start:sf.stop]
+            if prim._vaid is None:                           # not yet in the context: first upload by pyrender
+                prim.positions, prim.normals = pv, pn
+                continue
+            data = np.ascontiguousarray(np.concatenate([pv, pn] + ([] if uv is None else [uv]), 1))
+            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, prim._buffers[0])
+            GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, data.nbytes, data)
+            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
 
     def _upload_shadow(self, i: int, v: np.ndarray, center_xz: np.ndarray) -> None:
         node, _, tex, y = self._shadows[i]
@@ -264,15 +272,16 @@ class SceneRenderer:
                            GL.GL_UNSIGNED_BYTE, np.ascontiguousarray(img))
         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
 
-    def render(self, vertices: Sequence[np.ndarray],
-               centers_xz: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
-        """vertices: one (V, 3) array per body; centers_xz: where each body's shadow is centred (pelvis x, z).
+    def render(self, vertices: Sequence[np.ndarray], centers_xz: Sequence[np.ndarray] | None = None,
+               normals: Sequence[np.ndarray] | None = None) -> list[np.ndarray]:
+        """vertices: one (V, 3) array per body; centers_xz: where each body's shadow is centred (pelvis x, z);
+        normals: one (V, 3) array per body (None: smooth normals from the triangles).
         Returns one (H, W, 3) uint8 image per body."""
         if len(vertices) != self.num_bodies:
             raise ValueError(f"expected {self.num_bodies} bodies, got {len(vertices)}")
         self._r._platform.make_current()
         for i, v in enumerate(vertices):
-            self._upload_body(i, v)
+            self._upload_body(i, v, None if normals is None else normals[i])
             if self._shadows:
                 c = np.asarray(centers_xz[i]) if centers_xz is not None else np.asarray(v)[:, [0, 2]].mean(0)
                 self._upload_shadow(i, np.asarray(v), c)

@@ -6,7 +6,8 @@ shader). This shader keeps what the look needs: diffuse from each directional li
 as pyrender's PBR diffuse, so light intensities mean the same), a soft Blinn-Phong highlight that fades
 with roughness, ambient, and two texture uses:
 * `emissiveTexture` is added *after* gamma encoding, i.e. shown exactly as stored (sRGB): the unlit floor;
-* `baseColorTexture` alpha (times the factor's alpha) is the output alpha: the contact-shadow decal.
+* `baseColorTexture` alpha (times the factor's alpha) is the output alpha: the contact-shadow decal; with a
+  factor alpha of 1 a texel of alpha < 0.5 is discarded instead (a character's cut-out, glTF's MASK).
 The vertex shader takes normals through mat3(M) (rigid node transforms only) instead of pyrender's
 per-vertex 4x4 inverse-transpose.
 
@@ -101,6 +102,7 @@ void main()
 #ifdef HAS_BASE_COLOR_TEX
     vec4 tex = texture(material.base_color_texture, uv_0);
     base = base * vec4(pow(tex.rgb, vec3(2.2)), tex.a);
+    if (material.base_color_factor.a > 0.9995 && base.a < 0.5) discard;   // a cut-out (MASK) texel
 #endif
     vec3 color = base.rgb * ambient_light;
 #ifdef NORMAL_LOC

@@ -199,11 +199,12 @@ class GestureService:
         return result
 
     def render(self, result: Result, progress: Progress | None = None,
-               cancelled: Callable[[], bool] | None = None) -> Result:
+               cancelled: Callable[[], bool] | None = None, character=None) -> Result:
         """The result with its video: for a request run with `render=False` (the page shows the motions first),
         with the rendering column of the timing rows and `seconds` (request start to video ready) filled in;
         a result that has its video comes back as it is. `cancelled()` (asked every ~1 % of the frames) stops it:
-        RenderCancelled (render/background.py)."""
+        RenderCancelled (render/background.py). character: a retarget.Character; one with a mesh is drawn in
+        the video instead of the body."""
         if result.video is not None or not result.motions:
             return result
         job, prog = result.job, progress or (lambda f, m: None)
@@ -217,7 +218,8 @@ class GestureService:
             render_apart(list(job.motions), job.audio, video, labels=list(job.labels), size=(job.size, job.size),
                          body_path=body_path, gen_seconds=list(job.gen_seconds),
                          progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
-                         nice=self.settings.render_nice, cancelled=cancelled)
+                         nice=self.settings.render_nice, cancelled=cancelled,
+                         rig=character.path if character is not None and character.document is not None else None)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
         render_s = time.perf_counter() - t_r

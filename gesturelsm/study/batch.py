@@ -100,9 +100,9 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
     """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
     web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
-    `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then gets
-    the motion on that character beside it (VIDEO.vrm / .glb, the same blinded name; the video shows the
-    mannequin)."""
+    `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then shows the
+    character's own mesh and gets the motion on that character beside it (VIDEO.vrm / .glb, the same blinded
+    name)."""
     methods = list(dict.fromkeys(methods))
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
@@ -137,7 +137,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                 log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
                 continue
             render_video([gen.motions[it.method]], speech.audio, out / "videos" / it.video, size=(size, size),
-                         body=body)
+                         body=body, character=rig)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 

@@ -42,8 +42,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="web study: pairwise preference between methods on the same speech, or 1-5 ratings")
     p.add_argument("--attention", type=float, default=0.15,
                    help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
-    p.add_argument("--rig", help="your character (.vrm / .glb): each video also gets its motion on the character "
-                   "(same blinded name, .vrm / .glb); the videos keep the mannequin")
+    p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
+                   "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
     p.set_defaults(func=run)
 
 

@@ -147,17 +147,18 @@ class _Handlers:
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
         return gr.skip() if self._replaced(request, out) else out
 
-    def show_video(self, out: Result | None, request: gr.Request = None, progress=gr.Progress()):
+    def show_video(self, out: Result | None, character=None, request: gr.Request = None, progress=gr.Progress()):
         """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
         request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). The
-        rendered result goes back into the page's state only while no newer request has replaced it there."""
+        rendered result goes back into the page's state only while no newer request has replaced it there. With the
+        page session's `character`, the video draws the character's own mesh."""
         if out is None:
             return None, gr.skip(), gr.skip(), gr.skip()
         if self._replaced(request, out):
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         try:
             out = self.service.render(out, progress=lambda f, m: progress(f, desc=m),
-                                      cancelled=lambda: self._replaced(request, out))
+                                      cancelled=lambda: self._replaced(request, out), character=character)
         except RenderCancelled:
             log.info("a video was not finished: the page asked for newer motion")
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
@@ -297,7 +298,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                              api_name="generate_motion", **gen)
         stats_view.attach(shown, state, stats)         # beside the chain below: neither waits for the other
         shown.then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, state, [video, table, summary, state], api_name="show_video",
+            .then(h.show_video, [state, character], [video, table, summary, state], api_name="show_video",
                   api_visibility="private", show_progress="hidden", **render) \
             .then(h.add_exports, [state, character], [files, view, summary, state], api_name="add_exports",
                   api_visibility="private", **render)

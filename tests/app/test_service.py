@@ -63,10 +63,11 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
 
     import gesturelsm.serve.service as service_module
 
-    drawn = []
+    drawn, rigs = [], []
 
     def render_apart(motions, audio, video, **kw):
         drawn.append((len(motions), kw["labels"], kw["size"], len(audio)))
+        rigs.append(kw.get("rig"))
         Path(video).write_bytes(b"mp4")
 
     monkeypatch.setattr(service_module, "render_apart", render_apart)
@@ -85,6 +86,10 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     assert r.downloads == () and r.glb is None and e.video == r.video and e.rows == r.rows
     assert sorted(p.name for p in e.downloads)[:2] == ["ddim.bvh", "ddim.npz"] and e.glb.parent == a.job.folder
     assert service.export(e) is e
+    from types import SimpleNamespace
+
+    service.render(a, character=SimpleNamespace(path=Path("me.vrm"), document=object()))   # the page's character
+    assert rigs == [None, Path("me.vrm")]                                    # drawn by the render process (--rig)
     with pytest.raises(dataclasses.FrozenInstanceError):
         a.job.size = 512
 

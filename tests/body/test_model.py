@@ -93,3 +93,15 @@ def test_real_beat2_frames_put_the_hands_where_the_arms_point(mannequin, take_pa
         assert (np.linalg.norm(centroid - wrist, axis=1) < 0.10).all()
     # standing on the floor: the lowest point is within a few centimetres of y = 0
     assert np.abs(out.vertices[:, :, 1].min(1)).max() < 0.05
+
+
+@pytest.mark.parametrize("which", ["mannequin", "synthetic"])
+def test_forward_subset_equals_forward_on_those_vertices(which, mannequin, synthetic_smplx_dir):
+    """Pose correctives included: the synthetic file has non-zero posedirs, the mannequin none."""
+    body = mannequin if which == "mannequin" else load_body_model(synthetic_smplx_dir)
+    rng = np.random.default_rng(1)
+    poses = (rng.normal(size=(5, 165)) * 0.3).astype(np.float32)
+    expr, betas = rng.normal(size=(5, 100)), rng.normal(size=10)
+    idx = rng.choice(body.num_vertices, 40, replace=False)
+    full = body.forward(poses, np.zeros((5, 3)), expr, betas).vertices[:, idx]
+    np.testing.assert_allclose(body.forward_subset(idx, poses, expr, betas), full, atol=2e-5)

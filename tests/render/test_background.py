@@ -77,6 +77,24 @@ def test_render_apart_equals_render_video_in_a_lowered_session(tmp_path, make_po
     assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 5)
 
 
+@linux
+def test_render_apart_draws_the_character_given(tmp_path, make_pose, body):
+    """The page's mp4 with a character: the render process draws its mesh (`--rig`), as render_video does."""
+    from _rigs import build_rig, vrm_body_bones
+    from _skinned import write_skinned_glb
+    from gesturelsm.retarget import load_character
+
+    skel, _ = build_rig(body.rest_joints(), fingers=False)
+    write_skinned_glb(skel, tmp_path / "boxes.vrm", vrm_body_bones(), color=(0.05, 0.1, 0.6, 1.0), half=0.05)
+    motion = make_pose(12, np.linspace(-1.2, 1.2, 12))
+    out = render_apart([motion], None, tmp_path / "req" / "apart.mp4", size=(64, 64), nice=5, rig=tmp_path / "boxes.vrm")
+    ref = render_video([motion], None, tmp_path / "inproc.mp4", size=(64, 64),
+                       character=load_character(tmp_path / "boxes.vrm"))
+    plain = render_video([motion], None, tmp_path / "mannequin.mp4", size=(64, 64))
+    a, b, c = (decode_video(p, (64, 64)).astype(int) for p in (out, ref, plain))
+    assert np.abs(a - b).mean() < 0.3 and np.abs(a - c).mean() > 2, "the character, not the mannequin"
+
+
 def test_a_failing_render_says_why_and_leaves_nothing(tmp_path, make_pose):
     missing = tmp_path / "nowhere" / "SMPLX_NEUTRAL.npz"
     with pytest.raises(RenderError, match="nowhere"):

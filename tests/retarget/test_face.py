@@ -1,11 +1,15 @@
-"""A VRM's mouth follows the generated jaw: the `aa` expression's morph targets get weight channels in the
-exported file, 0 with the jaw closed and 1 at 0.35 rad of opening, on the mesh nodes the expression binds."""
+"""A VRM's face follows the generated one: visemes from the mouth's opening and width measured on the body's
+landmarks (a wider-open jaw raises `aa`, a closed neutral face gives 0, weights in [0, 1] summing to the
+opening, the smile widens and its opposite rounds), no blink on the mannequin (its expressions have no
+eyelid), and in the exported file weight channels on exactly the morph targets of the presets the character
+defines."""
 from __future__ import annotations
 
 import json
 import struct
 
 import numpy as np
+import pytest
 
 from _rigs import build_rig, gltf_validator_errors, vrm_body_bones, write_gltf
 from gesturelsm.body.model import resolve_body
@@ -14,7 +18,8 @@ from gesturelsm.export.rig import export_rig_glb
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.skeleton import JOINT_INDEX
 from gesturelsm.retarget import load_character
-from gesturelsm.retarget.face import jaw_open
+from gesturelsm.retarget.face import PRESETS, VISEMES, WIDE_OPEN, face_weights, jaw_open
+from _skinned import write_skinned_glb
 
 
 def _vrm_with_mouth(tmp_path, version: str):
@@ -57,8 +62,77 @@ def test_mouth_opens_with_the_jaw(tmp_path):
         ch = [c for c in anim["channels"] if c["target"]["path"] == "weights"]
         assert [c["target"]["node"] for c in ch] == [face]
         w = accessor_array(gltf, blob, anim["samplers"][ch[0]["sampler"]]["output"])[:, 0]
-        np.testing.assert_allclose(w, jaw_open(poses), atol=1e-6)
-        assert w[0] == 0.0 and w[-1] == 1.0 and np.all(np.diff(w) >= 0)
+        np.testing.assert_allclose(w, face_weights(resolve_body(None), poses)["aa"], atol=1e-6)
+        assert w[0] == 0.0 and w[-1] == 1.0 and np.all(np.diff(w) >= -1e-6)
+        np.testing.assert_allclose(w[jaw_open(poses) >= 1], 1.0, atol=1e-6)        # wide open: all `aa`
         np.testing.assert_allclose(accessor_array(gltf, blob, 1), [[0, 0, 0], [0, 0.1, 0], [0, 0, 0]])  # mesh kept
         report = gltf_validator_errors(tmp_path / f"out{version}.vrm", tmp_path)
         assert report is None or report[0] == 0, report                  # checked where node is installed
+
+
+@pytest.fixture(scope="module")
+def body():
+    return resolve_body(None)
+
+
+def _jaw(values, expressions=None):
+    poses = np.zeros((len(values), 165))
+    poses[:, 3 * JOINT_INDEX["jaw"]] = values
+    return poses, (np.zeros((len(values), 100)) if expressions is None else expressions)
+
+
+def test_a_wider_open_jaw_gives_a_larger_aa_and_a_closed_face_none(body):
+    poses, ex = _jaw(np.linspace(0, WIDE_OPEN, 15))
+    w = face_weights(body, poses, ex)
+    assert set(w) == set(PRESETS)
+    assert np.all(np.diff(w["aa"]) > 0) and w["aa"][-1] == pytest.approx(1.0, abs=1e-6)
+    for p in PRESETS:
+        assert w[p][0] == pytest.approx(0.0, abs=1e-6), p                   # closed, neutral: nothing
+        assert np.all((w[p] >= 0) & (w[p] <= 1)), p
+    total = sum(w[p] for p in VISEMES)
+    assert np.all(np.diff(total) > 0) and np.all(total <= 1 + 1e-9)
+
+
+def test_the_lips_width_chooses_between_wide_and_round_visemes(body):
+    """Mannequin expression 1 is a smile (corners out): + widens the mouth (ee / ih), - narrows it (oh / ou)."""
+    ex = np.zeros((3, 100))
+    ex[:, 1] = [-3.0, 0.0, 3.0]
+    w = face_weights(body, *_jaw([0.25] * 3, ex))
+    assert w["oh"][0] > 0.05 and w["ou"][0] > 0.05 and w["ee"][0] == w["oh"][2] == 0.0
+    assert w["ee"][2] > 0.05 and w["ee"][1] == w["oh"][1] == w["ou"][1] == 0.0
+    assert w["aa"][1] > max(w["aa"][0], w["aa"][2])                          # the neutral width is `aa`'s
+    opening = sum(w[p] for p in VISEMES)
+    assert np.all((opening > 0.3) & (opening <= 1.0))                        # the width shares the opening out
+
+
+def test_no_blink_without_eyelid_motion(body):
+    rng = np.random.default_rng(0)
+    poses, _ = _jaw(rng.uniform(0, 0.3, 20))
+    w = face_weights(body, poses, rng.normal(size=(20, 100)))
+    assert np.all(w["blink"] == 0.0)
+
+
+def test_only_the_presets_a_character_defines_get_weights(tmp_path, body):
+    skel, _ = build_rig(body.rest_joints(), fingers=False)
+    T = 30
+    rng = np.random.default_rng(1)
+    poses, ex = _jaw(np.linspace(0, 0.4, T), rng.normal(size=(T, 100)))
+    seq = MotionSequence(poses, np.tile([0, 1.0, 0], (T, 1)), ex)
+    expected = face_weights(body, poses, ex)
+    for version in ("1", "0"):
+        path = tmp_path / f"oh_aa{version}.vrm"
+        write_skinned_glb(skel, path, vrm_body_bones(), vrm=version, presets=("oh", "aa"))
+        export_rig_glb(seq, load_character(path), tmp_path / f"out{version}.vrm")
+        gltf, blob = read_glb(tmp_path / f"out{version}.vrm")
+        anim = gltf["animations"][0]
+        (ch,) = [c for c in anim["channels"] if c["target"]["path"] == "weights"]
+        assert gltf["nodes"][ch["target"]["node"]].get("mesh") == 0
+        W = accessor_array(gltf, blob, anim["samplers"][ch["sampler"]]["output"]).reshape(T, 2)
+        np.testing.assert_allclose(W, np.stack([expected["oh"], expected["aa"]], 1), atol=1e-6)
+        report = gltf_validator_errors(tmp_path / f"out{version}.vrm", tmp_path)
+        assert report is None or report[0] == 0, report
+    plain = tmp_path / "plain.vrm"
+    write_skinned_glb(skel, plain, vrm_body_bones())                         # no expressions at all
+    export_rig_glb(seq, load_character(plain), tmp_path / "out_plain.vrm")
+    gltf, _ = read_glb(tmp_path / "out_plain.vrm")
+    assert not [c for c in gltf["animations"][0]["channels"] if c["target"]["path"] == "weights"]
