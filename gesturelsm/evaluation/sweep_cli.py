@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
+from ..backends import checkpoint_sources
 from ..pipeline import GesturePipeline
 from .sweep import SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
@@ -49,7 +50,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     limits = SweepLimits(LIMITS.max_cells, LIMITS.max_seeds, args.max_work)
     audio = load_audio(args.audio)
-    pipe = GesturePipeline.from_pretrained(args.checkpoints)
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods)
     grid = SweepGrid(tuple(dict.fromkeys(args.methods or pipe.methods)), parse_numbers(args.steps, int, "--steps"),
                      parse_numbers(args.cfg, float, "--cfg"), args.seeds)
     check_grid(pipe, grid, len(audio) / SAMPLE_RATE, limits)
