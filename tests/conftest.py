@@ -137,7 +137,8 @@ def built_wheel(tmp_path_factory) -> Path:
 
 
 # Fixtures whose tests leave the fast tier (`make test-fast`, `-m "not slow and not browser"`): each costs tens of
-# seconds on 2 cores or reads the real data; `make test` runs them all.
+# seconds on 2 cores or reads the real data; `make test` runs them all. Tests that need the shipped network or a real
+# model load (Whisper, the text encoder in a new interpreter) are marked slow where they are defined.
 HEAVY_FIXTURES = {
     "app_url": "serves the web app",
     "service": "the web app's request service over trained checkpoints (renders videos)",
@@ -145,11 +146,18 @@ HEAVY_FIXTURES = {
     "recognizer": "loads Whisper",
     "beat2_root": "reads the real BEAT2 take",
     "beat2": "reads the real BEAT2 take",
-    "eval_assets": "trains models for the evaluation runners",
+    "eval_assets": "runs the evaluation runners (eval, bench, sweep) over checkpoints",
 }
 
 
 def pytest_collection_modifyitems(config, items):
+    parallel = config.pluginmanager.hasplugin("xdist")
     for item in items:
         if HEAVY_FIXTURES.keys() & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+        if parallel:
+            # With `-n 2 --dist loadgroup` (the Makefile's): a module's tests stay in one process, so its module
+            # fixtures are built once; the browser tests share one process, so two Chromiums never compete for
+            # the 2 cores with a served app and a render each.
+            group = "browser" if item.get_closest_marker("browser") else item.nodeid.split("::")[0]
+            item.add_marker(pytest.mark.xdist_group(group))
