@@ -1,5 +1,6 @@
 # make test  - create .venv, install everything, run the test suite
 # make test-fast - the same without slow and browser tests (the edit-test loop)
+#   both run TEST_WORKERS test processes (pytest-xdist; one math thread each, see tests/conftest.py)
 # make demo  - create .venv, install everything, start the web app on http://127.0.0.1:7860
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -7,6 +8,8 @@ STAMP := $(VENV)/.setup-done
 export NUMBA_CACHE_DIR ?= $(CURDIR)/$(VENV)/numba-cache
 export GRADIO_ANALYTICS_ENABLED := False
 export HF_HUB_DISABLE_TELEMETRY := 1
+TEST_WORKERS ?= 2
+PYTEST := $(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 
 .PHONY: setup test test-fast demo clean
 setup: $(STAMP)
@@ -17,10 +20,10 @@ $(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/p
 	touch $@
 
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PYTEST)
 
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -m "not slow and not browser"
+	$(PYTEST) -m "not slow and not browser"
 
 demo: $(STAMP)
 	$(PY) -m app

@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -88,11 +91,23 @@ def beat2_maker():
     return make_take
 
 
+def pytest_configure(config):
+    """One math thread per test process, and for the processes tests start (they inherit OMP_NUM_THREADS): the
+    tests' tensors are small, so a second thread gains little, while on a 2-core machine shared with other busy
+    processes OpenMP threads spinning for a busy core made a test 9x slower (tests/flows/test_methods.py's toy
+    distribution: 69 s with two threads, 7.5 s with one, run one after the other). A value set outside is kept."""
+    import torch
+
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    torch.set_num_threads(int(os.environ["OMP_NUM_THREADS"]))
+
+
 # A tiny but complete set of checkpoints (4 tokenizers + 3 generators) built from synthetic motion, so the whole
-# pipeline runs in tests without ../shared or the shipped assets (tests/app and tests/evaluation build their own).
+# pipeline runs in tests without ../shared or the shipped assets. Built once per test process and shared by every
+# test that needs checkpoints (pipeline, app, study, evaluation): tests only read it.
 @pytest.fixture(scope="session")
 def tiny_assets(tmp_path_factory) -> Path:
-    return build_tiny_assets(tmp_path_factory.mktemp("assets"), steps=40, batch_size=8, warmup=5)
+    return build_tiny_assets(tmp_path_factory.mktemp("assets"), steps=20, batch_size=8, warmup=5)
 
 
 @pytest.fixture(scope="session")
@@ -102,8 +117,28 @@ def tiny_pipeline(tiny_assets):
     return GesturePipeline.from_pretrained(tiny_assets)
 
 
+# The wheel `pip wheel` builds from a copy of the checkout's packaging inputs (so the checkout gets no build/ or
+# egg-info folders), once per test process: tests/test_packaging.py reads it, tests/test_constants.py installs it.
+@pytest.fixture(scope="session")
+def built_wheel(tmp_path_factory) -> Path:
+    src = tmp_path_factory.mktemp("src")
+    for name in ("setup.py", "pyproject.toml", "README.md"):
+        shutil.copy2(REPO / name, src / name)
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules", "*.egg-info")
+    for name in ("gesturelsm", "assets", "app"):
+        shutil.copytree(REPO / name, src / name, ignore=ignore)
+    out = tmp_path_factory.mktemp("wheel")
+    subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "wheel", "--no-deps",
+                    "--no-build-isolation", "--no-index", "-q", "-w", str(out), str(src)],
+                   check=True, cwd=src, capture_output=True)
+    shutil.rmtree(src)                          # nothing to fall back on but what the wheel carries
+    (found,) = out.glob("gesturelsm-*.whl")
+    return found
+
+
 # Fixtures whose tests leave the fast tier (`make test-fast`, `-m "not slow and not browser"`): each costs tens of
-# seconds on 2 cores or reads the real data; `make test` runs them all.
+# seconds on 2 cores or reads the real data; `make test` runs them all. Tests that need the shipped network or a real
+# model load (Whisper, the text encoder in a new interpreter) are marked slow where they are defined.
 HEAVY_FIXTURES = {
     "app_url": "serves the web app",
     "service": "the web app's request service over trained checkpoints (renders videos)",
@@ -111,11 +146,18 @@ HEAVY_FIXTURES = {
     "recognizer": "loads Whisper",
     "beat2_root": "reads the real BEAT2 take",
     "beat2": "reads the real BEAT2 take",
-    "eval_assets": "trains models for the evaluation runners",
+    "eval_assets": "runs the evaluation runners (eval, bench, sweep) over checkpoints",
 }
 
 
 def pytest_collection_modifyitems(config, items):
+    parallel = config.pluginmanager.hasplugin("xdist")
     for item in items:
         if HEAVY_FIXTURES.keys() & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+        if parallel:
+            # With `-n 2 --dist loadgroup` (the Makefile's): a module's tests stay in one process, so its module
+            # fixtures are built once; the browser tests share one process, so two Chromiums never compete for
+            # the 2 cores with a served app and a render each.
+            group = "browser" if item.get_closest_marker("browser") else item.nodeid.split("::")[0]
+            item.add_marker(pytest.mark.xdist_group(group))

@@ -4,7 +4,6 @@ from __future__ import annotations
 import filecmp
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -38,21 +37,11 @@ def test_a_checkout_uses_the_repository_assets_folder():
 
 
 @pytest.mark.skipif(not SHIPPED, reason="no shipped checkpoints in assets/")
-def test_an_installed_wheel_carries_and_finds_the_shipped_assets(tmp_path):
-    src = tmp_path / "src"
-    skip = shutil.ignore_patterns("__pycache__", "node_modules", "dist", "*.egg-info")
-    for name in ("gesturelsm", "app", "assets"):
-        shutil.copytree(REPO / name, src / name, ignore=skip)
-    for name in ("pyproject.toml", "setup.py", "README.md"):
-        shutil.copy(REPO / name, src / name)
+def test_an_installed_wheel_carries_and_finds_the_shipped_assets(built_wheel, tmp_path):
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]
-    subprocess.run(pip + ["wheel", "--no-deps", "--no-build-isolation", "--no-index", "-w", str(tmp_path / "wheels"),
-                          str(src)], check=True, cwd=tmp_path, capture_output=True)
-    wheel = next((tmp_path / "wheels").glob("gesturelsm-*.whl"))
     site = tmp_path / "site"
-    subprocess.run(pip + ["install", "--no-deps", "--no-index", "--target", str(site), str(wheel)], check=True,
+    subprocess.run(pip + ["install", "--no-deps", "--no-index", "--target", str(site), str(built_wheel)], check=True,
                    capture_output=True)
-    shutil.rmtree(src)                                              # nothing left to fall back on but the install
 
     env = {**os.environ, "PYTHONPATH": str(site)}
     run = subprocess.run([sys.executable, "-c", PROBE], cwd=tmp_path, env=env, capture_output=True, text=True)

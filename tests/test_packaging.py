@@ -5,9 +5,6 @@ build/ or egg-info folders."""
 from __future__ import annotations
 
 import configparser
-import shutil
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
@@ -17,18 +14,8 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def wheel(tmp_path_factory) -> Path:
-    src = tmp_path_factory.mktemp("src")
-    for name in ("setup.py", "pyproject.toml", "README.md"):
-        shutil.copy2(REPO / name, src / name)
-    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules")
-    for name in ("gesturelsm", "assets", "app"):
-        shutil.copytree(REPO / name, src / name, ignore=ignore)
-    out = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(out),
-                    str(src)], check=True, cwd=src, capture_output=True)
-    (found,) = out.glob("gesturelsm-*.whl")
-    return found
+def wheel(built_wheel) -> Path:
+    return built_wheel
 
 
 def test_the_wheel_has_one_top_level_package_and_no_app(wheel):

@@ -1,5 +1,5 @@
-"""Fixtures for the web app tests: tiny checkpoints built in the session (as tests/generator/conftest.py
-does), a GestureService over them, and the app served in this process on a free local port."""
+"""Fixtures for the web app tests: the session's tiny checkpoints (tests/conftest.py), a GestureService over them,
+and the app served in this process on a free local port."""
 from __future__ import annotations
 
 import os
@@ -13,10 +13,8 @@ os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 
 @pytest.fixture(scope="session")
-def app_assets(tmp_path_factory) -> Path:
-    from _support import build_tiny_assets
-
-    return build_tiny_assets(tmp_path_factory.mktemp("app_assets"), steps=20, batch_size=8, warmup=5)
+def app_assets(tiny_assets) -> Path:
+    return tiny_assets
 
 
 @pytest.fixture(scope="session")

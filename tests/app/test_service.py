@@ -48,8 +48,8 @@ def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
 
 
 def test_same_seed_same_motion_and_transcript_mode(service, speech_wav):
-    a = service.run(Request(str(speech_wav), text="hello there friends", steps=1, size=256, exports=False))
-    b = service.run(Request(str(speech_wav), text="hello there friends", steps=1, size=256, exports=False))
+    a = service.run(Request(str(speech_wav), text="hello there friends", steps=1, exports=False, render=False))
+    b = service.run(Request(str(speech_wav), text="hello there friends", steps=1, exports=False, render=False))
     assert "aligned automatically" in a.text_mode
     assert a.rows[0][2] > 0                                 # alignment time shown
     np.testing.assert_array_equal(a.motions["gesturelsm"].poses, b.motions["gesturelsm"].poses)
@@ -99,7 +99,7 @@ def test_textgrid_upload_gives_word_timings(service, speech_wav, tmp_path):
 
     tg = tmp_path / "words.TextGrid"
     write_textgrid(tg, [Word("hello", 0.2, 0.6), Word("world", 0.7, 1.2)], duration=2.0)
-    out = service.run(Request(str(speech_wav), textgrid_path=str(tg), steps=1, size=256, exports=False))
+    out = service.run(Request(str(speech_wav), textgrid_path=str(tg), steps=1, exports=False, render=False))
     assert out.text_mode == "transcript with given word timings"
 
 
@@ -109,13 +109,14 @@ def test_ground_truth_for_a_known_beat2_take(service, beat2_dir, tmp_path):
     sf.write(wav, y, sr)
     assert find_beat2_take(beat2_dir, y.astype(np.float32), "upload.wav") == "2_scott_0_9_9"
     assert find_beat2_take(beat2_dir, speech_like(2.0), "other.wav") is None
-    out = service.run(Request(str(wav), methods=["gesturelsm", "ground_truth"], steps=1, size=256, exports=False))
+    out = service.run(Request(str(wav), methods=["gesturelsm", "ground_truth"], steps=1, exports=False,
+                              render=False))
     assert out.ground_truth == "2_scott_0_9_9" and out.rows[1][0] == "Ground truth"
 
 
 def test_ground_truth_missing_is_said(service, speech_wav):
-    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ground_truth"], steps=1, size=256,
-                              exports=False))
+    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ground_truth"], steps=1, exports=False,
+                              render=False))
     assert out.ground_truth is None and any("not a take" in w for w in out.warnings)
 
 
@@ -236,7 +237,7 @@ def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
     from gesturelsm.asr.source import RECENT
 
     RECENT.clear()                                  # transcribed here, not remembered from an earlier test
-    req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False)
+    req = Request(str(EXAMPLES / "hello.wav"), steps=1, exports=False, render=False)   # motions only: no video
     auto = service.run(req)
     assert auto.text_mode.startswith("automatic transcript") and "everyone" in auto.transcript.lower()
     assert auto.rows[0][TIMING_COLUMNS.index("transcription")] > 0

@@ -9,6 +9,7 @@ from gesturelsm.pipeline import ASSETS
 from gesturelsm.webapp.ui import EXAMPLES
 
 
+@pytest.mark.slow                                    # the shipped network, then a 5 s video rendered at niceness 19
 def test_shipped_checkpoints_serve_an_example(tmp_path):
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")

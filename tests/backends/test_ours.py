@@ -22,6 +22,9 @@ GOLDEN = {
 }
 
 
+pytestmark = pytest.mark.slow                        # the shipped network, six generations
+
+
 @pytest.fixture(scope="module")
 def shipped() -> GesturePipeline:
     threads = torch.get_num_threads()

@@ -1,4 +1,5 @@
-"""Tiny checkpoints and a tiny BEAT2-layout folder, built in the test session (no ../shared, no assets/)."""
+"""The session's tiny checkpoints (tests/conftest.py) and a tiny BEAT2-layout folder, built in the test session
+(no ../shared, no assets/)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -6,12 +7,12 @@ from pathlib import Path
 import pytest
 import soundfile as sf
 
-from _support import build_tiny_assets, speech_like, synthetic_motion
+from _support import speech_like, synthetic_motion
 
 
 @pytest.fixture(scope="session")
-def eval_assets(tmp_path_factory) -> Path:
-    return build_tiny_assets(tmp_path_factory.mktemp("eval_assets"), steps=5, batch_size=4, warmup=2)
+def eval_assets(tiny_assets) -> Path:
+    return tiny_assets
 
 
 @pytest.fixture(scope="session")

@@ -99,6 +99,7 @@ def test_missing_text_model_falls_back_to_audio_only(tmp_path):
     assert not emb.available and "unavailable" in emb.error
 
 
+@pytest.mark.slow                                    # loads the real text encoder in a new interpreter
 def test_loading_the_text_encoder_prints_no_progress_bar():
     """A command that loads the text encoder prints no third-party progress bar (transformers draws one while it
     loads the weights unless told not to)."""

@@ -9,13 +9,12 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from _support import build_tiny_assets, speech_like
-
+from _support import speech_like
 
 
 @pytest.fixture(scope="module")
-def study_assets(tmp_path_factory):
-    return build_tiny_assets(tmp_path_factory.mktemp("study_assets"), steps=20, batch_size=8, warmup=5)
+def study_assets(tiny_assets):
+    return tiny_assets
 
 
 @pytest.fixture
