@@ -36,6 +36,7 @@ def test_a_checkout_uses_the_repository_assets_folder():
     assert mannequin.DEFAULT_PATH == constants.ASSETS / "body" / "SMPLX_MANNEQUIN.npz"
 
 
+@pytest.mark.slow                       # a whole command in subprocesses: the full tier
 @pytest.mark.skipif(not SHIPPED, reason="no shipped checkpoints in assets/")
 def test_an_installed_wheel_carries_and_finds_the_shipped_assets(built_wheel, tmp_path):
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check", "-q"]

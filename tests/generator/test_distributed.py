@@ -78,6 +78,7 @@ def test_only_the_first_process_of_a_node_prints_the_refusal():
     assert out.value.code == 2
 
 
+@pytest.mark.slow                       # a new interpreter per rank: the full tier
 @pytest.mark.parametrize("rank,lines", [(0, 1), (1, 0)])
 def test_train_command_refuses_before_loading_anything(tmp_path, rank, lines):
     """`gesturelsm train` as process `rank` of 2 torchrun processes on a (faked) one-GPU machine: exit status 2

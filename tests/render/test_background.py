@@ -53,6 +53,7 @@ def test_an_unreadable_or_empty_autogroup_reads_as_none(tmp_path, monkeypatch):
     assert bg.lower_this_process(0)["autogroup"] is None
 
 
+@pytest.mark.slow                       # a whole command in subprocesses: the full tier
 @linux
 def test_render_apart_equals_render_video_in_a_lowered_session(tmp_path, make_pose, caplog):
     motion, y = step_clip(make_pose, frames=40, step=25)
@@ -77,6 +78,7 @@ def test_render_apart_equals_render_video_in_a_lowered_session(tmp_path, make_po
     assert info["nice"] == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 5)
 
 
+@pytest.mark.slow                       # a whole command in subprocesses: the full tier
 @linux
 def test_render_apart_draws_the_character_given(tmp_path, make_pose, body):
     """The page's mp4 with a character: the render process draws its mesh (`--rig`), as render_video does."""

@@ -33,6 +33,7 @@ def _rows(path):
         return list(csv.DictReader(fh))
 
 
+@pytest.mark.slow                       # a whole command in subprocesses: the full tier
 def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_path):
     from gesturelsm.cli import main
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import imageio_ffmpeg
 import numpy as np
+import pytest
 import soundfile as sf
 
 from _rigs import build_rig, vrm_body_bones
@@ -14,6 +15,7 @@ from gesturelsm.cli import main
 from gesturelsm.export.glb import read_glb
 
 
+@pytest.mark.slow                       # a whole command in subprocesses: the full tier
 def test_batch_with_rig_draws_the_character_and_writes_its_file_per_video(tiny_assets, tmp_path, capsys):
     d = tmp_path / "speech"
     d.mkdir()
