@@ -17,6 +17,9 @@ All of it happens in an aligned frame (the character's left, up and forward turn
 follow as L_i = W_p^-1 Δ_p^-1 Δ_i W_i (W: rest world rotations). The root moves as SMPL-X's pelvis scaled by
 the ratio of leg lengths (so centimetre rigs move in centimetres), starting at the character's place, and
 its height keeps the lowest foot joint as far above the character's floor as SMPL-X's is above its own.
+Where the root starts and where SMPL-X's floor is come from the motion itself (its first frame, its lowest foot),
+or from a `Ground` given by the caller: a stream retargeted chunk by chunk with its first chunk's `Ground` has
+the same root motion as the whole stream at once (no jump at chunk borders).
 """
 from __future__ import annotations
 
@@ -65,6 +68,14 @@ class SourceBody:
                    body.module.pose_mean.detach().cpu().numpy().astype(np.float64).reshape(-1))
 
 
+@dataclass(frozen=True)
+class Ground:
+    """The reference of the root motion, in SMPL-X's world: `pelvis` (3,) is where SMPL-X's pelvis stands when the
+    character's hips stand at their rest place, `floor` the height of SMPL-X's floor (its lowest foot joint there)."""
+    pelvis: np.ndarray
+    floor: float
+
+
 @dataclass
 class Retargeted:
     """A motion on a character (all arrays per frame, in the character's own world frame and units)."""
@@ -77,6 +88,7 @@ class Retargeted:
     root_translation: np.ndarray   # (T, 3) the hips' local translation
     align: np.ndarray              # (3, 3) the character's world -> SMPL-X's axes (left +x, up +y, forward +z)
     scale: float                   # character units per SMPL-X metre (leg-length ratio)
+    ground: Ground | None = None   # the root motion's reference (pass it on to continue a stream)
 
     @property
     def num_frames(self) -> int:
@@ -201,8 +213,9 @@ def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G
     return delta[:, :N]
 
 
-def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
-    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring)."""
+def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = None) -> Retargeted:
+    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring); `ground`: the
+    root motion's reference (None: the motion's first frame and lowest foot)."""
     Mw = skel.world()
     p_rest, W = Mw[:, :3, 3], world_rotation(Mw)
     A = alignment(skel, p_rest)
@@ -228,10 +241,12 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
         pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
     hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
-    disp = scale * (pelvis - pelvis[:1])
     feet = [f for f in FEET if f in skel.bones]
     smplx_low = (P[:, [JOINT_INDEX[f] for f in feet], 1] + np.asarray(seq.trans, np.float64)[:, 1:2]).min(1)
-    lift = smplx_low - smplx_low.min()                                # SMPL-X's lowest foot above its floor
+    if ground is None:
+        ground = Ground(pelvis[0].copy(), float(smplx_low.min()))
+    disp = scale * (pelvis - ground.pelvis)
+    lift = smplx_low - ground.floor                                   # SMPL-X's lowest foot above its floor
     rest_low = q[[skel.bones[f] for f in feet], 1].min()
     disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
     below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(N)])
@@ -250,4 +265,4 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
     pos_w = pos @ A
     parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
     root_t = (np.linalg.inv(parent_world) @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
-    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale))
+    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale), ground)
