@@ -16,7 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, write_gltf
-from _support import synthetic_motion
+from _support import speech_like, synthetic_motion
 from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.export.motion_format import CHARACTER_VERSION, HEADER, VERSION, decode, encode
@@ -98,6 +98,13 @@ def test_no_jump_at_chunk_borders(character, motion, body):
     assert np.linalg.norm(np.diff(naive, axis=0), axis=1)[borders - 1].max() > 3 * inside.max()
 
 
+def wait_idle(mgr) -> None:
+    deadline = time.monotonic() + 10
+    while mgr.active and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert mgr.active == 0
+
+
 class FakeSession:
     """What live.py `payload` reads of a LiveSession: poll(), stats(), delivered."""
 
@@ -161,8 +168,6 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
     from gesturelsm.live.session import LiveManager
     from gesturelsm.webapp import live_socket
 
-    from test_live_socket import pcm_blocks, wait_idle
-
     chars = LiveCharacters(tmp_path)
     token = chars.register(character)
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
@@ -171,8 +176,9 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
     def run(hello: dict) -> list:
         with client.websocket_connect(live_socket.PATH) as ws:
             ws.send_text(json.dumps(hello))
-            for b in pcm_blocks(2.0, 16000):
-                ws.send_bytes(b)
+            y = (np.clip(speech_like(2.0, seed=7), -1, 1) * 32767).astype("<i2")
+            for a in range(0, len(y), 1600):
+                ws.send_bytes(y[a:a + 1600].tobytes())
             ws.send_text(json.dumps({"end": True}))
             out = []
             while not out or out[-1].meta["status"] == "streaming":
