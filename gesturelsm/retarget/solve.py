@@ -26,10 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import torch
 
-from ..body.fk import forward_kinematics
-from ..motion.rotations import axis_angle_to_matrix
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS, PARENTS
 from .errors import CharacterError
 from .skeleton import Skeleton, world_rotation
@@ -129,12 +126,40 @@ def _leg(x: np.ndarray, idx: dict[str, int]) -> float:
     return float(np.mean(legs))
 
 
+def _rodrigues(aa: np.ndarray) -> np.ndarray:
+    """(..., 3) axis-angle -> (..., 3, 3) rotation matrices."""
+    angle = np.linalg.norm(aa, axis=-1)[..., None, None]
+    k = aa / np.maximum(angle[..., 0], 1e-12)
+    K = np.zeros(aa.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
+    K = K - np.swapaxes(K, -1, -2)
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * (K @ K)
+
+
+def _depths(parents) -> np.ndarray:
+    depth = np.zeros(len(parents), np.int64)
+    for i, pp in enumerate(parents):
+        depth[i] = 0 if pp < 0 else depth[pp] + 1
+    return depth
+
+
+_LEVELS = [np.nonzero(_depths(PARENTS) == d)[0] for d in range(int(_depths(PARENTS).max()) + 1)]   # root first
+
+
 def _smplx_fk(seq, src: SourceBody) -> tuple[np.ndarray, np.ndarray]:
-    """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3)."""
+    """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3): one level
+    of the tree at a time, in numpy (a stream's chunk of 20 frames costs well under a millisecond)."""
     T = seq.num_frames
-    aa = torch.from_numpy((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
-    J, Gm = forward_kinematics(axis_angle_to_matrix(aa.float()), torch.from_numpy(src.rest_joints).float(), PARENTS)
-    return J.numpy().astype(np.float64), Gm[..., :3, :3].numpy().astype(np.float64)
+    R = _rodrigues((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
+    rest = src.rest_joints
+    par = np.asarray(PARENTS)
+    G, P = np.empty((T, NUM_JOINTS, 3, 3)), np.empty((T, NUM_JOINTS, 3))
+    G[:, _LEVELS[0]], P[:, _LEVELS[0]] = R[:, _LEVELS[0]], rest[_LEVELS[0]]
+    for idx in _LEVELS[1:]:
+        p = par[idx]
+        G[:, idx] = G[:, p] @ R[:, idx]
+        P[:, idx] = P[:, p] + np.einsum("tjxy,jy->tjx", G[:, p], rest[idx] - rest[p])
+    return P, G
 
 
 def _is_below(parents: np.ndarray, child: int, ancestor: int) -> bool:
@@ -189,10 +214,9 @@ def _plan(skel: Skeleton, q: np.ndarray, J: np.ndarray) -> _Plan:
     return _Plan(chain, frames, leaves, copy_of)
 
 
-def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G: np.ndarray) -> np.ndarray:
+def _solve_deltas(skel: Skeleton, plan: _Plan, P: np.ndarray, G: np.ndarray) -> np.ndarray:
     """(T, N, 3, 3) world rotations relative to rest, in the aligned frame (see the module docstring); each
     kind of bone is solved for all its bones at once."""
-    plan = _plan(skel, q, J)
     T, N = len(P), len(skel)
     delta = np.empty((T, N + 1, 3, 3))
     delta[:, N] = np.eye(3)                                          # the joints above every humanoid bone
@@ -213,9 +237,26 @@ def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G
     return delta[:, :N]
 
 
-def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = None) -> Retargeted:
-    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring); `ground`: the
-    root motion's reference (None: the motion's first frame and lowest foot)."""
+@dataclass
+class Setup:
+    """What retargeting onto `skel` from `source` needs of the two rest poses alone (`prepare`): computed once, it
+    makes retargeting a stream chunk by chunk cost only the per-frame work."""
+    skel: Skeleton
+    source: SourceBody
+    Mw: np.ndarray             # (N, 4, 4) rest world matrices
+    W: np.ndarray              # (N, 3, 3) rest world rotations
+    A: np.ndarray              # (3, 3) alignment
+    q: np.ndarray              # (N, 3) rest positions, aligned frame
+    scale: float
+    plan: _Plan
+    levels: list[np.ndarray]   # the joints of each depth of the tree below the roots, top down
+    below: np.ndarray          # (N,) bool: the hips and the joints under them (they move with the root)
+    Vbase: np.ndarray          # (3, 3) aligned world rotation above the roots
+    to_parent: np.ndarray      # (4, 4) world -> the hips' parent's local frame
+
+
+def prepare(skel: Skeleton, source: SourceBody) -> Setup:
+    """The rest-pose part of `retarget` (an absurd scale raises CharacterError here)."""
     Mw = skel.world()
     p_rest, W = Mw[:, :3, 3], world_rotation(Mw)
     A = alignment(skel, p_rest)
@@ -225,18 +266,31 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     if not 1e-3 <= scale <= 1e4:
         raise CharacterError(f"{skel.source}: absurd scale: the legs are {scale * _leg(Jr, JOINT_INDEX):.3g} "
                              "units long (a humanoid's are about 0.8 m, 80 cm or 800 mm)")
+    depth = _depths(skel.parents)
+    hips = skel.bones["pelvis"]
+    below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(len(skel))])
+    parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
+    return Setup(skel, source, Mw, W, A, q, float(scale), _plan(skel, q, Jr),
+                 [np.nonzero(depth == d)[0] for d in range(1, int(depth.max()) + 1)], below,
+                 A @ world_rotation(skel.base), np.linalg.inv(parent_world))
+
+
+def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = None,
+             setup: Setup | None = None) -> Retargeted:
+    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring); `ground`: the
+    root motion's reference (None: the motion's first frame and lowest foot); `setup`: `prepare(skel, source)`,
+    when the caller keeps it."""
+    if setup is None or setup.skel is not skel or setup.source is not source:
+        setup = prepare(skel, source)
+    W, A, q, scale = setup.W, setup.A, setup.q, setup.scale
     P, G = _smplx_fk(seq, source)
-    delta = _solve_deltas(skel, q, Jr, P, G)
+    delta = _solve_deltas(skel, setup.plan, P, G)
     T, N = delta.shape[:2]
     # joint positions with the root at its rest place: each offset turns with its parent
     pos = np.empty((T, N, 3))
-    depth = np.zeros(N, np.int64)
-    for i, pp in enumerate(skel.parents):
-        depth[i] = 0 if pp < 0 else depth[pp] + 1
     roots = np.nonzero(skel.parents < 0)[0]
     pos[:, roots] = q[roots]
-    for d in range(1, int(depth.max()) + 1):                         # one level of the tree at a time
-        idx = np.nonzero(depth == d)[0]
+    for idx in setup.levels:                                          # one level of the tree at a time
         par = skel.parents[idx]
         pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
     hips = skel.bones["pelvis"]
@@ -249,12 +303,10 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     lift = smplx_low - ground.floor                                   # SMPL-X's lowest foot above its floor
     rest_low = q[[skel.bones[f] for f in feet], 1].min()
     disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
-    below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(N)])
-    pos[:, below] += disp[:, None]
+    pos[:, setup.below] += disp[:, None]
     # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
     # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
-    V = A @ W
-    Vbase = A @ world_rotation(skel.base)
+    V, Vbase = A @ W, setup.Vbase
     moving = np.array(sorted(set(skel.bones.values()) | {hips}))
     par = skel.parents[moving]
     Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
@@ -263,6 +315,5 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     local[:] = skel.rotation
     local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
     pos_w = pos @ A
-    parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
-    root_t = (np.linalg.inv(parent_world) @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
+    root_t = (setup.to_parent @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
     return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale), ground)

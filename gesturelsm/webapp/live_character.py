@@ -37,8 +37,8 @@ import numpy as np
 from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import matrix_to_quaternion_xyzw
 from gesturelsm.motion.sequence import MotionSequence
-from gesturelsm.motion.skeleton import NUM_JOINTS
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
+from gesturelsm.retarget.solve import prepare
 
 from .character import bone_order
 from .motion_player import file_url
@@ -139,10 +139,8 @@ class CharacterStream:
         self.skeleton = character.skeleton
         self.order = bone_order(self.skeleton)
         self.source = SourceBody.of(resolve_body(body), None)
-        rest = retarget(MotionSequence(np.zeros((1, NUM_JOINTS * 3), np.float32), np.zeros((1, 3), np.float32),
-                                       np.zeros((1, 100), np.float32)),
-                        self.skeleton, self.source)
-        self.align, self.scale = rest.align, rest.scale
+        self.setup = prepare(self.skeleton, self.source)         # the rest-pose work, once per stream
+        self.align, self.scale = self.setup.A, self.setup.scale
         self.ground: Ground | None = None
         self.last: np.ndarray | None = None          # (B, 4) the last frame's quaternions sent
 
@@ -157,7 +155,7 @@ class CharacterStream:
     def chunk(self, seq: MotionSequence) -> tuple[np.ndarray, np.ndarray]:
         """The next frames of the stream on the character: bone quaternions (T, B, 4) x, y, z, w (hips first, sign
         continuous with the previous chunk) and the hips' local translation (T, 3), float32."""
-        r = retarget(seq, self.skeleton, self.source, self.ground)
+        r = retarget(seq, self.skeleton, self.source, self.ground, self.setup)
         self.ground = r.ground
         q = matrix_to_quaternion_xyzw(r.local_rotation[:, self.order])
         prev = self.last if self.last is not None else q[0]
