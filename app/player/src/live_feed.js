@@ -86,6 +86,7 @@ export class LiveFeed {
     ws.onmessage = (e) => this.push(e.data);
     ws.onclose = () => {
       mic.close();
+      if (this.answer) this.answer(null);
       if (this.ws === ws) this.ws = null;
       this._buttons(false);
       if (!this.ended) this._text('status', 'the connection to the server closed');
