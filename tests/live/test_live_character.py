@@ -210,3 +210,12 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
     assert first.meta == {"status": "streaming", "character_error": EXPIRED}
     assert all(m.bone_rotations is None for m in msgs) and sum(m.frames for m in msgs) == 60
     wait_idle(mgr)
+
+
+def test_the_hello_names_a_token_or_nothing():
+    from gesturelsm.webapp.live_socket import Refused, hello
+
+    assert hello('{"sample_rate": 48000}') == (48000, None)
+    assert hello('{"sample_rate": 16000, "character": "abc"}') == (16000, "abc")
+    with pytest.raises(Refused, match="the token the page was given"):
+        hello('{"sample_rate": 16000, "character": {"path": "/etc/passwd"}}')
