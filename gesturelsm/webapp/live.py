@@ -28,7 +28,8 @@ a record is a binary message; Gradio's microphone puts it base64-encoded in the 
 The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
 factor beside it. The player `live-player` (app/player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
-delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms).
+delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms); on the visitor's
+character it carries data-character (the file name), like `motion-player`.
 """
 from __future__ import annotations
 
