@@ -38,6 +38,7 @@ from starlette.routing import WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gesturelsm.audio import MAX_SAMPLE_RATE
+from gesturelsm.errors import GestureError
 from gesturelsm.export.motion_format import MotionRecord, encode
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
@@ -167,7 +168,10 @@ def stream_character(characters, token: str, body=None) -> tuple[CharacterStream
     url = entry.serve() if entry is not None else None
     if url is None:
         return None, {"status": "streaming", "character_error": EXPIRED}
-    stream = CharacterStream(entry.character, body)
+    try:
+        stream = CharacterStream(entry.character, body)
+    except GestureError as exc:                 # a character the retargeting refuses (e.g. an absurd scale)
+        return None, {"status": "streaming", "character_error": f"{exc}; the live stream uses the mannequin"}
     return stream, {"status": "streaming", "character": {**stream.spec(), "url": url, "key": entry.key}}
 
 

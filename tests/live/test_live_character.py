@@ -219,3 +219,17 @@ def test_the_hello_names_a_token_or_nothing():
     assert hello('{"sample_rate": 16000, "character": "abc"}') == (16000, "abc")
     with pytest.raises(Refused, match="the token the page was given"):
         hello('{"sample_rate": 16000, "character": {"path": "/etc/passwd"}}')
+
+
+def test_a_character_the_retargeting_refuses_is_a_message_and_the_mannequin(character, body, tmp_path):
+    """A rig a million times too large: the socket's first message says why, and no character stream is made."""
+    from dataclasses import replace
+
+    from gesturelsm.webapp.live_socket import stream_character
+
+    chars = LiveCharacters(tmp_path)
+    huge = replace(character, skeleton=replace(character.skeleton, translation=character.skeleton.translation * 1e6))
+    stream, meta = stream_character(chars, chars.register(huge), body)
+    assert stream is None and "absurd scale" in meta["character_error"] and meta["status"] == "streaming"
+    stream, meta = stream_character(chars, chars.register(character), body)
+    assert isinstance(stream, CharacterStream) and meta["character"]["name"] == "me.glb"
