@@ -2,10 +2,12 @@
 
     .venv/bin/python benchmarks/live_browser.py                        # 30 s of the real take (../shared)
     .venv/bin/python benchmarks/live_browser.py --seconds 60 --wav speech.wav --screenshot docs/live.png
+    .venv/bin/python benchmarks/live_browser.py --character avatar.vrm      # on a character (Character upload)
 
 The app is served in this process with the shipped checkpoints (as `python -m app`); Chromium opens it with
 `--use-fake-device-for-media-stream --use-file-for-fake-audio-capture=<wav>` (the wav cut to --seconds, 48 kHz
-16-bit; Chromium loops it), presses Record on the Live tab, waits --seconds and presses Stop. Reported:
+16-bit; Chromium loops it), presses Record on the Live tab, waits --seconds and presses Stop (with --character, the file
+is chosen in the page's Character upload first, so the stream is on it). Reported:
 
 * the page's meter at the end (#live-latency = median, #live-stats = p90 and real-time factor): from a microphone
   chunk's arrival at the server to the motion covering it being ready, since the stream started;
@@ -122,6 +124,10 @@ def run(args) -> dict:
             page.goto(f"{url}?measure=1")              # the live feed stamps each message's arrival (last.at)
             page.wait_for_selector("#live-player[data-ready]", timeout=60000)
             page.wait_for_function("() => window.gesturelsmPlayer && window.gesturelsmPlayer.live", timeout=60000)
+            if args.character:                          # chosen as a visitor does; the stream then uses it
+                page.locator("#character input[type=file]").set_input_files(args.character)
+                page.locator("#character", has_text="humanoid bones").wait_for(timeout=120000)
+                page.wait_for_function("() => window.gesturelsmPlayer.live.chosen !== null", timeout=60000)
             page.locator("#live-player").scroll_into_view_if_needed()
             cpu0, bcpu0, t0 = self_cpu_s(), child_cpu_s(os.getpid()), time.perf_counter()
             page.locator("#live-record").click()
@@ -129,6 +135,7 @@ def run(args) -> dict:
                 time.sleep(1.0)
                 samples.append(page.evaluate(PAGE_STATE))
             end = page.evaluate(PAGE_STATE)
+            end["body"] = page.get_attribute("#live-player", "data-character") or "mannequin"
             wall = time.perf_counter() - t0
             cpu, bcpu = self_cpu_s() - cpu0, child_cpu_s(os.getpid()) - bcpu0
             if args.screenshot:
@@ -154,6 +161,7 @@ def report(r: dict, seconds: float) -> None:
     fps = [s["fps"] for s in r["samples"] if s["state"] == "playing"]
     rows = [
         ("speech streamed (s)", f"{seconds:g} (recording {r['wall']:.1f} s wall)"),
+        ("body in the live player (data-character)", e["body"]),
         ("live settings: commit / look-ahead (latents), steps, CFG",
          f"{r['config'].commit} / {r['config'].lookahead}, {r['config'].steps}, {r['config'].cfg:g}"),
         ("server latency median (ms), #live-latency", med or "-"),
@@ -187,6 +195,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--workdir", default="/tmp/gesturelsm-live-browser")
     p.add_argument("--screenshot", help="also save a PNG of the Live tab while it streams")
+    p.add_argument("--character", help="choose this .vrm / .glb / .gltf in the page first (the stream is on it)")
     for k, t in (("commit", int), ("lookahead", int), ("steps", int), ("cfg", float)):
         p.add_argument(f"--{k}", type=t, help=f"live {k} (default: the app's, gesturelsm/live/stream.py LiveConfig)")
     args = p.parse_args(argv)

@@ -3,11 +3,16 @@
     .venv/bin/python benchmarks/live_latency.py                       # 60 s paced run + quality on two takes
     .venv/bin/python benchmarks/live_latency.py --seconds 600         # 10 minutes (the real take looped)
     .venv/bin/python benchmarks/live_latency.py --skip-quality --threads 2
+    .venv/bin/python benchmarks/live_latency.py --skip-quality --character avatar.vrm   # also on a character
 
 Paced run: a real take (../shared) looped to --seconds, fed in --chunk-ms chunks at the pace of speech (chunk k
 arrives when its last sample would have been spoken). Latency of a chunk = when the motion of all its frames is
 available - its arrival. CPU share = process CPU time / wall time (1.0 = one core busy). Memory: resident set size
 sampled each chunk (first minute vs the end). Drift: motion frames available vs audio frames arrived at the end.
+Each motion chunk is also made into the live socket's message (gesturelsm/webapp/live.py `payload`: the page
+player's record); with --character PATH the same chunk is made a second time with the character section (retargeted
+onto the character, gesturelsm/webapp/live_character.py), in the same run, so the two latencies (chunk available +
+its message built) differ only by the character's cost.
 
 Quality (as fast as possible, same seed): the held-out audio-only takes streamed with the live settings vs the
 offline pipeline at the same steps: speech-response tests (metrics.speech_response), upper-body speed and jitter,
@@ -38,13 +43,38 @@ def rss_mb() -> float:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
 
 
-def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float) -> dict:
+def messages(character: str | None):
+    """Functions chunk -> the socket's message bytes: the mannequin's record, and (with a character file) the record
+    with the character section; each keeps its stream's state."""
+    from dataclasses import replace
+
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.export.motion_format import encode
+    from gesturelsm.export.player import motion_record
+
+    body = resolve_body(None)
+    out = {"mannequin": lambda mc: encode(motion_record(mc.motion, body, mc.start))}
+    if character:
+        from gesturelsm.retarget import load_character
+        from gesturelsm.webapp.live_character import CharacterStream
+
+        stream = CharacterStream(load_character(character), body)
+
+        def with_character(mc) -> bytes:
+            q, r = stream.chunk(mc.motion)
+            return encode(replace(motion_record(mc.motion, body, mc.start), bone_rotations=q, bone_root=r))
+        out[Path(character).name] = with_character
+    return out
+
+
+def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float, character: str | None = None) -> dict:
     from gesturelsm.live import StreamingGenerator
     from gesturelsm.constants import SAMPLE_RATE
 
     n = int(round(chunk_ms * SAMPLE_RATE / 1000))
     gen = StreamingGenerator(pipe, cfg)
-    lat, mem = [], []
+    make = messages(character)
+    lat, mem, built = [], [], {k: [] for k in make}          # built: per message kind, (ms to build, latencies)
     c0, t0 = time.process_time(), time.perf_counter()
     for a in range(0, len(audio), n):
         chunk = audio[a:a + n]
@@ -52,6 +82,11 @@ def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float) -> dict:
         time.sleep(max(0.0, arrival - time.perf_counter()))
         for mc in gen.feed(chunk, arrival):
             lat += mc.latencies
+            for k, f in make.items():
+                t = time.perf_counter()
+                f(mc)
+                dt = time.perf_counter() - t
+                built[k].append((dt * 1000, [x + dt for x in mc.latencies]))
         mem.append((a / SAMPLE_RATE, rss_mb()))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     behind = gen.n_in * 30 / SAMPLE_RATE - gen.emitted                            # frames of audio without motion yet
@@ -59,7 +94,8 @@ def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float) -> dict:
     first = m[m[:, 0] <= 60, 1]
     return {"lat": np.array(lat), "cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
             "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(),
-            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
+            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SAMPLE_RATE,
+            "built": built}
 
 
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
@@ -131,6 +167,8 @@ def main() -> None:
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-paced", action="store_true")
     ap.add_argument("--pooled", type=int, default=0, metavar="N", help="also stream both takes with seeds 0..N-1")
+    ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
+                    ".glb, .gltf, .bvh): the latency with and without it")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     from dataclasses import replace
@@ -150,7 +188,7 @@ def main() -> None:
     if not args.skip_paced:
         take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
         y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
-        r = paced(pipe, y, cfg, args.chunk_ms)
+        r = paced(pipe, y, cfg, args.chunk_ms, args.character)
         print(f"| paced run ({args.seconds:.0f} s of {args.take}, {args.chunk_ms:.0f} ms chunks) | value |")
         print("|---|---|")
         print(f"| latency median / p90 / max (s) | {np.median(r['lat']):.2f} / {np.percentile(r['lat'], 90):.2f} / "
@@ -162,6 +200,14 @@ def main() -> None:
         print(f"| motion frames behind the audio at the end | {r['behind_frames']:.0f} "
               f"({r['frames']} of {r['audio_frames']}) |")
         print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
+        print("| socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / max (s) |")
+        print("|---|---|---|")
+        for k, rows in r["built"].items():
+            ms = np.array([m for m, _ in rows])
+            lat = np.concatenate([x for _, x in rows])
+            print(f"| {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
+                  f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
+        print()
     if not args.skip_quality:
         rows = quality(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], cfg.steps)
         print("| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "

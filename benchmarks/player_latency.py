@@ -9,7 +9,10 @@ transcribing its upload afresh; prints a markdown table of medians. The page is 
 hooks on (`?measure=1`, app/player/src/measure.js): its load marks and the split of its draws.
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR] [--think-s 3]
-                                                  [--repeat 3]
+                                                  [--repeat 3] [--character avatar.vrm]
+
+With --character PATH every case runs twice per repeat, on the mannequin and with PATH chosen in the page's Character
+upload (then "playing" also waits for `#motion-player[data-character]`), interleaved so both see the same load.
 """
 from __future__ import annotations
 
@@ -60,14 +63,16 @@ def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
     return worst
 
 
-def click_and_wait(page, timeout_s: float = 600) -> tuple[float, dict]:
-    """Click generate; seconds until the player plays the new motion, and the player's own marks (ms)."""
+def click_and_wait(page, timeout_s: float = 600, on: str | None = None) -> tuple[float, dict]:
+    """Click generate; seconds until the player plays the new motion (on the character file `on`, when given), and
+    the player's own marks (ms)."""
     page.evaluate(f"() => {{ delete document.querySelector('{PLAYER}').dataset.marks; }}")
     click_ms = page.evaluate("() => performance.now()")
     t0 = time.perf_counter()
     page.locator("#generate").click()
     # polled on every animation frame: wait_for_selector's polling backs off to 500 ms and added 0.3-0.5 s
-    page.wait_for_function(f"() => document.querySelector('{PLAYER}[data-marks][data-state=playing]') !== null",
+    sel = f"{PLAYER}[data-marks][data-state=playing]" + (f"[data-character={json.dumps(on)}]" if on else "")
+    page.wait_for_function(f"() => document.querySelector({json.dumps(sel)}) !== null",
                            polling="raf", timeout=timeout_s * 1000)
     marks = json.loads(page.get_attribute(PLAYER, "data-marks"))
     marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> payload in the page (s)
@@ -84,10 +89,14 @@ def downloads_changed(old: str) -> str:
             f"return h && h !== {old!r}; }}")
 
 
-def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path(".")) -> dict:
+def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path("."),
+             character: Path | None = None) -> dict:
     page = browser.new_page(viewport={"width": 1400, "height": 1300})
     page.goto(f"{url}?measure=1")                      # the player's marks (data-marks) and draw split (prof)
     page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
+    if character is not None:                          # chosen before the speech, as a visitor would
+        page.locator("#character input[type=file]").set_input_files(str(character))
+        page.locator("#character", has_text="humanoid bones").wait_for(timeout=120000)
     for m in ALL:
         if m not in methods:
             page.locator("#methods label", has_text=LABELS[m]).click()
@@ -95,7 +104,7 @@ def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
     page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being transcribed)
     t0 = time.perf_counter()
-    play_s, marks = click_and_wait(page)
+    play_s, marks = click_and_wait(page, on=Path(character).name if character is not None else None)
     r = {"play": play_s, "marks": marks, "fps_first": fps(page, 1.0)}
     rendering = ("!document.querySelector('#summary').innerText.includes('Video ready') && "
                  f"document.querySelector('{PLAYER}').dataset.state === 'playing'")
@@ -137,6 +146,21 @@ def per_draw(prof: dict | None) -> str:
     return " / ".join(f"{prof[k] / prof['draws']:.1f}" for k in ("pose", "render", "labels", "dom"))
 
 
+def row(dur: float, n: int, body: str, runs: list[dict]) -> None:
+    """One line of the table: medians over `runs`."""
+    r = {k: median([x[k] for x in runs]) for k in ("play", "fps_first", "fps_render", "fps_idle", "scrub",
+                                                  "mp4", "again", "again_rendering")}
+    busy = sum(x["rendering"] for x in runs)
+    m = {k: median([x["marks"].get(k, 0) for x in runs]) for k in ("page_play", "payload", "bodies",
+                                                                   "motion", "play")}
+    spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
+    print(f"| {dur:.1f} s | {n} | {body} | {r['play']:.2f}{spread} | {m['page_play']:.2f} | {m['payload']:.2f} | "
+          f"{m['bodies']:.0f} / {m['motion']:.0f} / {m['play']:.0f} | {r['fps_first']:.1f} | "
+          f"{r['fps_render']:.1f} | {r['fps_idle']:.1f} | {per_draw(runs[-1]['prof'])} | {r['scrub']:.0f} | "
+          f"{r['mp4']:.1f} | {r['again']:.2f} | {r['again_rendering']:.2f} ({busy}/{len(runs)}) |",
+          flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
@@ -147,7 +171,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--repeat", type=int, default=3, help="runs per case; the table gives medians (and the range of "
                    "click -> playing)")
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
+    p.add_argument("--character", type=Path, metavar="PATH",
+                   help="also run every case with this character chosen in the page (.vrm / .glb / .gltf)")
     args = p.parse_args(argv)
+    if args.character is not None and not args.character.is_file():
+        p.error(f"--character {args.character}: no such file")
     import torch
     from playwright.sync_api import sync_playwright
 
@@ -162,31 +190,24 @@ def main(argv: list[str] | None = None) -> int:
     service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
     service.warmup()
     demo, url = serve_locally(service)
-    print("| speech | methods | click -> playing (s), median (range) | same, page clock (s) | click -> payload in the page (s) | then bodies / motion / "
+    print("| speech | methods | body | click -> playing (s), median (range) | same, page clock (s) | click -> payload in the page (s) | then bodies / motion / "
           "playing (ms) | "
           "player fps, first second | player fps while the mp4 renders (next <= 10 s) | player fps after (server idle) | ms per draw after: pose / render / labels / dom | scrub offset (frames) | click -> mp4 (s) | "
           "again, new seed -> playing (s) | again while the mp4 renders -> playing (s) (runs where it still rendered) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
         for sec in args.seconds:
             wav, _, dur = speech(sec, Path(tmp) / f"speech_{int(sec)}.wav")
             for n in args.methods:
-                runs = []
+                bodies = [None] + ([args.character] if args.character is not None else [])
+                cases = {b: [] for b in bodies}
                 for _ in range(args.repeat):
-                    RECENT.clear()                   # every run transcribes its upload afresh, as a new visitor's
-                    runs.append(run_case(browser, url, wav, ALL[:n], args.think_s, service.workdir))
-                r = {k: median([x[k] for x in runs]) for k in ("play", "fps_first", "fps_render", "fps_idle", "scrub",
-                                                              "mp4", "again", "again_rendering")}
-                busy = sum(x["rendering"] for x in runs)
-                m = {k: median([x["marks"].get(k, 0) for x in runs]) for k in ("page_play", "payload", "bodies",
-                                                                               "motion", "play")}
-                spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
-                print(f"| {dur:.1f} s | {n} | {r['play']:.2f}{spread} | {m['page_play']:.2f} | {m['payload']:.2f} | "
-                      f"{m['bodies']:.0f} / {m['motion']:.0f} / {m['play']:.0f} | {r['fps_first']:.1f} | "
-                      f"{r['fps_render']:.1f} | {r['fps_idle']:.1f} | {per_draw(runs[-1]['prof'])} | {r['scrub']:.0f} | "
-                      f"{r['mp4']:.1f} | {r['again']:.2f} | {r['again_rendering']:.2f} ({busy}/{len(runs)}) |",
-                      flush=True)
+                    for b in bodies:
+                        RECENT.clear()               # every run transcribes its upload afresh, as a new visitor's
+                        cases[b].append(run_case(browser, url, wav, ALL[:n], args.think_s, service.workdir, b))
+                for b, runs in cases.items():
+                    row(dur, n, "mannequin" if b is None else b.name, runs)
         browser.close()
     demo.close()
     return 0

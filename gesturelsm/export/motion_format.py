@@ -22,7 +22,19 @@ A record, little-endian throughout:
       expressions  (T, E)
     meta: meta_bytes of UTF-8 JSON, an object (the live feed's status and latency; empty in files)
 
-The header is a multiple of 4 bytes, so the page views the floats in place (no copy). 10 s of the player's
+Version 2 is version 1 with a character section: the same motion on the visitor's character (the live feed with a
+character chosen, gesturelsm/webapp/live_character.py). A record without one is written as version 1, byte for byte.
+
+    header (28 bytes) as above, version 2
+    section header (4 bytes)
+     28  bones        uint16   B, the character's humanoid bones (its hips first)
+     30  reserved     uint16   0
+    data, float32: rotations, root, expressions as above, then
+      bone rotations (T, B, 4)  each bone node's local rotation x, y, z, w (sign-continuous over the stream)
+      bone root      (T, 3)     the hips node's local translation, the character's units
+    meta
+
+The headers are a multiple of 4 bytes, so the page views the floats in place (no copy). 10 s of the player's
 motion at 30 fps is 28 + 300 x (55 x 4 + 3 + E) x 4 bytes, ~0.27 MB per method.
 """
 from __future__ import annotations
@@ -37,8 +49,10 @@ from ..errors import InputError
 from ..motion.skeleton import NUM_JOINTS
 
 MAGIC = b"GLSM"
-VERSION = 1
+VERSION = 1                                     # a record without a character section
+CHARACTER_VERSION = 2                           # a record with one
 HEADER = struct.Struct("<4sHHHHfIII")
+SECTION = struct.Struct("<HH")                  # version 2: bones, reserved
 QUATERNION, AXIS_ANGLE = "quaternion", "axis-angle"
 KINDS = {QUATERNION: 1, AXIS_ANGLE: 2}          # kind -> its code in the header
 CHANNELS = {QUATERNION: 4, AXIS_ANGLE: 3}       # numbers per joint and frame
@@ -62,6 +76,8 @@ class MotionRecord:
     fps: float = 30.0
     start: int = 0
     meta: dict = field(default_factory=dict)
+    bone_rotations: np.ndarray | None = None    # (T, B, 4) the character section (version 2), None: none
+    bone_root: np.ndarray | None = None         # (T, 3)
 
     @property
     def frames(self) -> int:
@@ -81,9 +97,16 @@ def encode(record: MotionRecord) -> bytes:
     if root.shape != (T, 3) or expr.ndim != 2 or expr.shape[0] != T:
         raise ValueError(f"root must be ({T}, 3) and expressions ({T}, E), got {root.shape} and {expr.shape}")
     meta = json.dumps(record.meta, separators=(",", ":")).encode() if record.meta else b""
-    head = HEADER.pack(MAGIC, VERSION, KINDS[record.kind], rot.shape[1], expr.shape[1], float(record.fps),
-                       int(record.start), T, len(meta))
-    return b"".join([head, rot.tobytes(), root.tobytes(), expr.tobytes(), meta])
+    section, bones = b"", []
+    if record.bone_rotations is not None:
+        brot, broot = np.asarray(record.bone_rotations, "<f4"), np.asarray(record.bone_root, "<f4")
+        if brot.ndim != 3 or brot.shape[0] != T or brot.shape[2] != 4 or broot.shape != (T, 3):
+            raise ValueError(f"bone rotations must be ({T}, bones, 4) and bone root ({T}, 3), got {brot.shape} and "
+                             f"{broot.shape}")
+        section, bones = SECTION.pack(brot.shape[1], 0), [brot.tobytes(), broot.tobytes()]
+    head = HEADER.pack(MAGIC, CHARACTER_VERSION if section else VERSION, KINDS[record.kind], rot.shape[1],
+                       expr.shape[1], float(record.fps), int(record.start), T, len(meta))
+    return b"".join([head, section, rot.tobytes(), root.tobytes(), expr.tobytes(), *bones, meta])
 
 
 def decode(data: bytes, source: str = "motion data") -> MotionRecord:
@@ -95,19 +118,26 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
     if magic != MAGIC:
         raise MotionFormatError(f"{source}: not a GestureLSM motion record (it starts with {magic!r}, "
                                 f"not {MAGIC!r})")
-    if version != VERSION:
-        raise MotionFormatError(f"{source}: motion format version {version}; this reader knows version {VERSION} "
-                                "(update the app or rewrite the file)")
+    if version not in (VERSION, CHARACTER_VERSION):
+        raise MotionFormatError(f"{source}: motion format version {version}; this reader knows versions {VERSION} "
+                                f"and {CHARACTER_VERSION} (update the app or rewrite the file)")
     kind = next((k for k, c in KINDS.items() if c == code), None)
     if kind is None:
         raise MotionFormatError(f"{source}: unknown motion kind {code} (1 = quaternion, 2 = axis-angle)")
-    widths = (J * CHANNELS[kind], 3, E)
-    want = HEADER.size + 4 * T * sum(widths) + n_meta
+    at, B = HEADER.size, 0
+    if version == CHARACTER_VERSION:
+        if len(data) < at + SECTION.size:
+            raise MotionFormatError(f"{source}: {len(data)} bytes, shorter than the headers of a version 2 record")
+        B = SECTION.unpack_from(data, at)[0]
+        at += SECTION.size
+    widths = (J * CHANNELS[kind], 3, E) + ((B * 4, 3) if version == CHARACTER_VERSION else ())
+    want = at + 4 * T * sum(widths) + n_meta
     if len(data) != want:
         raise MotionFormatError(f"{source}: {len(data)} bytes, but its header says {want} ({T} frames of {J} "
-                                f"joints and {E} expressions, {n_meta} bytes of meta): the data is cut or padded")
-    floats = np.frombuffer(data, "<f4", T * sum(widths), HEADER.size)
-    rot, root, expr = np.split(floats, np.cumsum([T * w for w in widths[:2]]))
+                                f"joints, {E} expressions and {B} character bones, {n_meta} bytes of meta): the data "
+                                "is cut or padded")
+    floats = np.frombuffer(data, "<f4", T * sum(widths), at)
+    rot, root, expr, *section = np.split(floats, np.cumsum([T * w for w in widths[:-1]]))
     meta = {}
     if n_meta:
         try:
@@ -116,9 +146,10 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
             raise MotionFormatError(f"{source}: its meta block is not UTF-8 JSON") from None
         if not isinstance(meta, dict):
             raise MotionFormatError(f"{source}: its meta block is not a JSON object")
+    bones = (section[0].reshape(T, B, 4), section[1].reshape(T, 3)) if section else (None, None)
     return MotionRecord(rot.reshape(T, J, CHANNELS[kind]), root.reshape(T, 3), expr.reshape(T, E), kind=kind,
-                        fps=float(fps), start=int(start), meta=meta)
+                        fps=float(fps), start=int(start), meta=meta, bone_rotations=bones[0], bone_root=bones[1])
 
 
-__all__ = ["AXIS_ANGLE", "HEADER", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",
+__all__ = ["AXIS_ANGLE", "CHARACTER_VERSION", "HEADER", "SECTION", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",
            "encode"]

@@ -9,7 +9,7 @@ No Blender: numpy and torch only. See `solve.py` for the method and docs/CHARACT
 from .character import Character, load_character, retarget_motion
 from .errors import CharacterError
 from .skeleton import Skeleton
-from .solve import Retargeted, SourceBody, retarget
+from .solve import Ground, Retargeted, SourceBody, retarget
 
-__all__ = ["Character", "CharacterError", "Retargeted", "Skeleton", "SourceBody", "load_character",
+__all__ = ["Character", "CharacterError", "Ground", "Retargeted", "Skeleton", "SourceBody", "load_character",
            "retarget", "retarget_motion"]

@@ -10,7 +10,7 @@ from .bvh_read import read_bvh_skeleton
 from .errors import CharacterError
 from .gltf import MAX_BYTES, GltfDocument, gltf_skeleton, read_gltf
 from .skeleton import Skeleton
-from .solve import Retargeted, SourceBody, retarget
+from .solve import Ground, Retargeted, SourceBody, retarget
 
 SUFFIXES = (".vrm", ".glb", ".gltf", ".bvh")
 
@@ -39,7 +39,8 @@ def load_character(path: str | Path, bone_map: str | dict | None = None, limit: 
     return Character(path, gltf_skeleton(doc, bone_map), doc)
 
 
-def retarget_motion(seq, character: Character | Skeleton, body=None) -> Retargeted:
-    """`seq` (MotionSequence on `body`: None = $GESTURELSM_SMPLX_MODEL or the mannequin) on the character."""
+def retarget_motion(seq, character: Character | Skeleton, body=None, ground: Ground | None = None) -> Retargeted:
+    """`seq` (MotionSequence on `body`: None = $GESTURELSM_SMPLX_MODEL or the mannequin) on the character;
+    `ground`: the root motion's reference (solve.py `Ground`; None: the motion's own first frame and floor)."""
     skel = character.skeleton if isinstance(character, Character) else character
-    return retarget(seq, skel, SourceBody.of(resolve_body(body), seq.betas))
+    return retarget(seq, skel, SourceBody.of(resolve_body(body), seq.betas), ground)

@@ -17,16 +17,16 @@ All of it happens in an aligned frame (the character's left, up and forward turn
 follow as L_i = W_p^-1 Δ_p^-1 Δ_i W_i (W: rest world rotations). The root moves as SMPL-X's pelvis scaled by
 the ratio of leg lengths (so centimetre rigs move in centimetres), starting at the character's place, and
 its height keeps the lowest foot joint as far above the character's floor as SMPL-X's is above its own.
+Where the root starts and where SMPL-X's floor is come from the motion itself (its first frame, its lowest foot),
+or from a `Ground` given by the caller: a stream retargeted chunk by chunk with its first chunk's `Ground` has
+the same root motion as the whole stream at once (no jump at chunk borders).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-import torch
 
-from ..body.fk import forward_kinematics
-from ..motion.rotations import axis_angle_to_matrix
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS, PARENTS
 from .errors import CharacterError
 from .skeleton import Skeleton, world_rotation
@@ -65,6 +65,14 @@ class SourceBody:
                    body.module.pose_mean.detach().cpu().numpy().astype(np.float64).reshape(-1))
 
 
+@dataclass(frozen=True)
+class Ground:
+    """The reference of the root motion, in SMPL-X's world: `pelvis` (3,) is where SMPL-X's pelvis stands when the
+    character's hips stand at their rest place, `floor` the height of SMPL-X's floor (its lowest foot joint there)."""
+    pelvis: np.ndarray
+    floor: float
+
+
 @dataclass
 class Retargeted:
     """A motion on a character (all arrays per frame, in the character's own world frame and units)."""
@@ -77,6 +85,7 @@ class Retargeted:
     root_translation: np.ndarray   # (T, 3) the hips' local translation
     align: np.ndarray              # (3, 3) the character's world -> SMPL-X's axes (left +x, up +y, forward +z)
     scale: float                   # character units per SMPL-X metre (leg-length ratio)
+    ground: Ground | None = None   # the root motion's reference (pass it on to continue a stream)
 
     @property
     def num_frames(self) -> int:
@@ -117,12 +126,40 @@ def _leg(x: np.ndarray, idx: dict[str, int]) -> float:
     return float(np.mean(legs))
 
 
+def _rodrigues(aa: np.ndarray) -> np.ndarray:
+    """(..., 3) axis-angle -> (..., 3, 3) rotation matrices."""
+    angle = np.linalg.norm(aa, axis=-1)[..., None, None]
+    k = aa / np.maximum(angle[..., 0], 1e-12)
+    K = np.zeros(aa.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
+    K = K - np.swapaxes(K, -1, -2)
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * (K @ K)
+
+
+def _depths(parents) -> np.ndarray:
+    depth = np.zeros(len(parents), np.int64)
+    for i, pp in enumerate(parents):
+        depth[i] = 0 if pp < 0 else depth[pp] + 1
+    return depth
+
+
+_LEVELS = [np.nonzero(_depths(PARENTS) == d)[0] for d in range(int(_depths(PARENTS).max()) + 1)]   # root first
+
+
 def _smplx_fk(seq, src: SourceBody) -> tuple[np.ndarray, np.ndarray]:
-    """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3)."""
+    """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3): one level
+    of the tree at a time, in numpy (a stream's chunk of 20 frames costs well under a millisecond)."""
     T = seq.num_frames
-    aa = torch.from_numpy((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
-    J, Gm = forward_kinematics(axis_angle_to_matrix(aa.float()), torch.from_numpy(src.rest_joints).float(), PARENTS)
-    return J.numpy().astype(np.float64), Gm[..., :3, :3].numpy().astype(np.float64)
+    R = _rodrigues((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
+    rest = src.rest_joints
+    par = np.asarray(PARENTS)
+    G, P = np.empty((T, NUM_JOINTS, 3, 3)), np.empty((T, NUM_JOINTS, 3))
+    G[:, _LEVELS[0]], P[:, _LEVELS[0]] = R[:, _LEVELS[0]], rest[_LEVELS[0]]
+    for idx in _LEVELS[1:]:
+        p = par[idx]
+        G[:, idx] = G[:, p] @ R[:, idx]
+        P[:, idx] = P[:, p] + np.einsum("tjxy,jy->tjx", G[:, p], rest[idx] - rest[p])
+    return P, G
 
 
 def _is_below(parents: np.ndarray, child: int, ancestor: int) -> bool:
@@ -177,10 +214,9 @@ def _plan(skel: Skeleton, q: np.ndarray, J: np.ndarray) -> _Plan:
     return _Plan(chain, frames, leaves, copy_of)
 
 
-def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G: np.ndarray) -> np.ndarray:
+def _solve_deltas(skel: Skeleton, plan: _Plan, P: np.ndarray, G: np.ndarray) -> np.ndarray:
     """(T, N, 3, 3) world rotations relative to rest, in the aligned frame (see the module docstring); each
     kind of bone is solved for all its bones at once."""
-    plan = _plan(skel, q, J)
     T, N = len(P), len(skel)
     delta = np.empty((T, N + 1, 3, 3))
     delta[:, N] = np.eye(3)                                          # the joints above every humanoid bone
@@ -201,8 +237,26 @@ def _solve_deltas(skel: Skeleton, q: np.ndarray, J: np.ndarray, P: np.ndarray, G
     return delta[:, :N]
 
 
-def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
-    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring)."""
+@dataclass
+class Setup:
+    """What retargeting onto `skel` from `source` needs of the two rest poses alone (`prepare`): computed once, it
+    makes retargeting a stream chunk by chunk cost only the per-frame work."""
+    skel: Skeleton
+    source: SourceBody
+    Mw: np.ndarray             # (N, 4, 4) rest world matrices
+    W: np.ndarray              # (N, 3, 3) rest world rotations
+    A: np.ndarray              # (3, 3) alignment
+    q: np.ndarray              # (N, 3) rest positions, aligned frame
+    scale: float
+    plan: _Plan
+    levels: list[np.ndarray]   # the joints of each depth of the tree below the roots, top down
+    below: np.ndarray          # (N,) bool: the hips and the joints under them (they move with the root)
+    Vbase: np.ndarray          # (3, 3) aligned world rotation above the roots
+    to_parent: np.ndarray      # (4, 4) world -> the hips' parent's local frame
+
+
+def prepare(skel: Skeleton, source: SourceBody) -> Setup:
+    """The rest-pose part of `retarget` (an absurd scale raises CharacterError here)."""
     Mw = skel.world()
     p_rest, W = Mw[:, :3, 3], world_rotation(Mw)
     A = alignment(skel, p_rest)
@@ -212,34 +266,47 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
     if not 1e-3 <= scale <= 1e4:
         raise CharacterError(f"{skel.source}: absurd scale: the legs are {scale * _leg(Jr, JOINT_INDEX):.3g} "
                              "units long (a humanoid's are about 0.8 m, 80 cm or 800 mm)")
+    depth = _depths(skel.parents)
+    hips = skel.bones["pelvis"]
+    below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(len(skel))])
+    parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
+    return Setup(skel, source, Mw, W, A, q, float(scale), _plan(skel, q, Jr),
+                 [np.nonzero(depth == d)[0] for d in range(1, int(depth.max()) + 1)], below,
+                 A @ world_rotation(skel.base), np.linalg.inv(parent_world))
+
+
+def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = None,
+             setup: Setup | None = None) -> Retargeted:
+    """Retarget `seq` (a MotionSequence on the SMPL-X body `source`) onto `skel` (module docstring); `ground`: the
+    root motion's reference (None: the motion's first frame and lowest foot); `setup`: `prepare(skel, source)`,
+    when the caller keeps it."""
+    if setup is None or setup.skel is not skel or setup.source is not source:
+        setup = prepare(skel, source)
+    W, A, q, scale = setup.W, setup.A, setup.q, setup.scale
     P, G = _smplx_fk(seq, source)
-    delta = _solve_deltas(skel, q, Jr, P, G)
+    delta = _solve_deltas(skel, setup.plan, P, G)
     T, N = delta.shape[:2]
     # joint positions with the root at its rest place: each offset turns with its parent
     pos = np.empty((T, N, 3))
-    depth = np.zeros(N, np.int64)
-    for i, pp in enumerate(skel.parents):
-        depth[i] = 0 if pp < 0 else depth[pp] + 1
     roots = np.nonzero(skel.parents < 0)[0]
     pos[:, roots] = q[roots]
-    for d in range(1, int(depth.max()) + 1):                         # one level of the tree at a time
-        idx = np.nonzero(depth == d)[0]
+    for idx in setup.levels:                                          # one level of the tree at a time
         par = skel.parents[idx]
         pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
     hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
-    disp = scale * (pelvis - pelvis[:1])
     feet = [f for f in FEET if f in skel.bones]
     smplx_low = (P[:, [JOINT_INDEX[f] for f in feet], 1] + np.asarray(seq.trans, np.float64)[:, 1:2]).min(1)
-    lift = smplx_low - smplx_low.min()                                # SMPL-X's lowest foot above its floor
+    if ground is None:
+        ground = Ground(pelvis[0].copy(), float(smplx_low.min()))
+    disp = scale * (pelvis - ground.pelvis)
+    lift = smplx_low - ground.floor                                   # SMPL-X's lowest foot above its floor
     rest_low = q[[skel.bones[f] for f in feet], 1].min()
     disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
-    below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(N)])
-    pos[:, below] += disp[:, None]
+    pos[:, setup.below] += disp[:, None]
     # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
     # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
-    V = A @ W
-    Vbase = A @ world_rotation(skel.base)
+    V, Vbase = A @ W, setup.Vbase
     moving = np.array(sorted(set(skel.bones.values()) | {hips}))
     par = skel.parents[moving]
     Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
@@ -248,6 +315,5 @@ def retarget(seq, skel: Skeleton, source: SourceBody) -> Retargeted:
     local[:] = skel.rotation
     local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
     pos_w = pos @ A
-    parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base
-    root_t = (np.linalg.inv(parent_world) @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
-    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale))
+    root_t = (setup.to_parent @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
+    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale), ground)

@@ -79,10 +79,15 @@ def _b64(a: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(a, np.float32).tobytes()).decode()
 
 
+def bone_order(skel) -> list[int]:
+    """The joints the player sets, in the payload's order: the hips, then the other humanoid bones."""
+    return [skel.bones["pelvis"]] + sorted(i for i in skel.bones.values() if i != skel.bones["pelvis"])
+
+
 def character_payload(character: Character, motions: dict, body=None) -> dict:
     """Each method's motion on the character: {name, bones, nodes, fps, frames, methods: {method: {quats, root}}}."""
     skel = character.skeleton
-    order = [skel.bones["pelvis"]] + sorted(i for i in skel.bones.values() if i != skel.bones["pelvis"])
+    order = bone_order(skel)
     out = {"name": character.name, "bones": [skel.names[i] for i in order], "nodes": [skel.nodes[i] for i in order],
            "methods": {}}
     for method, seq in motions.items():

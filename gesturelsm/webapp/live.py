@@ -20,17 +20,21 @@ and by the page's app/player/src/motion_format.js): the frames since the last me
 meta object {"frames": frames so far, "audio_seconds": audio received so far, "median_latency_ms", "p90_latency_ms",
 "real_time_factor", "status"}. With a body (the page's) the frames are the in-browser player's arrays (kind
 quaternion: 55 local rotations x, y, z, w, the root in metres, E expression weights; gesturelsm/export/player.py
-`motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3 poses and trans). Over the socket
+`motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3 poses and trans). With the visitor's
+character (live_character.py: the socket's hello names the page session's token) each record also carries the frames on
+the character (the format's version 2 character section); without one the records are version 1. Over the socket
 a record is a binary message; Gradio's microphone puts it base64-encoded in the hidden textbox `live-motion`
 (`decode(base64.b64decode(text))`).
 The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
 factor beside it. The player `live-player` (app/player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
-delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms).
+delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms); on the visitor's
+character it carries data-character (the file name), like `motion-player`.
 """
 from __future__ import annotations
 
 import base64
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
@@ -59,9 +63,10 @@ def to_float(sr: int, data: np.ndarray) -> np.ndarray:
     return resample(to_mono(y.astype(np.float32)), int(sr), SAMPLE_RATE).astype(np.float32)
 
 
-def payload(session: LiveSession, status: str, body=None) -> tuple[bytes, str, str]:
+def payload(session: LiveSession, status: str, body=None, character=None) -> tuple[bytes, str, str]:
     """(the motion record for the player, text of #live-latency, text of #live-stats) from what the session produced
-    since the last call; with `body` (a resolved body model) the record holds the in-browser player's arrays."""
+    since the last call; with `body` (a resolved body model) the record holds the in-browser player's arrays, with
+    `character` (live_character.py `CharacterStream`) also the same frames on the visitor's character."""
     chunks = session.poll()
     st = session.stats()
     start = chunks[0].start if chunks else session.delivered
@@ -79,6 +84,9 @@ def payload(session: LiveSession, status: str, body=None) -> tuple[bytes, str, s
     else:
         record = MotionRecord(kind=QUATERNION if body is not None else AXIS_ANGLE,
                               rotations=np.zeros((0, NUM_JOINTS, 4 if body is not None else 3)), start=start, meta=meta)
+    if seq is not None and character is not None:
+        quats, root = character.chunk(seq)
+        record = replace(record, bone_rotations=quats, bone_root=root)
     return encode(record), _ms(st["median_latency_ms"]), _stats(st)
 
 
@@ -133,6 +141,16 @@ def _delete(session: LiveSession | None) -> None:
         session.stop()
 
 
+def character_js() -> str:
+    """The Character upload's last chained event: hands the page session's live spec (live_character.py
+    `LiveCharacters.choose`: token, name, url, key; null for the mannequin) to the live player, which uses it from the
+    next Record on (app/player/src/index.js `chooseLiveCharacter`)."""
+    from .motion_player import BUNDLE
+
+    return ("(spec) => { import(new URL('gradio_api/file=" + str(BUNDLE) + "', document.baseURI).href)"
+            ".then((m) => m.chooseLiveCharacter(spec || null)); }")
+
+
 def live_player(body, cache: str | Path) -> gr.HTML | None:
     """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`) with
     its controls and meter, streaming over the app's WebSocket (live_socket.py), or None when the player bundle
@@ -159,12 +177,13 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
 
 
 def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = None,
-                 socket_routes: Callable[[LiveManager, object], list] | None = None) -> list:
+                 socket_routes: Callable[..., list] | None = None, characters=None) -> list:
     """Add the Live tab to the Blocks being built (call inside `with gr.Blocks()`); returns the routes to serve with
     the page (`Blocks.launch(app_kwargs={"routes": ...})`: ui.py `launch` does). With `body` (the page's body
     model), `cache` (where its rest GLB goes), `socket_routes` (`live_socket.routes`) and the player bundle built,
     the microphone streams over the app's WebSocket (its one route) and the motion plays in the in-browser player
-    `live-player`; otherwise through Gradio's streaming microphone, shown as numbers (no routes)."""
+    `live-player`; otherwise through Gradio's streaming microphone, shown as numbers (no routes). `characters`
+    (live_character.py `LiveCharacters`, the page sessions' characters) goes to the socket's route."""
     if body is not None:
         from gesturelsm.body.model import resolve_body
 
@@ -177,7 +196,8 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
                     f"stream. At most {manager.max_sessions} live streams run at once.")
         socket = body is not None and cache is not None and socket_routes is not None
         if socket and live_player(body, cache) is not None:
-            return socket_routes(manager, body)    # the socket path: everything else is in the player's HTML
+            extra = {} if characters is None else {"characters": characters}
+            return socket_routes(manager, body, **extra)   # the socket path: everything else is in the player's HTML
         state = gr.State(None, delete_callback=_delete)
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
                        waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page

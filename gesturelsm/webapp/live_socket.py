@@ -5,9 +5,16 @@ speech 1-2.6 s behind the voice before any generation (README, live mode). Here 
 with an AudioWorklet (app/player/src/microphone.js `LiveMic`) and sends it as it comes, and the server sends each motion
 chunk the moment the session's worker has it (no polling):
 
-    client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate)
+    client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate); with
+                              {"sample_rate": 16000, "character": TOKEN}  the page session's character token
+                                                                 (live_character.py), the stream is on that character
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
+    server -> client   binary a motion record, no frames        only when the hello named a character, first: meta
+                                                                 {"status": "streaming", "character": the player's spec
+                                                                 (live_character.py `CharacterStream.spec`, url, key)},
+                                                                 or {"status": "streaming", "character_error": why}
+                                                                 for a token the server does not hold (the mannequin)
     server -> client   binary a motion record                   per motion chunk (live.py `payload`; layout in
                                                                  gesturelsm/export/motion_format.py): its meta's status
                                                                  is "streaming", then "stopped" or a message (busy,
@@ -31,10 +38,12 @@ from starlette.routing import WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gesturelsm.audio import MAX_SAMPLE_RATE
+from gesturelsm.errors import GestureError
 from gesturelsm.export.motion_format import MotionRecord, encode
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
 from .live import PATH, payload, to_float
+from .live_character import EXPIRED, CharacterStream
 
 log = logging.getLogger(__name__)
 RATES = (8000, MAX_SAMPLE_RATE)  # sample rates accepted from a page (an AudioContext's range is 3000-768000)
@@ -47,15 +56,25 @@ class Refused(ValueError):
     """A message the visitor's page should not have sent; the text says what was wrong."""
 
 
-def hello_rate(text: str) -> int:
-    """The sample rate of the first message (`{"sample_rate": 48000}`), checked."""
+def hello(text: str) -> tuple[int, str | None]:
+    """The sample rate and character token (None: none) of the first message (`{"sample_rate": 48000}`, optionally
+    `"character": TOKEN`), checked."""
     try:
-        sr = int(json.loads(text)["sample_rate"])
+        d = json.loads(text)
+        sr = int(d["sample_rate"])
     except (ValueError, TypeError, KeyError):
         raise Refused('the first message must be {"sample_rate": <Hz>}') from None
     if not RATES[0] <= sr <= RATES[1]:
         raise Refused(f"sample rate {sr} Hz is not supported (use {RATES[0]}-{RATES[1]} Hz)")
-    return sr
+    token = d.get("character")
+    if token is not None and not isinstance(token, str):
+        raise Refused("the character must be the token the page was given (a string)")
+    return sr, token
+
+
+def hello_rate(text: str) -> int:
+    """The sample rate of the first message, checked."""
+    return hello(text)[0]
 
 
 def pcm(data: bytes, sr: int) -> np.ndarray:
@@ -67,12 +86,13 @@ def pcm(data: bytes, sr: int) -> np.ndarray:
     return to_float(sr, np.frombuffer(data, "<i2"))
 
 
-async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
-    """One visitor's stream, from the socket's opening to its close."""
+async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None) -> None:
+    """One visitor's stream, from the socket's opening to its close; `characters` (live_character.py
+    `LiveCharacters`) resolves the hello's character token."""
     await ws.accept()
     loop = asyncio.get_running_loop()
     ready = asyncio.Event()
-    session, pusher = None, None
+    session, pusher, character = None, None, None
     last = {"status": "streaming", "final": False, "closing": False}
 
     async def push() -> None:                   # motion out as soon as the worker publishes it; one sender only
@@ -83,12 +103,12 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
                 if session.running or last["closing"]:
                     continue
                 # the session ended by itself (no audio for its idle timeout, or generation failed): say so, close
-                await say(ws, payload(session, session.error or "this live stream has ended", body)[0])
+                await say(ws, payload(session, session.error or "this live stream has ended", body, character)[0])
                 await shut(ws)
                 return
             ready.clear()
             final = last["final"]
-            if not await say(ws, payload(session, last["status"], body)[0]) or final:
+            if not await say(ws, payload(session, last["status"], body, character)[0]) or final:
                 return
 
     async def finish(status: str, end: bool) -> None:
@@ -105,7 +125,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
 
     try:
         try:
-            sr = hello_rate(await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
+            sr, token = hello(await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
         except asyncio.TimeoutError:
             raise Refused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
         try:
@@ -113,6 +133,10 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
         except LiveBusy as exc:
             await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
             return
+        if token is not None:                   # before any motion: the page shows the character from frame 0
+            character, meta = await asyncio.to_thread(stream_character, characters, token, body)
+            if not await say(ws, encode(MotionRecord(meta=meta))):
+                return
         pusher = asyncio.create_task(push())
         while True:
             msg = await ws.receive()
@@ -135,6 +159,20 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None) -> None:
         if session is not None:
             session.stop()
         await shut(ws)
+
+
+def stream_character(characters, token: str, body=None) -> tuple[CharacterStream | None, dict]:
+    """The stream's character for the hello's `token` and the meta of the message that tells the page: its spec,
+    or why the stream uses the mannequin."""
+    entry = characters.get(token) if characters is not None else None
+    url = entry.serve() if entry is not None else None
+    if url is None:
+        return None, {"status": "streaming", "character_error": EXPIRED}
+    try:
+        stream = CharacterStream(entry.character, body)
+    except GestureError as exc:                 # a character the retargeting refuses (e.g. an absurd scale)
+        return None, {"status": "streaming", "character_error": f"{exc}; the live stream uses the mannequin"}
+    return stream, {"status": "streaming", "character": {**stream.spec(), "url": url, "key": entry.key}}
 
 
 async def say(ws: WebSocket, message: str | bytes) -> bool:
@@ -167,9 +205,10 @@ def control(text: str | None) -> dict:
     return d
 
 
-def routes(manager: LiveManager, body=None) -> list[WebSocketRoute]:
-    """The socket route for a FastAPI app (`Blocks.launch(app_kwargs={"routes": ...})`)."""
+def routes(manager: LiveManager, body=None, characters=None) -> list[WebSocketRoute]:
+    """The socket route for a FastAPI app (`Blocks.launch(app_kwargs={"routes": ...})`); `characters`: the page
+    sessions' characters (live_character.py `LiveCharacters`), None: the mannequin only."""
     async def endpoint(ws: WebSocket) -> None:
-        await serve(ws, manager, body)
+        await serve(ws, manager, body, characters)
 
     return [WebSocketRoute(PATH, endpoint)]

@@ -26,6 +26,7 @@ from gesturelsm.serve.service import GestureService
 
 from . import live, live_socket, motion_player, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
+from .live_character import LiveCharacters
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
@@ -276,11 +277,11 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 inputs, button, upload = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view, show3d, stats = _output_column(service)
-        manager, routes = None, []
+        manager, routes, characters = None, [], LiveCharacters(service.workdir)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
-                                       socket_routes=live_socket.routes)
+                                       socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service)
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
@@ -289,7 +290,11 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                         f"{settings.max_upload_mb:g} MB, {settings.concurrency} request(s) at a time (others wait "
                         f"in the queue); files are deleted after {settings.keep_minutes:g} minutes.")
         text, state, character = inputs[1], gr.State(), gr.State()     # character: the page session's (None: mannequin)
-        upload.change(choose, upload, [character, upload], api_visibility="private")
+        chosen = upload.change(choose, upload, [character, upload], api_visibility="private")
+        if routes:              # the Live tab's player streams on the same character: the socket gets it by a token
+            token, spec = gr.State(None, delete_callback=characters.drop), gr.JSON(visible=False)
+            chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
+                .then(None, spec, None, js=live.character_js())
         audio, auto_text = inputs[0], inputs[-1]
         for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
             uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",

@@ -111,17 +111,19 @@ DECODE_JS = """async () => {
                                  ['wav.bin', new TextEncoder().encode('RIFF' + 'x'.repeat(40)).buffer]]) {
       try { m.decodeMotion(bytes, name); errors.push(null); } catch (e) { errors.push(e.message); }
     }
+    const c = m.decodeMotion(await (await fetch('/c.bin')).arrayBuffer(), 'c.bin');
     return {kind: r.kind, joints: r.joints, fps: r.fps, start: r.start, frames: r.frames, meta: r.meta,
             rotations: Array.from(r.rotations), root: Array.from(r.root), expressions: Array.from(r.expressions),
-            errors};
+            errors, plain: r.character, version: c.version, bones: c.character.bones,
+            c: [c.rotations, c.root, c.expressions, c.character.rotations, c.character.root].map((a) => Array.from(a))};
 }"""
 
 
 @pytest.mark.browser
 def test_the_page_decodes_what_python_encodes(tmp_path):
     """A live-style record (a chunk from frame 42, meta) written by gesturelsm/export/motion_format.py and decoded by
-    the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame; cut or foreign
-    bytes give the decoder's message naming the source."""
+    the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame, also of a
+    version-2 record's character section; cut or foreign bytes give the decoder's message naming the source."""
     from playwright.sync_api import sync_playwright
 
     from _support import CHROMIUM
@@ -138,8 +140,13 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     rec = MotionRecord(rng.normal(size=(T, 55, 4)).astype(np.float32), rng.normal(size=(T, 3)).astype(np.float32),
                        rng.normal(size=(T, E)).astype(np.float32), start=42,
                        meta={"status": "streaming", "frames": 51, "audio_seconds": 1.75, "median_latency_ms": None})
+    from dataclasses import replace
+
+    crec = replace(rec, bone_rotations=rng.normal(size=(T, 7, 4)).astype(np.float32),
+                   bone_root=rng.normal(size=(T, 3)).astype(np.float32))
     files = {"/index.html": (b"<!doctype html><title>decode</title>", "text/html"),
-             "/player.js": (BUNDLE.read_bytes(), "text/javascript"), "/m.bin": (encode(rec), "application/octet-stream")}
+             "/player.js": (BUNDLE.read_bytes(), "text/javascript"), "/m.bin": (encode(rec), "application/octet-stream"),
+             "/c.bin": (encode(crec), "application/octet-stream")}
 
     def serve(route):
         body, kind = files[route.request.url.split("player.test", 1)[1]]
@@ -158,6 +165,9 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     assert got["meta"] == rec.meta
     for k in ("rotations", "root", "expressions"):             # float32 -> JS number -> float32: bit for bit
         np.testing.assert_array_equal(np.asarray(got[k], np.float32).reshape(getattr(rec, k).shape), getattr(rec, k))
+    assert got["plain"] is None and (got["version"], got["bones"]) == (2, 7)
+    for a, want in zip(got["c"], (crec.rotations, crec.root, crec.expressions, crec.bone_rotations, crec.bone_root)):
+        np.testing.assert_array_equal(np.asarray(a, np.float32).reshape(want.shape), want)
     cut, head, wav = got["errors"]
     assert cut.startswith("cut.bin: ") and "cut or padded" in cut
     assert head.startswith("head.bin: 12 bytes, shorter than the 28-byte header")

@@ -80,3 +80,31 @@ def test_encoding_checks_the_shapes():
         encode(MotionRecord(np.zeros((2, 55, 3)), np.zeros((2, 3)), np.zeros((2, 0))))       # 3 numbers: axis-angle
     with pytest.raises(ValueError, match="root must be"):
         encode(MotionRecord(np.zeros((2, 55, 4)), np.zeros((3, 3)), np.zeros((2, 0))))
+
+
+def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone():
+    """The live feed on a character: bone rotations and the hips' translation after the expressions, the bone count
+    at byte 28; a record without a section is version 1 with the same bytes as before."""
+    from dataclasses import replace
+
+    from gesturelsm.export.motion_format import CHARACTER_VERSION, SECTION
+
+    rec = _record(QUATERNION, T=5, E=2)
+    rng = np.random.default_rng(1)
+    crec = replace(rec, bone_rotations=rng.normal(size=(5, 43, 4)).astype(np.float32),
+                   bone_root=rng.normal(size=(5, 3)).astype(np.float32))
+    plain, data = encode(rec), encode(crec)
+    assert struct.unpack_from("<H", plain, 4)[0] == 1
+    assert struct.unpack_from("<H", data, 4)[0] == CHARACTER_VERSION == 2
+    assert SECTION.unpack_from(data, 28) == (43, 0)
+    np.testing.assert_array_equal(np.frombuffer(data, "<f4", 4, 32), rec.rotations[0, 0])   # floats from byte 32
+    assert len(data) == len(plain) + 4 + 4 * 5 * (43 * 4 + 3)
+    got = decode(data)
+    for k in ("rotations", "root", "expressions", "bone_rotations", "bone_root"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(crec, k))
+    assert got.meta == rec.meta and got.start == rec.start and decode(plain).bone_rotations is None
+    assert encode(got) == data
+    with pytest.raises(MotionFormatError, match="cut or padded"):
+        decode(data[:-4])
+    with pytest.raises(ValueError, match="bone rotations must be"):
+        encode(replace(rec, bone_rotations=np.zeros((4, 43, 4)), bone_root=np.zeros((5, 3))))

@@ -106,7 +106,8 @@ export function fetchCharacter(spec) {
 /**
  * One method of the player on the character (player.js draws these instead of the mannequin's Body): a clone of
  * the loaded character turned into the player's world (`align`, `1 / scale`: SMPL-X axes, metres), posed at
- * frame f from the payload's rotations of `method`.
+ * frame f from the payload's rotations of `method`. A payload without that method is a live stream's
+ * (live_feed.js): its frames come with appendBones, chunk by chunk, from the motion records' character section.
  */
 export class CharacterBody {
   constructor(base, payload, method, offset) {
@@ -124,10 +125,30 @@ export class CharacterBody {
     this.root.add(scene);
     this.root.position.x = offset;
     this.head = nodes.get(payload.nodes[payload.head]) || scene;     // the label stands above it
-    this.payload = payload; this.method = method; this.frames = payload.frames;
+    this.payload = payload; this.method = method;
+    this.streamed = !(payload.methods && payload.methods[method]);
+    this.frames = this.streamed ? 0 : payload.frames;
+    this.q = new Float32Array(0); this.r = new Float32Array(0); this.cap = 0;
   }
 
-  append() {}                    // the character's frames all come with the payload
+  append() {}                    // the mannequin's arrays: not drawn on the character
 
-  pose(f) { showPayloadFrame(this.character, this.payload, this.method, f); }
+  // A streamed chunk: quats (n, B, 4) and the hips' translation (n, 3); buffers double when full (as Body's).
+  appendBones(quats, root) {
+    const B = this.payload.nodes.length, n = root.length / 3, need = this.frames + n;
+    if (quats.length !== n * B * 4) throw new Error(`a chunk of ${quats.length / 4} bone rotations for ${n} frames of ${B} bones`);
+    if (need > this.cap) {
+      const cap = Math.max(need, 2 * this.cap, 64);
+      const grow = (a, w) => { const c = new Float32Array(cap * w); c.set(a.subarray(0, this.frames * w)); return c; };
+      this.q = grow(this.q, 4 * B); this.r = grow(this.r, 3); this.cap = cap;
+    }
+    this.q.set(quats, this.frames * 4 * B); this.r.set(root, this.frames * 3);
+    this.frames = need;
+  }
+
+  pose(f) {
+    if (!this.streamed) return showPayloadFrame(this.character, this.payload, this.method, f);
+    const B = this.payload.nodes.length;
+    applyFrame(this.character, this.payload.nodes, this.q.subarray(4 * B * f, 4 * B * (f + 1)), this.r.subarray(3 * f, 3 * f + 3));
+  }
 }

@@ -2,7 +2,8 @@
 //   window.gesturelsmPlayer        the page's MotionPlayer (#motion-player; player.js documents its methods)
 //   window.gesturelsmPlayer.live   the Live tab's LiveFeed (#live-player; live_feed.js), null without one
 // The page imports this module and calls mount(element) / mountLive(element, box) (gesturelsm/webapp/motion_player.py,
-// gesturelsm/webapp/live.py); the other exports are for tools and tests that import the bundle.
+// gesturelsm/webapp/live.py) and chooseLiveCharacter(spec) when the visitor chooses or clears a character; the other
+// exports are for tools and tests that import the bundle.
 import { LiveFeed } from './live_feed.js';
 import { MotionPlayer } from './player.js';
 
@@ -13,6 +14,7 @@ export { decodeMotion } from './motion_format.js';
 export { LiveFeed, MotionPlayer };
 
 let liveFeed = null;            // the page's live feed, whichever of the two players mounts first
+let liveCharacter = null;       // the page session's character for the live feed (gesturelsm/webapp/live_character.py)
 
 // One player per element, created on first use; the page calls gesturelsmPlayer.load(payload).
 export function mount(element) {
@@ -32,6 +34,14 @@ export function mount(element) {
 export function mountLive(element, box = document) {
   if (!element.__live) element.__live = new LiveFeed(element, element.dataset.preload, box);
   liveFeed = element.__live;
+  liveFeed.useCharacter(liveCharacter);
   if (window.gesturelsmPlayer) window.gesturelsmPlayer.live = liveFeed;
   return liveFeed;
+}
+
+// The Character upload's event (gesturelsm/webapp/live.py character_js): the live feed streams on this character from
+// its next Record on ({token, name, url, key}; null: the mannequin), whether or not the Live tab is mounted yet.
+export function chooseLiveCharacter(spec) {
+  liveCharacter = spec && spec.token ? spec : null;
+  if (liveFeed) liveFeed.useCharacter(liveCharacter);
 }

@@ -4,11 +4,18 @@
 // the motion that comes back; stop() sends the end (the server generates the rest, then closes). push(buffer)
 // appends the frames a message carries; reset() starts a new stream; `last` is the meta of the latest message
 // (frames so far, audio seconds received, latencies, status).
+// The visitor's character (the page's Character upload): useCharacter(spec) (index.js chooseLiveCharacter; spec =
+// {token, name, url, key} or null) fetches and parses it once, and from the next start() on the hello names its
+// token; the server answers with the character's bones (a frames-less first message, meta.character) and every
+// record then carries the frames on the character (motion_format.js character section), drawn with character.js'
+// applyFrame; the element carries data-character (the file name) while it is shown. A character the server no
+// longer holds, or the browser cannot load, leaves the mannequin with the reason in data-character-error.
 // The meter: #live-latency = the server's median (ms) from a block's arrival to its motion being ready,
 // #live-stats = p90 and real-time factor, #live-status. It also measures the latency the visitor sees: for every
 // newly drawn frame f, now - (capture of the first block - SEND_S + f / fps), i.e. from the moment the speech of
 // that frame was spoken to the moment its motion is on screen (element data-shown-median-ms and data-shown-p90-ms,
 // and the caption under the body).
+import { fetchCharacter } from './character.js';
 import { el } from './dom.js';
 import { LiveClock } from './live_clock.js';
 import { LiveMic, SEND_S } from './microphone.js';
@@ -29,6 +36,7 @@ export class LiveFeed {
       element.dataset.ready = '1';
     });
     this.spoken0 = null; this.seen = -1; this.shown = []; this.last = null;
+    this.chosen = null; this.answer = null;
     const watch = () => { this._watch(); requestAnimationFrame(watch); };
     requestAnimationFrame(watch);
   }
@@ -36,11 +44,17 @@ export class LiveFeed {
   get measure() { return this.player.measure; }    // measure.js: also stamps each message's meta (last.at)
   set measure(on) { this.player.measure = on; }
 
-  async reset() {
+  // The character the next stream uses (null: the mannequin); parsed now so that Record does not wait for it.
+  useCharacter(spec) {
+    this.chosen = spec && spec.token ? spec : null;
+    if (this.chosen) fetchCharacter(this.chosen).catch(() => {});   // a failure shows when a stream uses it
+  }
+
+  async reset(character = null) {
     this.spoken0 = performance.now(); this.seen = -1; this.shown = [];
     this.clock = new LiveClock(30);
     this.ended = false;
-    this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl }]);
+    this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl, method: 'live' }], 30, character);
     await this.ready;
     this.player.attachClock(this.clock);
     for (const d of ['shownMedianMs', 'shownP90Ms', 'gaps']) delete this.element.dataset[d];
@@ -72,14 +86,24 @@ export class LiveFeed {
     ws.onmessage = (e) => this.push(e.data);
     ws.onclose = () => {
       mic.close();
+      if (this.answer) this.answer(null);
       if (this.ws === ws) this.ws = null;
       this._buttons(false);
       if (!this.ended) this._text('status', 'the connection to the server closed');
     };
     ws.onerror = () => this._text('status', 'could not reach the live stream on the server');
+    const chosen = this.chosen;
+    delete this.element.dataset.characterError;
     ws.onopen = async () => {
-      ws.send(JSON.stringify({ sample_rate: mic.rate }));
-      await this.reset();
+      ws.send(JSON.stringify(chosen ? { sample_rate: mic.rate, character: chosen.token } : { sample_rate: mic.rate }));
+      // with a character: the server's first message says which bones it streams (or why it cannot)
+      const spec = chosen ? await new Promise((resolve) => {
+        this.answer = resolve;
+        setTimeout(() => resolve(null), 10000);
+      }) : null;
+      this.answer = null;
+      if (ws.readyState !== WebSocket.OPEN) return;
+      await this.reset(spec);
       this.spoken0 = null;                          // set by the first block
       this._text('status', 'streaming');
       await mic.start((pcm) => {
@@ -106,6 +130,11 @@ export class LiveFeed {
       return this._text('status', e.message);
     }
     const d = rec.meta;
+    if (!rec.frames && (d.character || d.character_error)) {     // the stream's character (its first message)
+      if (d.character_error) this.element.dataset.characterError = d.character_error;
+      if (this.answer) this.answer(d.character || null);
+      return;
+    }
     this.last = d;
     if (this.measure) d.at = performance.now();
     if (!this.clock) await this.reset();           // frames from a stream whose start this page did not see
@@ -124,7 +153,11 @@ export class LiveFeed {
         `${(d.real_time_factor || 0).toFixed(1)}x · ${d.frames} frames`);
     }
     if (d.status) this._text('status', d.status);
-    if (d.status && d.status !== 'streaming') { this.ended = true; if (this.mic) this.mic.close(); }
+    if (d.status && d.status !== 'streaming') {
+      this.ended = true;
+      if (this.mic) this.mic.close();
+      if (this.answer) this.answer(null);           // refused before naming the character (busy)
+    }
   }
 
   _watch() {

@@ -8,7 +8,8 @@
 //   await p.setBodies([{label, body: glbUrl}], fps=30)     // rest bodies (GLB cached per URL), frames cleared
 //   await p.setBodies(specs, fps, payload.character)      // the methods on the visitor's character (character.js)
 //   p.appendFrames(i, rotations, root, expressions)       // Float32Arrays: (n, 55, 4) x,y,z,w; (n, 3); (n, E)
-//   p.appendRecord(i, record)                             // a decoded motion record (motion_format.js)
+//   p.appendRecord(i, record)                             // a decoded motion record (motion_format.js); on a
+//                                                         // streamed character body, its character section
 //   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
 //   p.play(); p.pause(); p.seek(seconds)
 //   await p.load(payload)                                 // the page: payload of gesturelsm/export/player.py
@@ -123,6 +124,16 @@ export class MotionPlayer {
 
   // A decoded motion record (motion_format.js) for body i; `source` names it in the error for other motion.
   appendRecord(i, record, source = 'motion') {
+    const b = this.bodies[i];
+    if (b.streamed) {                                  // the live stream on the visitor's character
+      if (!record.character || record.character.bones !== b.payload.nodes.length) {
+        throw new Error(`${source}: no frames for the ${b.payload.nodes.length} bones of the character`);
+      }
+      b.appendBones(record.character.rotations, record.character.root);
+      this.range.max = String(this.frames() / this.fps);
+      this.dirty = true;
+      return;
+    }
     if (record.kind !== 'quaternion' || record.joints !== JOINTS) {
       throw new Error(`${source}: ${record.kind} motion of ${record.joints} joints; the player draws quaternion ` +
         `motion of ${JOINTS} joints`);
