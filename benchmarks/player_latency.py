@@ -21,6 +21,7 @@ import os
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
+import sys  # noqa: E402
 import argparse  # noqa: E402
 import json  # noqa: E402
 import re  # noqa: E402
@@ -28,6 +29,8 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from statistics import median  # noqa: E402
 from pathlib import Path  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # app/measure.py lives in the checkout, not the wheel
 
 ALL = ["gesturelsm", "rectified_flow", "ddim"]
 LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
