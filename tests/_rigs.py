@@ -4,7 +4,9 @@ independent check of a retargeted motion (forward kinematics from the written lo
 """
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -233,3 +235,28 @@ def gltf_validator_errors(path: Path, folder: Path) -> tuple[int, list] | None:
     run = subprocess.run([node, str(script), str(package), str(path)], capture_output=True, text=True, timeout=120)
     report = json.loads(run.stdout)
     return report["errors"], report["messages"]
+
+
+@contextlib.contextmanager
+def character_js_page(folder: Path) -> Iterator:
+    """A blank headless Chromium page holding `bundle_character_js` as `window.C`; skips, saying why, when chromium
+    or the player's npm packages are missing."""
+    import pytest
+    from playwright.sync_api import sync_playwright
+
+    from _support import CHROMIUM
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (scripts/setup.sh installs it)")
+    bundle = bundle_character_js(folder)
+    if bundle is None:
+        pytest.skip("the player's npm packages are not installed (cd app/player && npm ci)")
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        try:
+            page = browser.new_page()
+            page.set_content("<html><body></body></html>")
+            page.add_script_tag(content=bundle.read_text())
+            yield page
+        finally:
+            browser.close()

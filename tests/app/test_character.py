@@ -4,7 +4,6 @@ from the payload puts the right wrist where the retargeting does."""
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import gradio as gr
@@ -12,13 +11,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from _rigs import bundle_character_js
+from _rigs import character_js_page
 from gesturelsm.webapp.character import character_payload, decode, read_upload
 from gesturelsm.retarget import retarget_motion
 
 VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
-CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
-                 if p and Path(p).exists()), None)
 
 
 @pytest.fixture(scope="module")
@@ -63,22 +60,12 @@ def test_bad_uploads_are_one_line_errors(tmp_path):
 
 
 @pytest.mark.browser
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/setup.sh installs it)")
 def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motion, tmp_path):
-    bundle = bundle_character_js(tmp_path)
-    if bundle is None:
-        pytest.skip("the player's npm packages are not installed (cd app/player && npm ci)")
-    from playwright.sync_api import sync_playwright
-
     import base64
 
     motions, p = payload
     frames = [0, 30, 59]
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page()
-        page.set_content("<html><body></body></html>")
-        page.add_script_tag(content=bundle.read_text())
+    with character_js_page(tmp_path) as page:
         got = page.evaluate("""async ([b64, payload, frames]) => {
             const bytes = Uint8Array.from(atob(b64), c => c.charCodeAt(0)).buffer;
             const ch = await window.C.loadCharacter(bytes);
@@ -89,7 +76,6 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
             }
             return out;
         }""", [base64.b64encode(VRM.read_bytes()).decode(), p, frames])
-        browser.close()
     r = retarget_motion(motions["ddim"], character)
     want = r.positions[frames, r.skeleton.bones["right_wrist"]]
     np.testing.assert_allclose(np.asarray(got), want, atol=1e-3)

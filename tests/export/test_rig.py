@@ -6,14 +6,13 @@ loads as a VRM in three-vrm in Chromium, where the right wrist sits where the mo
 from __future__ import annotations
 
 import base64
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from _rigs import bundle_character_js, gltf_validator_errors
+from _rigs import character_js_page, gltf_validator_errors
 from gesturelsm.cli import main
 from gesturelsm.export.bvh import euler_zxy_to_matrix
 from gesturelsm.export.glb import accessor_array, read_glb
@@ -103,26 +102,12 @@ def test_glb_passes_the_khronos_validator(exported, tmp_path):
     assert report[0] == 0, report[1]
 
 
-CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
-                 if p and Path(p).exists()), None)
-
-
 @pytest.mark.browser
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (scripts/setup.sh installs it)")
 def test_three_vrm_loads_it_and_the_wrist_moves_as_the_motion_says(exported, tmp_path):
-    bundle = bundle_character_js(tmp_path)
-    if bundle is None:
-        pytest.skip("the player's npm packages are not installed (cd app/player && npm ci)")
-    from playwright.sync_api import sync_playwright
-
     seq, result, out = exported
     data = base64.b64encode((out / "take.vrm").read_bytes()).decode()
     frames = [0, 45, 89]
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page()
-        page.set_content("<html><body></body></html>")
-        page.add_script_tag(content=bundle.read_text())
+    with character_js_page(tmp_path) as page:
         got = page.evaluate("""async ([b64, times]) => {
             const bytes = Uint8Array.from(atob(b64), c => c.charCodeAt(0)).buffer;
             const ch = await window.C.loadCharacter(bytes);
@@ -134,7 +119,6 @@ def test_three_vrm_loads_it_and_the_wrist_moves_as_the_motion_says(exported, tmp
             }
             return out;
         }""", [data, [f / 30 for f in frames]])
-        browser.close()
     assert got["vrm"] and got["version"] == "0" and got["clip"] == "gesturelsm"
     wrist = result.skeleton.bones["right_wrist"]
     want = result.positions[frames, wrist]
