@@ -34,6 +34,13 @@ MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) En
 # -0.19 to -0.23 (beam 5: -0.18 to -0.20), far above MIN_AVG_LOGPROB (one run each of
 # benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload at once.
 BEAM_SIZE = 1
+# Whisper falls back to sampling at rising temperatures when a 30-s window's greedy text repeats itself (compression
+# ratio > 2.4) or is improbable. On tones and chords the greedy text is one phrase repeated (ratio 10-12, mean
+# log-probability -0.3: MIN_AVG_LOGPROB alone would accept it) and the five fallbacks then took 2-4x the greedy pass
+# to end with no words; on the three BEAT2 takes no window fell back (ratios 1.2-1.9). So `recognize` decodes
+# greedily once, rejects audio whose every window loops, and runs the fallback only where some windows loop.
+LOOP_RATIO = 2.4
+FALLBACK_TEMPERATURES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 MIN_SECONDS = 0.3
 TIMINGS = ("auto", "dtw", "whisper")
 AUDIO_ONLY_NOTE = " Generating from the audio only; type the transcript to use the text-conditioned model."
@@ -73,11 +80,27 @@ def sequential(words: list[Word], min_s: float = 0.01) -> list[Word]:
     return out
 
 
+def _decode(audio: np.ndarray, beam_size: int, temperature) -> list:
+    segments, _info = load_model().transcribe(np.ascontiguousarray(audio, np.float32), language="en",
+                                              beam_size=beam_size, word_timestamps=True,
+                                              condition_on_previous_text=False, temperature=temperature)
+    return list(segments)
+
+
 def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE) -> tuple[list[Word], float, dict]:
-    """Whisper's words with its own times, the mean token log-probability (weighted by tokens) and details."""
-    model = load_model()
-    segments, _info = model.transcribe(np.ascontiguousarray(audio, np.float32), language="en", beam_size=beam_size,
-                                       word_timestamps=True, condition_on_previous_text=False)
+    """Whisper's words with its own times, the mean token log-probability (weighted by tokens) and details.
+
+    One greedy pass first (temperature 0). Where every window it decoded is a loop (one phrase repeated: compression
+    ratio > LOOP_RATIO), there is no speech to find: no words, details["repeated_phrase"] = True. Where only some
+    windows loop, the audio is decoded again with Whisper's temperature fallback (FALLBACK_TEMPERATURES)."""
+    segments = _decode(audio, beam_size, 0.0)
+    loops = [seg.compression_ratio > LOOP_RATIO for seg in segments]
+    if segments and all(loops):
+        return [], -math.inf, {"model": MODEL_NAME, "mean_word_probability": 0.0, "repeated_phrase": True,
+                               "heard_repeated": _clip(" ".join(seg.text.strip() for seg in segments[:1])),
+                               "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
+    if any(loops):
+        segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES))
     words: list[Word] = []
     logp, ntok, probs, no_speech = 0.0, 0, [], []
     for seg in segments:
@@ -108,6 +131,9 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     heard = " ".join(w.text for w in words)
     conf = math.exp(avg) if words else 0.0
     details["avg_logprob"] = avg
+    if details.get("repeated_phrase"):
+        return _rejected(f"No speech was recognised: the recogniser only heard one phrase over and over "
+                         f"(\"{details['heard_repeated']}\"), as it does on music, tones or noise.", details=details)
     if not words:
         return _rejected("No speech was recognised (silence, noise or music?).", details=details)
     if avg < MIN_AVG_LOGPROB:
