@@ -29,9 +29,9 @@ from ..constants import SAMPLE_RATE
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
 
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
-# Greedy decoding: on the three real BEAT2 takes it recovered 556 of 587 MFA words against 555 with beam 5, onsets
-# 80 ms from MFA against 83, in 1.8-2.0 instead of 2.5-3.0 s per minute of speech, with a mean log-probability of
-# -0.19 to -0.23 (beam 5: -0.18 to -0.20), far above MIN_AVG_LOGPROB (one run each of
+# Greedy decoding: on the three real BEAT2 takes it recovered 550 of 587 MFA words against 553 with beam 5, onsets
+# 86 ms from MFA against 82, in 2.5-2.8 instead of 4.3-4.9 s per minute of speech, with a mean log-probability of
+# -0.19 to -0.21 (beam 5: -0.18 to -0.20), far above MIN_AVG_LOGPROB (one run each of
 # benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload at once.
 BEAM_SIZE = 1
 # Whisper falls back to sampling at rising temperatures when a 30-s window's greedy text repeats itself (compression
