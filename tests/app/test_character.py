@@ -45,6 +45,29 @@ def test_payload_carries_the_retargeted_rotations(character, payload):
         np.testing.assert_allclose(got, want, atol=1e-5)
         np.testing.assert_allclose(decode(p["methods"][method]["root"], (60, 3)), r.root_translation, atol=1e-5)
     json.dumps(p)                                                    # goes to the page as JSON
+    assert "morphs" not in p and all("morph" not in m for m in p["methods"].values())   # no face presets, no face
+
+
+def test_payload_moves_the_face_as_the_export_does(tmp_path):
+    """A VRM 0.x binding visemes and blink: `morphs` lists every (mesh, target) they bind, and each method's `morph`
+    is the exported VRM's weights (`morph_weights(face_weights(...))`) of those channels, frame by frame."""
+    from _skinned import face_vrm
+    from _support import synthetic_motion
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.retarget.face import driven_presets, face_weights, morph_binds, morph_weights
+
+    character = read_upload(str(face_vrm(tmp_path / "face.vrm", vrm="0")))
+    gltf = character.document.gltf
+    motions = {"a": synthetic_motion(frames=40, seed=1), "b": synthetic_motion(frames=40, seed=2)}
+    p = character_payload(character, motions)
+    channels = sorted({(m, k) for pr in driven_presets(gltf) for m, k, _ in morph_binds(gltf, pr)})
+    assert len(channels) == 6 and [tuple(c) for c in p["morphs"]] == channels
+    for method, seq in motions.items():
+        per_mesh = morph_weights(gltf, face_weights(resolve_body(None), seq.poses, seq.expressions, seq.betas))
+        got = decode(p["methods"][method]["morph"], (40, len(channels)))
+        np.testing.assert_allclose(got, np.stack([per_mesh[m][:, k] for m, k in channels], axis=1), atol=1e-6)
+        assert got.max() > 0.1 and np.ptp(got, axis=0).max() > 0.1       # the mouth moves in this motion
+    json.dumps(p)
 
 
 def test_bad_uploads_are_one_line_errors(tmp_path):
