@@ -144,8 +144,8 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
     want = at + 4 * T * sum(widths) + n_meta
     if len(data) != want:
         raise MotionFormatError(f"{source}: {len(data)} bytes, but its header says {want} ({T} frames of {J} "
-                                f"joints, {E} expressions, {B} character bones and {F} morph weights, {n_meta} bytes of meta): the data "
-                                "is cut or padded")
+                                f"joints, {E} expressions, {B} character bones and {F} morph weights, {n_meta} bytes "
+                                "of meta): the data is cut or padded")
     floats = np.frombuffer(data, "<f4", T * sum(widths), at)
     rot, root, expr, *section = np.split(floats, np.cumsum([T * w for w in widths[:-1]]))
     meta = {}
@@ -159,7 +159,8 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
     bones = (section[0].reshape(T, B, 4), section[1].reshape(T, 3)) if section else (None, None)
     morph = section[2].reshape(T, F) if section and F else None
     return MotionRecord(rot.reshape(T, J, CHANNELS[kind]), root.reshape(T, 3), expr.reshape(T, E), kind=kind,
-                        fps=float(fps), start=int(start), meta=meta, bone_rotations=bones[0], bone_root=bones[1], morph=morph)
+                        fps=float(fps), start=int(start), meta=meta, bone_rotations=bones[0], bone_root=bones[1],
+                        morph=morph)
 
 
 __all__ = ["AXIS_ANGLE", "CHARACTER_VERSION", "HEADER", "SECTION", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",

@@ -130,7 +130,8 @@ def morph_channels(gltf: dict) -> list[tuple[int, int]]:
 
 
 def channel_weights(per_mesh: dict[int, np.ndarray], channels: list[tuple[int, int]], frames: int) -> np.ndarray:
-    """(frames, len(channels)) float32: column j is `per_mesh[mesh][:, k]` (`morph_weights`) of channel j = (mesh, k)."""
+    """(frames, len(channels)) float32: column j is `per_mesh[mesh][:, k]` (`morph_weights`) of channel j =
+    (mesh, k)."""
     if not channels:
         return np.zeros((frames, 0), np.float32)
     return np.stack([per_mesh[m][:, k] for m, k in channels], axis=1).astype(np.float32)

@@ -13,8 +13,9 @@ and `scale` is its units per metre. A VRM that defines viseme (`aa ih ou ee oh`)
 its face: `morphs` lists the morph-target channels its presets bind, [[glTF mesh index, morph target index], ...],
 and each method adds `morph` (frames, len(morphs)), those channels' weights = `retarget.face.morph_weights` of the
 method's `face_weights` (what the exported VRM animates); the player sets them as the influences of every three.js
-Mesh of that glTF mesh. A character without these presets gets neither key. The player sets `#motion-player[data-character]` to `name`. A file that
-cannot be used raises gr.Error (`choose`, the upload's event: a warning) and the mannequin stays.
+Mesh of that glTF mesh. A character without these presets gets neither key. The player sets
+`#motion-player[data-character]` to `name`. A file that cannot be used raises gr.Error (`choose`, the upload's
+event: a warning) and the mannequin stays.
 
     files = rig_downloads(character, motions, folder)  # each method's motion in the character's own file
 """

@@ -7,7 +7,7 @@ session chose with the Character upload (character.py), retargeted chunk by chun
     entry = characters.get(token)                          # the live socket's hello names the token: LiveEntry / None
     stream = CharacterStream(entry.character, body)        # per live stream
     stream.spec()                                          # the page's JSON: name, bones, nodes, align, scale, head
-    quats, root, morph = stream.chunk(seq)                 # (T, B, 4), (T, 3), (T, F): this chunk, continuing the stream
+    quats, root, morph = stream.chunk(seq)                 # (T, B, 4), (T, 3), (T, F): this chunk, continuing
 
 The socket is not a Gradio event, so it cannot read the page session's gr.State: the page hands the socket a random
 token instead (never a path), which this map resolves to the Character the upload's event read. An entry is dropped

@@ -47,7 +47,8 @@ export function decodeMotion(buffer, source = 'motion data') {
   const want = off + 4 * frames * widths.reduce((a, b) => a + b, 0) + metaBytes;
   if (size !== want) {
     throw new Error(`${source}: ${size} bytes, but its header says ${want} (${frames} frames of ${joints} joints, ` +
-      `${E} expressions, ${B} character bones and ${F} morph weights, ${metaBytes} bytes of meta): the data is cut or padded`);
+      `${E} expressions, ${B} character bones and ${F} morph weights, ${metaBytes} bytes of meta): ` +
+      'the data is cut or padded');
   }
   const [rotations, root, expressions, boneRotations, boneRoot, morph] = widths.map((w) => {
     const n = frames * w, at = off;
