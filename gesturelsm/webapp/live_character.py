@@ -112,15 +112,17 @@ class LiveCharacters:
         if entry is not None:
             shutil.rmtree(entry.folder, ignore_errors=True)
 
-    def choose(self, character: Character | None, old: str | None) -> tuple[str | None, dict | None]:
+    def choose(self, character: Character | None, old: str | None, body=None) -> tuple[str | None, dict | None]:
         """The upload's event, after character.py `choose`: (the page session's new token, the live player's spec
-        {token, name, url, key}); None, None for the mannequin."""
+        {token, url, key} and `CharacterStream.spec()`'s fields: the player shows the character at rest before the
+        first Record); None, None for the mannequin."""
         self.drop(old)
         if character is None:
             return None, None
         token = self.register(character)
         entry = self.get(token)
-        return token, {"token": token, "name": character.name, "url": entry.serve(), "key": entry.key}
+        return token, {**CharacterStream(character, body).spec(), "token": token, "url": entry.serve(),
+                       "key": entry.key}
 
     def __len__(self) -> int:
         return len(self._entries)

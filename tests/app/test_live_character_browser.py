@@ -1,5 +1,5 @@
 """The Live tab on the character chosen with the page's Character upload, in real headless Chromium with its fake
-microphone: after choosing ../shared's cryptovoxels.vrm, Record streams onto it (`#live-player[data-character]`, the
+microphone: after choosing ../shared's cryptovoxels.vrm it stands in the live player at rest, Record streams onto it (`#live-player[data-character]`, the
 frames advance) and its right hand moves with the streamed motion; clearing the upload puts the next stream back on
 the mannequin; a VRM with visemes and blink moves its face's morph targets with the stream. Tiny checkpoints (the
 app tests' service). Skips, saying why, without chromium, the player bundle or the character."""
@@ -55,7 +55,10 @@ def test_the_live_tab_streams_onto_the_chosen_character(app_url, speech_48k):
         page.locator("#character input[type=file]").set_input_files(str(VRM))
         page.locator("#character", has_text="43 humanoid bones").wait_for(timeout=60000)
         page.wait_for_function(f"() => {LIVE}.chosen && {LIVE}.chosen.name === 'cryptovoxels.vrm'", timeout=30000)
+        page.wait_for_selector(f"{PLAYER}[data-character='cryptovoxels.vrm']", timeout=30000)   # at rest, no stream
+        assert page.evaluate(f"() => {LIVE}.player.bodies[0].streamed && {LIVE}.player.frames() === 0")
         page.locator("#live-record").click()
+        page.wait_for_function(f"() => {LIVE}.ws && {LIVE}.player.frames() > 0", timeout=60000)
         page.wait_for_selector(f"{PLAYER}[data-character='cryptovoxels.vrm']", timeout=30000)
         page.wait_for_function(f"() => Number(document.querySelector('{PLAYER}').dataset.frames) > 5", timeout=60000)
         assert page.get_attribute(PLAYER, "data-state") == "playing"

@@ -172,6 +172,8 @@ def test_tokens_resolve_to_the_chosen_character_and_expire(character, tmp_path):
     chars = LiveCharacters(tmp_path, max_entries=2)
     token, spec = chars.choose(character, None)
     assert isinstance(token, str) and len(token) >= 32 and spec["token"] == token and spec["name"] == "me.glb"
+    rest = CharacterStream(character).spec()                             # the live player shows it at rest with these
+    assert {k: spec[k] for k in rest} == rest
     served = Path(spec["url"].split("file=", 1)[1])
     assert served.parent.parent == tmp_path and served.parent.name.startswith("req-")     # swept like requests
     assert served.read_bytes() == character.path.read_bytes()
