@@ -1,8 +1,9 @@
 """The Live tab on the character chosen with the page's Character upload, in real headless Chromium with its fake
-microphone: after choosing ../shared's cryptovoxels.vrm it stands in the live player at rest, Record streams onto it (`#live-player[data-character]`, the
-frames advance) and its right hand moves with the streamed motion; clearing the upload puts the next stream back on
-the mannequin; a VRM with visemes and blink moves its face's morph targets with the stream. Tiny checkpoints (the
-app tests' service). Skips, saying why, without chromium, the player bundle or the character."""
+microphone: after choosing ../shared's cryptovoxels.vrm it stands in the live player at rest, Record streams onto it
+(`#live-player[data-character]`, the frames advance) and its right hand moves with the streamed motion; clearing the
+upload puts the next stream back on the mannequin; a VRM with visemes and blink moves its face's morph targets with
+the stream. Tiny checkpoints (the app tests' service). Skips, saying why, without chromium, the player bundle or the
+character."""
 from __future__ import annotations
 
 from pathlib import Path

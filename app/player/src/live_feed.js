@@ -47,7 +47,8 @@ export class LiveFeed {
   set measure(on) { this.player.measure = on; }
 
   // The character the next stream uses (null: the mannequin); parsed now so that Record does not wait for it, and
-  // shown at rest while no stream runs (spec with the bones, axes and scale: live_character.py `LiveCharacters.choose`).
+  // shown at rest before the first stream (the spec has its bones, axes and scale: live_character.py
+  // `LiveCharacters.choose`).
   useCharacter(spec) {
     this.chosen = spec && spec.token ? spec : null;
     if (this.chosen) fetchCharacter(this.chosen).catch(() => {});   // a failure shows when a stream uses it
