@@ -61,8 +61,8 @@ def messages(character: str | None):
         stream = CharacterStream(load_character(character), body)
 
         def with_character(mc) -> bytes:
-            q, r = stream.chunk(mc.motion)
-            return encode(replace(motion_record(mc.motion, body, mc.start), bone_rotations=q, bone_root=r))
+            q, r, w = stream.chunk(mc.motion)
+            return encode(replace(motion_record(mc.motion, body, mc.start), bone_rotations=q, bone_root=r, morph=w))
         out[Path(character).name] = with_character
     return out
 

@@ -155,3 +155,15 @@ def write_skinned_glb(skel, path, humanoid: dict[str, str] | None = None, vrm: s
         fh.write(struct.pack("<4sII", b"glTF", 2, 12 + 8 + len(js) + 8 + len(blob)))
         fh.write(struct.pack("<I4s", len(js), b"JSON") + js + struct.pack("<I4s", len(blob), b"BIN\0") + blob)
     return g
+
+
+def face_vrm(path, vrm: str = "0"):
+    """A VRM (0.x or 1.0) on the mannequin's rest skeleton with every face preset the player drives (`aa ih ou ee oh`
+    and `blink`), each a morph target of the head box. Returns the path."""
+    from _rigs import build_rig, vrm_body_bones
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.retarget.face import PRESETS
+
+    skel, _ = build_rig(resolve_body(None).rest_joints(), fingers=False)
+    write_skinned_glb(skel, path, vrm_body_bones(), vrm=vrm, presets=PRESETS)
+    return path

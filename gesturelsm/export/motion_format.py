@@ -28,11 +28,15 @@ character chosen, gesturelsm/webapp/live_character.py). A record without one is 
     header (28 bytes) as above, version 2
     section header (4 bytes)
      28  bones        uint16   B, the character's humanoid bones (its hips first)
-     30  reserved     uint16   0
+     30  morphs       uint16   F, the character's face morph-target channels (0: none)
     data, float32: rotations, root, expressions as above, then
       bone rotations (T, B, 4)  each bone node's local rotation x, y, z, w (sign-continuous over the stream)
       bone root      (T, 3)     the hips node's local translation, the character's units
+      morph weights  (T, F)     the face's morph-target weights, in the order of the channels the stream's first
+                                message lists (meta.character.morphs, [[glTF mesh, target], ...])
     meta
+
+A version 2 record with F = 0 is the same bytes as one written before the face's channels existed (the field was 0).
 
 The headers are a multiple of 4 bytes, so the page views the floats in place (no copy). 10 s of the player's
 motion at 30 fps is 28 + 300 x (55 x 4 + 3 + E) x 4 bytes, ~0.27 MB per method.
@@ -52,7 +56,7 @@ MAGIC = b"GLSM"
 VERSION = 1                                     # a record without a character section
 CHARACTER_VERSION = 2                           # a record with one
 HEADER = struct.Struct("<4sHHHHfIII")
-SECTION = struct.Struct("<HH")                  # version 2: bones, reserved
+SECTION = struct.Struct("<HH")                  # version 2: bones, morph channels
 QUATERNION, AXIS_ANGLE = "quaternion", "axis-angle"
 KINDS = {QUATERNION: 1, AXIS_ANGLE: 2}          # kind -> its code in the header
 CHANNELS = {QUATERNION: 4, AXIS_ANGLE: 3}       # numbers per joint and frame
@@ -78,6 +82,7 @@ class MotionRecord:
     meta: dict = field(default_factory=dict)
     bone_rotations: np.ndarray | None = None    # (T, B, 4) the character section (version 2), None: none
     bone_root: np.ndarray | None = None         # (T, 3)
+    morph: np.ndarray | None = None             # (T, F) the character's face morph weights, None: none (F = 0)
 
     @property
     def frames(self) -> int:
@@ -103,7 +108,12 @@ def encode(record: MotionRecord) -> bytes:
         if brot.ndim != 3 or brot.shape[0] != T or brot.shape[2] != 4 or broot.shape != (T, 3):
             raise ValueError(f"bone rotations must be ({T}, bones, 4) and bone root ({T}, 3), got {brot.shape} and "
                              f"{broot.shape}")
-        section, bones = SECTION.pack(brot.shape[1], 0), [brot.tobytes(), broot.tobytes()]
+        morph = np.zeros((T, 0), "<f4") if record.morph is None else np.asarray(record.morph, "<f4")
+        if morph.ndim != 2 or morph.shape[0] != T:
+            raise ValueError(f"morph weights must be ({T}, channels), got {morph.shape}")
+        section, bones = SECTION.pack(brot.shape[1], morph.shape[1]), [brot.tobytes(), broot.tobytes(), morph.tobytes()]
+    elif record.morph is not None:
+        raise ValueError("morph weights need the character's bone rotations (a version 2 record)")
     head = HEADER.pack(MAGIC, CHARACTER_VERSION if section else VERSION, KINDS[record.kind], rot.shape[1],
                        expr.shape[1], float(record.fps), int(record.start), T, len(meta))
     return b"".join([head, section, rot.tobytes(), root.tobytes(), expr.tobytes(), *bones, meta])
@@ -124,18 +134,18 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
     kind = next((k for k, c in KINDS.items() if c == code), None)
     if kind is None:
         raise MotionFormatError(f"{source}: unknown motion kind {code} (1 = quaternion, 2 = axis-angle)")
-    at, B = HEADER.size, 0
+    at, B, F = HEADER.size, 0, 0
     if version == CHARACTER_VERSION:
         if len(data) < at + SECTION.size:
             raise MotionFormatError(f"{source}: {len(data)} bytes, shorter than the headers of a version 2 record")
-        B = SECTION.unpack_from(data, at)[0]
+        B, F = SECTION.unpack_from(data, at)
         at += SECTION.size
-    widths = (J * CHANNELS[kind], 3, E) + ((B * 4, 3) if version == CHARACTER_VERSION else ())
+    widths = (J * CHANNELS[kind], 3, E) + ((B * 4, 3, F) if version == CHARACTER_VERSION else ())
     want = at + 4 * T * sum(widths) + n_meta
     if len(data) != want:
         raise MotionFormatError(f"{source}: {len(data)} bytes, but its header says {want} ({T} frames of {J} "
-                                f"joints, {E} expressions and {B} character bones, {n_meta} bytes of meta): the data "
-                                "is cut or padded")
+                                f"joints, {E} expressions, {B} character bones and {F} morph weights, {n_meta} bytes "
+                                "of meta): the data is cut or padded")
     floats = np.frombuffer(data, "<f4", T * sum(widths), at)
     rot, root, expr, *section = np.split(floats, np.cumsum([T * w for w in widths[:-1]]))
     meta = {}
@@ -147,8 +157,10 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
         if not isinstance(meta, dict):
             raise MotionFormatError(f"{source}: its meta block is not a JSON object")
     bones = (section[0].reshape(T, B, 4), section[1].reshape(T, 3)) if section else (None, None)
+    morph = section[2].reshape(T, F) if section and F else None
     return MotionRecord(rot.reshape(T, J, CHANNELS[kind]), root.reshape(T, 3), expr.reshape(T, E), kind=kind,
-                        fps=float(fps), start=int(start), meta=meta, bone_rotations=bones[0], bone_root=bones[1])
+                        fps=float(fps), start=int(start), meta=meta, bone_rotations=bones[0], bone_root=bones[1],
+                        morph=morph)
 
 
 __all__ = ["AXIS_ANGLE", "CHARACTER_VERSION", "HEADER", "SECTION", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",

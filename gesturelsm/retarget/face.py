@@ -116,6 +116,27 @@ def driven_presets(gltf: dict) -> list[str]:
     return [p for p in PRESETS if morph_binds(gltf, p)]
 
 
+def _targets(meshes: list, mesh: int) -> int:
+    """How many morph targets glTF mesh `mesh` has (its first primitive's; every primitive has as many)."""
+    return len((meshes[mesh].get("primitives") or [{}])[0].get("targets", []))
+
+
+def morph_channels(gltf: dict) -> list[tuple[int, int]]:
+    """The (mesh index, morph target index) pairs the character's driven presets bind, sorted: the channels a player
+    animates (every other morph target keeps its default weight, which `morph_weights` also leaves there)."""
+    meshes = gltf.get("meshes") or []
+    return sorted({(mesh, k) for p in driven_presets(gltf) for mesh, k, _ in morph_binds(gltf, p)
+                   if 0 <= mesh < len(meshes) and 0 <= k < _targets(meshes, mesh)})
+
+
+def channel_weights(per_mesh: dict[int, np.ndarray], channels: list[tuple[int, int]], frames: int) -> np.ndarray:
+    """(frames, len(channels)) float32: column j is `per_mesh[mesh][:, k]` (`morph_weights`) of channel j =
+    (mesh, k)."""
+    if not channels:
+        return np.zeros((frames, 0), np.float32)
+    return np.stack([per_mesh[m][:, k] for m, k in channels], axis=1).astype(np.float32)
+
+
 def morph_weights(gltf: dict, weights: dict[str, np.ndarray]) -> dict[int, np.ndarray]:
     """{mesh index: (T, targets) morph weights} for the meshes the character's presets bind: each mesh's default
     weights plus, per preset, its bind weight times the preset's weight, clipped to [0, 1]."""
@@ -127,7 +148,7 @@ def morph_weights(gltf: dict, weights: dict[str, np.ndarray]) -> dict[int, np.nd
             if not 0 <= mesh < len(meshes):
                 continue
             if mesh not in out:
-                K = len((meshes[mesh].get("primitives") or [{}])[0].get("targets", []))
+                K = _targets(meshes, mesh)
                 base = np.asarray((meshes[mesh].get("weights") or [0.0] * K)[:K], np.float64)
                 out[mesh] = np.tile(np.pad(base, (0, K - len(base))), (len(w), 1))
             if k < out[mesh].shape[1]:

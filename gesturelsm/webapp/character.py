@@ -9,8 +9,13 @@ to apply with three-vrm (app/player/src/character.js `applyFrame`).
 The payload per method holds base64 float32 arrays: `quats` (frames, bones, 4), local rotations (x, y, z, w)
 of the bone nodes in `nodes` (glTF node indices, hips first; `bones` are their names), and `root` (frames, 3),
 the hips' local translation; `align` (x, y, z, w) turns the character's world into the player's (SMPL-X axes)
-and `scale` is its units per metre. The player sets `#motion-player[data-character]` to `name`. A file that
-cannot be used raises gr.Error (`choose`, the upload's event: a warning) and the mannequin stays.
+and `scale` is its units per metre. A VRM that defines viseme (`aa ih ou ee oh`) or `blink` expressions also moves
+its face: `morphs` lists the morph-target channels its presets bind, [[glTF mesh index, morph target index], ...],
+and each method adds `morph` (frames, len(morphs)), those channels' weights = `retarget.face.morph_weights` of the
+method's `face_weights` (what the exported VRM animates); the player sets them as the influences of every three.js
+Mesh of that glTF mesh. A character without these presets gets neither key. The player sets
+`#motion-player[data-character]` to `name`. A file that cannot be used raises gr.Error (`choose`, the upload's
+event: a warning) and the mannequin stays.
 
     files = rig_downloads(character, motions, folder)  # each method's motion in the character's own file
 """
@@ -24,10 +29,12 @@ from pathlib import Path
 import gradio as gr
 import numpy as np
 
+from gesturelsm.body.model import resolve_body
 from gesturelsm.errors import GestureError
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.export.rig import export_rig
 from gesturelsm.retarget import Character, load_character, retarget_motion
+from gesturelsm.retarget.face import channel_weights, face_weights, morph_channels, morph_weights
 
 MAX_CHARACTER_BYTES = 32 * 1024 * 1024        # a page upload; the CLI takes up to 64 MB
 PAGE_SUFFIXES = (".vrm", ".glb", ".gltf")
@@ -84,16 +91,35 @@ def bone_order(skel) -> list[int]:
     return [skel.bones["pelvis"]] + sorted(i for i in skel.bones.values() if i != skel.bones["pelvis"])
 
 
+def face_channels(character: Character) -> list[tuple[int, int]]:
+    """The morph-target channels (glTF mesh, target) the character's viseme / blink presets bind; [] for none."""
+    return morph_channels(character.document.gltf) if character.document is not None else []
+
+
+def face_morph(character: Character, channels: list[tuple[int, int]], seq, body) -> np.ndarray:
+    """(frames, len(channels)) float32: the weights of `channels` for `seq`'s jaw and expressions (the export's)."""
+    gltf = character.document.gltf
+    per_mesh = morph_weights(gltf, face_weights(body, seq.poses, seq.expressions, seq.betas))
+    return channel_weights(per_mesh, channels, seq.num_frames)
+
+
 def character_payload(character: Character, motions: dict, body=None) -> dict:
-    """Each method's motion on the character: {name, bones, nodes, fps, frames, methods: {method: {quats, root}}}."""
+    """Each method's motion on the character: {name, bones, nodes, fps, frames, methods: {method: {quats, root}}},
+    plus `morphs` and each method's `morph` for a character with face presets (module docstring)."""
     skel = character.skeleton
     order = bone_order(skel)
     out = {"name": character.name, "bones": [skel.names[i] for i in order], "nodes": [skel.nodes[i] for i in order],
            "methods": {}}
+    channels = face_channels(character)
+    if channels:
+        out["morphs"] = [list(c) for c in channels]
+        face_body = resolve_body(body)
     for method, seq in motions.items():
         r = retarget_motion(seq, character, body)
         q = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation[:, order]))
         out["methods"][method] = {"quats": _b64(q), "root": _b64(r.root_translation)}
+        if channels:
+            out["methods"][method]["morph"] = _b64(face_morph(character, channels, seq, face_body))
         out["fps"], out["frames"] = r.fps, min(out.get("frames", r.num_frames), r.num_frames)
         out["align"] = matrix_to_quaternion_xyzw(r.align).tolist()
         out["scale"] = float(r.scale)

@@ -85,8 +85,8 @@ def payload(session: LiveSession, status: str, body=None, character=None) -> tup
         record = MotionRecord(kind=QUATERNION if body is not None else AXIS_ANGLE,
                               rotations=np.zeros((0, NUM_JOINTS, 4 if body is not None else 3)), start=start, meta=meta)
     if seq is not None and character is not None:
-        quats, root = character.chunk(seq)
-        record = replace(record, bone_rotations=quats, bone_root=root)
+        quats, root, morph = character.chunk(seq)
+        record = replace(record, bone_rotations=quats, bone_root=root, morph=morph)
     return encode(record), _ms(st["median_latency_ms"]), _stats(st)
 
 

@@ -7,7 +7,7 @@ session chose with the Character upload (character.py), retargeted chunk by chun
     entry = characters.get(token)                          # the live socket's hello names the token: LiveEntry / None
     stream = CharacterStream(entry.character, body)        # per live stream
     stream.spec()                                          # the page's JSON: name, bones, nodes, align, scale, head
-    quats, root = stream.chunk(seq)                        # (T, B, 4), (T, 3): this chunk, continuing the stream
+    quats, root, morph = stream.chunk(seq)                 # (T, B, 4), (T, 3), (T, F): this chunk, continuing
 
 The socket is not a Gradio event, so it cannot read the page session's gr.State: the page hands the socket a random
 token instead (never a path), which this map resolves to the Character the upload's event read. An entry is dropped
@@ -19,6 +19,9 @@ when a stream starts after a sweep).
 Retargeting a stream chunk by chunk gives what retargeting the whole stream gives (gesturelsm.retarget): the
 rotations are per frame, the root motion keeps the first chunk's reference (`Ground`: where the pelvis started, where
 SMPL-X's floor is), and each bone's quaternion keeps the sign of its previous frame across chunk borders.
+A VRM with viseme / blink expressions also moves its face: `spec()["morphs"]` lists the morph-target channels
+(character.py `face_channels`, [[glTF mesh, target], ...]; [] for none) and each chunk's `morph` holds their weights
+for the chunk's frames (character.py `face_morph`: per frame, so per chunk is the whole motion's at those frames).
 """
 from __future__ import annotations
 
@@ -40,7 +43,7 @@ from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
 from gesturelsm.retarget.solve import prepare
 
-from .character import bone_order
+from .character import bone_order, face_channels, face_morph
 from .motion_player import file_url
 
 TTL_S = 6 * 3600          # an entry unused this long is dropped (its page session has long gone quiet)
@@ -109,15 +112,17 @@ class LiveCharacters:
         if entry is not None:
             shutil.rmtree(entry.folder, ignore_errors=True)
 
-    def choose(self, character: Character | None, old: str | None) -> tuple[str | None, dict | None]:
+    def choose(self, character: Character | None, old: str | None, body=None) -> tuple[str | None, dict | None]:
         """The upload's event, after character.py `choose`: (the page session's new token, the live player's spec
-        {token, name, url, key}); None, None for the mannequin."""
+        {token, url, key} and `CharacterStream.spec()`'s fields: the player shows the character at rest before the
+        first Record); None, None for the mannequin."""
         self.drop(old)
         if character is None:
             return None, None
         token = self.register(character)
         entry = self.get(token)
-        return token, {"token": token, "name": character.name, "url": entry.serve(), "key": entry.key}
+        return token, {**CharacterStream(character, body).spec(), "token": token, "url": entry.serve(),
+                       "key": entry.key}
 
     def __len__(self) -> int:
         return len(self._entries)
@@ -138,7 +143,9 @@ class CharacterStream:
         self.character = character
         self.skeleton = character.skeleton
         self.order = bone_order(self.skeleton)
-        self.source = SourceBody.of(resolve_body(body), None)
+        self.body = resolve_body(body)
+        self.source = SourceBody.of(self.body, None)
+        self.channels = face_channels(character)
         self.setup = prepare(self.skeleton, self.source)         # the rest-pose work, once per stream
         self.align, self.scale = self.setup.A, self.setup.scale
         self.ground: Ground | None = None
@@ -150,11 +157,13 @@ class CharacterStream:
         return {"name": self.character.name, "bones": [skel.names[i] for i in self.order],
                 "nodes": [skel.nodes[i] for i in self.order], "fps": 30,
                 "align": matrix_to_quaternion_xyzw(self.align).tolist(), "scale": float(self.scale),
-                "head": self.order.index(skel.bones["head"]) if "head" in skel.bones else 0}
+                "head": self.order.index(skel.bones["head"]) if "head" in skel.bones else 0,
+                "morphs": [list(c) for c in self.channels]}
 
-    def chunk(self, seq: MotionSequence) -> tuple[np.ndarray, np.ndarray]:
+    def chunk(self, seq: MotionSequence) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The next frames of the stream on the character: bone quaternions (T, B, 4) x, y, z, w (hips first, sign
-        continuous with the previous chunk) and the hips' local translation (T, 3), float32."""
+        continuous with the previous chunk), the hips' local translation (T, 3) and the face's morph weights (T, F),
+        F = len(spec()["morphs"]) (0 for a character without face presets), float32."""
         r = retarget(seq, self.skeleton, self.source, self.ground, self.setup)
         self.ground = r.ground
         q = matrix_to_quaternion_xyzw(r.local_rotation[:, self.order])
@@ -164,4 +173,6 @@ class CharacterStream:
             prev = q[t]
         if len(q):
             self.last = q[-1].copy()
-        return q.astype(np.float32), r.root_translation.astype(np.float32)
+        morph = face_morph(self.character, self.channels, seq, self.body) if self.channels else \
+            np.zeros((len(q), 0), np.float32)
+        return q.astype(np.float32), r.root_translation.astype(np.float32), morph

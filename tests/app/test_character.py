@@ -45,6 +45,29 @@ def test_payload_carries_the_retargeted_rotations(character, payload):
         np.testing.assert_allclose(got, want, atol=1e-5)
         np.testing.assert_allclose(decode(p["methods"][method]["root"], (60, 3)), r.root_translation, atol=1e-5)
     json.dumps(p)                                                    # goes to the page as JSON
+    assert "morphs" not in p and all("morph" not in m for m in p["methods"].values())   # no face presets, no face
+
+
+def test_payload_moves_the_face_as_the_export_does(tmp_path):
+    """A VRM 0.x binding visemes and blink: `morphs` lists every (mesh, target) they bind, and each method's `morph`
+    is the exported VRM's weights (`morph_weights(face_weights(...))`) of those channels, frame by frame."""
+    from _skinned import face_vrm
+    from _support import synthetic_motion
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.retarget.face import driven_presets, face_weights, morph_binds, morph_weights
+
+    character = read_upload(str(face_vrm(tmp_path / "face.vrm", vrm="0")))
+    gltf = character.document.gltf
+    motions = {"a": synthetic_motion(frames=40, seed=1), "b": synthetic_motion(frames=40, seed=2)}
+    p = character_payload(character, motions)
+    channels = sorted({(m, k) for pr in driven_presets(gltf) for m, k, _ in morph_binds(gltf, pr)})
+    assert len(channels) == 6 and [tuple(c) for c in p["morphs"]] == channels
+    for method, seq in motions.items():
+        per_mesh = morph_weights(gltf, face_weights(resolve_body(None), seq.poses, seq.expressions, seq.betas))
+        got = decode(p["methods"][method]["morph"], (40, len(channels)))
+        np.testing.assert_allclose(got, np.stack([per_mesh[m][:, k] for m, k in channels], axis=1), atol=1e-6)
+        assert got.max() > 0.1 and np.ptp(got, axis=0).max() > 0.1       # the mouth moves in this motion
+    json.dumps(p)
 
 
 def test_bad_uploads_are_one_line_errors(tmp_path):
@@ -174,3 +197,52 @@ def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, 
     for method, shown in zip(got["methods"], got["shown"]):       # each instance shows its own method's frame
         want = decode(got["quats"][method], (-1, B, 4))[got["frame"]]
         np.testing.assert_allclose(np.abs(np.sum(np.asarray(shown) * want, axis=1)), 1.0, atol=1e-5)
+
+
+FACE_JS = """async ([b64, payload, live, chunk]) => {
+    const bytes = Uint8Array.from(atob(b64), c => c.charCodeAt(0)).buffer;
+    const base = await window.C.loadCharacter(bytes);
+    const influences = (body) => { const out = [];
+        body.meshes.forEach((objs, m) => objs.forEach((o) => out.push([m, Array.from(o.morphTargetInfluences)])));
+        return out; };
+    const page = new window.C.CharacterBody(base, payload, 'a', 0), shown = [];
+    for (const f of chunk.frames) { page.pose(f); shown.push(influences(page)); }
+    const streamed = new window.C.CharacterBody(base, live, 'live', 0), streamedShown = [];
+    streamed.appendBones(new Float32Array(chunk.quats), new Float32Array(chunk.root), new Float32Array(chunk.morph));
+    for (const f of chunk.frames) { streamed.pose(f); streamedShown.push(influences(streamed)); }
+    let refused = null;
+    try { streamed.appendBones(new Float32Array(chunk.quats), new Float32Array(chunk.root), null); }
+    catch (e) { refused = e.message; }
+    return {shown, streamedShown, refused};
+}"""
+
+
+@pytest.mark.browser
+def test_the_characters_face_moves_in_the_browser(tmp_path):
+    """A VRM with visemes and blink in three.js: the page's CharacterBody (payload) and the live one (a streamed
+    chunk's morph weights) set each preset's morph target influence on the clone's mesh to the server's weight at the
+    frame shown, the mouth open at some frame and different between frames."""
+    import base64
+
+    from _skinned import face_vrm
+    from _support import synthetic_motion
+    from gesturelsm.webapp.live_character import CharacterStream
+
+    path = face_vrm(tmp_path / "face.vrm", vrm="0")
+    character = read_upload(str(path))
+    seq = synthetic_motion(frames=40, seed=1)
+    p = character_payload(character, {"a": seq})
+    W = decode(p["methods"]["a"]["morph"], (40, len(p["morphs"])))
+    stream = CharacterStream(character)
+    q, r, w = stream.chunk(seq)
+    np.testing.assert_allclose(w, W, atol=1e-6)
+    frames = [int(W.sum(1).argmax()), int(W.sum(1).argmin())]          # the mouth widest open, and nearly shut
+    chunk = {"frames": frames, "quats": q.ravel().tolist(), "root": r.ravel().tolist(), "morph": w.ravel().tolist()}
+    with character_js_page(tmp_path) as page:
+        got = page.evaluate(FACE_JS, [base64.b64encode(path.read_bytes()).decode(), p, stream.spec(), chunk])
+    assert W[frames[0]].max() > 0.1 and np.abs(W[frames[0]] - W[frames[1]]).max() > 0.1
+    for shown in (got["shown"], got["streamedShown"]):
+        for f, meshes in zip(frames, shown):
+            assert [m for m, _ in meshes] == [0]                           # the one glTF mesh, one three.js Mesh
+            np.testing.assert_allclose([meshes[0][1][k] for _, k in p["morphs"]], W[f], atol=1e-6)
+    assert "0 face weights for 40 frames of 6 morph channels" in got["refused"]

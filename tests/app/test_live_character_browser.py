@@ -1,8 +1,9 @@
 """The Live tab on the character chosen with the page's Character upload, in real headless Chromium with its fake
-microphone: after choosing ../shared's cryptovoxels.vrm, Record streams onto it (`#live-player[data-character]`, the
-frames advance) and its right hand moves with the streamed motion; clearing the upload puts the next stream back on
-the mannequin. Tiny checkpoints (the app tests' service). Skips, saying why, without chromium, the player bundle or
-the character."""
+microphone: after choosing ../shared's cryptovoxels.vrm it stands in the live player at rest, Record streams onto it
+(`#live-player[data-character]`, the frames advance) and its right hand moves with the streamed motion; clearing the
+upload puts the next stream back on the mannequin; a VRM with visemes and blink moves its face's morph targets with
+the stream. Tiny checkpoints (the app tests' service). Skips, saying why, without chromium, the player bundle or the
+character."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -55,7 +56,10 @@ def test_the_live_tab_streams_onto_the_chosen_character(app_url, speech_48k):
         page.locator("#character input[type=file]").set_input_files(str(VRM))
         page.locator("#character", has_text="43 humanoid bones").wait_for(timeout=60000)
         page.wait_for_function(f"() => {LIVE}.chosen && {LIVE}.chosen.name === 'cryptovoxels.vrm'", timeout=30000)
+        page.wait_for_selector(f"{PLAYER}[data-character='cryptovoxels.vrm']", timeout=30000)   # at rest, no stream
+        assert page.evaluate(f"() => {LIVE}.player.bodies[0].streamed && {LIVE}.player.frames() === 0")
         page.locator("#live-record").click()
+        page.wait_for_function(f"() => {LIVE}.ws && {LIVE}.player.frames() > 0", timeout=60000)
         page.wait_for_selector(f"{PLAYER}[data-character='cryptovoxels.vrm']", timeout=30000)
         page.wait_for_function(f"() => Number(document.querySelector('{PLAYER}').dataset.frames) > 5", timeout=60000)
         assert page.get_attribute(PLAYER, "data-state") == "playing"
@@ -79,3 +83,60 @@ def test_the_live_tab_streams_onto_the_chosen_character(app_url, speech_48k):
             && document.querySelector('{PLAYER}').dataset.character === undefined""", timeout=60000)
         page.locator("#live-stop").click()
         page.wait_for_function(f"() => {LIVE}.ws === null", timeout=30000)
+
+
+FACE_JS = f"""() => {{ const f = {LIVE}, b = f.player.bodies[0], F = b.morphs.length, shown = f.player.shown;
+    const mesh = b.meshes.get(0)[0];
+    return {{morphs: b.morphs, frame: shown, frames: b.frames,
+            streamed: Array.from(b.w.subarray(0, b.frames * F)),
+            influences: Array.from(mesh.morphTargetInfluences)}}; }}"""
+
+
+@pytest.mark.browser
+def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, monkeypatch):
+    """A VRM with visemes and blink on the Live tab: after Record the stream names its morph channels, the page
+    receives exactly the weights the server computed for each chunk, and the character's mesh shows the weights of the
+    frame on screen, which change over time. The tiny test checkpoints keep the jaw shut, so the server's face sees
+    the generated motion with its jaw opening and shutting (5 frames each)."""
+    import gesturelsm.webapp.live_character as live_character
+    from _skinned import face_vrm
+    from _support import player_page
+    from gesturelsm.motion.skeleton import JOINT_INDEX
+    from gesturelsm.webapp.motion_player import BUNDLE
+
+    sent, real = [], live_character.face_morph
+
+    def talking(character, channels, seq, body):
+        poses = seq.poses.copy()
+        poses[:, 3 * JOINT_INDEX["jaw"]] = 0.3 * (np.arange(len(poses)) % 10 < 5)
+        sent.append(real(character, channels, type(seq)(poses, seq.trans, seq.expressions, seq.betas), body))
+        return sent[-1]
+
+    monkeypatch.setattr(live_character, "face_morph", talking)
+
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+    path = face_vrm(tmp_path / "face.vrm", vrm="1")
+    args = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
+            f"--use-file-for-fake-audio-capture={speech_48k}"]
+    with player_page(app_url, PLAYER, args) as page:
+        page.locator("#character input[type=file]").set_input_files(str(path))
+        page.locator("#character", has_text="humanoid bones").wait_for(timeout=60000)
+        page.wait_for_function(f"() => {LIVE}.chosen && {LIVE}.chosen.name === 'face.vrm'", timeout=30000)
+        page.locator("#live-record").click()
+        page.wait_for_selector(f"{PLAYER}[data-character='face.vrm']", timeout=30000)
+        page.wait_for_function(f"() => {LIVE}.player.bodies[0].frames > 40", timeout=60000)
+        seen = []
+        for _ in range(8):
+            seen.append(page.evaluate(FACE_JS))
+            page.wait_for_timeout(250)
+        page.locator("#live-stop").click()
+        page.wait_for_function(f"() => {LIVE}.ws === null", timeout=30000)
+    assert seen[0]["morphs"] == [[0, k] for k in range(6)]                     # the stream's channels
+    last = seen[-1]
+    W = np.asarray(last["streamed"], np.float32).reshape(last["frames"], 6)
+    np.testing.assert_array_equal(W, np.concatenate(sent)[:len(W)])             # the server's weights, frame by frame
+    assert W.max() > 0.05 and np.ptp(W, axis=0).max() > 0.05                   # the mouth opens and shuts
+    for s in seen:                                                               # the mesh shows the frame on screen
+        np.testing.assert_allclose(s["influences"], W[s["frame"]], atol=1e-6)
+    assert len({tuple(np.round(s["influences"], 6)) for s in seen}) > 1          # and it changes over time

@@ -112,9 +112,15 @@ DECODE_JS = """async () => {
       try { m.decodeMotion(bytes, name); errors.push(null); } catch (e) { errors.push(e.message); }
     }
     const c = m.decodeMotion(await (await fetch('/c.bin')).arrayBuffer(), 'c.bin');
+    const f = m.decodeMotion(await (await fetch('/f.bin')).arrayBuffer(), 'f.bin');
+    let fcut = null;
+    try { m.decodeMotion((await (await fetch('/f.bin')).arrayBuffer()).slice(0, -4), 'fcut.bin'); }
+    catch (e) { fcut = e.message; }
     return {kind: r.kind, joints: r.joints, fps: r.fps, start: r.start, frames: r.frames, meta: r.meta,
             rotations: Array.from(r.rotations), root: Array.from(r.root), expressions: Array.from(r.expressions),
-            errors, plain: r.character, version: c.version, bones: c.character.bones,
+            errors, plain: r.character, version: c.version, bones: c.character.bones, cmorphs: c.character.morphs,
+            fmorphs: f.character.morphs, fbones: f.character.bones, fcut,
+            f: [f.character.rotations, f.character.root, f.character.morph].map((a) => Array.from(a)),
             c: [c.rotations, c.root, c.expressions, c.character.rotations, c.character.root].map((a) => Array.from(a))};
 }"""
 
@@ -123,7 +129,8 @@ DECODE_JS = """async () => {
 def test_the_page_decodes_what_python_encodes(tmp_path):
     """A live-style record (a chunk from frame 42, meta) written by gesturelsm/export/motion_format.py and decoded by
     the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame, also of a
-    version-2 record's character section; cut or foreign bytes give the decoder's message naming the source."""
+    version-2 record's character section (with and without the face's morph weights); cut or foreign bytes give the
+    decoder's message naming the source."""
     from playwright.sync_api import sync_playwright
 
     from _support import CHROMIUM
@@ -144,9 +151,11 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
 
     crec = replace(rec, bone_rotations=rng.normal(size=(T, 7, 4)).astype(np.float32),
                    bone_root=rng.normal(size=(T, 3)).astype(np.float32))
+    frec = replace(crec, morph=rng.uniform(size=(T, 6)).astype(np.float32))          # a face: 6 morph channels
     files = {"/index.html": (b"<!doctype html><title>decode</title>", "text/html"),
              "/player.js": (BUNDLE.read_bytes(), "text/javascript"), "/m.bin": (encode(rec), "application/octet-stream"),
-             "/c.bin": (encode(crec), "application/octet-stream")}
+             "/c.bin": (encode(crec), "application/octet-stream"),
+             "/f.bin": (encode(frec), "application/octet-stream")}
 
     def serve(route):
         body, kind = files[route.request.url.split("player.test", 1)[1]]
@@ -168,6 +177,10 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     assert got["plain"] is None and (got["version"], got["bones"]) == (2, 7)
     for a, want in zip(got["c"], (crec.rotations, crec.root, crec.expressions, crec.bone_rotations, crec.bone_root)):
         np.testing.assert_array_equal(np.asarray(a, np.float32).reshape(want.shape), want)
+    assert got["cmorphs"] == 0 and (got["fbones"], got["fmorphs"]) == (7, 6)
+    for a, want in zip(got["f"], (frec.bone_rotations, frec.bone_root, frec.morph)):
+        np.testing.assert_array_equal(np.asarray(a, np.float32).reshape(want.shape), want)
+    assert got["fcut"].startswith("fcut.bin: ") and "6 morph weights" in got["fcut"] and "cut or padded" in got["fcut"]
     cut, head, wav = got["errors"]
     assert cut.startswith("cut.bin: ") and "cut or padded" in cut
     assert head.startswith("head.bin: 12 bytes, shorter than the 28-byte header")

@@ -108,3 +108,33 @@ def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone
         decode(data[:-4])
     with pytest.raises(ValueError, match="bone rotations must be"):
         encode(replace(rec, bone_rotations=np.zeros((4, 43, 4)), bone_root=np.zeros((5, 3))))
+
+
+def test_face_morph_weights_round_trip_after_the_hips_translation():
+    """A character with face presets: F morph weights per frame after the hips' translation, F at byte 30 (0 there
+    keeps the bone-only record's bytes); encode -> decode gives every weight back, wrong sizes are refused."""
+    from dataclasses import replace
+
+    from gesturelsm.export.motion_format import SECTION
+
+    rng = np.random.default_rng(2)
+    T, B, F = 6, 43, 7
+    bones = replace(_record(QUATERNION, T=T, E=2), bone_rotations=rng.normal(size=(T, B, 4)).astype(np.float32),
+                    bone_root=rng.normal(size=(T, 3)).astype(np.float32))
+    face = replace(bones, morph=rng.uniform(size=(T, F)).astype(np.float32))
+    plain, data = encode(bones), encode(face)
+    assert SECTION.unpack_from(plain, 28) == (B, 0) and SECTION.unpack_from(data, 28) == (B, F)
+    assert len(data) == len(plain) + 4 * T * F
+    n_meta = struct.unpack_from("<I", data, 24)[0]
+    np.testing.assert_array_equal(np.frombuffer(data, "<f4", T * F, len(data) - n_meta - 4 * T * F).reshape(T, F),
+                                  face.morph)                               # right before the meta block
+    got = decode(data)
+    for k in ("rotations", "root", "expressions", "bone_rotations", "bone_root", "morph"):
+        np.testing.assert_array_equal(getattr(got, k), getattr(face, k))
+    assert decode(plain).morph is None and encode(got) == data
+    with pytest.raises(MotionFormatError, match=f"{F} morph weights.*cut or padded"):
+        decode(data[:-n_meta - 4] + data[len(data) - n_meta:])
+    with pytest.raises(ValueError, match="morph weights must be"):
+        encode(replace(face, morph=np.zeros((T - 1, F))))
+    with pytest.raises(ValueError, match="need the character's bone rotations"):
+        encode(replace(_record(), morph=np.zeros((7, F))))

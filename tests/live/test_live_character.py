@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import struct
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -25,7 +26,7 @@ from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import load_character, retarget_motion
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order  # noqa: E402
+from gesturelsm.webapp.character import bone_order, character_payload  # noqa: E402
 from gesturelsm.webapp.live import payload  # noqa: E402
 from gesturelsm.webapp.live_character import EXPIRED, CharacterStream, LiveCharacters  # noqa: E402
 
@@ -61,7 +62,7 @@ def streamed(character, motion, body) -> tuple[CharacterStream, np.ndarray, np.n
     for n in CHUNKS:
         out.append(stream.chunk(motion.slice(a, a + n)))
         a += n
-    return stream, np.concatenate([q for q, _ in out]), np.concatenate([r for _, r in out])
+    return stream, np.concatenate([q for q, _, _ in out]), np.concatenate([r for _, r, _ in out])
 
 
 def test_streamed_chunks_equal_retargeting_the_whole_motion(character, motion, body):
@@ -133,15 +134,46 @@ def test_without_a_character_the_records_are_the_mannequins_byte_for_byte(charac
     assert HEADER.unpack_from(with_char)[1] == CHARACTER_VERSION
     for k in ("rotations", "root", "expressions"):                     # the mannequin's arrays are all still there
         np.testing.assert_array_equal(getattr(rec, k), getattr(plain, k))
-    q, r = CharacterStream(character, body).chunk(seq)
+    q, r, w = CharacterStream(character, body).chunk(seq)
     np.testing.assert_array_equal(rec.bone_rotations, q)
     np.testing.assert_array_equal(rec.bone_root, r)
+    # a rig without face presets: no morph channels, and its records are the bone-only layout (F = 0 at byte 30)
+    assert w.shape == (20, 0) and rec.morph is None and struct.unpack_from("<H", with_char, 30)[0] == 0
+    assert CharacterStream(character, body).spec()["morphs"] == []
+    page = character_payload(character, {"m": seq}, body)
+    assert "morphs" not in page and set(page["methods"]["m"]) == {"quats", "root"}
+
+
+def test_streamed_face_weights_equal_the_whole_motions(body, motion, tmp_path):
+    """A VRM with visemes and blink: each chunk's morph weights are the whole motion's at those frames, the export's
+    `morph_weights(face_weights(...))`, in the channel order the stream's spec lists; the records carry them."""
+    from _skinned import face_vrm
+    from gesturelsm.retarget.face import PRESETS, face_weights, morph_weights
+
+    vrm = load_character(face_vrm(tmp_path / "face.vrm", vrm="1"))
+    gltf = vrm.document.gltf
+    stream = CharacterStream(vrm, body)
+    channels = [tuple(c) for c in stream.spec()["morphs"]]
+    assert channels == [(0, k) for k in range(len(PRESETS))]            # one head-box target per preset
+    got, a = [], 0
+    for n in CHUNKS:
+        data = payload(FakeSession(motion.slice(a, a + n), a), "streaming", body, stream)[0]
+        rec = decode(data)
+        assert struct.unpack_from("<H", data, 30)[0] == len(channels) and rec.morph.shape == (n, len(channels))
+        got.append(rec.morph)
+        a += n
+    got = np.concatenate(got)
+    per_mesh = morph_weights(gltf, face_weights(body, motion.poses, motion.expressions, motion.betas))
+    np.testing.assert_allclose(got, np.stack([per_mesh[m][:, k] for m, k in channels], axis=1), atol=1e-6)
+    assert got.max() > 0.1 and np.ptp(got, axis=0).max() > 0.1             # the mouth moves in this motion
 
 
 def test_tokens_resolve_to_the_chosen_character_and_expire(character, tmp_path):
     chars = LiveCharacters(tmp_path, max_entries=2)
     token, spec = chars.choose(character, None)
     assert isinstance(token, str) and len(token) >= 32 and spec["token"] == token and spec["name"] == "me.glb"
+    rest = CharacterStream(character).spec()                             # the live player shows it at rest with these
+    assert {k: spec[k] for k in rest} == rest
     served = Path(spec["url"].split("file=", 1)[1])
     assert served.parent.parent == tmp_path and served.parent.name.startswith("req-")     # swept like requests
     assert served.read_bytes() == character.path.read_bytes()

@@ -1,6 +1,9 @@
 // The user's character in the browser: a VRM (0.x or 1.0) or a skinned glTF loaded with three.js'
 // GLTFLoader and @pixiv/three-vrm, animated either by the glTF animation the server wrote into the file
 // (`gesturelsm export --rig`) or by per-bone rotations streamed from the server (gesturelsm/webapp/character.py).
+// A character whose VRM presets bind visemes or blink also gets the face's morph-target weights: the payload's
+// `morphs` lists the channels [[glTF mesh index, morph target index], ...] and each frame holds one weight per channel,
+// set as morphTargetInfluences[target] of every three.js Mesh of that glTF mesh (one per primitive).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 import * as SkeletonUtils from 'three/examples/jsm/utils/SkeletonUtils.js';
@@ -66,6 +69,30 @@ export function applyFrame(character, nodes, quats, root) {
   character.scene.updateMatrixWorld(true);
 }
 
+/** The three.js Meshes of each glTF mesh index (a multi-primitive mesh is several; GLTFLoader's associations). */
+export function meshObjects(character) {
+  const out = new Map();
+  character.gltf.parser.associations.forEach((v, obj) => {
+    if (v && v.meshes !== undefined && obj.isMesh) {
+      if (!out.has(v.meshes)) out.set(v.meshes, []);
+      out.get(v.meshes).push(obj);
+    }
+  });
+  return out;
+}
+
+/**
+ * Set one frame of face weights: `channels` [[mesh, target], ...], `weights` one number per channel; `meshes` maps
+ * glTF mesh indices to their three.js Meshes (meshObjects). Targets a Mesh does not have are left alone.
+ */
+export function applyMorph(meshes, channels, weights) {
+  channels.forEach(([m, k], j) => {
+    for (const obj of meshes.get(m) || []) {
+      if (obj.morphTargetInfluences && k < obj.morphTargetInfluences.length) obj.morphTargetInfluences[k] = weights[j];
+    }
+  });
+}
+
 /** Decode a base64 float32 array from gesturelsm/webapp/character.py's payload. */
 export function decodeFloats(b64) {
   const bin = atob(b64);
@@ -76,15 +103,21 @@ export function decodeFloats(b64) {
 
 /**
  * Pose the character at `frame` of one method of the server's payload
- * ({name, bones, nodes, fps, frames, methods: {method: {quats, root}}}); decoded arrays are cached on it.
+ * ({name, bones, nodes, fps, frames, morphs?, methods: {method: {quats, root, morph?}}}); decoded arrays are cached on
+ * it. `meshes` (meshObjects of `character`) gets the face's weights when the payload has them.
  * The player sets #motion-player[data-character] = payload.name when it shows the character.
  */
-export function showPayloadFrame(character, payload, method, frame) {
+export function showPayloadFrame(character, payload, method, frame, meshes = null) {
   const m = payload.methods[method];
   if (!m) return;
   if (!m._q) { m._q = decodeFloats(m.quats); m._r = decodeFloats(m.root); }
+  if (m.morph && !m._w) m._w = decodeFloats(m.morph);
   const B = payload.nodes.length;
   const f = Math.max(0, Math.min(payload.frames - 1, frame | 0));
+  if (m._w && meshes) {
+    const F = payload.morphs.length;
+    applyMorph(meshes, payload.morphs, m._w.subarray(F * f, F * (f + 1)));
+  }
   applyFrame(character, payload.nodes, m._q.subarray(4 * B * f, 4 * B * (f + 1)), m._r.subarray(3 * f, 3 * f + 3));
 }
 
@@ -116,8 +149,10 @@ export class CharacterBody {
     scene.traverse((o) => { copies.push(o); o.frustumCulled = false; });
     let k = 0;
     base.scene.traverse((o) => of.set(o, copies[k++]));      // a clone keeps the order of the hierarchy
-    const nodes = new Map();
+    const nodes = new Map(), meshes = new Map();
     nodeObjects(base).forEach((obj, n) => { if (of.has(obj)) nodes.set(n, of.get(obj)); });
+    meshObjects(base).forEach((objs, m) => meshes.set(m, objs.filter((o) => of.has(o)).map((o) => of.get(o))));
+    this.meshes = meshes;                                      // glTF mesh index -> this clone's three.js Meshes
     this.character = { gltf: base.gltf, vrm: null, scene, nodes };
     scene.quaternion.fromArray(payload.align);
     scene.scale.setScalar(1 / payload.scale);
@@ -128,27 +163,33 @@ export class CharacterBody {
     this.payload = payload; this.method = method;
     this.streamed = !(payload.methods && payload.methods[method]);
     this.frames = this.streamed ? 0 : payload.frames;
-    this.q = new Float32Array(0); this.r = new Float32Array(0); this.cap = 0;
+    this.morphs = payload.morphs || [];                          // the face's channels [[mesh, target], ...]
+    this.q = new Float32Array(0); this.r = new Float32Array(0); this.w = new Float32Array(0); this.cap = 0;
   }
 
   append() {}                    // the mannequin's arrays: not drawn on the character
 
-  // A streamed chunk: quats (n, B, 4) and the hips' translation (n, 3); buffers double when full (as Body's).
-  appendBones(quats, root) {
-    const B = this.payload.nodes.length, n = root.length / 3, need = this.frames + n;
+  // A streamed chunk: quats (n, B, 4), the hips' translation (n, 3) and the face's weights (n, F), F = the channels of
+  // the stream's first message (payload.morphs); buffers double when full (as Body's).
+  appendBones(quats, root, morph = null) {
+    const B = this.payload.nodes.length, F = this.morphs.length, n = root.length / 3, need = this.frames + n;
     if (quats.length !== n * B * 4) throw new Error(`a chunk of ${quats.length / 4} bone rotations for ${n} frames of ${B} bones`);
+    const got = morph ? morph.length : 0;
+    if (got !== n * F) throw new Error(`a chunk of ${got} face weights for ${n} frames of ${F} morph channels`);
     if (need > this.cap) {
       const cap = Math.max(need, 2 * this.cap, 64);
       const grow = (a, w) => { const c = new Float32Array(cap * w); c.set(a.subarray(0, this.frames * w)); return c; };
-      this.q = grow(this.q, 4 * B); this.r = grow(this.r, 3); this.cap = cap;
+      this.q = grow(this.q, 4 * B); this.r = grow(this.r, 3); this.w = grow(this.w, F); this.cap = cap;
     }
     this.q.set(quats, this.frames * 4 * B); this.r.set(root, this.frames * 3);
+    if (F) this.w.set(morph, this.frames * F);
     this.frames = need;
   }
 
   pose(f) {
-    if (!this.streamed) return showPayloadFrame(this.character, this.payload, this.method, f);
-    const B = this.payload.nodes.length;
+    if (!this.streamed) return showPayloadFrame(this.character, this.payload, this.method, f, this.meshes);
+    const B = this.payload.nodes.length, F = this.morphs.length;
+    if (F) applyMorph(this.meshes, this.morphs, this.w.subarray(F * f, F * (f + 1)));
     applyFrame(this.character, this.payload.nodes, this.q.subarray(4 * B * f, 4 * B * (f + 1)), this.r.subarray(3 * f, 3 * f + 3));
   }
 }

@@ -5,11 +5,13 @@
 // appends the frames a message carries; reset() starts a new stream; `last` is the meta of the latest message
 // (frames so far, audio seconds received, latencies, status).
 // The visitor's character (the page's Character upload): useCharacter(spec) (index.js chooseLiveCharacter; spec =
-// {token, name, url, key} or null) fetches and parses it once, and from the next start() on the hello names its
-// token; the server answers with the character's bones (a frames-less first message, meta.character) and every
-// record then carries the frames on the character (motion_format.js character section), drawn with character.js'
-// applyFrame; the element carries data-character (the file name) while it is shown. A character the server no
-// longer holds, or the browser cannot load, leaves the mannequin with the reason in data-character-error.
+// {token, name, url, key, bones, nodes, align, scale, head, morphs} or null) fetches and parses it once (before the
+// first stream it stands there at rest), and from the next start() on the hello names its token; the server answers
+// with the character's bones (a frames-less first message, meta.character) and every record then carries the frames
+// on the character (motion_format.js character section), drawn with character.js' applyFrame, and its face's morph
+// weights when its VRM binds visemes or blink (meta.character.morphs); the element carries data-character (the file
+// name) while it is shown. A character the server no longer holds, or the browser cannot load, leaves the mannequin
+// with the reason in data-character-error.
 // The meter: #live-latency = the server's median (ms) from a block's arrival to its motion being ready,
 // #live-stats = p90 and real-time factor, #live-status. It also measures the latency the visitor sees: for every
 // newly drawn frame f, now - (capture of the first block - SEND_S + f / fps), i.e. from the moment the speech of
@@ -44,10 +46,16 @@ export class LiveFeed {
   get measure() { return this.player.measure; }    // measure.js: also stamps each message's meta (last.at)
   set measure(on) { this.player.measure = on; }
 
-  // The character the next stream uses (null: the mannequin); parsed now so that Record does not wait for it.
+  // The character the next stream uses (null: the mannequin); parsed now so that Record does not wait for it, and
+  // shown at rest before the first stream (the spec has its bones, axes and scale: live_character.py
+  // `LiveCharacters.choose`).
   useCharacter(spec) {
     this.chosen = spec && spec.token ? spec : null;
     if (this.chosen) fetchCharacter(this.chosen).catch(() => {});   // a failure shows when a stream uses it
+    if (this.ws || this.clock) return;                              // a stream is on screen: it stays
+    const rest = this.chosen && this.chosen.nodes ? this.chosen : null;
+    this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl, method: 'live' }], 30, rest)
+      .then(() => this.player.renderer.render(this.player.scene, this.player.camera));
   }
 
   async reset(character = null) {

@@ -4,7 +4,9 @@
 //     joints u16, expressions u16, fps f32, start u32, frames u32, meta bytes u32
 //   float32 rotations (frames, joints, 4 or 3), root (frames, 3), expressions (frames, E); meta (UTF-8 JSON).
 // Version 2 adds a character section (the live feed on the visitor's character): after the header, bones u16 (B) and
-// a reserved u16; after the expressions, float32 bone rotations (frames, B, 4) and the hips' translation (frames, 3).
+// morph channels u16 (F, 0: none); after the expressions, float32 bone rotations (frames, B, 4), the hips' translation
+// (frames, 3) and the face's morph-target weights (frames, F), in the order of the stream's first message's
+// meta.character.morphs ([[glTF mesh, target], ...]).
 // The float arrays are views into the buffer (no copy) on little-endian machines (all browsers' platforms).
 
 export const MAGIC = 'GLSM';
@@ -16,7 +18,7 @@ const CHANNELS = { quaternion: 4, 'axis-angle': 3 };
 const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
 
 // ArrayBuffer -> {version, kind, joints, expressionCount, fps, start, frames, rotations, root, expressions, meta,
-// character: null or {bones, rotations, root}};
+// character: null or {bones, rotations, root, morphs: F, morph: (frames, F) floats}};
 // throws an Error naming `source` and what is wrong when the bytes are not a record this decoder knows.
 export function decodeMotion(buffer, source = 'motion data') {
   if (ArrayBuffer.isView(buffer)) buffer = buffer.buffer.slice(buffer.byteOffset, buffer.byteOffset + buffer.byteLength);
@@ -39,14 +41,16 @@ export function decodeMotion(buffer, source = 'motion data') {
   const sectioned = version === CHARACTER_VERSION;
   if (sectioned && size < HEADER_BYTES + 4) throw new Error(`${source}: ${size} bytes, shorter than the headers of a version 2 record`);
   const B = sectioned ? v.getUint16(HEADER_BYTES, true) : 0;
-  const widths = [joints * CHANNELS[kind], 3, E, ...(sectioned ? [4 * B, 3] : [])];
+  const F = sectioned ? v.getUint16(HEADER_BYTES + 2, true) : 0;
+  const widths = [joints * CHANNELS[kind], 3, E, ...(sectioned ? [4 * B, 3, F] : [])];
   let off = HEADER_BYTES + (sectioned ? 4 : 0);
   const want = off + 4 * frames * widths.reduce((a, b) => a + b, 0) + metaBytes;
   if (size !== want) {
     throw new Error(`${source}: ${size} bytes, but its header says ${want} (${frames} frames of ${joints} joints, ` +
-      `${E} expressions and ${B} character bones, ${metaBytes} bytes of meta): the data is cut or padded`);
+      `${E} expressions, ${B} character bones and ${F} morph weights, ${metaBytes} bytes of meta): ` +
+      'the data is cut or padded');
   }
-  const [rotations, root, expressions, boneRotations, boneRoot] = widths.map((w) => {
+  const [rotations, root, expressions, boneRotations, boneRoot, morph] = widths.map((w) => {
     const n = frames * w, at = off;
     off += 4 * n;
     if (LITTLE_ENDIAN) return new Float32Array(buffer, at, n);
@@ -63,6 +67,6 @@ export function decodeMotion(buffer, source = 'motion data') {
     }
     if (!meta || typeof meta !== 'object' || Array.isArray(meta)) throw new Error(`${source}: its meta block is not a JSON object`);
   }
-  const character = sectioned ? { bones: B, rotations: boneRotations, root: boneRoot } : null;
+  const character = sectioned ? { bones: B, rotations: boneRotations, root: boneRoot, morphs: F, morph } : null;
   return { version, kind, joints, expressionCount: E, fps, start, frames, rotations, root, expressions, meta, character };
 }

@@ -129,7 +129,7 @@ export class MotionPlayer {
       if (!record.character || record.character.bones !== b.payload.nodes.length) {
         throw new Error(`${source}: no frames for the ${b.payload.nodes.length} bones of the character`);
       }
-      b.appendBones(record.character.rotations, record.character.root);
+      b.appendBones(record.character.rotations, record.character.root, record.character.morph);
       this.range.max = String(this.frames() / this.fps);
       this.dirty = true;
       return;
