@@ -184,3 +184,19 @@ def test_real_take_face_moves_with_speech(beat2_root, real_motion, body):
     jaw = face.weight("JawOpen")
     assert jaw.std() > 0.02 and jaw.max() > 0.1                        # the jaw moves while the speaker talks
     assert np.abs(face.head).max() < np.pi / 2                         # a speaker's head stays within a quarter turn
+
+
+def test_head_orientation_is_the_posed_face_s_on_a_real_take(beat2_root, real_motion, body):
+    """Oracle: the rotation carrying the rest face's rigid landmarks (brows, nose, eyes) onto the posed body's is
+    the head joint's world orientation that HeadYaw/Pitch/Roll are read from."""
+    from gesturelsm.export.arkit import global_rotations
+    from gesturelsm.export.keypoints import keypoints_3d
+
+    seq = real_motion.slice(0, 20)
+    posed = keypoints_3d(seq, body)["face"][:, 17:48]
+    rest_seq = MotionSequence(np.zeros((1, 165)), np.zeros((1, 3)), np.zeros((1, 100)), seq.betas)
+    rest = keypoints_3d(rest_seq, body)["face"][0, 17:48]
+    head = global_rotations(seq.poses, "head")
+    for t in range(seq.num_frames):
+        mesh, _ = Rotation.align_vectors(posed[t] - posed[t].mean(0), rest - rest.mean(0))
+        assert np.degrees((mesh * head[t].inv()).magnitude()) < 0.5
