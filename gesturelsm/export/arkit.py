@@ -36,16 +36,18 @@ Stay 0 (nothing on the body's landmarks or joints measures them): EyeSquint, Jaw
 MouthShrugLower/Upper, MouthPress, MouthDimple, CheekPuff, CheekSquint, NoseSneer, TongueOut.
 
 Rotations, radians, intrinsic yaw-pitch-roll (R = Ry(yaw) Rx(pitch) Rz(roll)): yaw > 0 turns the face to its
-own left, pitch > 0 tips it down (chin to chest), roll > 0 tilts the top of the head to its right.
+own left, pitch > 0 tips it down (chin to chest), roll > 0 tilts the top of the head to its right; all 0 for the
+rest pose's upright, forward-facing head.
 HeadYaw/Pitch/Roll: the `head` joint's world orientation relative to the body's facing direction (the pelvis's
 heading about the vertical axis), so turning the whole body is not a head turn but bending the neck or the spine
 is. Left/RightEye*: the eye joint's rotation relative to the head (0 when the motion does not pose the eyes).
 
-Which body drives what: the built-in mannequin's expressions (mouth open, smile, brows raised) and its jaw drive
-JawOpen/Left/Right, MouthClose, MouthLowerDown, MouthSmile, MouthStretch, BrowInnerUp/OuterUp and a little EyeWide
-(its brow field lifts the upper lids); it has no eyelid closure, narrowing or frown, so EyeBlink, MouthFunnel/
-Pucker, MouthFrown and BrowDown stay 0 on it. An SMPL-X model file with FLAME's expression basis moves every
-landmark and drives all the measured blendshapes.
+Which body drives what: the built-in mannequin's three expressions (mouth open, smile, brows raised; negative
+coefficients reverse them) move the lower lip, the mouth corners and the brows (the brows' field lifts the upper
+lids a little); with its jaw they drive JawOpen/Left/Right, MouthClose, MouthLowerDown/UpperUp, MouthSmile/Frown,
+MouthStretch/Pucker, BrowInnerUp/OuterUp/Down and EyeWide. Its eyelids never close, its lips never funnel and its
+fields are symmetric, so EyeBlink, MouthFunnel and MouthLeft/Right stay near 0 on it. An SMPL-X model file with
+FLAME's expression basis moves every landmark and drives all the measured blendshapes.
 """
 from __future__ import annotations
 
