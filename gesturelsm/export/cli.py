@@ -1,8 +1,10 @@
-"""`gesturelsm export`: a motion npz -> BVH, animated GLB, OpenPose keypoints, or a clean BEAT2 npz.
+"""`gesturelsm export`: a motion npz -> BVH, animated GLB, OpenPose keypoints, ARKit face blendshapes (a Live Link
+Face CSV), or a clean BEAT2 npz.
 
     gesturelsm export take.npz --bvh take.bvh --glb take.glb --keypoints take_keypoints/
     gesturelsm export take.npz --keypoints take_keypoints.json --size 768x512   # one file, all frames
     gesturelsm export take.npz --npz clean.npz                                    # BEAT2 / Blender add-on npz
+    gesturelsm export take.npz --arkit take_face.csv                              # Unreal / Unity face rigs
     gesturelsm export take.npz --rig avatar.vrm --glb avatar_take.vrm --bvh avatar_take.bvh   # your character
 """
 from __future__ import annotations
@@ -14,17 +16,19 @@ from ..body.model import resolve_body
 from ..errors import UserError
 from ..motion.sequence import MotionSequence
 from ..render.style import STYLES, parse_size
-from . import export_bvh, export_glb, export_keypoints, export_npz
+from . import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / BEAT2 npz",
+    p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / ARKit face CSV / BEAT2 npz",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("motion", help="BEAT2-layout .npz motion file")
     p.add_argument("--bvh", help="write a BVH (SMPL-X skeleton, 30 fps)")
     p.add_argument("--glb", help="write an animated, skinned GLB (glTF 2.0)")
     p.add_argument("--keypoints", help="write OpenPose 2D keypoints: a folder (one JSON per frame) or FILE.json")
     p.add_argument("--npz", help="write a checked BEAT2-layout npz")
+    p.add_argument("--arkit", help="write the face as ARKit's 52 blendshapes + head / eye rotations per frame, in "
+                   "Live Link Face's CSV layout (FILE.csv; Unreal's Live Link Face importer, Unity, Blender)")
     p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
     p.add_argument("--units", choices=["cm", "m"], default="cm", help="BVH units (default cm)")
     p.add_argument("--names", choices=["animator", "smplx"], default="animator",
@@ -40,15 +44,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not any((args.bvh, args.glb, args.keypoints, args.npz)):
-        raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --npz")
+    arkit = getattr(args, "arkit", None)
+    if not any((args.bvh, args.glb, args.keypoints, args.npz, arkit)):
+        raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --arkit, --npz")
+    if arkit and Path(arkit).suffix.lower() != ".csv":
+        raise UserError(f"--arkit {arkit}: use a .csv file name (the Live Link Face CSV)")
     if not Path(args.motion).exists():
         raise UserError(f"motion file not found: {args.motion}")
     seq = MotionSequence.load(args.motion)
     if getattr(args, "rig", None):
         return _run_rig(args, seq)
     body = None
-    if args.bvh or args.glb or args.keypoints:
+    if args.bvh or args.glb or args.keypoints or arkit:
         body = resolve_body(args.model)
     done = []
     if args.npz:
@@ -62,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
             raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
         done.append(export_keypoints(seq, args.keypoints, size=parse_size(args.size), body=body,
                                      style=STYLES[args.style]))
+    if arkit:
+        done.append(export_arkit(seq, arkit, body=body))
     for p in done:
         print(f"wrote {p}")
     return 0
@@ -72,8 +81,9 @@ def _run_rig(args: argparse.Namespace, seq: MotionSequence) -> int:
     from ..retarget import load_character, retarget_motion
     from .rig import export_rig_bvh, export_rig_glb
 
-    if args.keypoints or args.npz or not (args.glb or args.bvh):
-        raise UserError("with --rig, give --glb OUT.glb (or .vrm) and / or --bvh OUT.bvh")
+    if args.keypoints or args.npz or getattr(args, "arkit", None) or not (args.glb or args.bvh):
+        raise UserError("with --rig, give --glb OUT.glb (or .vrm) and / or --bvh OUT.bvh (export --keypoints, "
+                        "--arkit and --npz without --rig)")
     character = load_character(args.rig, args.bone_map)
     if args.glb and character.document is None:
         raise UserError(f"--rig {character.name}: a BVH skeleton has no mesh to animate; use --bvh only")

@@ -35,7 +35,7 @@ from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..constants import Progress
 from ..errors import AudioError, GestureError, InputError, RenderError
-from ..export import export_bvh, export_glb, export_keypoints, export_npz
+from ..export import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
 from ..motion.postprocess import SMOOTHING_WINDOWS
 from ..motion.sequence import MotionSequence
 from ..backends import checkpoint_sources
@@ -237,7 +237,8 @@ class GestureService:
         return replace(result, downloads=tuple(files), glb=glb)
 
     def _exports(self, motions: list[MotionSequence], names: list[str], out: Path) -> tuple[list[Path], Path | None]:
-        """npz + BVH per method, GLB + keypoints for the first one (the interactive view shows that GLB)."""
+        """npz + BVH per method; GLB, keypoints and the ARKit face (Live Link Face CSV) for the first one (the
+        interactive view shows that GLB)."""
         files: list[Path] = []
         glb = None
         for i, (seq, name) in enumerate(zip(motions, names)):
@@ -247,6 +248,7 @@ class GestureService:
                 glb = export_glb(seq, out / f"{name}.glb", body=self.body)
                 files.append(glb)
                 files.append(export_keypoints(seq, out / f"{name}_keypoints.json", body=self.body))
+                files.append(export_arkit(seq, out / f"{name}_arkit.csv", body=self.body))
         return [Path(f) for f in files], glb
 
 

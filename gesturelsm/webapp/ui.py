@@ -242,8 +242,8 @@ def _output_column(service: GestureService) -> tuple:
                          label="Timing per method and stage (seconds; real-time factor = speech seconds per "
                                "generation second)")
     stats = stats_view.component()                 # motion statistics per method, filled after the player starts
-    files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints", file_count="multiple",
-                    elem_id="downloads")
+    files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints, ARKit face CSV",
+                    file_count="multiple", elem_id="downloads")
     # Mounted only when asked for: its viewer redraws continuously (it would slow the player's software WebGL), and a
     # viewer mounted hidden (e.g. in a closed accordion) and given its file there draws nothing when shown later.
     show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")

@@ -41,7 +41,7 @@ def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     assert out.rows[-1][7] == pytest.approx(out.seconds, abs=1e-3)
     names = sorted(p.name for p in out.downloads)
     assert names == ["ddim.bvh", "ddim.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm.npz",
-                     "gesturelsm_keypoints.json"]
+                     "gesturelsm_arkit.csv", "gesturelsm_keypoints.json"]
     assert out.glb is not None and out.glb.read_bytes()[:4] == b"glTF"
     fr = [f for f, _ in steps]
     assert fr == sorted(fr) and fr[-1] == 1.0 and any("rendering" in m for _, m in steps)

@@ -1,0 +1,87 @@
+"""Cost of the ARKit face export (`gesturelsm export --arkit`) for 60 s of motion (1800 frames at 30 fps); markdown
+table out.
+
+    .venv/bin/python benchmarks/arkit_speed.py [--seconds 60] [--repeats 5] [--threads 1]
+
+Motion: the real BEAT2 take from ../shared (its jaw, expressions, head and eyes move), repeated to the length asked;
+smooth random motion when the take is absent. Body: the built-in mannequin (or $GESTURELSM_SMPLX_MODEL). Rows:
+measuring the face (`arkit_face`: facial landmarks for the jaw alone and for jaw + expressions, head and eye
+rotations), writing the Live Link Face CSV, reading it back, and the BVH export of the same motion for scale. Median
+of the repeats after one warm-up run; wall and this process's CPU seconds (the machine may be shared: compare rows
+of one run).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from gesturelsm.body.model import resolve_body  # noqa: E402
+from gesturelsm.export import arkit_face, export_bvh, read_live_link_csv  # noqa: E402
+from gesturelsm.export.live_link import write_live_link_csv  # noqa: E402
+from gesturelsm.motion import MotionSequence  # noqa: E402
+
+TAKE = REPO.parent / "shared" / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+
+
+def motion(seconds: float) -> tuple[MotionSequence, str]:
+    frames = int(round(seconds * 30))
+    if TAKE.exists():
+        seq = MotionSequence.load(TAKE)
+        reps = -(-frames // seq.num_frames)
+        tile = lambda a: np.concatenate([a] * reps)[:frames]  # noqa: E731
+        return MotionSequence(tile(seq.poses), tile(seq.trans), tile(seq.expressions), seq.betas), "BEAT2 take"
+    rng = np.random.default_rng(0)
+    t = np.arange(frames)[:, None] / 30
+    poses = 0.1 * np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 165)) * t + rng.uniform(0, 6, (1, 165)))
+    expr = np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 100)) * t)
+    return MotionSequence(poses, np.tile([0, 1.3, 0], (frames, 1)), expr), "synthetic"
+
+
+def timed(fn, repeats: int) -> tuple[float, float]:
+    fn()
+    wall, cpu = [], []
+    for _ in range(repeats):
+        w, c = time.perf_counter(), time.process_time()
+        fn()
+        wall.append(time.perf_counter() - w)
+        cpu.append(time.process_time() - c)
+    return float(np.median(wall)), float(np.median(cpu))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    seq, kind = motion(args.seconds)
+    body = resolve_body(None)
+    face = arkit_face(seq, body)
+    with tempfile.TemporaryDirectory() as tmp:
+        csv = Path(tmp) / "face.csv"
+        write_live_link_csv(face, csv)
+        rows = [("measure the face (arkit_face)", timed(lambda: arkit_face(seq, body), args.repeats)),
+                ("write the Live Link Face CSV", timed(lambda: write_live_link_csv(face, csv), args.repeats)),
+                ("read it back (read_live_link_csv)", timed(lambda: read_live_link_csv(csv), args.repeats)),
+                ("BVH export, same motion (scale)", timed(lambda: export_bvh(seq, Path(tmp) / "m.bvh", body=body),
+                                                          args.repeats))]
+        size = csv.stat().st_size
+    print(f"{seq.num_frames} frames ({kind}, {args.seconds:g} s), body {body.path.name}, torch threads "
+          f"{args.threads}, CSV {size / 1e6:.2f} MB, median of {args.repeats}\n")
+    print("| step | wall s | CPU s | ms per frame (wall) |\n|---|---|---|---|")
+    for name, (w, c) in rows:
+        print(f"| {name} | {w:.3f} | {c:.3f} | {1000 * w / seq.num_frames:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
