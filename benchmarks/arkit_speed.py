@@ -12,14 +12,12 @@ of one run).
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
@@ -27,23 +25,7 @@ sys.path.insert(0, str(REPO))
 from gesturelsm.body.model import resolve_body  # noqa: E402
 from gesturelsm.export import arkit_face, export_bvh, read_live_link_csv  # noqa: E402
 from gesturelsm.export.live_link import write_live_link_csv  # noqa: E402
-from gesturelsm.motion import MotionSequence  # noqa: E402
-
-TAKE = REPO.parent / "shared" / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
-
-
-def motion(seconds: float) -> tuple[MotionSequence, str]:
-    frames = int(round(seconds * 30))
-    if TAKE.exists():
-        seq = MotionSequence.load(TAKE)
-        reps = -(-frames // seq.num_frames)
-        tile = lambda a: np.concatenate([a] * reps)[:frames]  # noqa: E731
-        return MotionSequence(tile(seq.poses), tile(seq.trans), tile(seq.expressions), seq.betas), "BEAT2 take"
-    rng = np.random.default_rng(0)
-    t = np.arange(frames)[:, None] / 30
-    poses = 0.1 * np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 165)) * t + rng.uniform(0, 6, (1, 165)))
-    expr = np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 100)) * t)
-    return MotionSequence(poses, np.tile([0, 1.3, 0], (frames, 1)), expr), "synthetic"
+from _motion import length_args, looped_motion  # noqa: E402
 
 
 def timed(fn, repeats: int) -> tuple[float, float]:
@@ -58,13 +40,8 @@ def timed(fn, repeats: int) -> tuple[float, float]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seconds", type=float, default=60.0)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
-    args = ap.parse_args()
-    torch.set_num_threads(args.threads)
-    seq, kind = motion(args.seconds)
+    args = length_args(__doc__.split("\n")[0])
+    seq, kind = looped_motion(args.seconds)
     body = resolve_body(None)
     face = arkit_face(seq, body)
     with tempfile.TemporaryDirectory() as tmp:

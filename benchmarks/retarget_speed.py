@@ -11,13 +11,11 @@ runs on the machine; CPU seconds (this process's) much less, so both are printed
 """
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
@@ -25,35 +23,16 @@ sys.path.insert(0, str(REPO / "tests"))
 
 from _rigs import Y_UP_TO_Z_UP, build_rig  # noqa: E402
 from gesturelsm.body.model import resolve_body  # noqa: E402
-from gesturelsm.motion import MotionSequence  # noqa: E402
+from _motion import length_args, looped_motion  # noqa: E402
 from gesturelsm.retarget import SourceBody, load_character, retarget  # noqa: E402
 
 SHARED = REPO.parent / "shared"
-TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
 VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"
 
 
-def motion(seconds: float) -> tuple[MotionSequence, str]:
-    frames = int(round(seconds * 30))
-    if TAKE.exists():
-        seq = MotionSequence.load(TAKE)
-        reps = -(-frames // seq.num_frames)
-        tile = lambda a: np.concatenate([a] * reps)[:frames]  # noqa: E731
-        return MotionSequence(tile(seq.poses), tile(seq.trans), tile(seq.expressions), seq.betas), "BEAT2 take"
-    rng = np.random.default_rng(0)
-    t = np.arange(frames)[:, None] / 30
-    poses = 0.3 * np.sin(2 * np.pi * rng.uniform(0.2, 1.5, (1, 165)) * t + rng.uniform(0, 6, (1, 165)))
-    return MotionSequence(poses, np.tile([0, 1.3, 0], (frames, 1)), np.zeros((frames, 100))), "synthetic"
-
-
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seconds", type=float, default=60.0)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
-    args = ap.parse_args()
-    torch.set_num_threads(args.threads)
-    seq, kind = motion(args.seconds)
+    args = length_args(__doc__.split("\n")[0])
+    seq, kind = looped_motion(args.seconds, 0.3)
     source = SourceBody.of(resolve_body(None), seq.betas)
     rigs = []
     if VRM.exists():
