@@ -97,7 +97,7 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE) -> tuple[list[Word]
     loops = [seg.compression_ratio > LOOP_RATIO for seg in segments]
     if segments and all(loops):
         return [], -math.inf, {"model": MODEL_NAME, "mean_word_probability": 0.0, "repeated_phrase": True,
-                               "heard_repeated": _clip(" ".join(seg.text.strip() for seg in segments[:1])),
+                               "heard_repeated": _clip(" ".join(segments[0].text.split())),
                                "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
     if any(loops):
         segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES))
@@ -132,8 +132,10 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     conf = math.exp(avg) if words else 0.0
     details["avg_logprob"] = avg
     if details.get("repeated_phrase"):
-        return _rejected(f"No speech was recognised: the recogniser only heard one phrase over and over "
-                         f"(\"{details['heard_repeated']}\"), as it does on music, tones or noise.", details=details)
+        phrase = details["heard_repeated"]
+        return _rejected(f"Automatic transcription was rejected: the English speech recogniser only heard one phrase "
+                         f"over and over (\"{phrase}\"). The speech may not be English, or it is music, tones or "
+                         "noise.", phrase, 0.0, details)
     if not words:
         return _rejected("No speech was recognised (silence, noise or music?).", details=details)
     if avg < MIN_AVG_LOGPROB:

@@ -103,7 +103,7 @@ def test_gradio_client_generate(app_url, speech_wav):
     assert Path(video).stat().st_size > 1000 and Path(glb).suffix == ".glb"
     assert table["headers"] == TIMING_COLUMNS and len(table["data"]) == 3
     assert "aligned automatically" in summary
-    assert {Path(f).suffix for f in files} == {".npz", ".bvh", ".glb", ".json"}
+    assert {Path(f).suffix for f in files} == {".npz", ".bvh", ".glb", ".json", ".csv"}
 
 
 def test_gradio_client_bad_input_message(app_url, tmp_path):

@@ -59,7 +59,7 @@ def test_audio_whose_every_window_loops_is_rejected_after_one_pass(fake):
     words, avg, details = recognize(AUDIO)
     assert model.asked == [0.0] and words == [] and avg == -np.inf and details["repeated_phrase"]
     tr = transcribe(AUDIO, timing="whisper")
-    assert not tr.accepted and tr.words == [] and "one phrase over and over" in tr.warnings[0]
+    assert not tr.accepted and tr.words == [] and "one phrase over and over" in tr.warnings[0] and tr.heard
     assert "so I'm gonna" in tr.warnings[0] and tr.warnings[0].endswith(AUDIO_ONLY_NOTE)
 
 
