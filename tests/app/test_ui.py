@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -185,15 +186,17 @@ def test_browser_microphone_recording_generates(playwright, app_url):
         page.goto(app_url)
         page.locator("#speech button[aria-label='Record audio']").first.click()
         page.locator("#speech").get_by_role("button", name="Record", exact=True).click()   # not the Live tab's
+        started = time.monotonic()
         page.wait_for_timeout(2500)
         page.locator("#speech button.stop-button").first.click()
+        recorded = time.monotonic() - started            # a loaded machine answers the clicks later
         page.locator("#speech [aria-label='Play']").wait_for(timeout=20000)     # the recording is in the player
         page.locator("#generate").click()
         show_video(page, 120000)
         duration = page.evaluate("""async () => { const v = document.querySelector('#video video');
             if (v.readyState < 1) await new Promise(r => v.addEventListener('loadedmetadata', r, {once: true}));
             return v.duration; }""")
-        assert 2.0 < duration < 6.0                      # as long as the recording (~2.5 s + start-up)
+        assert 2.0 < duration < recorded + 1.0           # as long as the recording (at most the time between clicks)
         summary = page.locator("#summary").inner_text()   # the recording is eSpeak English: transcribed, or
         assert "automatic transcript" in summary or "audio-only" in summary     # audio-only without the recogniser
     finally:
