@@ -60,7 +60,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, PARENTS
 from ..retarget.face import (BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, LID_LOWER, LID_UPPER,
-                             WIDE_OPEN, face_landmarks)
+                             WIDE_OPEN, face_landmarks, landmark_gap)
 
 # Live Link Face's CSV column order and spelling (ARKit's names, capitalised)
 ARKIT_NAMES: tuple[str, ...] = (
@@ -116,13 +116,9 @@ class ArkitFace:
         return self.weights[:, low.index(name.lower())]
 
 
-def _gap(lm: np.ndarray, a: list[int], b: list[int], axes: slice = slice(0, 3)) -> np.ndarray:
-    return np.linalg.norm(lm[..., a, axes] - lm[..., b, axes], axis=-1).mean(-1)
-
-
 def _lip_gap(lm: np.ndarray) -> np.ndarray:
     """The inner-lip gap in the face's mid-plane (up and forward: a sideways jaw shift is not an opening)."""
-    return _gap(lm, INNER_UPPER, INNER_LOWER, slice(1, 3))
+    return landmark_gap(lm, INNER_UPPER, INNER_LOWER, slice(1, 3))
 
 
 def landmark_weights(body, poses: np.ndarray, expressions: np.ndarray | None = None, betas=None
@@ -166,8 +162,8 @@ def landmark_weights(body, poses: np.ndarray, expressions: np.ndarray | None = N
         outer = BROW_OUTER_LEFT if side == "Left" else BROW_OUTER_RIGHT
         out[f"BrowOuterUp{side}"] = d[:, outer, 1].mean(-1) / move
         out[f"BrowDown{side}"] = -d[:, brow, 1].mean(-1) / move
-        lid0 = max(float(_gap(neutral, *LIDS[side])), 1e-9)
-        lid = _gap(lm, *LIDS[side]) / lid0
+        lid0 = max(float(landmark_gap(neutral, *LIDS[side])), 1e-9)
+        lid = landmark_gap(lm, *LIDS[side]) / lid0
         out[f"EyeBlink{side}"] = ((1.0 - lid) - BLINK_FROM) / (1.0 - BLINK_FROM)
         out[f"EyeWide{side}"] = (lid - 1.0) / EYE_WIDE_FULL
     out["BrowInnerUp"] = d[:, BROW_INNER, 1].mean(-1) / move

@@ -62,8 +62,9 @@ def face_landmarks(body, jaw: np.ndarray, expressions: np.ndarray | None, betas=
     return out
 
 
-def _gap(lm: np.ndarray, a: list[int], b: list[int]) -> np.ndarray:
-    return np.linalg.norm(lm[..., a, :] - lm[..., b, :], axis=-1).mean(-1)
+def landmark_gap(lm: np.ndarray, a: list[int], b: list[int], axes: slice = slice(0, 3)) -> np.ndarray:
+    """(...,) mean distance between landmarks a[i] and b[i] of (..., 51, 3) landmarks, over the coordinates `axes`."""
+    return np.linalg.norm(lm[..., a, axes] - lm[..., b, axes], axis=-1).mean(-1)
 
 
 def face_weights(body, poses: np.ndarray, expressions: np.ndarray | None = None, betas=None) -> dict[str, np.ndarray]:
@@ -75,16 +76,16 @@ def face_weights(body, poses: np.ndarray, expressions: np.ndarray | None = None,
     ref = face_landmarks(body, np.array([[0.0, 0, 0], [WIDE_OPEN, 0, 0]]), None, betas)
     lm = face_landmarks(body, poses[:, j:j + 3], expressions, betas)
     jaw_only = lm if expressions is None else face_landmarks(body, poses[:, j:j + 3], None, betas)
-    gap0, gap_wide = _gap(ref, INNER_UPPER, INNER_LOWER)
-    o = np.clip((_gap(lm, INNER_UPPER, INNER_LOWER) - gap0) / max(gap_wide - gap0, 1e-9), 0.0, 1.0)
+    gap0, gap_wide = landmark_gap(ref, INNER_UPPER, INNER_LOWER)
+    o = np.clip((landmark_gap(lm, INNER_UPPER, INNER_LOWER) - gap0) / max(gap_wide - gap0, 1e-9), 0.0, 1.0)
     width = lambda x: np.linalg.norm(x[..., CORNERS[0], :] - x[..., CORNERS[1], :], axis=-1)  # noqa: E731
     w0 = float(width(ref[0]))
     s = np.clip((width(lm) - width(jaw_only)) / (FULL_SPREAD * w0), -1.0, 1.0)
     wide, rnd, neutral = np.maximum(s, 0.0), np.maximum(-s, 0.0), 1.0 - np.abs(s)
     out = {"aa": o * neutral * o, "ee": o * wide * o, "oh": o * rnd * o,
            "ih": o * (wide + neutral) * (1 - o), "ou": o * rnd * (1 - o)}
-    lid0 = float(_gap(ref[0], LID_UPPER, LID_LOWER))
-    closure = 1.0 - _gap(lm, LID_UPPER, LID_LOWER) / max(lid0, 1e-9)
+    lid0 = float(landmark_gap(ref[0], LID_UPPER, LID_LOWER))
+    closure = 1.0 - landmark_gap(lm, LID_UPPER, LID_LOWER) / max(lid0, 1e-9)
     out["blink"] = np.clip((closure - BLINK_FROM) / (1.0 - BLINK_FROM), 0.0, 1.0)
     return {k: np.clip(v, 0.0, 1.0).reshape(T) for k, v in out.items()}
 
