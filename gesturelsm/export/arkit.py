@@ -59,8 +59,8 @@ from scipy.spatial.transform import Rotation
 from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, PARENTS
-from ..retarget.face import (BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, LID_LOWER, LID_UPPER,
-                             WIDE_OPEN, face_landmarks, landmark_gap)
+from ..retarget.face import (BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, WIDE_OPEN, face_landmarks,
+                             landmark_gap)
 
 # Live Link Face's CSV column order and spelling (ARKit's names, capitalised)
 ARKIT_NAMES: tuple[str, ...] = (

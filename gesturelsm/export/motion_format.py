@@ -36,7 +36,7 @@ character chosen, gesturelsm/webapp/live_character.py). A record without one is 
                                 message lists (meta.character.morphs, [[glTF mesh, target], ...])
     meta
 
-A version 2 record with F = 0 is the same bytes as one written before the face's channels existed (the field was 0).
+In a version 2 record with F = 0 no morph weights follow the hips' translation.
 
 The headers are a multiple of 4 bytes, so the page views the floats in place (no copy). 10 s of the player's
 motion at 30 fps is 28 + 300 x (55 x 4 + 3 + E) x 4 bytes, ~0.27 MB per method.

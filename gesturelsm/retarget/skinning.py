@@ -19,14 +19,7 @@ import numpy as np
 
 from .mesh import CharacterMesh, MeshPart
 from .skeleton import Skeleton
-from .solve import Retargeted
-
-
-def _depths(parents: np.ndarray) -> np.ndarray:
-    depth = np.zeros(len(parents), np.int64)
-    for i, p in enumerate(parents):
-        depth[i] = 0 if p < 0 else depth[p] + 1
-    return depth
+from .solve import Retargeted, joint_depths
 
 
 def local_matrices(skel: Skeleton, rotation: np.ndarray, root: int | None = None,
@@ -46,7 +39,7 @@ def local_matrices(skel: Skeleton, rotation: np.ndarray, root: int | None = None
 def world_from_local(skel: Skeleton, L: np.ndarray) -> np.ndarray:
     """(n, N, 4, 4) world matrices of local matrices L (n, N, 4, 4), one tree level at a time."""
     M = np.empty_like(L)
-    depth = _depths(skel.parents)
+    depth = joint_depths(skel.parents)
     for d in range(int(depth.max()) + 1):
         idx = np.nonzero(depth == d)[0]
         par = skel.parents[idx]

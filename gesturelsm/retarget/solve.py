@@ -136,14 +136,16 @@ def _rodrigues(aa: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * (K @ K)
 
 
-def _depths(parents) -> np.ndarray:
+def joint_depths(parents) -> np.ndarray:
+    """Each joint's number of ancestors (parents[i] < i, -1 for a root)."""
     depth = np.zeros(len(parents), np.int64)
     for i, pp in enumerate(parents):
         depth[i] = 0 if pp < 0 else depth[pp] + 1
     return depth
 
 
-_LEVELS = [np.nonzero(_depths(PARENTS) == d)[0] for d in range(int(_depths(PARENTS).max()) + 1)]   # root first
+_DEPTH = joint_depths(PARENTS)
+_LEVELS = [np.nonzero(_DEPTH == d)[0] for d in range(int(_DEPTH.max()) + 1)]   # root first
 
 
 def _smplx_fk(seq, src: SourceBody) -> tuple[np.ndarray, np.ndarray]:
@@ -266,7 +268,7 @@ def prepare(skel: Skeleton, source: SourceBody) -> Setup:
     if not 1e-3 <= scale <= 1e4:
         raise CharacterError(f"{skel.source}: absurd scale: the legs are {scale * _leg(Jr, JOINT_INDEX):.3g} "
                              "units long (a humanoid's are about 0.8 m, 80 cm or 800 mm)")
-    depth = _depths(skel.parents)
+    depth = joint_depths(skel.parents)
     hips = skel.bones["pelvis"]
     below = np.array([i == hips or _is_below(skel.parents, i, hips) for i in range(len(skel))])
     parent_world = Mw[skel.parents[hips]] if skel.parents[hips] >= 0 else skel.base

@@ -145,9 +145,9 @@ def character_js() -> str:
     """The Character upload's last chained event: hands the page session's live spec (live_character.py
     `LiveCharacters.choose`: token, name, url, key; null for the mannequin) to the live player, which uses it from the
     next Record on (app/player/src/index.js `chooseLiveCharacter`)."""
-    from .motion_player import BUNDLE
+    from .motion_player import BUNDLE, file_url
 
-    return ("(spec) => { import(new URL('gradio_api/file=" + str(BUNDLE) + "', document.baseURI).href)"
+    return ("(spec) => { import(new URL('" + file_url(BUNDLE) + "', document.baseURI).href)"
             ".then((m) => m.chooseLiveCharacter(spec || null)); }")
 
 
@@ -163,7 +163,7 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
     if not BUNDLE.exists():
         return None
     url = file_url(body_glb(body, np.zeros(NUM_BETAS, np.float32), cache))
-    js = (f"import(new URL('gradio_api/file={BUNDLE}', document.baseURI).href)"
+    js = (f"import(new URL('{file_url(BUNDLE)}', document.baseURI).href)"
           ".then((m) => m.mountLive(element.querySelector('#live-player'), element))"
           ".catch((e) => { element.querySelector('#live-player').dataset.error = String(e); });")
     html = (f'<div id="live-player" data-state="empty" data-frames="0" data-frame="0" data-preload="{url}" '

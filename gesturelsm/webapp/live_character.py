@@ -1,7 +1,7 @@
 """The visitor's character in the Live tab, server side: the live socket streams the motion on the character the page
 session chose with the Character upload (character.py), retargeted chunk by chunk.
 
-    characters = LiveCharacters(workdir)                   # one per server (ui.py); the live socket gets it too
+    characters = LiveCharacters(workdir, body=body)        # one per server (ui.py); the live socket gets it too
     token, spec = characters.choose(character, old_token)  # the upload's event: the page session keeps the token,
                                                            # the page's live player gets `spec` (token, name, url, key)
     entry = characters.get(token)                          # the live socket's hello names the token: LiveEntry / None
@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from gesturelsm.body.model import resolve_body
-from gesturelsm.export.glb import matrix_to_quaternion_xyzw
+from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
 from gesturelsm.retarget.solve import prepare
@@ -77,13 +77,17 @@ class LiveEntry:
 class LiveCharacters:
     """Page session tokens -> the character each chose (thread-safe; see the module docstring)."""
 
-    def __init__(self, workdir: str | Path, ttl_s: float = TTL_S, max_entries: int = MAX_ENTRIES):
-        self.workdir, self.ttl_s, self.max_entries = Path(workdir), ttl_s, max_entries
+    def __init__(self, workdir: str | Path, ttl_s: float = TTL_S, max_entries: int = MAX_ENTRIES, body=None):
+        """`body`: the server's body model (None: the built-in one), which the at-rest spec is measured on."""
+        self.workdir, self.ttl_s, self.max_entries, self.body = Path(workdir), ttl_s, max_entries, body
         self._entries: OrderedDict[str, LiveEntry] = OrderedDict()
         self._lock = threading.Lock()
 
     def register(self, character: Character) -> str:
         """A new token for `character` (its file copied where the page can load it)."""
+        return self._add(character)[0]
+
+    def _add(self, character: Character) -> tuple[str, LiveEntry]:
         entry = LiveEntry(character, hashlib.sha1(character.path.read_bytes()).hexdigest(),
                           self.workdir / f"req-{secrets.token_hex(16)}")
         entry.serve()
@@ -91,7 +95,7 @@ class LiveCharacters:
         with self._lock:
             self._entries[token] = entry
             self._expire()
-        return token
+        return token, entry
 
     def get(self, token: str | None) -> LiveEntry | None:
         """The entry of `token`, None when unknown or expired (using it keeps it alive)."""
@@ -112,16 +116,15 @@ class LiveCharacters:
         if entry is not None:
             shutil.rmtree(entry.folder, ignore_errors=True)
 
-    def choose(self, character: Character | None, old: str | None, body=None) -> tuple[str | None, dict | None]:
+    def choose(self, character: Character | None, old: str | None) -> tuple[str | None, dict | None]:
         """The upload's event, after character.py `choose`: (the page session's new token, the live player's spec
         {token, url, key} and `CharacterStream.spec()`'s fields: the player shows the character at rest before the
         first Record); None, None for the mannequin."""
         self.drop(old)
         if character is None:
             return None, None
-        token = self.register(character)
-        entry = self.get(token)
-        return token, {**CharacterStream(character, body).spec(), "token": token, "url": entry.serve(),
+        token, entry = self._add(character)
+        return token, {**CharacterStream(character, self.body).spec(), "token": token, "url": entry.serve(),
                        "key": entry.key}
 
     def __len__(self) -> int:
@@ -130,7 +133,7 @@ class LiveCharacters:
     def _expire(self) -> None:
         now, gone = time.monotonic(), []
         for token, entry in list(self._entries.items()):
-            if now - entry.used > self.ttl_s or len(self._entries) - len(gone) > self.max_entries:
+            if now - entry.used > self.ttl_s or len(self._entries) > self.max_entries:
                 gone.append(self._entries.pop(token))
         for entry in gone:
             shutil.rmtree(entry.folder, ignore_errors=True)
@@ -168,9 +171,7 @@ class CharacterStream:
         self.ground = r.ground
         q = matrix_to_quaternion_xyzw(r.local_rotation[:, self.order])
         prev = self.last if self.last is not None else q[0]
-        for t in range(len(q)):                          # the sign nearer the previous frame, bone by bone
-            q[t] *= np.where((q[t] * prev).sum(-1, keepdims=True) < 0, -1.0, 1.0)
-            prev = q[t]
+        q = continuous_quaternions(np.concatenate([prev[None], q]))[1:]     # signs continue the previous chunk's
         if len(q):
             self.last = q[-1].copy()
         morph = face_morph(self.character, self.channels, seq, self.body) if self.channels else \

@@ -72,11 +72,6 @@ def hello(text: str) -> tuple[int, str | None]:
     return sr, token
 
 
-def hello_rate(text: str) -> int:
-    """The sample rate of the first message, checked."""
-    return hello(text)[0]
-
-
 def pcm(data: bytes, sr: int) -> np.ndarray:
     """int16 little-endian mono PCM at `sr` -> (n,) float32 at 16 kHz."""
     if len(data) % 2:
@@ -95,6 +90,11 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
     session, pusher, character = None, None, None
     last = {"status": "streaming", "final": False, "closing": False}
 
+    async def message(status: str) -> bytes:
+        # off the event loop: on a character, retargeting and measuring the face take ~20 ms per chunk, which
+        # would hold up every other visitor's socket
+        return (await asyncio.to_thread(payload, session, status, body, character))[0]
+
     async def push() -> None:                   # motion out as soon as the worker publishes it; one sender only
         while True:
             try:
@@ -103,12 +103,12 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
                 if session.running or last["closing"]:
                     continue
                 # the session ended by itself (no audio for its idle timeout, or generation failed): say so, close
-                await say(ws, payload(session, session.error or "this live stream has ended", body, character)[0])
+                await say(ws, await message(session.error or "this live stream has ended"))
                 await shut(ws)
                 return
             ready.clear()
             final = last["final"]
-            if not await say(ws, payload(session, last["status"], body, character)[0]) or final:
+            if not await say(ws, await message(last["status"])) or final:
                 return
 
     async def finish(status: str, end: bool) -> None:

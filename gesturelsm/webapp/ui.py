@@ -277,7 +277,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 inputs, button, upload = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view, show3d, stats = _output_column(service)
-        manager, routes, characters = None, [], LiveCharacters(service.workdir)
+        manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",

@@ -50,11 +50,12 @@ def test_payload_carries_the_retargeted_rotations(character, payload):
 
 def test_payload_moves_the_face_as_the_export_does(tmp_path):
     """A VRM 0.x binding visemes and blink: `morphs` lists every (mesh, target) they bind, and each method's `morph`
-    is the exported VRM's weights (`morph_weights(face_weights(...))`) of those channels, frame by frame."""
+    is what the exported VRM (`export_rig_glb`) animates on those channels, frame by frame."""
     from _skinned import face_vrm
     from _support import synthetic_motion
-    from gesturelsm.body.model import resolve_body
-    from gesturelsm.retarget.face import driven_presets, face_weights, morph_binds, morph_weights
+    from gesturelsm.export.glb import accessor_array, read_glb
+    from gesturelsm.export.rig import export_rig_glb
+    from gesturelsm.retarget.face import driven_presets, morph_binds
 
     character = read_upload(str(face_vrm(tmp_path / "face.vrm", vrm="0")))
     gltf = character.document.gltf
@@ -63,7 +64,13 @@ def test_payload_moves_the_face_as_the_export_does(tmp_path):
     channels = sorted({(m, k) for pr in driven_presets(gltf) for m, k, _ in morph_binds(gltf, pr)})
     assert len(channels) == 6 and [tuple(c) for c in p["morphs"]] == channels
     for method, seq in motions.items():
-        per_mesh = morph_weights(gltf, face_weights(resolve_body(None), seq.poses, seq.expressions, seq.betas))
+        out = export_rig_glb(seq, character, tmp_path / f"{method}.vrm")
+        ex, blob = read_glb(out)
+        anim = ex["animations"][0]
+        per_mesh = {ex["nodes"][c["target"]["node"]]["mesh"]:
+                    accessor_array(ex, blob, anim["samplers"][c["sampler"]]["output"]).reshape(40, -1)
+                    for c in anim["channels"] if c["target"]["path"] == "weights"}
+        assert sorted(per_mesh) == sorted({m for m, _ in channels})
         got = decode(p["methods"][method]["morph"], (40, len(channels)))
         np.testing.assert_allclose(got, np.stack([per_mesh[m][:, k] for m, k in channels], axis=1), atol=1e-6)
         assert got.max() > 0.1 and np.ptp(got, axis=0).max() > 0.1       # the mouth moves in this motion

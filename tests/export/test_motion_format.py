@@ -3,6 +3,7 @@ record bit for bit; the header sits where the page's decoder reads it; bytes tha
 give a one-line message naming the source."""
 from __future__ import annotations
 
+import json
 import struct
 
 import numpy as np
@@ -84,7 +85,7 @@ def test_encoding_checks_the_shapes():
 
 def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone():
     """The live feed on a character: bone rotations and the hips' translation after the expressions, the bone count
-    at byte 28; a record without a section is version 1 with the same bytes as before."""
+    at byte 28; a record without a section is version 1 in version 1's layout."""
     from dataclasses import replace
 
     from gesturelsm.export.motion_format import CHARACTER_VERSION, SECTION
@@ -94,7 +95,9 @@ def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone
     crec = replace(rec, bone_rotations=rng.normal(size=(5, 43, 4)).astype(np.float32),
                    bone_root=rng.normal(size=(5, 3)).astype(np.float32))
     plain, data = encode(rec), encode(crec)
-    assert struct.unpack_from("<H", plain, 4)[0] == 1
+    meta = json.dumps(rec.meta, separators=(",", ":")).encode()
+    assert plain == (HEADER.pack(b"GLSM", 1, 1, 55, 2, 30.0, 123456, 5, len(meta)) + rec.rotations.tobytes()
+                     + rec.root.tobytes() + rec.expressions.tobytes() + meta)            # version 1's layout, as is
     assert struct.unpack_from("<H", data, 4)[0] == CHARACTER_VERSION == 2
     assert SECTION.unpack_from(data, 28) == (43, 0)
     np.testing.assert_array_equal(np.frombuffer(data, "<f4", 4, 32), rec.rotations[0, 0])   # floats from byte 32
@@ -111,8 +114,8 @@ def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone
 
 
 def test_face_morph_weights_round_trip_after_the_hips_translation():
-    """A character with face presets: F morph weights per frame after the hips' translation, F at byte 30 (0 there
-    keeps the bone-only record's bytes); encode -> decode gives every weight back, wrong sizes are refused."""
+    """A character with face presets: F morph weights per frame after the hips' translation, F at byte 30 (0: none;
+    the bone-only record); encode -> decode gives every weight back, wrong sizes are refused."""
     from dataclasses import replace
 
     from gesturelsm.export.motion_format import SECTION

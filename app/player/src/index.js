@@ -34,7 +34,7 @@ export function mount(element) {
 export function mountLive(element, box = document) {
   if (!element.__live) element.__live = new LiveFeed(element, element.dataset.preload, box);
   liveFeed = element.__live;
-  liveFeed.useCharacter(liveCharacter);
+  if (liveCharacter) liveFeed.useCharacter(liveCharacter);     // the constructor already shows the mannequin
   if (window.gesturelsmPlayer) window.gesturelsmPlayer.live = liveFeed;
   return liveFeed;
 }
