@@ -106,6 +106,14 @@ def served(service) -> Iterator[str]:
         demo.close()
 
 
+def gradio_client(url: str):
+    """A Gradio client of a served test app. Its HTTP timeout (httpx's default is 5 s) is long enough for a server
+    that shares two loaded cores with another test process: the load test's twelve clients timed out under load."""
+    from gradio_client import Client
+
+    return Client(url, verbose=False, httpx_kwargs={"timeout": 120})
+
+
 def shipped_service(workdir):
     """A GestureService over the shipped checkpoints for browser tests; skips, saying why, when the checkpoints or
     the in-browser player's bundle (built by scripts/setup.sh with npm) are missing."""

@@ -1,16 +1,29 @@
 """Shared fixtures. Real BEAT2 data lives in ../shared beside the repository (never copied into it)."""
 from __future__ import annotations
 
+import atexit
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
-import numpy as np
-import pytest
+# Each test process its own Gradio cache (read when gradio is imported, so before any test imports it): Gradio names
+# an upload's copy by its content and a closing demo deletes the copies it made, so a demo closed in one test process
+# could delete the same speech's copy that another process's app was about to read. pytest-xdist's workers inherit
+# the first process's environment: a directory made by another process (GESTURELSM_TEST_GRADIO_PID) is replaced; one
+# the user set is kept.
+_PID = str(os.getpid())
+if "GRADIO_TEMP_DIR" not in os.environ or os.environ.get("GESTURELSM_TEST_GRADIO_PID", _PID) != _PID:
+    os.environ["GRADIO_TEMP_DIR"] = tempfile.mkdtemp(prefix="gesturelsm-tests-gradio-")
+    os.environ["GESTURELSM_TEST_GRADIO_PID"] = _PID
+    atexit.register(shutil.rmtree, os.environ["GRADIO_TEMP_DIR"], True)
 
-from _support import build_tiny_assets
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from _support import build_tiny_assets  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared"))

@@ -8,15 +8,11 @@ from pathlib import Path
 
 import pytest
 
-
-def _client(url):
-    from gradio_client import Client
-
-    return Client(url, verbose=False)
+from _support import gradio_client
 
 
 def _api(url) -> dict:
-    return _client(url).view_api(return_format="dict", print_info=False)["named_endpoints"]
+    return gradio_client(url).view_api(return_format="dict", print_info=False)["named_endpoints"]
 
 
 def _literals(python_type: str) -> list:
@@ -52,7 +48,7 @@ def test_generate_accepts_the_types_view_api_reports(app_url, speech_wav):
     assert size["python_type"]["type"].startswith("Literal['")           # choices listed as strings
     args = [_typed(p, speech_wav) for p in params]
     assert args[[p["parameter_name"] for p in params].index("size")] == str(size["parameter_default"])
-    video, table, summary, files, glb = _client(app_url).predict(*args, api_name="/generate")
+    video, table, summary, files, glb = gradio_client(app_url).predict(*args, api_name="/generate")
     assert Path(video).stat().st_size > 1000 and Path(glb).suffix == ".glb"
     assert len(table["data"]) == 2 and summary                          # the method, then the total row
 
@@ -66,7 +62,7 @@ def test_every_listed_choice_is_accepted(app_url, speech_wav, field):
     base = [_typed(p, speech_wav) for p in params]
     choices = _literals(params[names.index(field)]["python_type"]["type"])
     assert len(choices) >= 4
-    client = _client(app_url)
+    client = gradio_client(app_url)
     for choice in choices:
         args = list(base)
         args[names.index(field)] = choice
@@ -80,4 +76,4 @@ def test_a_size_outside_the_list_is_refused_with_the_fields_message(app_url, spe
     args = [_typed(p, speech_wav) for p in params]
     args[names.index("size")] = "300"
     with pytest.raises(Exception, match="Video size"):
-        _client(app_url).predict(*args, api_name="/generate_motion")
+        gradio_client(app_url).predict(*args, api_name="/generate_motion")

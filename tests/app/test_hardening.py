@@ -20,7 +20,7 @@ from gesturelsm.presentation import steps_from_flags
 from gesturelsm.serve.request import Request
 from gesturelsm.serve.service import GestureService
 
-from _support import speech_like
+from _support import gradio_client, speech_like
 
 
 @pytest.fixture
@@ -167,12 +167,6 @@ def test_gradio_cache_lifetime_follows_keep_minutes(service):
     assert sweep_seconds(60) == 60 and sweep_seconds(0.1) == 5
 
 
-def _client(url):
-    from gradio_client import Client
-
-    return Client(url, verbose=False)
-
-
 @pytest.mark.parametrize("position, value, message", [
     (6, 2 ** 70, "Seed must be from 0 to 4294967295"),
     (6, 1e30, "Seed must be from 0 to 4294967295"),
@@ -190,7 +184,7 @@ def test_api_bad_fields_get_the_same_one_line_message(app_url, speech_wav, posit
     args = [handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, 0, 20, False, "off", 256]
     args[position] = value
     with pytest.raises(Exception, match=message):
-        _client(app_url).predict(*args, api_name="/generate")
+        gradio_client(app_url).predict(*args, api_name="/generate")
 
 
 def test_refused_request_logs_one_line_without_traceback(app_url, speech_wav, caplog, capfd):
@@ -198,8 +192,8 @@ def test_refused_request_logs_one_line_without_traceback(app_url, speech_wav, ca
 
     with caplog.at_level(logging.INFO, logger="gesturelsm.app"):
         with pytest.raises(Exception, match="Seed must be"):
-            _client(app_url).predict(handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, 2 ** 70, 20,
-                                     False, "off", 256, api_name="/generate")
+            gradio_client(app_url).predict(handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, 2 ** 70, 20,
+                                           False, "off", 256, api_name="/generate")
     err = capfd.readouterr().err
     assert "Traceback" not in err
     refused = [r for r in caplog.records if r.name == "gesturelsm.app" and "request refused" in r.getMessage()]
@@ -221,8 +215,8 @@ def test_load_eight_concurrent_requests_served_then_queue_full(service, tmp_path
 
     def one(seed: int) -> None:
         try:
-            payload, *_ = _client(url).predict(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20,
-                                               False, "off", 256, api_name="/generate_motion")
+            payload, *_ = gradio_client(url).predict(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20,
+                                                     False, "off", 256, api_name="/generate_motion")
             results.append(("served", payload))
         except Exception as exc:                                       # noqa: BLE001 (the outcome is checked)
             results.append(("refused", str(exc)))

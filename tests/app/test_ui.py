@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
+from _support import gradio_client
 from gesturelsm.serve.request import TIMING_COLUMNS
 
 CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
@@ -89,16 +90,10 @@ def test_app_entry_flags_and_env(monkeypatch):
     assert os.environ["GRADIO_ANALYTICS_ENABLED"] == "False" and os.environ["HF_HUB_DISABLE_TELEMETRY"] == "1"
 
 
-def _client(url):
-    from gradio_client import Client
-
-    return Client(url, verbose=False)
-
-
 def test_gradio_client_generate(app_url, speech_wav):
     from gradio_client import handle_file
 
-    video, table, summary, files, glb = _client(app_url).predict(
+    video, table, summary, files, glb = gradio_client(app_url).predict(
         handle_file(str(speech_wav)), "hello there", None, ["gesturelsm", "rectified_flow"], 2, 1.5, 3, 20, True,
         "light", 256, api_name="/generate")
     assert Path(video).stat().st_size > 1000 and Path(glb).suffix == ".glb"
@@ -113,8 +108,8 @@ def test_gradio_client_bad_input_message(app_url, tmp_path):
     silent = tmp_path / "silent.wav"
     sf.write(silent, np.zeros(16000, np.float32), 16000)
     with pytest.raises(Exception, match="silent"):
-        _client(app_url).predict(handle_file(str(silent)), "", None, ["gesturelsm"], 2, 2.0, 0, 20, False, "off",
-                                 256, api_name="/generate")
+        gradio_client(app_url).predict(handle_file(str(silent)), "", None, ["gesturelsm"], 2, 2.0, 0, 20, False, "off",
+                                       256, api_name="/generate")
 
 
 @pytest.fixture(scope="module")
@@ -245,8 +240,8 @@ def test_queue_serves_two_visitors(app_url, speech_wav):
     import imageio.v2 as imageio
     from gradio_client import handle_file
 
-    jobs = [_client(app_url).submit(handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
-                                    "off", 256, api_name="/generate") for seed in (1, 2)]
+    jobs = [gradio_client(app_url).submit(handle_file(str(speech_wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20,
+                                          False, "off", 256, api_name="/generate") for seed in (1, 2)]
     videos = [j.result(timeout=120)[0] for j in jobs]
     frames = [np.stack(imageio.mimread(v, memtest=False)) for v in videos]      # (T, H, W, 3) decoded pictures
     seconds = sf.info(str(speech_wav)).duration
