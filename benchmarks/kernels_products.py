@@ -5,35 +5,26 @@
 
 Linear: F.linear (MKL sgemm) vs kernels.linear with oneDNN forced (GESTURELSM_KERNELS=all). Convolution: F.conv1d
 vs kernels.conv1d_as_2d (channels-last). Also prints the largest difference from a float64 product, so the speed is
-not bought with precision. Medians of interleaved repeats.
+not bought with precision. Medians of interleaved repeats, timed as the kernels' own choices are
+(kernels.choice.compare: this thread's CPU time at one thread, wall time otherwise).
 """
 from __future__ import annotations
 
 import argparse
 import contextlib
 import os
-import statistics
 
 import torch
 import torch.nn.functional as F
 
-from gesturelsm.evaluation.timing import hardware_name, timed
+from gesturelsm.evaluation.timing import hardware_name
 from gesturelsm.kernels import channels_last_1d, conv1d_as_2d, linear, onednn_linear_available
+from gesturelsm.kernels.choice import compare
 
 # (rows, in, out): cross-attention MLP at width 768 (B 2 x 32 tokens); spatial-temporal blocks at width 256
 LINEARS = [(64, 768, 3072), (64, 3072, 768), (192, 256, 1024), (192, 1024, 256), (192, 256, 768)]
 # (channels in, out, length, stride, padding): the speech encoder's largest convolutions (kernel 15)
 CONVS = [(64, 64, 14322, 1, 7), (64, 64, 14322, 6, 0), (128, 128, 396, 1, 7)]
-
-
-def compare(a, b, repeats: int) -> tuple[float, float]:
-    """Median seconds of a() and b() after one warm-up call each, interleaved so drift on a shared machine hits both."""
-    a(), b()
-    ta, tb = [], []
-    for _ in range(repeats):
-        ta.append(timed(a, "cpu")[1])
-        tb.append(timed(b, "cpu")[1])
-    return statistics.median(ta), statistics.median(tb)
 
 
 @contextlib.contextmanager
