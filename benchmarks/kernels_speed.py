@@ -85,7 +85,7 @@ def print_choices(first_s: float) -> None:
     print("| path | choices | taken | ratio min / median / max | fast path |")
     print("|---|---|---|---|---|")
     for path, what in kernels.PATHS.items():
-        ratios = sorted(c.ratio for c in made if c.path == path)
+        ratios = sorted(c.ratio for c in made if c.path == path and c.source != "failed")
         taken = sum(c.taken for c in made if c.path == path)
         spread = f"{ratios[0]:.2f} / {statistics.median(ratios):.2f} / {ratios[-1]:.2f}" if ratios else "-"
         print(f"| {path} | {len(ratios)} | {taken} | {spread} | {what} |")

@@ -181,6 +181,16 @@ def test_an_unwritable_cache_location_keeps_choices_in_memory(measuring, monkeyp
     assert fake.calls == 1 and kernels.choices()[0].taken
 
 
+def test_a_fast_side_that_fails_means_the_default_and_is_not_stored(measuring):
+    def refuse():
+        raise RuntimeError("a private op refused this input")
+
+    assert not kernels.taken("linear", ("odd shape",), lambda: ((lambda: None), refuse))
+    assert not kernels.taken("linear", ("odd shape",), lambda: pytest.fail("measured twice"))
+    assert [(c.source, c.taken) for c in kernels.choices()] == [("failed", False)]
+    assert not measuring.exists()                        # nothing written: another process may measure it again
+
+
 @needs_onednn
 def test_gesturelsm_onednn_0_forces_the_default_whatever_was_measured(measuring, monkeypatch):
     monkeypatch.setattr(choice, "compare", FakeCompare(9.0, 1.0))

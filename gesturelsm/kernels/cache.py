@@ -31,7 +31,12 @@ def cache_path() -> Path | None:
     env = os.environ.get("GESTURELSM_KERNELS_CACHE")
     if env is not None:
         return Path(env).expanduser() if env.strip() else None
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    base = os.environ.get("XDG_CACHE_HOME")
+    if not base:
+        try:
+            base = str(Path.home() / ".cache")
+        except RuntimeError:                                      # no home folder to be found: memory only
+            return None
     return Path(base) / "gesturelsm" / "kernels.json"
 
 

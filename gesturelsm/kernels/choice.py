@@ -47,8 +47,8 @@ Pair = Callable[[], tuple[Callable[[], object], Callable[[], object]]]
 @dataclass(frozen=True)
 class Choice:
     """One decision: `path` for calls described by `key`, taken or not; `ratio` = default time / fast time;
-    `source` is "measured" or "cache" (read from disk); `cost`: wall seconds spent measuring it (nested choices
-    made during its warm-up included)."""
+    `source` is "measured", "cache" (read from disk) or "failed" (a side raised: the default, not stored); `cost`:
+    wall seconds spent measuring it (nested choices made during its warm-up included)."""
     path: str
     key: str
     taken: bool
@@ -144,22 +144,30 @@ def _decide(threads: int, path: str, key: Hashable, pair: Pair) -> Choice:
     if stored is not None:
         choice = Choice(path, text, stored["taken"], float(stored["ratio"]), "cache")
     else:
-        start = time.perf_counter()
-        _depth[0] += 1
-        try:
-            t_default, t_fast = compare(*pair())
-        finally:
-            _depth[0] -= 1
-        cost = time.perf_counter() - start
-        if _depth[0] == 0:
-            _spent[0] += cost
-        ratio = t_default / max(t_fast, 1e-12)
-        choice = Choice(path, text, ratio >= MARGIN, ratio, "measured", cost)
-        entry = {"taken": choice.taken, "ratio": round(ratio, 4)}
-        _disk.setdefault(machine, {})[text] = entry
-        cache.write(cache.cache_path(), machine, {text: entry})
+        choice = _measure(path, text, pair)
+        if choice.source == "measured":
+            entry = {"taken": choice.taken, "ratio": round(choice.ratio, 4)}
+            _disk.setdefault(machine, {})[text] = entry
+            cache.write(cache.cache_path(), machine, {text: entry})
     _memory[(threads, path, key)] = choice
     return choice
+
+
+def _measure(path: str, text: str, pair: Pair) -> Choice:
+    """Time both sides; a side that fails (a private op refusing an unusual input) means: the default, for this
+    process only ("failed" is not stored)."""
+    start = time.perf_counter()
+    _depth[0] += 1
+    try:
+        t_default, t_fast = compare(*pair())
+    except Exception:  # noqa: BLE001 - the default path is always a correct answer
+        return Choice(path, text, False, math.nan, "failed", time.perf_counter() - start)
+    finally:
+        _depth[0] -= 1
+        if _depth[0] == 0:
+            _spent[0] += time.perf_counter() - start
+    ratio = t_default / max(t_fast, 1e-12)
+    return Choice(path, text, ratio >= MARGIN, ratio, "measured", time.perf_counter() - start)
 
 
 def choices() -> list[Choice]:

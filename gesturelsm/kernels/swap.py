@@ -22,7 +22,8 @@ class LinearGELU(nn.Linear):
 
 
 class FastLinear(nn.Linear):
-    """nn.Linear through `linear` (oneDNN where measured faster, else exactly F.linear); what `accelerate` makes of one."""
+    """nn.Linear through `linear` (oneDNN where measured faster, else exactly F.linear); what `accelerate` makes of
+    one."""
     fused_gelu = False
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
@@ -83,10 +84,11 @@ def _fuse_gelu_pairs(seq: nn.Sequential) -> None:
 
 def accelerate(model: nn.Module) -> nn.Module:
     """Swap, in place, every nn.Linear for FastLinear, every LinearGELU (and nn.Linear + nn.GELU pair inside an
-    nn.Sequential) for FastLinearGELU, every plain zero-padded nn.Conv1d for FastConv1d, and every module whose class
-    has a registered faster subclass (`faster_version_of`) for that subclass. The same parameter tensors stay in place (same state_dict keys,
-    same values), training and autograd take the default ops, and GESTURELSM_ONEDNN=0 gives the default ops'
-    output exactly. For inference loaders; idempotent. Returns `model`."""
+    nn.Sequential) for FastLinearGELU, every plain zero-padded nn.Conv1d for FastConv1d, and every module whose
+    class has a registered faster subclass (`faster_version_of`) for that subclass. The same parameter tensors stay
+    in place (same state_dict keys, same values), training and autograd take the default ops, and
+    GESTURELSM_ONEDNN=0 gives the default ops' output exactly. Which fast path a swapped module takes is measured
+    at its first call of each shape (choice.py). For inference loaders; idempotent. Returns `model`."""
     for m in list(model.modules()):
         if isinstance(m, nn.Sequential):
             _fuse_gelu_pairs(m)
