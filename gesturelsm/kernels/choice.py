@@ -13,7 +13,8 @@ processes on a shared machine then hardly move it), wall time otherwise.
 
 GESTURELSM_KERNELS forces the choice instead (nothing is measured or read from disk): `all` takes every path
 where it is available, `none` none, a comma list (`linear,trace`) those named. Tests set it, so they do not
-depend on the machine's timings. GESTURELSM_ONEDNN=0 still turns every fast module off (see ops.fast_path).
+depend on the machine's timings. GESTURELSM_ONEDNN=0 turns every fast module off, whatever GESTURELSM_KERNELS says
+(ops.fast_path).
 """
 from __future__ import annotations
 
