@@ -1,7 +1,7 @@
 """fp32 GFLOP/s of PyTorch's default kernels against oneDNN's, for the products the authors' paper-size model runs
-(one CFG pair, 128-frame window) and its speech encoder's convolutions (part 3 of kernels_speed.py).
+(one CFG pair, 128-frame window) and its speech encoder's convolutions: part 3 of kernels_speed.py,
 
-    .venv/bin/python benchmarks/kernels_products.py [--threads 1] [--repeats 9]
+    .venv/bin/python benchmarks/kernels_speed.py --products [--threads 1]
 
 Linear: F.linear (MKL sgemm) vs kernels.linear with oneDNN forced (GESTURELSM_KERNELS=all). Convolution: F.conv1d
 vs kernels.conv1d_as_2d (channels-last). Also prints the largest difference from a float64 product, so the speed is
@@ -10,7 +10,6 @@ not bought with precision. Medians of interleaved repeats, timed as the kernels'
 """
 from __future__ import annotations
 
-import argparse
 import contextlib
 import os
 
@@ -73,14 +72,3 @@ def _table(threads: int, repeats: int) -> None:
             print(f"| conv k15 {ci} -> {co}, length {length}, stride {stride} | {fl / ta:.0f} | {fl / tb:.0f} | "
                   f"{ta / tb:.2f}x | {err[0]:.1e} / {err[1]:.1e} |")
 
-
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--repeats", type=int, default=9)
-    args = ap.parse_args()
-    products_table(args.threads, args.repeats)
-
-
-if __name__ == "__main__":
-    main()
