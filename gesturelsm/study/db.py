@@ -147,7 +147,9 @@ def _sqlite_engine(url: str, path: Path, create: bool, busy_timeout: float) -> E
 
     @event.listens_for(engine, "begin")
     def _begin(conn):                        # noqa: ANN001
-        conn.exec_driver_sql("BEGIN IMMEDIATE" if conn.get_execution_options().get("write") else "BEGIN")
+        opts = conn.get_execution_options()
+        conn.exec_driver_sql(f"PRAGMA busy_timeout = {int(1000 * opts.get('lock_wait', busy_timeout))}")
+        conn.exec_driver_sql("BEGIN IMMEDIATE" if opts.get("write") else "BEGIN")
     return engine
 
 
@@ -155,6 +157,11 @@ def writing(engine: Engine) -> Engine:
     """The engine for write transactions: on SQLite they take the write lock at BEGIN, so two writers never
     both read a state and then find the lock taken when they write."""
     return engine.execution_options(write=True)
+
+
+def waiting(engine: Engine, seconds: float) -> Engine:
+    """The engine whose transactions wait at most `seconds` for a lock another connection holds (SQLite)."""
+    return engine.execution_options(lock_wait=max(0.0, seconds))
 
 
 def has_tables(engine: Engine) -> bool:
@@ -268,4 +275,4 @@ def all_answers(engine: Engine) -> list[dict]:
 
 
 __all__ = ["Refused", "RaterState", "all_answers", "answered_trials", "claim_identity", "default_url", "has_tables",
-           "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "writing"]
+           "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting", "writing"]

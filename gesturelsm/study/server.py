@@ -210,7 +210,7 @@ def build_app(study: Study) -> Starlette:
     @_api
     async def open_(request: Request) -> Response:
         rater = study.rater(request.path_params["token"])
-        st = await store.write(_open_and_show, rater)
+        st = await store.write(_open_and_show, rater, action="open")
         return JSONResponse(dict(session=st.session, **study.state(rater, st)))
 
     @_api

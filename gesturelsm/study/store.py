@@ -14,7 +14,8 @@ study keeps it, and database work never runs on the server's event loop.
   SQLite waits `busy_timeout` seconds for a write lock another program holds, then the answer is refused with a
   message the page shows (`Refused`, HTTP 503) and the rater can send it again.
 
-FAILURES holds what a rater is told for each failure; docs/STUDY.md says what happens to the answers in each.
+FAILURES holds what a rater is told for each failure (`message`); docs/STUDY.md says what happens to the answers
+in each.
 """
 from __future__ import annotations
 
@@ -35,23 +36,37 @@ from . import db
 from .db import Refused
 
 BUSY_TIMEOUT = 0.75          # s waited for a write lock held by another program before an answer is refused
+MIN_WAIT = 0.05             # s any write waits for a lock at least
 DEADLINE = 10.0              # s a request waits for the database at most (queue included)
 READERS = 4
-NOT_SAVED = "your answer was NOT saved"
-FAILURES = {
-    "deleted": f"{NOT_SAVED}: the study's database was deleted while the study ran; please tell the study's "
-               "organiser",
-    "replaced": f"{NOT_SAVED}: the study's database was replaced by another file while the study ran; please "
-                "tell the study's organiser",
-    "read-only": f"{NOT_SAVED}: the study's database is read-only; please tell the study's organiser",
-    "busy": f"{NOT_SAVED}: the study's database is busy (another program holds it); please try again in a moment",
-    "late": "the study's database did not answer in time; your answer may not have been saved: reload the page to "
-            "see where you are",
-    "failed": f"{NOT_SAVED}: the study's database failed; please try again, or tell the study's organiser",
+FAILURES = {           # why a write was refused, as the rater is told (after what it means for them: ACTIONS)
+    "deleted": "the study's database was deleted while the study ran; please tell the study's organiser",
+    "replaced": "the study's database was replaced by another file while the study ran; please tell the study's "
+                "organiser",
+    "read-only": "the study's database is read-only; please tell the study's organiser",
+    "busy": "the study's database is busy (another program holds it); please try again in a moment",
+    "late": "the study's database did not answer in time; reload the page to see where you are",
+    "failed": "the study's database failed; please try again, or tell the study's organiser",
 }
+ACTIONS = {"answer": "your answer was NOT saved", "open": "the study cannot be opened just now"}
 UNREADABLE = "the study's database cannot be read just now; please try again in a moment"
 MARKER = Path("key") / "database.json"
 SIDE_FILES = ("-wal", "-shm")
+
+
+class Unstored(Refused):
+    """A write the database did not take (or may not have taken): `kind` is a key of FAILURES."""
+
+    def __init__(self, kind: str):
+        super().__init__(503, FAILURES[kind])
+        self.kind = kind
+
+
+def message(kind: str, action: str) -> str:
+    """What the rater is told when `action` ("answer" | "open") meets failure `kind`."""
+    if kind == "late" and action == "answer":
+        return f"your answer may not have been saved: {FAILURES[kind]}"
+    return f"{ACTIONS[action]}: {FAILURES[kind]}"
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -104,8 +119,9 @@ def missing_message(where: str, entry: dict) -> str:
 class Store:
     """The answers database of one running study server."""
 
-    def __init__(self, engine: Engine, url: str, log: Callable[[str], None] = print):
-        self.engine, self.url, self.log = engine, url, log
+    def __init__(self, engine: Engine, url: str, log: Callable[[str], None] = print,
+                 busy_timeout: float = BUSY_TIMEOUT):
+        self.engine, self.url, self.log, self.busy_timeout = engine, url, log, busy_timeout
         self.file = db.sqlite_file(url)
         self.broken: str | None = None                   # a deleted or replaced database: no more writes
         self._ids: dict[str, tuple[int, int] | None] = {}
@@ -137,7 +153,7 @@ class Store:
             raise UserError(f"the answers database {where} is read-only; make it writable (answers could not be "
                             "saved)")
         try:
-            got, new = db.claim_identity(engine, entry["id"] if entry else None)
+            got, _ = db.claim_identity(engine, entry["id"] if entry else None)
         except DBAPIError as exc:
             raise UserError(f"the answers database {where} takes no writes ({exc.orig}); answers could not be "
                             "saved") from None
@@ -149,25 +165,25 @@ class Store:
                             f"remove its entry from {MARKER}")
         if not entry:
             _write_marker(folder, key, dict(id=got, created_at=time.time()))
-        return cls(engine, full, log)
+        return cls(engine, full, log, busy_timeout)
 
     def _path(self, suffix: str) -> Path:
         return self.file.with_name(self.file.name + suffix)
 
-    def _fail(self, kind: str, detail: str) -> Refused:
+    def _fail(self, kind: str, detail: str) -> Unstored:
         if kind in ("deleted", "replaced"):
             if self.broken is None:
                 self.log(f"ANSWERS ARE NOT BEING SAVED: {detail}. Every answer is refused until the server is "
                          "restarted on the study's database.")
             self.broken = kind
         else:
-            self.log(f"answer refused: {detail}")
-        return Refused(503, FAILURES[kind])
+            self.log(f"write refused: {detail}")
+        return Unstored(kind)
 
     def check(self) -> None:
         """Refuse (503) unless the database is still the files the server opened, and writable."""
         if self.broken:
-            raise Refused(503, FAILURES[self.broken])
+            raise Unstored(self.broken)
         if self.file is None:
             return
         for suffix in ("", *SIDE_FILES):
@@ -200,12 +216,16 @@ class Store:
             raise self._fail("replaced", f"the answer of rater {rater}, trial {trial} is not in {self.file} after "
                                          "its commit")
 
-    def _guarded(self, fn: Callable, deadline: float, *args, **kw):
-        if time.monotonic() > deadline:                  # waited in the queue past the request's deadline
-            raise Refused(503, FAILURES["busy"])
+    def _guarded(self, fn: Callable, arrived: float, *args, **kw):
+        waited = time.monotonic() - arrived
+        if waited > DEADLINE:                            # waited in the queue past the request's deadline
+            raise Unstored("busy")
         self.check()
+        # a lock held elsewhere is waited for busy_timeout from the request's arrival, so writes queued behind
+        # one that waits for it do not each wait as long again (MIN_WAIT: a brief lock of another writer)
+        engine = db.waiting(self.engine, max(MIN_WAIT, self.busy_timeout - waited))
         try:
-            out = fn(self.engine, *args, **kw)
+            out = fn(engine, *args, **kw)
         except DBAPIError as exc:
             text = str(exc.orig).lower()
             kind = "busy" if "locked" in text or "busy" in text else "read-only" if "readonly" in text else "failed"
@@ -215,14 +235,17 @@ class Store:
         self.check()
         return out
 
-    async def write(self, fn: Callable, *args, **kw):
-        """`fn(engine, *args, **kw)` on the writer thread, between identity checks; Refused on any failure."""
-        deadline = time.monotonic() + DEADLINE
-        return await self._run(self._writer, FAILURES["late"], self._guarded, fn, deadline, *args, **kw)
+    async def write(self, fn: Callable, *args, action: str = "answer", **kw):
+        """`fn(engine, *args, **kw)` on the writer thread, between identity checks; a failure is a Refused (503)
+        that tells the rater what it means for their `action` ("answer" | "open")."""
+        try:
+            return await self._run(self._writer, Unstored("late"), self._guarded, fn, time.monotonic(), *args, **kw)
+        except Unstored as exc:
+            raise Refused(503, message(exc.kind, action)) from None
 
     async def read(self, fn: Callable, *args, **kw):
         """`fn(engine, *args, **kw)` on a reader thread, with the same deadline."""
-        return await self._run(self._readers, UNREADABLE, self._read, fn, *args, **kw)
+        return await self._run(self._readers, Refused(503, UNREADABLE), self._read, fn, *args, **kw)
 
     def _read(self, fn: Callable, *args, **kw):
         try:
@@ -231,13 +254,13 @@ class Store:
             self.log(f"read failed: {exc}")
             raise Refused(503, UNREADABLE) from None
 
-    async def _run(self, pool: ThreadPoolExecutor, late: str, fn: Callable, *args, **kw):
+    async def _run(self, pool: ThreadPoolExecutor, late: Refused, fn: Callable, *args, **kw):
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(pool, lambda: fn(*args, **kw))
         try:
             return await asyncio.wait_for(future, DEADLINE)
         except asyncio.TimeoutError:
-            raise Refused(503, late) from None
+            raise late from None
 
     def close(self) -> None:
         self._writer.shutdown(wait=False, cancel_futures=True)
@@ -248,5 +271,5 @@ class Store:
         self.engine.dispose()
 
 
-__all__ = ["BUSY_TIMEOUT", "DEADLINE", "FAILURES", "MARKER", "Store", "marker_key", "missing_message",
-           "read_markers", "writable"]
+__all__ = ["ACTIONS", "BUSY_TIMEOUT", "DEADLINE", "FAILURES", "MARKER", "Store", "Unstored", "marker_key", "message",
+           "missing_message", "read_markers", "writable"]

@@ -117,11 +117,11 @@ def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
     from gesturelsm.study.batch import plan_study
     from gesturelsm.study.naming import video_settings
 
-    render = dict(size=512, body="SMPLX_MANNEQUIN.npz 0123456789ab", character=None)
+    render = dict(size=512, body="SMPLX_MANNEQUIN.npz mannequin-sha", character=None)
     base = Plan(["gesturelsm"], {"gesturelsm": 8}, 2.0, 0, False, "light")
-    settings = video_settings(base, "gesturelsm", render, "aaaaaaaaaaaa")
+    settings = video_settings(base, "gesturelsm", render, "weights-one")
     changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, size=256,
-                   body="SMPLX_NEUTRAL.npz 0123456789ab", character="me.vrm 0123456789ab", weights="bbbbbbbbbbbb")
+                   body="SMPLX_NEUTRAL.npz mannequin-sha", character="me.vrm mannequin-sha", weights="weights-two")
     plan_fields = {f.name for f in fields(Plan)} - {"methods", "steps", "filename", "beat2"}
     assert plan_fields <= set(changed), "a setting of Plan is missing from this test"
     assert set(settings) == set(changed)
