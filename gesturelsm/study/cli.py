@@ -22,7 +22,8 @@ from .design import MODES, Design
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("batch", help="render blinded user-study videos, their key and the study's design and "
-                              "links (resumable)", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              "links (resumable)", description=__doc__,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--audio-dir", required=True, help="folder of speech files (wav, flac, mp3, ...)")
     p.add_argument("--methods", nargs="+", default=["gesturelsm", "rectified_flow", "ddim"],
                    help="gesturelsm, rectified_flow, ddim, ground_truth (needs --beat2)")

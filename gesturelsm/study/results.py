@@ -20,6 +20,7 @@ from itertools import combinations
 from pathlib import Path
 
 import numpy as np
+from sqlalchemy.exc import DBAPIError
 
 from ..errors import UserError
 from . import db, stats
@@ -100,7 +101,10 @@ def read_answers(study: str | Path, url: str | None = None) -> list[dict]:
         if entry:
             raise UserError(missing_message(str(file), entry))
         return []
-    return db.all_answers(db.open_db(full, create=False))
+    try:
+        return db.all_answers(db.open_db(full, create=False))
+    except DBAPIError as exc:
+        raise UserError(f"cannot read the answers database {file or marker_key(url)}: {exc.orig}") from None
 
 
 def analyse(study: str | Path, url: str | None = None, rule: Rule = Rule(), reference: str | None = None,

@@ -203,15 +203,17 @@ class Store:
         if self.file is None:
             return
         try:
-            con = sqlite3.connect(f"{self.file.as_uri()}?mode=ro", uri=True)
+            con = sqlite3.connect(f"{self.file.as_uri()}?mode=ro", uri=True, timeout=self.busy_timeout)
             try:
                 row = con.execute("SELECT created_at FROM answers WHERE rater = ? AND trial = ?",
                                   (rater, trial)).fetchone()
             finally:
                 con.close()
         except sqlite3.Error as exc:
-            raise self._fail("deleted", f"the answer of rater {rater}, trial {trial} could not be read back from "
-                                        f"{self.file} ({exc})") from None
+            what = f"the answer of rater {rater}, trial {trial} could not be read back from {self.file} ({exc})"
+            if "locked" in str(exc) or "busy" in str(exc):     # committed, most likely: the rater reloads to see
+                raise self._fail("late", what) from None
+            raise self._fail("deleted", what) from None
         if row is None or row[0] != created_at:
             raise self._fail("replaced", f"the answer of rater {rater}, trial {trial} is not in {self.file} after "
                                          "its commit")

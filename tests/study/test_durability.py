@@ -66,7 +66,9 @@ def test_answers_are_refused_once_the_database_is_deleted(folder, removed):
     assert opened.status_code == 503 and opened.json()["error"]
 
 
-def test_a_restart_on_a_missing_database_is_a_clear_error(folder):
+def test_a_restart_on_a_missing_database_is_a_clear_error(folder, capsys):
+    from gesturelsm.cli import main
+
     rater = _rater(folder)
     c = _client(folder)
     session = c.post(f"/api/{rater.token}/open").json()["session"]
@@ -75,6 +77,8 @@ def test_a_restart_on_a_missing_database_is_a_clear_error(folder):
         f.unlink()
     with pytest.raises(UserError, match="missing"):
         _client(folder)
+    assert main(["study", "results", str(folder)]) == 2        # not "no answers yet": they existed
+    assert "missing" in capsys.readouterr().err
     assert not (folder / "responses.sqlite").exists()           # nothing was made in its place
 
 

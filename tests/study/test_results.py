@@ -136,3 +136,6 @@ def test_results_with_no_answers_says_so_and_creates_no_database(tmp_path, capsy
     db.open_db(db.default_url(folder))                  # a database the server made, nobody answered yet
     assert main(["study", "results", str(folder)]) == 1
     assert "no answers yet" in capsys.readouterr().out
+    (folder / "responses.sqlite").write_bytes(b"not a database" * 100)
+    assert main(["study", "results", str(folder)]) == 2
+    assert "cannot read the answers database" in capsys.readouterr().err
