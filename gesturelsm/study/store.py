@@ -35,7 +35,7 @@ from ..errors import UserError
 from . import db
 from .db import Refused
 
-BUSY_TIMEOUT = 0.75          # s waited for a write lock held by another program before an answer is refused
+BUSY_TIMEOUT = 0.5           # s waited for a write lock held by another program before an answer is refused
 MIN_WAIT = 0.05             # s any write waits for a lock at least
 DEADLINE = 10.0              # s a request waits for the database at most (queue included)
 READERS = 4
