@@ -36,7 +36,7 @@ def _rows(path):
 
 
 @pytest.mark.slow                       # a whole command in subprocesses: the full tier
-def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_path):
+def test_batch_makes_one_study_design_blinded_and_resumable(study_assets, audio_dir, tmp_path):
     from gesturelsm.cli import main
 
     out = tmp_path / "study"
