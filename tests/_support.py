@@ -122,7 +122,7 @@ def shipped_service(workdir):
     from gesturelsm.constants import ASSETS
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")

@@ -138,7 +138,7 @@ def built_wheel(tmp_path_factory) -> Path:
     for name in ("setup.py", "pyproject.toml", "README.md"):
         shutil.copy2(REPO / name, src / name)
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules", "*.egg-info")
-    for name in ("gesturelsm", "assets", "app"):
+    for name in ("gesturelsm", "assets"):
         shutil.copytree(REPO / name, src / name, ignore=ignore)
     out = tmp_path_factory.mktemp("wheel")
     subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "wheel", "--no-deps",

@@ -1,6 +1,6 @@
-"""The page's character, server side (gesturelsm/webapp/character.py) and in the browser (app/player/src/character.js):
-the payload carries the retargeted rotations exactly; bad uploads give one-line gr.Errors; three-vrm posed
-from the payload puts the right wrist where the retargeting does."""
+"""The page's character, server side (gesturelsm/webapp/character.py) and in the browser
+(gesturelsm/webapp/player/src/character.js): the payload carries the retargeted rotations exactly; bad uploads give
+one-line gr.Errors; three-vrm posed from the payload puts the right wrist where the retargeting does."""
 from __future__ import annotations
 
 import json
@@ -174,12 +174,12 @@ def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, 
     import soundfile as sf
 
     from _support import player_page, speech_like
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not VRM.exists():
         pytest.skip(f"the shared character is not at {VRM} (../shared beside the repo)")
     if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd gesturelsm/webapp/player && npm ci && npm run build)")
     sf.write(tmp_path / "speech.wav", speech_like(8.0, seed=2), 16000)
     player = "#motion-player"
     with player_page(app_url, player) as page:

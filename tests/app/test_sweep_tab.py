@@ -72,7 +72,7 @@ def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, app_as
 
 
 def test_a_sweep_run_opens_in_the_player_as_its_own_motion(page_sweep):
-    from gesturelsm.export.player import read_motion, motion_arrays
+    from gesturelsm.export.player_payload import read_motion, motion_arrays
 
     h, (*_, state) = page_sweep
     payload = h.open_run(state, "5")
