@@ -12,6 +12,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from _rigs import character_js_page
+from _support import quiet
 from gesturelsm.webapp.character import character_payload, decode, read_upload
 from gesturelsm.retarget import retarget_motion
 
@@ -109,10 +110,6 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
     r = retarget_motion(motions["ddim"], character)
     want = r.positions[frames, r.skeleton.bones["right_wrist"]]
     np.testing.assert_allclose(np.asarray(got), want, atol=1e-3)
-
-
-def quiet(*args, **kwargs) -> None:
-    """Stands in for gr.Progress outside a Gradio event."""
 
 
 def _request(wav, methods) -> tuple:
