@@ -67,35 +67,110 @@ def messages(character: str | None):
     return out
 
 
-def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float, character: str | None = None) -> dict:
+def paced(pipe, audio: np.ndarray, cfgs: dict, chunk_ms: float, character: str | None = None) -> dict:
+    """A paced run of one stream per named setting in `cfgs`, fed the same chunks in one loop, the order of the
+    streams rotating chunk by chunk; a stream's latencies leave out the time the other streams worked in the same
+    step before it (as if it ran alone), while a step that overruns its chunk delays every stream's next one."""
     from gesturelsm.live import StreamingGenerator
     from gesturelsm.constants import SAMPLE_RATE
 
     n = int(round(chunk_ms * SAMPLE_RATE / 1000))
-    gen = StreamingGenerator(pipe, cfg)
-    make = messages(character)
-    lat, mem, built = [], [], {k: [] for k in make}          # built: per message kind, (ms to build, latencies)
+    names = list(cfgs)
+    streams = {k: {"gen": StreamingGenerator(pipe, c), "make": messages(character), "lat": []} for k, c in cfgs.items()}
+    for st in streams.values():
+        st["built"] = {k: [] for k in st["make"]}                 # per message kind, (ms to build, latencies)
+    mem = []
     c0, t0 = time.process_time(), time.perf_counter()
-    for a in range(0, len(audio), n):
+    for k, a in enumerate(range(0, len(audio), n)):
         chunk = audio[a:a + n]
         arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
         time.sleep(max(0.0, arrival - time.perf_counter()))
-        for mc in gen.feed(chunk, arrival):
-            lat += mc.latencies
-            for k, f in make.items():
-                t = time.perf_counter()
-                f(mc)
-                dt = time.perf_counter() - t
-                built[k].append((dt * 1000, [x + dt for x in mc.latencies]))
+        step0 = time.perf_counter()
+        for name in names[k % len(names):] + names[:k % len(names)]:
+            st = streams[name]
+            waited = time.perf_counter() - step0           # the other streams' work this step: not this stream's
+            for mc in st["gen"].feed(chunk, arrival):
+                lat = [x - waited for x in mc.latencies]
+                st["lat"] += lat
+                for kind, f in st["make"].items():
+                    t = time.perf_counter()
+                    f(mc)
+                    dt = time.perf_counter() - t
+                    st["built"][kind].append((dt * 1000, [x + dt for x in lat]))
         mem.append((a / SAMPLE_RATE, rss_mb()))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    behind = gen.n_in * 30 / SAMPLE_RATE - gen.emitted                            # frames of audio without motion yet
     m = np.array(mem)
     first = m[m[:, 0] <= 60, 1]
-    return {"lat": np.array(lat), "cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
-            "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(),
-            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SAMPLE_RATE,
-            "built": built}
+    out = {"cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "streams": {},
+           "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max()}
+    for name, st in streams.items():
+        gen = st["gen"]
+        out["streams"][name] = {"lat": np.array(st["lat"]), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
+                                "built": st["built"], "frames": gen.emitted, "windows": gen.window,
+                                "compute_ms": 1000 * gen.compute_s / max(gen.window, 1),
+                                "behind_frames": gen.n_in * 30 / SAMPLE_RATE - gen.emitted,   # audio without motion
+                                "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
+    return out
+
+
+def paced_tables(r: dict, seconds: float, take: str, chunk_ms: float) -> None:
+    """Print the paced run: per setting, side by side; then the run's CPU and memory (all streams)."""
+    names = list(r["streams"])
+    cols = [r["streams"][k] for k in names]
+    print(f"| paced run ({seconds:.0f} s of {take}, {chunk_ms:.0f} ms chunks) | " + " | ".join(names) + " |")
+    print("|---|" + "---|" * len(names))
+
+    def row(label, f):
+        print(f"| {label} | " + " | ".join(f(c) for c in cols) + " |")
+    row("latency median / p90 / max (s)", lambda c: f"**{np.median(c['lat']):.3f}** / "
+        f"**{np.percentile(c['lat'], 90):.3f}** / {c['lat'].max():.3f}")
+    row("compute per window (ms)", lambda c: f"{c['compute_ms']:.0f}")
+    row("real-time factor (audio s per compute s)", lambda c: f"{c['rtf']:.2f}")
+    row("motion frames behind the audio at the end", lambda c: f"{c['behind_frames']:.0f} ({c['frames']} of "
+        f"{c['audio_frames']})")
+    print()
+    print(f"| the whole run ({len(names)} stream{'s' if len(names) > 1 else ''}) | value |")
+    print("|---|---|")
+    print(f"| CPU share (cores) / CPU seconds per audio second | {r['cpu']:.2f} / {r['cpu_per_audio_s']:.2f} |")
+    print(f"| RSS first minute min-max / at end / max (MB) | {r['mem_first_min'][0]:.0f}-{r['mem_first_min'][1]:.0f}"
+          f" / {r['mem_end']:.0f} / {r['mem_max']:.0f} |")
+    print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
+    print("| setting | socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / "
+          "max (s) |")
+    print("|---|---|---|---|")
+    for name, c in zip(names, cols):
+        for k, rows in c["built"].items():
+            ms = np.array([x for x, _ in rows])
+            lat = np.concatenate([x for _, x in rows])
+            print(f"| {name} | {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
+                  f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
+    print()
+
+
+def simultaneous(pipe, audio: np.ndarray, cfg, streams: int, chunk_ms: float) -> list[dict]:
+    """`streams` live sessions at once, as the server runs them (gesturelsm/live/session.py: a worker thread each),
+    every one fed the same audio at the pace of speech; per session its latencies (the session's own, from each
+    chunk's arrival), real-time factor and how far behind the audio it ended."""
+    from gesturelsm.constants import SAMPLE_RATE
+    from gesturelsm.live.session import LiveManager
+
+    n = int(round(chunk_ms * SAMPLE_RATE / 1000))
+    manager = LiveManager(pipe, max_sessions=streams, config=cfg)
+    sessions = [manager.open() for _ in range(streams)]
+    t0 = time.perf_counter()
+    for a in range(0, len(audio), n):
+        time.sleep(max(0.0, t0 + (a + n) / SAMPLE_RATE - time.perf_counter()))
+        for s in sessions:
+            s.feed(audio[a:a + n])
+    out = []
+    time.sleep(0.5)                                              # the last window's compute
+    for s in sessions:
+        st, g = s.stats(), s.gen
+        lat = np.array(s.latencies)
+        out.append({"lat": lat, "rtf": st["real_time_factor"], "behind_frames": g.n_in * 30 / SAMPLE_RATE - g.emitted,
+                    "dropped": st["dropped_chunks"], "error": st["error"]})
+        s.stop()
+    return out
 
 
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
@@ -154,6 +229,52 @@ def pooled(pipe, cfg, takes: list[str], seeds: int) -> str:
             f"{np.mean([a.height_p95 for a in amps]):.2f} |")
 
 
+# The live setting main shipped before the half-second work (LiveConfig's values then): `--before main`
+BEFORE = {"commit": 5, "lookahead": 1, "steps": 4, "cfg": 6.0, "decode_context": 16, "held": 0}
+
+
+def settings(spec: str, base):
+    """A LiveConfig from `base` with `key=value,...` applied (`main`: BEFORE)."""
+    from dataclasses import fields, replace
+
+    if spec == "main":
+        return replace(base, **BEFORE)
+    kinds = {f.name: type(getattr(base, f.name)) for f in fields(base)}
+    over = {}
+    for item in filter(None, spec.split(",")):
+        k, _, v = item.partition("=")
+        if k not in kinds:
+            raise SystemExit(f"--before: no live setting {k!r} (one of {', '.join(kinds)})")
+        over[k] = kinds[k](v) if kinds[k] is not bool else v.lower() in ("1", "true", "on")
+    return replace(base, **over)
+
+
+def quality_table(pipe, cfgs: dict) -> None:
+    print("| setting | take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
+          "jitter (m/s^2) | jerk at seams / inside | raised | p95 wrist height (m) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for label_cfg, cfg in cfgs.items():
+        for name, label, bt, ef, sp, acc, seam, amp in quality(pipe, cfg, TAKES, cfg.steps):
+            print(f"| {label_cfg} | {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | "
+                  f"{sp:.3f} | {acc:.2f} | {seam:.2f} | {100 * amp.raised_share:.1f} % | {amp.height_p95:.2f} |")
+    print()
+
+
+def simultaneous_table(rows: list[dict], seconds: float, chunk_ms: float) -> None:
+    print(f"| {len(rows)} live sessions at once ({seconds:.0f} s each, {chunk_ms:.0f} ms chunks) | latency median / "
+          "p90 (s) | median, last quarter (s) | real-time factor | frames behind at the end | dropped |")
+    print("|---|---|---|---|---|---|")
+    for i, r in enumerate(rows):
+        lat = r["lat"]
+        print(f"| session {i + 1}{' (' + r['error'] + ')' if r['error'] else ''} | {np.median(lat):.3f} / "
+              f"{np.percentile(lat, 90):.3f} | {np.median(lat[3 * len(lat) // 4:]):.3f} | {r['rtf']:.2f} | "
+              f"{r['behind_frames']:.0f} | {r['dropped']} |")
+    print()
+
+
+TAKES = ["2_scott_0_2_2", "2_scott_0_3_3"]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0, help="paced run length (the take is looped)")
@@ -163,6 +284,11 @@ def main() -> None:
     ap.add_argument("--commit", type=int, default=None)
     ap.add_argument("--cfg", type=float, default=None, help="guidance scale (default: LiveConfig's)")
     ap.add_argument("--lookahead", type=int, default=None)
+    ap.add_argument("--before", default="main", metavar="SPEC", help="also stream this setting beside the one "
+                    "measured, in the same runs: `main` (the setting main shipped before, BEFORE), `key=value,...` "
+                    "over LiveConfig's defaults, or `none`")
+    ap.add_argument("--streams", type=int, default=0, metavar="N", help="also run N live sessions at once (the "
+                    "server's worker threads), paced, with the setting measured")
     ap.add_argument("--take", default="2_scott_0_2_2")
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-paced", action="store_true")
@@ -181,46 +307,26 @@ def main() -> None:
         raise SystemExit(f"needs the real speech takes at {BEAT2}")
     given = (("steps", args.steps), ("commit", args.commit), ("lookahead", args.lookahead), ("cfg", args.cfg))
     cfg = replace(LiveConfig(), **{k: v for k, v in given if v is not None})
+    cfgs = {"measured": cfg} if args.before == "none" else {"before": settings(args.before, LiveConfig()),
+                                                             "after": cfg}
     pipe = GesturePipeline.from_pretrained(methods=[cfg.method])
-    look = (cfg.commit + cfg.lookahead) * 4 / 30
-    print(f"settings: {cfg}; audio look-ahead <= {look:.2f} s; torch threads {args.threads}; "
-          f"load average at start {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
+    for name, c in cfgs.items():
+        print(f"{name}: {c}; audio look-ahead <= {(c.commit + c.lookahead) * 4 / 30:.2f} s")
+    print(f"torch threads {args.threads}; load average at start {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
+    take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
+    y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
     if not args.skip_paced:
-        take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
-        y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
-        r = paced(pipe, y, cfg, args.chunk_ms, args.character)
-        print(f"| paced run ({args.seconds:.0f} s of {args.take}, {args.chunk_ms:.0f} ms chunks) | value |")
-        print("|---|---|")
-        print(f"| latency median / p90 / max (s) | {np.median(r['lat']):.2f} / {np.percentile(r['lat'], 90):.2f} / "
-              f"{r['lat'].max():.2f} |")
-        print(f"| real-time factor (audio s per compute s) | {r['rtf']:.2f} |")
-        print(f"| CPU share (cores) / CPU seconds per audio second | {r['cpu']:.2f} / {r['cpu_per_audio_s']:.2f} |")
-        print(f"| RSS first minute min-max / at end / max (MB) | {r['mem_first_min'][0]:.0f}-{r['mem_first_min'][1]:.0f}"
-              f" / {r['mem_end']:.0f} / {r['mem_max']:.0f} |")
-        print(f"| motion frames behind the audio at the end | {r['behind_frames']:.0f} "
-              f"({r['frames']} of {r['audio_frames']}) |")
-        print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
-        print("| socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / max (s) |")
-        print("|---|---|---|")
-        for k, rows in r["built"].items():
-            ms = np.array([m for m, _ in rows])
-            lat = np.concatenate([x for _, x in rows])
-            print(f"| {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
-                  f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
-        print()
+        paced_tables(paced(pipe, y, cfgs, args.chunk_ms, args.character), args.seconds, args.take, args.chunk_ms)
+    if args.streams:
+        simultaneous_table(simultaneous(pipe, y, cfg, args.streams, args.chunk_ms), args.seconds, args.chunk_ms)
     if not args.skip_quality:
-        rows = quality(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], cfg.steps)
-        print("| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
-              "jitter (m/s^2) | jerk at seams / inside | raised | p95 wrist height (m) |")
-        print("|---|---|---|---|---|---|---|---|---|")
-        for name, label, bt, ef, sp, acc, seam, amp in rows:
-            print(f"| {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | {sp:.3f} | "
-                  f"{acc:.2f} | {seam:.2f} | {100 * amp.raised_share:.1f} % | {amp.height_p95:.2f} |")
+        quality_table(pipe, cfgs)
     if args.pooled:
-        print("\n| streamed (pooled) | loudness gain, mean | standard error | z | gains > 0 | raised | "
+        print("| setting | streamed (pooled) | loudness gain, mean | standard error | z | gains > 0 | raised | "
               "p95 wrist height (m) |")
-        print("|---|---|---|---|---|---|---|")
-        print(pooled(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], args.pooled))
+        print("|---|---|---|---|---|---|---|---|")
+        for name, c in cfgs.items():
+            print(f"| {name} " + pooled(pipe, c, TAKES, args.pooled), flush=True)
 
 
 if __name__ == "__main__":

@@ -1,18 +1,23 @@
 """What a visitor of the page waits for, measured in real headless Chromium (SwiftShader WebGL, the floor):
-click on "Generate" -> the in-browser player plays (`#motion-player[data-state=playing]`, as Playwright sees it, polling
-on every animation frame, and on the page's own clock), the player's frame
-rate in the first second of play, then while the server renders the mp4 and the speech plays (up to 10 s), and after (server idle), audio-motion offset when scrubbing, click -> mp4 shown, and
-generating again with another seed on the same page (the bodies are replaced), once after the video and once while it
-renders. Shipped checkpoints, eSpeak NG
-speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Each case runs --repeat times, every run
-transcribing its upload afresh; prints a markdown table of medians. The page is opened with the player's measurement
-hooks on (`?measure=1`, gesturelsm/webapp/player/src/measure.js): its load marks and the split of its draws.
+click on "Generate" -> the first body moves (`#motion-player[data-state=playing]`, as Playwright sees it, polling on
+every animation frame) and all bodies move (`data-bodies` = the number of methods; a page without that attribute
+moves them all at once), the motion frames drawn in the first 2 s after that, click -> the payload in the page (the
+player's own mark), the player's frame rate while the server renders the mp4 and the speech plays (up to 10 s),
+click -> mp4 (--quick stops before these); without --quick also the frame rate after (server idle), the audio-motion offset when scrubbing, and
+generating again with another seed on the same page (the bodies are replaced), once after the video and once while
+it renders. Shipped checkpoints, eSpeak NG speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384.
 
-    .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR] [--think-s 3]
-                                                  [--repeat 3] [--character avatar.vrm]
+    .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--think-s 3] [--repeat 3]
+                                                  [--vs /path/to/other/checkout] [--quick] [--character avatar.vrm]
 
-With --character PATH every case runs twice per repeat, on the mannequin and with PATH chosen in the page's Character
-upload (then "playing" also waits for `#motion-player[data-character]`), interleaved so both see the same load.
+The page is the checkout's own `python -m app` in a process of its own (benchmarks/_served.py: its warm-up, its
+math threads), opened with the player's measurement hooks on (`?measure=1`, gesturelsm/webapp/player/src/measure.js).
+Each case runs --repeat times, each run on speech of its own content (the server transcribes every upload afresh);
+the table gives medians. --vs CHECKOUT serves that checkout's page too (e.g. a worktree of main: before / after) and
+alternates the two run by run, so both see the same minutes of a shared machine. With --character PATH every case
+runs twice per repeat, on the mannequin and with PATH chosen in the page's Character upload (then "playing" also
+waits for `#motion-player[data-character]`), interleaved the same way. --think-s: seconds between the upload and
+the click (0: at once, so the click also waits for the work the upload started).
 """
 from __future__ import annotations
 
@@ -23,6 +28,7 @@ os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 import sys  # noqa: E402
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import json  # noqa: E402
 import re  # noqa: E402
 import tempfile  # noqa: E402
@@ -30,7 +36,9 @@ import time  # noqa: E402
 from statistics import median  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))   # app/measure.py lives in the checkout, not the wheel
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))                  # app/measure.py lives in the checkout, not the wheel
+sys.path.insert(0, str(REPO / "benchmarks"))   # _served.py
 
 ALL = ["gesturelsm", "rectified_flow", "ddim"]
 LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
@@ -66,9 +74,13 @@ def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
     return worst
 
 
-def click_and_wait(page, timeout_s: float = 600, on: str | None = None) -> tuple[float, dict]:
-    """Click generate; seconds until the player plays the new motion (on the character file `on`, when given), and
-    the player's own marks (ms)."""
+ALL_MOVING = ("(e) => e.dataset.state === 'playing' && (e.dataset.bodies === undefined || "
+              "Number(e.dataset.bodies) >= {n})")       # a page without data-bodies moves them all at once
+
+
+def click_and_wait(page, n: int, timeout_s: float = 600, on: str | None = None) -> tuple[float, float, dict]:
+    """Click generate; seconds until the player moves the first body of the new motion (data-state playing; on the
+    character file `on`, when given) and until all `n` move (data-bodies), and the player's own marks (ms)."""
     page.evaluate(f"() => {{ delete document.querySelector('{PLAYER}').dataset.marks; }}")
     click_ms = page.evaluate("() => performance.now()")
     t0 = time.perf_counter()
@@ -77,10 +89,14 @@ def click_and_wait(page, timeout_s: float = 600, on: str | None = None) -> tuple
     sel = f"{PLAYER}[data-marks][data-state=playing]" + (f"[data-character={json.dumps(on)}]" if on else "")
     page.wait_for_function(f"() => document.querySelector({json.dumps(sel)}) !== null",
                            polling="raf", timeout=timeout_s * 1000)
+    first = time.perf_counter() - t0
+    page.wait_for_function(f"() => ({ALL_MOVING.format(n=n)})(document.querySelector('{PLAYER}'))", polling="raf",
+                           timeout=timeout_s * 1000)
+    every = time.perf_counter() - t0
     marks = json.loads(page.get_attribute(PLAYER, "data-marks"))
-    marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> payload in the page (s)
+    marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> first payload in the page (s)
     marks["page_play"] = marks["payload"] + marks["play"] / 1000        # click -> playing on the page's own clock
-    return time.perf_counter() - t0, marks
+    return first, every, marks
 
 
 def downloads(page) -> str:
@@ -92,8 +108,14 @@ def downloads_changed(old: str) -> str:
             f"return h && h !== {old!r}; }}")
 
 
-def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path("."),
-             character: Path | None = None) -> dict:
+def frames_drawn(page, seconds: float) -> int:
+    """Motion frames the player draws in the next `seconds` (data-frames counts them)."""
+    n0 = int(page.get_attribute(PLAYER, "data-frames"))
+    page.wait_for_timeout(seconds * 1000)
+    return int(page.get_attribute(PLAYER, "data-frames")) - n0
+
+
+def open_page(browser, url: str, wav: Path, methods: list[str], character: Path | None):
     page = browser.new_page(viewport={"width": 1400, "height": 1300})
     page.goto(f"{url}?measure=1")                      # the player's marks (data-marks) and draw split (prof)
     page.wait_for_selector(f"{PLAYER}[data-ready]", timeout=60000)
@@ -105,10 +127,19 @@ def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 
             page.locator("#methods label", has_text=LABELS[m]).click()
     page.locator("#speech input[type=file]").first.set_input_files(str(wav))
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
-    page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being transcribed)
+    return page
+
+
+def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path("."),
+             character: Path | None = None, quick: bool = False) -> dict:
+    page = open_page(browser, url, wav, methods, character)
+    page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being prepared)
     t0 = time.perf_counter()
-    play_s, marks = click_and_wait(page, on=Path(character).name if character is not None else None)
-    r = {"play": play_s, "marks": marks, "fps_first": fps(page, 1.0)}
+    first, every, marks = click_and_wait(page, len(methods), on=Path(character).name if character is not None else None)
+    r = {"play": first, "all": every, "marks": marks, "drawn2": frames_drawn(page, 2.0)}
+    if quick:                                         # the mp4 renders on (niced: on a busy machine it waits long)
+        page.close()
+        return r
     rendering = ("!document.querySelector('#summary').innerText.includes('Video ready') && "
                  f"document.querySelector('{PLAYER}').dataset.state === 'playing'")
     r["fps_render"] = fps_while(page, rendering)     # until the mp4 is ready or the speech is over (<= 10 s)
@@ -122,23 +153,30 @@ def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 
     r["fps_idle"] = fps(page)
     r["prof"] = page.evaluate("() => window.gesturelsmPlayer.prof || null")   # ms per part, draws after
     r["scrub"] = scrub_offset(page)
+    r.update(again(page, len(methods), workdir, methods[0]))
+    page.close()
+    return r
+
+
+def again(page, n: int, workdir: Path, first_method: str) -> dict:
+    """Generating again with another seed on the same page: after the chain is over, and while the mp4 renders."""
+    r = {}
     old = downloads(page)
     page.get_by_label("Seed").fill("7")
-    r["again"], _ = click_and_wait(page)
+    r["again"], _, _ = click_and_wait(page, n)
     page.wait_for_function(downloads_changed(old), timeout=900000)  # the chain is over again
     old = downloads(page)
     page.get_by_label("Seed").fill("8")                # its video renders; meanwhile the visitor changes the seed
-    click_and_wait(page)
+    click_and_wait(page, n)
     r["rendering"] = not page.evaluate("() => document.querySelector('#summary').innerText.includes('Video ready')")
     page.get_by_label("Seed").fill("9")
-    r["again_rendering"], _ = click_and_wait(page)
+    r["again_rendering"], _, _ = click_and_wait(page, n)
     folder = re.search(r"req-[0-9a-f]+", page.evaluate("() => window.gesturelsmPlayer.payload.bodies[0].motion"))[0]
-    exported = workdir / folder / f"{methods[0]}_keypoints.json"    # the newest request's last download
+    exported = workdir / folder / f"{first_method}_keypoints.json"    # the newest request's last download
     t_end = time.perf_counter() + 900
     while not exported.exists() and time.perf_counter() < t_end:
         page.wait_for_timeout(250)
     page.wait_for_function(downloads_changed(old), timeout=60000)   # and the page shows them
-    page.close()
     return r
 
 
@@ -149,70 +187,90 @@ def per_draw(prof: dict | None) -> str:
     return " / ".join(f"{prof[k] / prof['draws']:.1f}" for k in ("pose", "render", "labels", "dom"))
 
 
-def row(dur: float, n: int, body: str, runs: list[dict]) -> None:
+HEADER = ["speech", "methods", "page", "body", "click -> first body moving (s), median (range)",
+          "click -> all moving (s)", "frames drawn in the first 2 s", "click -> payload in the page (s)"]
+FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)", "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
+        "again, new seed -> playing (s)", "again while the mp4 renders -> playing (s) (runs where it still rendered)"]
+
+
+def row(dur: float, n: int, page: str, body: str, runs: list[dict], quick: bool) -> str:
     """One line of the table: medians over `runs`."""
-    r = {k: median([x[k] for x in runs]) for k in ("play", "fps_first", "fps_render", "fps_idle", "scrub",
-                                                  "mp4", "again", "again_rendering")}
-    busy = sum(x["rendering"] for x in runs)
-    m = {k: median([x["marks"].get(k, 0) for x in runs]) for k in ("page_play", "payload", "bodies",
-                                                                   "motion", "play")}
+    med = lambda k: median([x[k] for x in runs])               # noqa: E731
     spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
-    print(f"| {dur:.1f} s | {n} | {body} | {r['play']:.2f}{spread} | {m['page_play']:.2f} | {m['payload']:.2f} | "
-          f"{m['bodies']:.0f} / {m['motion']:.0f} / {m['play']:.0f} | {r['fps_first']:.1f} | "
-          f"{r['fps_render']:.1f} | {r['fps_idle']:.1f} | {per_draw(runs[-1]['prof'])} | {r['scrub']:.0f} | "
-          f"{r['mp4']:.1f} | {r['again']:.2f} | {r['again_rendering']:.2f} ({busy}/{len(runs)}) |",
-          flush=True)
+    payload = median([x["marks"].get("payload", 0) for x in runs])
+    cells = [f"{dur:.1f} s", str(n), page, body, f"**{med('play'):.2f}**{spread}", f"{med('all'):.2f}",
+             f"{med('drawn2'):.0f}", f"{payload:.2f}"]
+    if not quick:
+        busy = sum(x["rendering"] for x in runs)
+        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]), f"{med('scrub'):.0f}", f"{med('again'):.2f}",
+                  f"{med('again_rendering'):.2f} ({busy}/{len(runs)})"]
+    return "| " + " | ".join(cells) + " |"
+
+
+def unique_speech(wav: Path, k: int, out: Path) -> Path:
+    """`wav` scaled by a gain a thousandth below the last run's: other content, so the server transcribes it afresh
+    (it remembers transcripts by content), with the same words and length."""
+    import soundfile as sf
+
+    y, sr = sf.read(wav, dtype="float32")
+    sf.write(out, y * (1.0 - 1e-3 * k), sr)
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
     p.add_argument("--methods", type=int, nargs="+", default=[1, 3], choices=[1, 2, 3])
-    p.add_argument("--checkpoints")
     p.add_argument("--think-s", type=float, default=0.0,
                    help="seconds between the upload and the click (0: click at once, the worst case)")
     p.add_argument("--repeat", type=int, default=3, help="runs per case; the table gives medians (and the range of "
-                   "click -> playing)")
+                   "click -> first body moving)")
+    p.add_argument("--vs", type=Path, metavar="CHECKOUT", help="also serve the page of this checkout (e.g. a worktree "
+                   "of main) and alternate the two run by run")
+    p.add_argument("--quick", action="store_true", help="only the columns up to the payload: the next run starts "
+                   "without waiting for the mp4 (no fps while it renders, idle fps, scrubbing or generating again)")
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--character", type=Path, metavar="PATH",
                    help="also run every case with this character chosen in the page (.vrm / .glb / .gltf)")
     args = p.parse_args(argv)
     if args.character is not None and not args.character.is_file():
         p.error(f"--character {args.character}: no such file")
-    import torch
     from playwright.sync_api import sync_playwright
 
+    from _served import served_app
     from app.measure import speech
     from app.screenshot import CHROMIUM_ARGS
-    from gesturelsm.webapp.ui import serve_locally
-    from gesturelsm.serve.request import ServiceSettings
-    from gesturelsm.serve.service import GestureService
-    from gesturelsm.asr.source import RECENT
 
-    torch.set_num_threads(1)
-    service = GestureService.from_settings(ServiceSettings(checkpoints=args.checkpoints, max_seconds=600))
-    service.warmup()
-    demo, url = serve_locally(service)
-    print("| speech | methods | body | click -> playing (s), median (range) | same, page clock (s) | click -> payload in the page (s) | then bodies / motion / "
-          "playing (ms) | "
-          "player fps, first second | player fps while the mp4 renders (next <= 10 s) | player fps after (server idle) | ms per draw after: pose / render / labels / dom | scrub offset (frames) | click -> mp4 (s) | "
-          "again, new seed -> playing (s) | again while the mp4 renders -> playing (s) (runs where it still rendered) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    with tempfile.TemporaryDirectory() as tmp, sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS)
+    pages = [(REPO, "this checkout")] + ([(args.vs, f"{args.vs.name} (--vs)")] if args.vs else [])
+    cols = HEADER + ([] if args.quick else FULL)
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; think {args.think_s:g} s; "
+          f"medians of {args.repeat}\n")
+    with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as stack:
+        tmp = Path(tmp)
+        apps = []
+        for i, (checkout, name) in enumerate(pages):
+            (tmp / f"app{i}").mkdir()
+            apps.append(stack.enter_context(served_app(checkout, tmp / f"app{i}" / "work", name)))
+        print("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols), flush=True)
+        browser = stack.enter_context(sync_playwright()).chromium.launch(executable_path=args.chromium,
+                                                                         args=CHROMIUM_ARGS)
+        k = 0
         for sec in args.seconds:
-            wav, _, dur = speech(sec, Path(tmp) / f"speech_{int(sec)}.wav")
+            wav, _, dur = speech(sec, tmp / f"speech_{int(sec)}.wav")
             for n in args.methods:
                 bodies = [None] + ([args.character] if args.character is not None else [])
-                cases = {b: [] for b in bodies}
+                cases = {(a.name, b): [] for a in apps for b in bodies}
                 for _ in range(args.repeat):
-                    for b in bodies:
-                        RECENT.clear()               # every run transcribes its upload afresh, as a new visitor's
-                        cases[b].append(run_case(browser, url, wav, ALL[:n], args.think_s, service.workdir, b))
-                for b, runs in cases.items():
-                    row(dur, n, "mannequin" if b is None else b.name, runs)
+                    for a in apps:                       # interleaved: every page sees the same minutes of load
+                        for b in bodies:
+                            k += 1
+                            run_wav = unique_speech(wav, k, tmp / f"run{k}.wav")
+                            cases[(a.name, b)].append(run_case(browser, a.url, run_wav, ALL[:n], args.think_s,
+                                                               a.workdir, b, args.quick))
+                for (name, b), runs in cases.items():
+                    print(row(dur, n, name, "mannequin" if b is None else b.name, runs, args.quick), flush=True)
         browser.close()
-    demo.close()
+    print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
     return 0
 
 

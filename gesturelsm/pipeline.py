@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 import torch
@@ -35,6 +35,8 @@ from .tokenizer.model import RVQVAE
 
 MIN_SECONDS = 0.5
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
+GROUND_TRUTH_MISSING = ("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; it is left "
+                        "out.")
 
 
 @dataclass
@@ -85,6 +87,18 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
+
+
+@dataclass
+class Made:
+    """One method of a plan, made (`GesturePipeline.generate_each`): its motion, post-processed and as long as the
+    speech (None: it failed, or the ground-truth take was not recognised), or the error it failed with."""
+    method: str
+    motion: MotionSequence | None
+    result: GenerationResult | None = None     # a generator's timings and settings
+    take: str | None = None                    # the BEAT2 take recognised (GROUND_TRUTH)
+    warnings: list[str] = field(default_factory=list)
+    error: Exception | None = None
 
 
 class GesturePipeline:
@@ -240,32 +254,52 @@ class GesturePipeline:
             self.check_settings(m, plan.steps_for(m), plan.cfg)
         check_smoothing(plan.smoothing)
 
+    def run_order(self, plan: Plan) -> list[str]:
+        """The order a plan's methods are made in: the ground-truth take first (a lookup), then the generators by
+        step count, fewest first, so the first motion is ready as early as possible (ties keep the plan's order)."""
+        gens = sorted(plan.generators, key=plan.steps_for)
+        return [GROUND_TRUTH] * (GROUND_TRUTH in plan.methods) + gens
+
+    def generate_each(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+                      keep_going: bool = False) -> Iterator[Made]:
+        """The plan's methods one by one in `run_order`, each as soon as it is made: fitted to the speech's length
+        and post-processed (stand in place, smoothing). With `keep_going` a method that fails yields its error and
+        the next one is made; otherwise the error is raised."""
+        self.check_plan(plan)
+        T, order = speech.num_frames, self.run_order(plan)
+        for i, m in enumerate(order):
+            lo, hi = i / len(order), (i + 1) / len(order)
+            prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
+            try:
+                if m == GROUND_TRUTH:
+                    take = find_beat2_take(plan.beat2, speech.audio, plan.filename)
+                    motion = None if take is None else fit_length(take_motion(plan.beat2, take), T)
+                    made = Made(m, motion, take=take, warnings=[] if take else [GROUND_TRUTH_MISSING])
+                else:
+                    res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed),
+                                        method=m, progress=prog)
+                    made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
+            except Exception as exc:  # noqa: BLE001 (the caller reports it with the methods that were made)
+                if not keep_going:
+                    raise
+                yield Made(m, None, error=exc)
+                continue
+            if made.motion is not None:
+                made.motion = postprocess(made.motion.slice(0, T), plan.stand_in_place, plan.smoothing)
+            yield made
+
     def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
         """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing)."""
-        self.check_plan(plan)
-        T = speech.num_frames
-        gens = plan.generators
-        motions: dict[str, MotionSequence] = {}
-        results: dict[str, GenerationResult] = {}
+        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing); the
+        generators in the plan's order, then the ground truth."""
+        made = {x.method: x for x in self.generate_each(speech, plan, progress)}
         warnings = list(speech.warnings)
-        for i, m in enumerate(gens):
-            lo, hi = i / max(1, len(gens)), (i + 1) / max(1, len(gens))
-            prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
-            res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed), method=m,
-                                progress=prog)
-            results[m], motions[m] = res, res.motion
-            warnings += [w for w in res.warnings if w not in warnings]   # e.g. the authors' models: face neutral
-        gt_name = None
-        if GROUND_TRUTH in plan.methods:
-            gt_name = find_beat2_take(plan.beat2, speech.audio, plan.filename)
-            if gt_name is None:
-                warnings.append("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; "
-                                "it is left out.")
-            else:
-                motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
-        motions = {k: postprocess(v.slice(0, T), plan.stand_in_place, plan.smoothing) for k, v in motions.items()}
-        return Generated(motions, results, gt_name, warnings)
+        for x in made.values():
+            warnings += [w for w in x.warnings if w not in warnings]
+        shown = plan.generators + [GROUND_TRUTH] * (GROUND_TRUTH in made)            # the page's order
+        motions = {m: made[m].motion for m in shown if made[m].motion is not None}
+        results = {m: made[m].result for m in plan.generators}
+        return Generated(motions, results, made[GROUND_TRUTH].take if GROUND_TRUTH in made else None, warnings)
 
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,

@@ -24,6 +24,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..body.model import resolve_body
+from ..constants import FPS
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
@@ -112,17 +113,23 @@ def body_glb(body, betas: np.ndarray | None, cache: str | Path) -> Path:
 
 def player_payload(motions: Sequence[MotionSequence], labels: Sequence[str], methods: Sequence[str], body,
                    out: str | Path, cache: str | Path, url: Callable[[Path], str],
-                   audio: Path | None = None) -> dict:
+                   audio: Path | None = None, names: Sequence[str] | None = None) -> dict:
     """Write each motion's `.bin` into `out` (rest bodies into `cache`) and return the player's payload;
-    `url(path)` turns a written file into the URL the browser fetches."""
+    `url(path)` turns a written file into the URL the browser fetches. `names`: the motion files' names (default
+    player-I-METHOD.bin); a file that exists already is the same motion (a request's payload made again as more of
+    its methods are done) and is not written again."""
     body = resolve_body(body)
     out = Path(out)
-    frames = min(m.num_frames for m in motions)
-    fps = motions[0].fps
+    frames = min((m.num_frames for m in motions), default=0)
+    fps = motions[0].fps if motions else FPS
     bodies = []
     for i, (seq, label, method) in enumerate(zip(motions, labels, methods)):
         seq = seq.slice(0, frames)
-        path, E = write_motion(seq, body, out / f"player-{i}-{method}.bin")
+        path = out / (names[i] if names else f"player-{i}-{method}.bin")
+        if path.exists():
+            E = len([e for e in used_expressions(body) if e < seq.expressions.shape[1]])
+        else:
+            path, E = write_motion(seq, body, path)
         bodies.append({"label": label, "method": method, "body": url(body_glb(body, seq.betas, cache)),
                        "motion": url(path), "expressions": E})
     return {"fps": fps, "frames": frames, "duration": frames / fps, "joints": NUM_JOINTS,

@@ -74,10 +74,11 @@ class LiveConfig:
     decode_context: int = 16       # final latents left of the emitted span given to the decoder
     decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
     blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
+    held: int = 0                  # final latents before the new ones held fixed while sampling (0: all in the window)
 
     def check(self, t: int, s: int) -> None:
-        if not s <= self.commit <= t - s:
-            raise ValueError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
+        if not 1 <= self.commit <= t - s:
+            raise ValueError(f"commit must be between 1 and {t - s} latents (got {self.commit})")
         if min(self.lookahead, self.decode_lag, self.decode_context, self.blend_frames) < 0:
             raise ValueError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
 
@@ -204,7 +205,8 @@ class StreamingGenerator:
         if st > w0:         # latents [w0, st) are final: generate the rest of the window consistent with them
             known = torch.zeros(1, R, t, D)
             known[0, :, :st - w0] = self.lat[:, k0:k]
-            mask = (torch.arange(t) < st - w0)[None, None, :, None]
+            lo = 0 if self.cfg.held <= 0 else max(0, st - w0 - self.cfg.held)
+            mask = ((torch.arange(t) < st - w0) & (torch.arange(t) >= lo))[None, None, :, None]
             f = inpainting(f, self.method, known, mask, noise)
         x = self.method.sample(f, noise, self.cfg.steps, self.cfg.cfg)[0][:, st - w0:]        # (R, w0 + t - st, D)
         if self.window > 0 and st == w0:  # seeded by the previous window's provisional latents: cross-fade (offline)

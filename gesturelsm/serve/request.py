@@ -95,11 +95,20 @@ class Result:
     motions: Mapping[str, MotionSequence] = field(repr=False)   # shown, post-processed, by method
     transcript: str | None                   # the automatic transcript used (shown in the transcript box)
     job: RenderJob = field(repr=False)
+    pending: tuple[str, ...] = ()            # methods still being made (a result that grows: serve/progressive.py)
+    failed: Mapping[str, str] = field(default_factory=dict)       # method -> why it has no motion
+    slots: tuple[tuple[str, str], ...] = ()  # (method, label) of every method shown, made or not, in page order
 
     @property
     def summary(self) -> str:
-        lines = [f"**Transcript:** {self.text_mode}", f"**Motion ready in {self.motion_seconds:.1f} s.** " +
-                 (f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")]
+        if self.pending:
+            made = ", ".join(METHOD_LABELS.get(m, m) for m in self.motions) or "nothing yet"
+            ready = (f"**Ready after {self.motion_seconds:.1f} s:** {made}. **Generating:** "
+                     f"{', '.join(METHOD_LABELS.get(m, m) for m in self.pending)}...")
+        else:
+            ready = f"**Motion ready in {self.motion_seconds:.1f} s.** " + (
+                f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")
+        lines = [f"**Transcript:** {self.text_mode}", ready]
         if self.ground_truth:
             lines.append(f"**Ground truth:** BEAT2 take `{self.ground_truth}`")
         lines += [f"Note: {w}" for w in self.warnings]

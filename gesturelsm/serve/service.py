@@ -24,7 +24,7 @@ import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -43,7 +43,9 @@ from ..pipeline import FACTS, GROUND_TRUTH, GesturePipeline, Plan, SpeechInput
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
 from .limits import transcript_problems
-from .request import METHOD_LABELS, VIDEO_SIZES, RenderJob, Request, Result, ServiceSettings, timing_rows
+from .prepared import PreparedUploads, file_key
+from .progressive import stream_request
+from .request import METHOD_LABELS, VIDEO_SIZES, Request, Result, ServiceSettings, timing_rows
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -56,6 +58,7 @@ class GestureService:
         self.body = body
         self.workdir = Path(settings.workdir or Path(tempfile.gettempdir()) / "gesturelsm-app")
         self.workdir.mkdir(parents=True, exist_ok=True)
+        self.uploads = PreparedUploads()            # uploads decoded and prepared before the click (prefetch)
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
@@ -84,23 +87,24 @@ class GestureService:
         automatic_words(y, remember=False)                   # says "unavailable" itself when not installed
         return time.perf_counter() - t0
 
-    def prefetch(self, audio_path: str | None) -> bool:
-        """Transcribe an upload before the visitor asks for it (the page calls this when speech is uploaded or
-        recorded), so that a request without a transcript finds the words ready (asr.source remembers them). Never
-        raises: a file that cannot be used is left for the request to refuse with its message. Returns whether
-        the words are ready."""
+    def prefetch(self, audio_path: str | None, text: str = "", textgrid_path: str | None = None,
+                 transcribe: bool = True) -> bool:
+        """Prepare an upload before the visitor asks for it (the page calls this when speech is uploaded or recorded,
+        and when the transcript, TextGrid or transcription choice change): the file decoded and the speech prepared
+        for those transcript settings (features, the words typed / from the TextGrid / recognised and their timings),
+        remembered so that Generate only generates (`serve/prepared.py`). Never raises: a file that cannot be used is
+        left for the request to refuse with its message. Returns whether the speech is ready."""
         if not audio_path:
             return False
         try:
-            self._check(Request(audio_path))
-            audio = load_audio(audio_path, max_seconds=self.settings.max_seconds)
-            self.pipeline.prefetch_transcript(audio, SAMPLE_RATE)
+            self._speech(Request(audio_path, text=text or "", textgrid_path=textgrid_path, transcribe=transcribe),
+                         None, lambda f, m: None)
             return True
         except GestureError as exc:                      # the request refuses it with this message
-            log.info("no transcript prefetched for %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
+            log.info("upload not prepared %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
             return False
         except Exception:                                # a bug: keep its traceback in the log, not on the page
-            log.exception("prefetching the transcript of %s failed", Path(audio_path).name)
+            log.exception("preparing the upload %s failed", Path(audio_path).name)
             return False
 
     def cleanup(self, max_age_s: float | None = None) -> int:
@@ -145,51 +149,53 @@ class GestureService:
             raise InputError("\n".join(problems))
         return words, notes
 
+    def _decode(self, path: str) -> np.ndarray:
+        try:
+            return load_audio(path, max_seconds=self.settings.max_seconds)
+        except AudioTooLongError as exc:
+            raise AudioError(f"The audio is too long: {exc}") from None
+        except AudioError as exc:
+            raise AudioError(f"The audio could not be read: {exc}") from None
+
     def _speech(self, req: Request, audio: np.ndarray | None, prog: Progress) -> tuple[Plan, SpeechInput, list[str]]:
-        """Checks, then the speech prepared once for every method, and notes for the page."""
+        """Checks, then the speech prepared once for every method, and notes for the page; for an upload, what its
+        prefetch prepared (`serve/prepared.py`), else prepared now and remembered."""
+        path = None
         if audio is None:
             req, plan = self._check(req)
-            try:
-                audio = load_audio(req.audio_path, max_seconds=self.settings.max_seconds)
-            except AudioTooLongError as exc:
-                raise AudioError(f"The audio is too long: {exc}") from None
-            except AudioError as exc:
-                raise AudioError(f"The audio could not be read: {exc}") from None
+            path = req.audio_path
+            audio = self.uploads.decoded(path, lambda: self._decode(path))
         else:
             req, plan = self._check(req, need_file=False)
         seconds = len(audio) / SAMPLE_RATE
         problems = transcript_problems(req.text, seconds)
         if problems:
             raise InputError("\n".join(problems))
-        words, notes = self._words(req, seconds)
-        prog(0.02, "reading speech")
-        speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                              progress=lambda f, m: prog(0.02 + 0.1 * f, m),
-                                              transcribe=bool(req.transcribe))
+
+        fresh = []
+
+        def prepare() -> tuple[SpeechInput, list[str]]:
+            fresh.append(True)
+            words, notes = self._words(req, seconds)
+            prog(0.02, "reading speech")
+            speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
+                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m),
+                                                  transcribe=bool(req.transcribe))
+            return speech, notes
+        if path is None:
+            return (plan, *prepare())
+        key = ((req.text or "").strip(), file_key(req.textgrid_path), bool(req.transcribe))
+        speech, notes = self.uploads.prepared(path, key, prepare)
+        if not fresh:      # prepared before this request: its stages took no time of this request's
+            speech = replace(speech, timings={k: 0.0 for k in speech.timings})
         return plan, speech, notes
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Result:
         """Serve one request (see the module docstring). `audio` (16 kHz) skips reading req.audio_path."""
-        t_start = time.perf_counter()
         prog = progress or (lambda f, m: None)
-        self.cleanup()
-        plan, speech, notes = self._speech(req, audio, prog)
-        out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
-        out.mkdir(parents=True)
-        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m))
-        if not gen.motions:
-            raise InputError("Nothing to show: choose a generator method.")
-        labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
-        labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
-        gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
-        job = RenderJob(out, tuple(gen.motions.values()), tuple(labels), tuple(gen_s), speech.audio, speech.duration,
-                        int(req.size), t_start)
-        motion_s = time.perf_counter() - t_start
-        timings = {m: dict(r.timings) for m, r in gen.results.items()}
-        rows, timings = timing_rows(timings, gen.ground_truth is not None, speech.duration, 0.0, motion_s)
-        result = Result(None, rows, (), None, speech.text_mode, (*gen.warnings, *notes), gen.ground_truth, motion_s,
-                        motion_s, timings, dict(gen.motions), speech.transcript, job)
+        for result in self.stream(req, prog, audio):
+            pass
         if req.render:
             result = self.render(result, prog)
         if req.exports:
@@ -197,6 +203,19 @@ class GestureService:
             result = self.export(result)
         prog(1.0, "done")
         return result
+
+    def stream(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None
+               ) -> Iterator[Result]:
+        """The request's result as each method is made, fastest first, without the video and the downloads
+        (`serve/progressive.py`): the page shows every body the moment its motion exists."""
+        return stream_request(self, req, progress, audio)
+
+    def folder(self) -> Path:
+        """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the
+        others after keep_minutes."""
+        out = self.workdir / f"req-{secrets.token_hex(16)}"
+        out.mkdir(parents=True)
+        return out
 
     def render(self, result: Result, progress: Progress | None = None,
                cancelled: Callable[[], bool] | None = None, character=None) -> Result:
@@ -236,14 +255,32 @@ class GestureService:
         files, glb = self._exports(list(result.motions.values()), list(result.motions), result.job.folder)
         return replace(result, downloads=tuple(files), glb=glb)
 
+    def export_each(self, result: Result) -> list[Path]:
+        """npz + BVH of each motion of the result (in the page's order), written once per request and method: the
+        downloads of the methods made so far of a result that grows (`stream`); `export` adds the rest."""
+        return [p for seq, name in zip(result.motions.values(), result.motions)
+                for p in self._method_files(seq, name, result.job.folder)]
+
+    def _method_files(self, seq: MotionSequence, name: str, out: Path) -> list[Path]:
+        """NAME.npz and NAME.bvh in `out`, each written whole under another name first (the page's downloads event
+        and the exports after the video may make the same file at once; a file that exists is complete)."""
+        files = []
+        for path, write in ((out / f"{name}.npz", lambda p: export_npz(seq, p)),
+                            (out / f"{name}.bvh", lambda p: export_bvh(seq, p, body=self.body))):
+            if not path.exists():
+                tmp = path.with_name(f".{secrets.token_hex(8)}{path.suffix}")
+                write(tmp)
+                os.replace(tmp, path)
+            files.append(path)
+        return files
+
     def _exports(self, motions: list[MotionSequence], names: list[str], out: Path) -> tuple[list[Path], Path | None]:
-        """npz + BVH per method; GLB, keypoints and the ARKit face (Live Link Face CSV) for the first one (the
-        interactive view shows that GLB)."""
+        """npz + BVH per method (`export_each`); GLB, keypoints and the ARKit face (Live Link Face CSV) for the first
+        one (the interactive view shows that GLB)."""
         files: list[Path] = []
         glb = None
         for i, (seq, name) in enumerate(zip(motions, names)):
-            files.append(export_npz(seq, out / f"{name}.npz"))
-            files.append(export_bvh(seq, out / f"{name}.bvh", body=self.body))
+            files += self._method_files(seq, name, out)
             if i == 0:
                 glb = export_glb(seq, out / f"{name}.glb", body=self.body)
                 files.append(glb)

@@ -1,7 +1,8 @@
 """The page's motion statistics: one row per shown motion and the shipped speaker's reference row, under the timing
 table (element id `motion-stats`), each column's heading carrying a tooltip (what it measures, which way is better).
 
-Computed in a follow-up event after the motions reach the player (`attach`), so the player never waits for them;
+Computed in an event of its own each time the motions handed to the player grow (`attach`), so the player never
+waits for them;
 the numbers are `gesturelsm.evaluation.motion_stats`' (the definitions `gesturelsm eval` uses). Each cell carries its
 unrounded value in `data-value` for tools and tests.
 """
@@ -10,6 +11,7 @@ from __future__ import annotations
 import html
 import logging
 import time
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import gradio as gr
@@ -29,17 +31,29 @@ class StatsTable:
     seconds: float                                    # time to compute all rows
 
 
+_DONE: OrderedDict[tuple[str, str], dict[str, float]] = OrderedDict()     # (request folder, method) -> statistics
+_KEEP = 256
+
+
 def compute(out) -> StatsTable | None:
     """Statistics of every motion of a generated request (`serve.request.Result`: its motions by method, and its render
-    job's labels and speech)."""
+    job's labels and speech). A request whose methods arrive one by one is computed again as each arrives: the rows
+    computed before are reused (by request folder and method), so `seconds` is the time of the new rows."""
     if out is None or not out.motions or out.job.audio is None:
         return None
     t0 = time.perf_counter()
     ref = speaker_reference()
-    speech = SpeechContext.of(out.job.audio, None if ref is None else ref.mean_speed)
+    speech = None
     labels = list(out.job.labels) + list(out.motions)[len(out.job.labels):]
-    rows = [(label, method, motion_statistics(m, None, speech))
-            for label, (method, m) in zip(labels, out.motions.items())]
+    rows = []
+    for label, (method, m) in zip(labels, out.motions.items()):
+        key = (str(out.job.folder), method)
+        if key not in _DONE:
+            speech = speech or SpeechContext.of(out.job.audio, None if ref is None else ref.mean_speed)
+            _DONE[key] = motion_statistics(m, None, speech)
+            while len(_DONE) > _KEEP:
+                _DONE.popitem(last=False)
+        rows.append((label, method, _DONE[key]))
     return StatsTable(rows, ref, time.perf_counter() - t0)
 
 
@@ -85,9 +99,10 @@ def component() -> gr.HTML:
 
 
 def attach(event, state, target: gr.HTML) -> None:
-    """Chain the statistics after `event` (the event that hands the motions to the player), in a pool of their own."""
-    event.then(show, state, target, api_name="motion_stats", api_visibility="private", show_progress="hidden",
-               concurrency_limit=1, concurrency_id="stats")
+    """Compute the statistics whenever `event` fires (each time the motions handed to the player grow), in a pool of
+    their own; a burst of such events computes once, for the newest."""
+    event(show, state, target, api_name="motion_stats", api_visibility="private", show_progress="hidden",
+          concurrency_limit=1, concurrency_id="stats", trigger_mode="always_last")
 
 
 def values(html_text: str) -> dict[str, dict[str, float]]:

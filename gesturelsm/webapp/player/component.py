@@ -46,30 +46,46 @@ def served_paths() -> list[str]:
     return [str(BUNDLE.parent)]
 
 
-def player_component(service: GestureService) -> gr.HTML:
-    """The player, or a note saying how to build it when the bundle is missing. The player loads the body of
-    the default shape (zero betas, what the generators output) as the page opens."""
+def body_url(service: GestureService) -> str:
+    """The rest body of the default shape (zero betas, what the generators output), written once."""
     import numpy as np
 
+    return file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
+
+
+def player_component(service: GestureService) -> gr.HTML:
+    """The player, or a note saying how to build it when the bundle is missing. The player loads the body of
+    the default shape as the page opens."""
     if not BUNDLE.exists():
         return gr.HTML(MISSING, elem_id="motion-player-box")
-    body = file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
-    return gr.HTML("", html_template=ELEMENT.format(preload=body), js_on_load=MOUNT_JS.format(bundle=BUNDLE),
+    return gr.HTML("", html_template=ELEMENT.format(preload=body_url(service)), js_on_load=MOUNT_JS.format(bundle=BUNDLE),
                    elem_id="motion-player-box", padding=False)
 
 
 def payload(service: GestureService, out: Result, character=None) -> dict | None:
     """Write the player's files for a generated request (its folder) and return the player's payload; with a
-    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it."""
+    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it. For a result that is
+    still growing (serve/progressive.py) every method shown has a body entry, with its motion file once it is made
+    (`motion`) or why it failed (`error`); files already written for the request are not written again."""
     import soundfile as sf
 
-    if not out.motions:
+    slots = list(out.slots) or list(zip(out.motions, out.job.labels))
+    if not slots:
         return None
     folder = out.job.folder
     wav = folder / "speech.wav"
-    sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
-    p = player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
-                       service.workdir / "player-bodies", url=file_url, audio=wav)
-    if character is not None:
-        p["character"] = page_character(character, out.motions, folder, file_url, service.body)
+    if not wav.exists():
+        sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
+    made = [m for m, _ in slots if m in out.motions]
+    p = player_payload([out.motions[m] for m in made], [dict(slots)[m] for m in made], made, service.body, folder,
+                       service.workdir / "player-bodies", url=file_url, audio=wav,
+                       names=[f"player-{[m for m, _ in slots].index(k)}-{k}.bin" for k in made])
+    ready = {b["method"]: b for b in p["bodies"]}
+    rest = body_url(service)
+    p["bodies"] = [ready.get(m) or {"label": label, "method": m, "body": rest, "motion": None, "expressions": 0,
+                                    **({"error": out.failed[m]} if m in out.failed else {})} for m, label in slots]
+    p["frames"] = p["frames"] or int(round(out.job.speech_seconds * p["fps"]))
+    p["duration"] = p["frames"] / p["fps"]
+    if character is not None and made:
+        p["character"] = page_character(character, {m: out.motions[m] for m in made}, folder, file_url, service.body)
     return p

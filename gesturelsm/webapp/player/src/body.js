@@ -64,3 +64,20 @@ export class Body {
     if (infl && this.E) for (let e = 0; e < Math.min(this.E, infl.length); e++) infl[e] = this.expr[f * this.E + e];
   }
 }
+
+// A body's place while its motion is being generated (MotionPlayer.setBodies with a pending spec): nothing drawn,
+// its label above where the head will be, no frames (the shared clock is bounded by the bodies that move).
+export class Pending {
+  constructor(offset) {
+    this.root = new THREE.Group();
+    this.root.position.x = offset;
+    this.head = new THREE.Object3D();
+    this.head.position.y = 1.45;
+    this.root.add(this.head);
+    this.frames = 0; this.pending = true;
+  }
+
+  append() {}
+
+  pose() {}
+}

@@ -12,20 +12,28 @@
 //                                                         // streamed character body, its character section
 //   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
 //   p.play(); p.pause(); p.seek(seconds)
-//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player_payload.py
+//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player_payload.py,
+//                                                         // again with more bodies as they are made (progressive.js)
 //   p.measure = true                                      // benchmarks: timings in p.prof and data-marks (measure.js)
-// Frame shown = floor(clock.currentTime * fps), clamped to the frames received so far, so motion and speech
+// Bodies that join a running clock (a request whose methods finish one by one, an edited motion beside the
+// original): a spec with `pending: true` is a slot (its label only, nothing drawn, no frames) until
+//   p.join(i, record)                                     // slot i gets its body and motion and moves at once, at
+//                                                         // the clock's current time: nothing restarts or jumps
+//   p.join(i, null, characterPayload)                     // the same on the character (its method's frames inside)
+//   p.fail(i, message)                                    // slot i says why no motion comes
+// Frame shown = floor(clock.currentTime * fps), clamped to the frames of the bodies that move, so motion and speech
 // stay within one frame of each other whatever the clock does (play, scrub, seek, stall).
-// Test contract on the element: data-state = empty | loading | playing | paused, data-frames = motion frames
-// drawn so far, data-frame = index of the frame on screen, data-fps = draws in the last second, data-character =
-// the file name of the character on screen (absent: the mannequin).
+// Test contract on the element: data-state = empty | loading | playing | paused (playing from the first body that
+// moves), data-bodies = bodies moving now, data-frames = motion frames drawn so far, data-frame = index of the frame
+// on screen, data-fps = draws in the last second, data-character = the file name of the character on screen
+// (absent: the mannequin), data-failed = slots whose motion failed (absent: none).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { Body, JOINTS, clayMatcap, loadGlb } from './body.js';
+import { Body, JOINTS, Pending, clayMatcap, loadGlb } from './body.js';
 import { CharacterBody, fetchCharacter } from './character.js';
 import { adoptStyles, el } from './dom.js';
 import { drawProfile, lap, requested } from './measure.js';
-import { decodeMotion } from './motion_decoder.js';
+import { loadPayload } from './progressive.js';
 
 const SPACING = 1.2;           // metres between bodies, as in the server-side video
 
@@ -94,24 +102,73 @@ export class MotionPlayer {
     for (const b of this.bodies) this.scene.remove(b.root);
     this.labelBox.innerHTML = '';
     this.fps = fps; this.shown = -1; this.drawn = 0;
+    this.specs = specs; this.gltfs = gltfs; this.ch = ch; this.chSpec = character;
     const n = specs.length;
     this.labelBox.style.setProperty('--mp-bodies', String(Math.max(n, 1)));
     if (ch) this.element.dataset.character = character.name;
     else delete this.element.dataset.character;
+    delete this.element.dataset.failed;
     this.bodies = specs.map((s, i) => {
-      const x = (i - (n - 1) / 2) * SPACING;
-      const b = ch ? new CharacterBody(ch, character, s.method, x) : new Body(gltfs[i], s.label, x, this.material);
+      const b = s.pending ? new Pending(this._x(i)) : this._body(i, ch ? character : null);
       this.scene.add(b.root);
-      b.tag = el('div', { class: 'mp-label' }, this.labelBox);
-      // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
-      const m = /^(\D+?)\s+(\d.*)$/.exec(s.label);
-      b.tag.textContent = m ? m[1] : s.label;
-      if (m) { el('br', {}, b.tag); el('span', { class: 'mp-label-settings', text: m[2] }, b.tag); }
+      b.tag = this._tag(s.label, s.pending ? 'mp-label-pending' : '');
+      if (s.pending) { el('br', {}, b.tag); el('span', { class: 'mp-label-wait', text: 'generating...' }, b.tag); }
       return b;
     });
+    this._count();
     this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
     this.dirty = true;
     return true;
+  }
+
+  // Slot i's body joins the clock where it is now: its motion (a decoded record for the mannequin, or the page's
+  // character payload holding the method's frames) is in at once, so the next draw poses it at the shared frame.
+  join(i, record, character = null) {
+    const old = this.bodies[i];
+    const b = this._body(i, this.ch && character ? character : null);
+    b.tag = old.tag; b.tag.classList.remove('mp-label-pending');
+    const wait = b.tag.querySelector('.mp-label-wait');
+    if (wait) { wait.previousSibling.remove(); wait.remove(); }
+    this.scene.remove(old.root); this.scene.add(b.root);
+    this.bodies[i] = b;
+    if (record && !(this.ch && character)) this.appendRecord(i, record, this.specs[i].motion);
+    this.range.max = String(this.frames() / this.fps);
+    this._count();
+    this.shown = -1; this.dirty = true;                  // the next draw poses every body, the new one too
+  }
+
+  // Slot i has no motion coming: its label says why (the others play on).
+  fail(i, message) {
+    const b = this.bodies[i];
+    if (!b.pending || b.failed) return;
+    b.failed = message;
+    b.tag.classList.replace('mp-label-pending', 'mp-label-failed');
+    const why = b.tag.querySelector('.mp-label-wait') || el('span', {}, b.tag);
+    why.className = 'mp-label-why'; why.textContent = `failed: ${message}`;
+    this.element.dataset.failed = String(this.bodies.filter((x) => x.failed).length);
+    this.dirty = true;
+  }
+
+  _x(i) { return (i - (this.specs.length - 1) / 2) * SPACING; }
+
+  _body(i, character) {
+    const s = this.specs[i];
+    return character ? new CharacterBody(this.ch, character, s.method, this._x(i))
+      : new Body(this.gltfs[i], s.label, this._x(i), this.material);
+  }
+
+  // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
+  _tag(label, cls) {
+    const tag = el('div', { class: `mp-label ${cls}`.trim() }, this.labelBox);
+    const m = /^(\D+?)\s+(\d.*)$/.exec(label);
+    tag.textContent = m ? m[1] : label;
+    if (m) { el('br', {}, tag); el('span', { class: 'mp-label-settings', text: m[2] }, tag); }
+    return tag;
+  }
+
+  _count() {
+    const n = this.bodies.filter((b) => !b.pending && b.frames > 0).length;
+    if (this.element.dataset.bodies !== String(n)) this.element.dataset.bodies = String(n);
   }
 
   appendFrames(i, rotations, root, expressions = null) {
@@ -119,6 +176,7 @@ export class MotionPlayer {
     const E = expressions ? expressions.length / (rotations.length / (JOINTS * 4)) : 0;
     b.append(rotations, root, expressions || new Float32Array(0), E);
     this.range.max = String(this.frames() / this.fps);
+    this._count();
     this.dirty = true;
   }
 
@@ -131,6 +189,7 @@ export class MotionPlayer {
       }
       b.appendBones(record.character.rotations, record.character.root, record.character.morph);
       this.range.max = String(this.frames() / this.fps);
+      this._count();
       this.dirty = true;
       return;
     }
@@ -145,8 +204,8 @@ export class MotionPlayer {
 
   frames() {                                         // runs every animation frame: no allocation
     let n = Infinity;
-    for (const b of this.bodies) n = Math.min(n, b.frames);
-    return this.bodies.length ? n : 0;
+    for (const b of this.bodies) if (!b.pending) n = Math.min(n, b.frames);
+    return n === Infinity ? 0 : n;
   }
 
   async play() {
@@ -174,40 +233,9 @@ export class MotionPlayer {
     this.dirty = true;
   }
 
-  // The page's payload: the speech, one body and one motion file per method; plays once all are in. A motion file
-  // that cannot be fetched or decoded puts its message in the element's data-error.
-  async load(payload) {
-    const gen = this.generation + 1;
-    const marks = this.measure ? { start: performance.now() } : null;
-    this.payload = payload;
-    delete this.element.dataset.error; delete this.element.dataset.characterError;
-    this.pause();
-    this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
-    const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
-      if (!r.ok) throw new Error(`${b.motion}: HTTP ${r.status}`);
-      return r.arrayBuffer();
-    }).then((buf) => decodeMotion(buf, b.motion))));
-    motions.catch(() => {});                        // reported below, once the bodies are in
-    if (!(await this.setBodies(payload.bodies, payload.fps, payload.character))) return;
-    if (marks) marks.bodies = performance.now() - marks.start;
-    try {
-      const records = await motions;
-      if (gen !== this.generation) return;
-      if (marks) marks.motion = performance.now() - marks.start;
-      records.forEach((rec, i) => this.appendRecord(i, rec, payload.bodies[i].motion));
-    } catch (e) {
-      this.element.dataset.error = String(e.message || e);
-      throw e;
-    }
-    this.audio.currentTime = 0;
-    this.attachClock(this.audio);
-    await this.play();
-    if (marks && this.measure) {
-      marks.play = performance.now() - marks.start;
-      this.marks = marks;
-      this.element.dataset.marks = JSON.stringify(marks);
-    }
-  }
+  // The page's payload (progressive.js): the speech and one slot per method; each method's body joins the clock
+  // as its motion arrives (the same payload again, with more motion files), the first one starts the speech.
+  load(payload) { return loadPayload(this, payload); }
 
   // ---- internals -----------------------------------------------------------------------------------------
   _setState(s) { if (this.element.dataset.state !== s) this.element.dataset.state = s; }

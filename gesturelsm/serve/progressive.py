@@ -1,0 +1,113 @@
+"""One request's result as it grows, for the page that shows each method the moment its motion exists.
+
+`stream_request(service, req)` yields `Result`s: the first once the speech is prepared (no motion yet, every method
+`pending`), then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
+far in the page's order, their timing rows and notes; the last is what `GestureService.run` returns before the video
+and the downloads. A method that fails does not stop the others: the result names it in `failed` (method -> the
+visitor's line) and in a note; only when no method is made is its error raised. A failure that is not one of the
+errors a visitor can fix (a `GestureError`) is logged with its traceback and shown as a failure on the server.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from typing import Iterator
+
+import numpy as np
+
+from ..constants import Progress
+from ..errors import GestureError, InputError
+from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
+from .request import METHOD_LABELS, RenderJob, Request, Result, timing_rows
+
+log = logging.getLogger("gesturelsm.app")
+
+
+class MethodFailed(GestureError):
+    """Every method of a request failed on the server; the message names them."""
+
+
+def slot_label(method: str, plan: Plan) -> str:
+    """The label a method's body carries on the page and in the video."""
+    if method == GROUND_TRUTH:
+        return "Ground truth (BEAT2)"
+    return f"{METHOD_LABELS.get(method, method)} {plan.steps_for(method)} steps CFG {plan.cfg:g}"
+
+
+def failure(method: str, exc: Exception) -> str:
+    """The visitor's line for a method that failed: its message when it is one meant for them, else a server fault
+    (logged with its traceback)."""
+    if isinstance(exc, GestureError):
+        return str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    log.error("generating %s failed", method, exc_info=exc)
+    return "it failed on the server"
+
+
+class Growing:
+    """The made methods of one request and the `Result` they add up to so far."""
+
+    def __init__(self, plan: Plan, speech: SpeechInput, notes: list[str], folder, size: int, started: float):
+        self.plan, self.speech, self.notes, self.folder, self.size = plan, speech, notes, folder, size
+        self.started = started
+        self.slots = plan.generators + [GROUND_TRUTH] * (GROUND_TRUTH in plan.methods)
+        self.made: dict[str, Made] = {}
+        self.failed: dict[str, str] = {}
+        self.ready_s = 0.0
+
+    def add(self, x: Made) -> None:
+        self.made[x.method] = x
+        if x.error is not None:
+            self.failed[x.method] = failure(x.method, x.error)
+        elif x.motion is None:                              # the ground truth of a speech that is not a BEAT2 take
+            self.slots.remove(x.method)
+        self.ready_s = time.perf_counter() - self.started
+
+    def result(self) -> Result:
+        made = {m: self.made[m] for m in self.slots if m in self.made and self.made[m].motion is not None}
+        motions = {m: x.motion for m, x in made.items()}
+        gens = {m: x.result for m, x in made.items() if x.result is not None}
+        labels = [slot_label(m, self.plan) for m in motions]
+        gen_s = [gens[m].generation_seconds if m in gens else None for m in motions]
+        sp = self.speech
+        job = RenderJob(self.folder, tuple(motions.values()), tuple(labels), tuple(gen_s), sp.audio, sp.duration,
+                        self.size, self.started)
+        has_gt = GROUND_TRUTH in motions
+        rows, timings = timing_rows({m: dict(r.timings) for m, r in gens.items()}, has_gt, sp.duration, 0.0,
+                                    self.ready_s)
+        warnings = list(sp.warnings)
+        for x in self.made.values():
+            warnings += [w for w in x.warnings if w not in warnings]
+        warnings += [f"{METHOD_LABELS.get(m, m)}: {self.failed[m]}" for m in self.slots if m in self.failed]
+        warnings += self.notes
+        take = self.made[GROUND_TRUTH].take if has_gt else None
+        pending = tuple(m for m in self.slots if m not in self.made)
+        return Result(None, rows, (), None, sp.text_mode, tuple(warnings), take, self.ready_s, self.ready_s, timings,
+                      motions, sp.transcript, job, pending=pending,
+                      failed={m: self.failed[m] for m in self.slots if m in self.failed},
+                      slots=tuple((m, slot_label(m, self.plan)) for m in self.slots))
+
+
+def stream_request(service, req: Request, progress: Progress | None = None,
+                   audio: np.ndarray | None = None) -> Iterator[Result]:
+    """The request's result after the speech is prepared and after each method (module docstring); `service` is the
+    `GestureService` whose checks, prepared speech, pipeline and request folders it uses."""
+    started = time.perf_counter()
+    prog = progress or (lambda f, m: None)
+    service.cleanup()
+    plan, speech, notes = service._speech(req, audio, prog)
+    grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
+    each = service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
+                                          keep_going=True)
+    if GROUND_TRUTH not in plan.methods:             # else the take's lookup comes first and settles its slot
+        yield grow.result()
+    for x in each:
+        grow.add(x)
+        yield grow.result()
+    if not grow.result().motions:
+        errors = [x.error for x in grow.made.values() if x.error is not None]
+        if len(errors) == 1 and isinstance(errors[0], GestureError):
+            raise errors[0]
+        if errors:
+            raise MethodFailed("; ".join(f"{METHOD_LABELS.get(m, m)}: {grow.failed[m]}" for m in grow.slots
+                                         if m in grow.failed))
+        raise InputError("Nothing to show: choose a generator method.")

@@ -1,0 +1,85 @@
+// The page's payloads (gesturelsm/webapp/player/component.py `payload`): one request arrives in parts. The first
+// payload of a request (a new `id`) names the speech and one slot per method; every later one is the same request
+// with more of it done: a body entry gains `motion` (its motion file's URL) when the method finishes, or `error`
+// when it failed. Each body joins the running clock the moment its motion is decoded (MotionPlayer.join: nothing
+// restarts); the first one starts the speech from its beginning. On the visitor's character (payload.character) a
+// method's frames come inside the payload (character.methods, there whenever its body has `motion`), and its
+// motion file is drawn only if the character cannot be loaded.
+// With measuring on (measure.js) the element's data-marks holds, in ms from the first payload: bodies (slots
+// built), motion (first motion decoded), play (first body moving, the speech playing), all (every slot moving).
+import { decodeMotion } from './motion_decoder.js';
+
+function fetchRecord(url) {
+  return fetch(url).then((r) => {
+    if (!r.ok) throw new Error(`${url}: HTTP ${r.status}`);
+    return r.arrayBuffer();
+  }).then((buf) => decodeMotion(buf, url));
+}
+
+// A new request: the speech starts loading, the slots are built (the bodies ready at once join straight away).
+function begin(p, payload) {
+  const req = { id: payload.id, joined: new Set(), failed: new Set(), marks: p.measure ? { start: performance.now() } : null };
+  p.request = req;
+  p.payload = payload;
+  delete p.element.dataset.error; delete p.element.dataset.characterError;
+  p.pause();
+  p.clock = null;                                    // no clock until a body moves: data-state stays loading
+  p.audio.src = payload.audio || '';                 // the speech loads while the methods are generated
+  const specs = payload.bodies.map((b) => ({ ...b, pending: true }));
+  req.slots = p.setBodies(specs, payload.fps, payload.character).then((ok) => {
+    if (ok && req.marks) req.marks.bodies = performance.now() - req.marks.start;
+    return ok;
+  });
+  return req;
+}
+
+async function start(p, req) {
+  p.audio.currentTime = 0;
+  p.attachClock(p.audio);
+  await p.play();
+  if (req.marks && p.measure) {
+    req.marks.play = performance.now() - req.marks.start;
+    p.marks = req.marks;
+    p.element.dataset.marks = JSON.stringify(req.marks);
+  }
+}
+
+function allIn(p, req) {
+  if (!req.marks || !p.measure || req.joined.size + req.failed.size < p.payload.bodies.length) return;
+  req.marks.all = performance.now() - req.marks.start;
+  p.element.dataset.marks = JSON.stringify(req.marks);
+}
+
+// Body i of the request: its motion fetched and decoded (not on the character), then it joins.
+async function arrive(p, req, payload, i) {
+  const b = payload.bodies[i];
+  const record = await fetchRecord(b.motion);              // drawn unless the character is on screen
+  if (!(await req.slots) || p.request !== req) return;       // a newer request replaced this one
+  if (req.marks && req.marks.motion === undefined) req.marks.motion = performance.now() - req.marks.start;
+  p.join(i, record, payload.character);
+  if (req.joined.size === 0) { req.joined.add(i); await start(p, req); } else req.joined.add(i);
+  allIn(p, req);
+}
+
+export async function loadPayload(p, payload) {
+  let req = p.request;
+  if (!req || req.id !== payload.id || !payload.id) req = begin(p, payload);
+  p.payload = payload;
+  const pending = [];
+  payload.bodies.forEach((b, i) => {
+    if (req.joined.has(i) || req.failed.has(i) || (req.asked && req.asked.has(i))) return;
+    if (b.error) {
+      req.failed.add(i);
+      req.slots.then((ok) => { if (ok && p.request === req) { p.fail(i, b.error); allIn(p, req); } });
+    } else if (b.motion) {
+      (req.asked = req.asked || new Set()).add(i);
+      pending.push(arrive(p, req, payload, i));
+    }
+  });
+  try {
+    await Promise.all(pending);
+  } catch (e) {
+    p.element.dataset.error = String(e.message || e);
+    throw e;
+  }
+}
