@@ -1,0 +1,115 @@
+"""Bodies that join a running clock (gesturelsm/webapp/player/src/progressive.js, MotionPlayer.join / fail), in
+headless Chromium on the player bundle alone (no app): the page's payload for one request arrives again as its
+methods finish; the first body starts the speech, a later one joins at the current time (the speech does not restart
+or jump, every body shows the frame of the same speech position), a failed method says why while the others play.
+Skips, saying why, without chromium or the player bundle (scripts/setup.sh builds it with npm)."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from _support import CHROMIUM
+
+pytestmark = pytest.mark.browser
+T = 300                                     # 10 s at 30 fps
+
+
+def _files(tmp_path) -> tuple[dict, list[np.ndarray]]:
+    import soundfile as sf
+
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.export.motion_codec import encode
+    from gesturelsm.export.player_payload import body_glb, motion_record
+    from gesturelsm.motion.sequence import MotionSequence
+    from gesturelsm.webapp.player.component import BUNDLE
+
+    body = resolve_body(None)
+    rng = np.random.default_rng(5)
+    files = {"/index.html": (b'<!doctype html><div id="p"></div>', "text/html"),
+             "/player.js": (BUNDLE.read_bytes(), "text/javascript"),
+             "/body.glb": (body_glb(body, None, tmp_path).read_bytes(), "model/gltf-binary")}
+    wav = io.BytesIO()
+    sf.write(wav, (0.2 * np.sin(np.arange(16000 * T // 30) * 0.05)).astype(np.float32), 16000, format="WAV")
+    files["/speech.wav"] = (wav.getvalue(), "audio/wav")
+    rotations = []
+    for k in range(2):                      # two different smooth motions
+        t = np.linspace(0, 6, T)[:, None]
+        poses = 0.3 * np.sin(t * (1 + k) + rng.uniform(0, 6, (1, 165)))
+        seq = MotionSequence(poses.astype(np.float32), np.zeros((T, 3), np.float32), np.zeros((T, 100), np.float32))
+        rec = motion_record(seq, body)
+        files[f"/m{k}.bin"] = (encode(rec), "application/octet-stream")
+        rotations.append(rec.rotations)
+    return files, rotations
+
+
+def _payload(motions: list) -> dict:
+    bodies = [{"label": f"{['Alpha', 'Beta'][k]} 8 steps CFG 2", "method": f"m{k}", "body": "/body.glb", "motion": mo,
+               "expressions": 0} for k, mo in enumerate(motions)]
+    bodies.append({"label": "Broken 8 steps CFG 2", "method": "broken", "body": "/body.glb", "motion": None,
+                   "expressions": 0, **({"error": "it failed on the server"} if len(motions) > 1 and motions[1]
+                                        else {})})
+    return {"id": "req-1", "fps": 30, "frames": T, "duration": T / 30, "audio": "/speech.wav", "bodies": bodies}
+
+
+STATE = """() => { const p = window.player, e = p.element;
+    return {state: e.dataset.state, bodies: Number(e.dataset.bodies), failed: e.dataset.failed || null,
+            t: p.clock ? p.clock.currentTime : null, frame: Number(e.dataset.frame),
+            labels: [...e.querySelectorAll('.mp-label')].map((l) => l.textContent)}; }"""
+
+
+def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
+    from playwright.sync_api import sync_playwright
+
+    from app.screenshot import CHROMIUM_ARGS
+    from gesturelsm.webapp.player.component import BUNDLE
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    files, rotations = _files(tmp_path)
+
+    def serve(route):
+        body, kind = files[route.request.url.split("player.test", 1)[1].split("?")[0]]
+        route.fulfill(status=200, body=body, content_type=kind)
+
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            page.route("http://player.test/**", serve)
+            page.goto("http://player.test/index.html")
+            page.evaluate("""async () => { const m = await import('/player.js');
+                window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
+            page.evaluate("(p) => { window.player.load(p); }", _payload([None, None]))    # speech and slots only
+            page.wait_for_timeout(500)
+            first = page.evaluate(STATE)
+            assert (first["state"], first["bodies"]) == ("loading", 0)
+            assert "generating" in first["labels"][0] and "generating" in first["labels"][2]
+            page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", None]))
+            page.wait_for_function("() => window.player.element.dataset.state === 'playing'", timeout=30000)
+            page.wait_for_function("() => window.player.clock.currentTime > 1.0", timeout=30000)
+            before = page.evaluate(STATE)
+            assert before["bodies"] == 1 and before["failed"] is None
+            page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", "/m1.bin"]))   # and one fails
+            page.wait_for_function("() => window.player.element.dataset.bodies === '2'", timeout=30000)
+            joined = page.evaluate(STATE)
+            assert joined["t"] >= before["t"] and joined["state"] == "playing"        # nothing restarted
+            assert joined["failed"] == "1" and joined["labels"][2].endswith("failed: it failed on the server")
+            assert "generating" not in " ".join(joined["labels"])
+            page.evaluate("() => window.player.pause()")
+            page.wait_for_function("""() => { const p = window.player;
+                return p.element.dataset.state === 'paused'
+                  && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                                   timeout=10000)
+            end = page.evaluate(STATE)
+            shown = [np.asarray(page.evaluate(f"() => window.player.jointRotations({k})")) for k in range(2)]
+        finally:
+            browser.close()
+    f = end["frame"]
+    assert f >= int(before["t"] * 30) and f > 30                # the same speech position, well past the start
+    for k in range(2):                                          # both bodies show that frame of their own motion
+        np.testing.assert_allclose(shown[k], rotations[k][f], atol=1e-6)
+    assert np.abs(shown[0] - shown[1]).max() > 1e-3
