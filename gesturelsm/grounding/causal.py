@@ -208,8 +208,9 @@ class StreamGrounder:
 
     # ---- the legs -------------------------------------------------------------------------------------------
     def _solve(self, local: np.ndarray, pose: Posed, plan: Plan, lengths: np.ndarray, dy: np.ndarray) -> np.ndarray:
-        """The legs' local rotations reaching their targets (two-bone IK); frames where a foot has neither a plant
-        to hold it nor a residual or a step lift keep that leg's input rotations."""
+        """The legs' local rotations reaching their targets (two-bone IK), never below the floor; frames where a
+        foot has neither a plant to hold it, a residual, a step's lift nor the floor to keep it up keep that leg's
+        input rotations."""
         rig, s = self.rig, self.settings
         out = local.copy()
         for f, leg in enumerate(rig.legs):
@@ -221,8 +222,10 @@ class StreamGrounder:
                                     target[:, 1]) + plan.lift[:, f]
             R = slerp(pose.R[:, leg.ankle], plan.heading[:, f], plan.weight[:, f])
             toe_y = (R @ rig.toe_offset(leg))[:, 1]
-            target[:, 1] = np.maximum(target[:, 1], s.floor + np.maximum(rig.ankle_height, rig.toe_height - toe_y))
-            act = (plan.weight[:, f] > 0) | (np.abs(plan.residual[:, f]).max(1) > 0) | (plan.lift[:, f] > 0)
+            lowest = s.floor + np.maximum(rig.ankle_height, rig.toe_height - toe_y)
+            sinks = target[:, 1] < lowest
+            target[:, 1] = np.maximum(target[:, 1], lowest)
+            act = (plan.weight[:, f] > 0) | (np.abs(plan.residual[:, f]).max(1) > 0) | (plan.lift[:, f] > 0) | sinks
             if not act.any():
                 continue
             i = np.flatnonzero(act)
