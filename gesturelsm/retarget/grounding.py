@@ -12,10 +12,10 @@ forward +z) divided by the retargeting's scale (character units per SMPL-X metre
 the same on a character of any size or unit; joints between two of those bones turn with the upper one, as
 retargeting moves them. Its floor: y = 0 of the character's world when its rest pose's lowest foot joint stands on
 it (VRM's convention; up to a quarter of its leg above it), else that joint's height less SMPL-X's (that joint's
-height above the sole, as a share of the leg). The root's horizontal path is the retargeted one (the SMPL-X motion's, which
-had its drift removed when it was grounded); only the legs and the root's height change. The hip, knee and ankle
-bones' rotations change and every bone under them turns with them; every other bone's local rotation is the
-retargeted one, bit for bit.
+height above the sole, as a share of the leg). The root's horizontal path is the retargeted one (the SMPL-X
+motion's, which had its drift removed when it was grounded); only the legs and the root's height change. The hip,
+knee and ankle bones' rotations change and every bone under them turns with them; every other bone's local rotation
+is the retargeted one, bit for bit.
 """
 from __future__ import annotations
 
@@ -23,9 +23,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..body.model import resolve_body
 from ..grounding import Grounded, GroundingSettings, Leg, LegRig, ground_legs
 from ..grounding.causal import StreamGrounder
-from .solve import Retargeted, Setup, assemble, rest_rooted
+from .errors import CharacterError
+from .solve import Retargeted, Setup, SourceBody, assemble, prepare, rest_rooted
 
 SETTINGS = GroundingSettings(drift=None)       # the path is the (grounded) SMPL-X motion's; the legs are regrounded
 ANKLE_SHARE = 0.087                            # SMPL-X's ankle joint above its sole, share of the leg (hip to ankle)
@@ -48,7 +50,8 @@ def character_legs(setup: Setup) -> CharacterLegs | str:
     bones = skel.bones
     joints, legs = [bones["pelvis"]], []
     for side in SIDES:
-        names = [f"{side}_{n}" for n in ("hip", "knee", "ankle")] + ([f"{side}_foot"] if f"{side}_foot" in bones else [])
+        names = [f"{side}_{n}" for n in ("hip", "knee", "ankle")]
+        names += [f"{side}_foot"] if f"{side}_foot" in bones else []
         k = len(joints)
         joints += [bones[n] for n in names]
         legs.append(Leg(k, k + 1, k + 2, k + 3 if len(names) == 4 else k + 2))
@@ -124,6 +127,16 @@ def from_rig(setup: Setup, legs: CharacterLegs, r: Retargeted, g: Grounded) -> R
     return out
 
 
+def leg_problem(skel, body=None) -> str | None:
+    """The one line a person reads when this skeleton's legs cannot be grounded (retargeted from `body`, the
+    mannequin by default), else None."""
+    try:
+        legs = character_legs(prepare(skel, SourceBody.of(resolve_body(body))))
+    except CharacterError:                      # a skeleton retargeting refuses says so itself when it is used
+        return None
+    return _note(skel, legs) if isinstance(legs, str) else None
+
+
 def _note(skel, why: str) -> str:
     return f"{skel.source or 'the character'}: its legs cannot be grounded ({why}); they move as retargeted"
 
@@ -163,4 +176,5 @@ class CharacterStreamGrounder:
         return from_rig(self.setup, self.legs, r, g)
 
 
-__all__ = ["CharacterLegs", "CharacterStreamGrounder", "character_legs", "from_rig", "ground_retargeted", "to_rig"]
+__all__ = ["CharacterLegs", "CharacterStreamGrounder", "character_legs", "from_rig", "ground_retargeted", "leg_problem",
+           "to_rig"]
