@@ -26,8 +26,10 @@ import numpy as np
 from ..body.model import resolve_body
 from ..grounding import Grounded, GroundingSettings, Leg, LegRig, ground_legs
 from ..grounding.causal import StreamGrounder
+from ..motion.skeleton import JOINT_NAMES, PARENTS
 from .errors import CharacterError
-from .solve import Retargeted, Setup, SourceBody, assemble, prepare, rest_rooted
+from .solve import (Retargeted, Setup, SourceBody, local_rotations, moving_joints, prepare, rest_rooted,
+                    root_translation)
 
 SETTINGS = GroundingSettings(drift=None)       # the path is the (grounded) SMPL-X motion's; the legs are regrounded
 ANKLE_SHARE = 0.087                            # SMPL-X's ankle joint above its sole, share of the leg (hip to ankle)
@@ -121,9 +123,23 @@ def from_rig(setup: Setup, legs: CharacterLegs, r: Retargeted, g: Grounded) -> R
     hips = legs.joints[0]
     target = g.root * legs.scale + np.array([0.0, legs.floor, 0.0])
     pos[:, setup.below] += (target - pos[:, hips])[:, None]
-    out = assemble(setup, delta, pos, r.fps, r.ground)
-    keep = np.flatnonzero(anc < 0)                     # bones above and beside the legs: the retargeted rotations
-    out.local_rotation[:, keep] = r.local_rotation[:, keep]
+    local = r.local_rotation.copy()                    # bones above and beside the legs: the retargeted rotations
+    moved = np.intersect1d(moving_joints(setup), np.flatnonzero(anc >= 0))
+    local[:, moved] = local_rotations(setup, delta, moved)
+    pos_w = pos @ setup.A
+    return replace(r, aligned_delta=delta, positions=pos_w, local_rotation=local,
+                   root_translation=root_translation(setup, pos_w), note=None)
+
+
+def smplx_joints(r: Retargeted) -> np.ndarray:
+    """(T, 55, 3) the character's own joints in SMPL-X's order and axes (left +x, up +y, forward +z; the
+    character's units), for measures written for SMPL-X joints (metrics/feet.py, metrics/amplitude.py): each SMPL-X
+    joint is the humanoid bone mapped to it, or (when the character has none) its nearest mapped ancestor's."""
+    P = r.positions @ r.align.T
+    out = np.empty((r.num_frames, len(PARENTS), 3))
+    for j, name in enumerate(JOINT_NAMES):                       # parents come first in SMPL-X's order
+        i = r.skeleton.bones.get(name)
+        out[:, j] = P[:, i] if i is not None else out[:, max(PARENTS[j], 0)]
     return out
 
 
@@ -177,4 +193,4 @@ class CharacterStreamGrounder:
 
 
 __all__ = ["CharacterLegs", "CharacterStreamGrounder", "character_legs", "from_rig", "ground_retargeted", "leg_problem",
-           "to_rig"]
+           "smplx_joints", "to_rig"]

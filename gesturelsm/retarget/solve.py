@@ -322,16 +322,32 @@ def assemble(setup: Setup, delta: np.ndarray, pos: np.ndarray, fps: int, ground:
     skel, A = setup.skel, setup.A
     T, N = delta.shape[:2]
     hips = skel.bones["pelvis"]
-    # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
-    # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
-    V, Vbase = A @ setup.W, setup.Vbase
-    moving = np.array(sorted(set(skel.bones.values()) | {hips}))
-    par = skel.parents[moving]
+    local = np.empty((T, N, 3, 3))
+    local[:] = skel.rotation                     # joints that are no humanoid bone keep their rest rotation
+    moving = moving_joints(setup)
+    local[:, moving] = local_rotations(setup, delta, moving)
+    pos_w = pos @ A
+    return Retargeted(skel, fps, delta, pos_w, local, hips, root_translation(setup, pos_w), A, float(setup.scale),
+                      ground)
+
+
+def moving_joints(setup: Setup) -> np.ndarray:
+    """The joints whose local rotation moves: the humanoid bones and the hips."""
+    return np.array(sorted(set(setup.skel.bones.values()) | {setup.skel.bones["pelvis"]}))
+
+
+def local_rotations(setup: Setup, delta: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """(T, len(joints), 3, 3) local rotations of `joints` in their file's convention, from the aligned rotations
+    relative to rest `delta` (T, N, 3, 3): L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the
+    aligned rest rotations."""
+    V, Vbase = setup.A @ setup.W, setup.Vbase
+    par = setup.skel.parents[joints]
     Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
     dp = np.where((par >= 0)[None, :, None, None], delta[:, np.maximum(par, 0)], np.eye(3))
-    local = np.empty((T, N, 3, 3))
-    local[:] = skel.rotation
-    local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
-    pos_w = pos @ A
-    root_t = (setup.to_parent @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
-    return Retargeted(skel, fps, delta, pos_w, local, hips, root_t, A, float(setup.scale), ground)
+    return np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, joints]) @ V[joints]
+
+
+def root_translation(setup: Setup, pos_w: np.ndarray) -> np.ndarray:
+    """(T, 3) the hips' local translation for world joint positions `pos_w` (T, N, 3)."""
+    hips = pos_w[:, setup.skel.bones["pelvis"]]
+    return (setup.to_parent @ np.concatenate([hips, np.ones((len(hips), 1))], 1).T).T[:, :3]
