@@ -5,8 +5,9 @@ so a foot hovering at one threshold does not flicker.
 - `ContactDetector`: the causal state machine, one frame at a time (live mode); its state lags the foot by
   `frames_on` / `frames_off` frames.
 - `detect_contacts`: the same machine over a whole take at once (vectorised, equal to running the detector), then,
-  knowing the future, each contact is moved back to when its foot really landed and lifted, gaps shorter than
-  `min_gap` are closed and contacts shorter than `min_contact` dropped.
+  knowing the future, each contact is moved back to when its foot really landed (first low and slow) and lifted
+  (last low and slow before it rose), gaps shorter than `min_gap` are closed and contacts shorter than
+  `min_contact` dropped.
 
 Heights are the foot's lowest point above the supporting floor (m), speeds its horizontal speed (m/s), per frame and
 foot: (T, F) arrays.
@@ -85,12 +86,14 @@ def detect_contacts(height: np.ndarray, speed: np.ndarray, params: ContactParams
     p = params
     state = causal_contacts(height, speed, p)
     T, F = state.shape
+    low = (np.asarray(height, np.float64) < p.height_on) & (np.asarray(speed, np.float64) < p.speed_on)
     out = np.zeros_like(state)
     for f in range(F):
         runs = []
         for a, b in segments(state[:, f]):
             a = max(0, a - (p.frames_on - 1))                           # it landed when it first got low and slow
-            b = b - (p.frames_off - 1) if b < T else b                  # ... and lifted when it first got high or fast
+            if b < T:                                                   # ... and lifted after it last was
+                b = a + 1 + int(np.flatnonzero(low[a:b, f])[-1]) if low[a:b, f].any() else b
             if runs and a - runs[-1][1] < p.min_gap:
                 runs[-1] = (runs[-1][0], b)
             elif b > a:

@@ -32,13 +32,17 @@ def pole(seconds: float, fps: int = FPS) -> float:
 
 
 def smooth(x: np.ndarray, seconds: float, fps: int = FPS) -> np.ndarray:
-    """Zero-phase one-pole low-pass of x (T, ...) along time; edges extended by odd reflection (a trend continues)."""
+    """Zero-phase one-pole low-pass of x (T, ...) along time: a straight line through the first and last samples
+    passes unchanged (a steady trend has no lag and no edge effect), the rest is filtered forward and backward with
+    its edges extended by odd reflection."""
     x = np.asarray(x, np.float64)
     if seconds <= 0 or len(x) < 2:
         return x.copy()
     a = pole(seconds, fps)
-    pad = int(min(len(x) - 1, 3 * seconds * fps))
-    return filtfilt([1 - a], [1.0, -a], x, axis=0, padtype="odd" if pad > 0 else None, padlen=pad)
+    pad = int(min(len(x) - 1, 6 * seconds * fps))
+    u = (np.arange(len(x)) / (len(x) - 1)).reshape((-1,) + (1,) * (x.ndim - 1))
+    line = x[:1] + (x[-1:] - x[:1]) * u                     # the line through the ends passes unchanged
+    return line + filtfilt([1 - a], [1.0, -a], x - line, axis=0, padtype="odd" if pad > 0 else None, padlen=pad)
 
 
 class OnePole:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..constants import FPS
-from .contacts import ContactParams, detect_contacts, segments
+from .contacts import ContactParams, detect_contacts
 from .drift import DriftParams, remove_drift, smooth
 from .ik import REACH, two_bone
 from .rig import LegRig, Posed, forward
@@ -132,34 +132,25 @@ def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
     return m - soft * np.log(np.exp(-(a - m) / soft) + np.exp(-(b - m) / soft))
 
 
-def leg_targets(rig: LegRig, feet: Feet, plans: list[FootPlan], stepping: np.ndarray, settings: GroundingSettings,
-                R_ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def leg_targets(rig: LegRig, feet: Feet, plans: list[FootPlan], settings: GroundingSettings, R_ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Ankle positions (T, 2, 3) and ankle world rotations (T, 2, 3, 3) the feet go to (targets.py): held by the
-    plants, else their own path corrected (the horizontal position easing out of and into the plants, the height
-    rising as the foot's own does); lifted in an arc during a step (steps.py); never so low that the ankle or the toe
-    joint is below where a level foot on the floor has them."""
+    plants, else their own path corrected (easing out of and into the plants, the height rising as the foot's own
+    does, lifted at least by the plan's arc when it travels); never so low that the ankle or the toe joint is below
+    where a level foot on the floor has them."""
     pos, rot = np.empty_like(feet.ankle), np.empty(feet.ankle.shape + (3,))
     floor = settings.floor
     for f, (leg, plan) in enumerate(zip(rig.legs, plans)):
         orig = feet.ankle[:, f]
         free = orig + correction(orig, plan.contact, plan.plant, settings.targets)
         w = plan.weight[:, None]
-        target = free.copy()                                  # height: its own lift, carried by the correction
-        target[:, [0, 2]] = (w * plan.plant + (1 - w) * free)[:, [0, 2]]   # ground: eased out of and into plants
-        target[:, 1] += lift_arcs(stepping[:, f], settings.steps.lift)
+        target = free.copy()                                  # height: its own lift, carried by the correction,
+        target[:, 1] = np.maximum(target[:, 1], plan.plant[:, 1] + plan.lift)    # at least clearing the floor
+        target[:, [0, 2]] = (w * plan.plant + (1 - w) * free)[:, [0, 2]]   # eased out of and into the plants
         R = slerp(R_ankle[:, f], plan.heading, plan.weight)
         toe_y = (R @ rig.toe_offset(leg))[:, 1]
         target[:, 1] = np.maximum(target[:, 1], floor + np.maximum(rig.ankle_height, rig.toe_height - toe_y))
         pos[:, f], rot[:, f] = target, R
     return pos, rot
-
-
-def lift_arcs(stepping: np.ndarray, lift: float) -> np.ndarray:
-    """(T,) a half-sine lift over each run of step frames."""
-    out = np.zeros(len(stepping))
-    for a, b in segments(stepping):
-        out[a:b] = lift * np.sin(np.pi * (np.arange(a, b) - a + 1) / (b - a + 1))
-    return out
 
 
 def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: GroundingSettings = GroundingSettings(),
@@ -183,9 +174,10 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     if idle.note:
         return idle
     feet = measure_feet(rig, pose, settings.floor, fps)
-    contacts = detect_contacts(feet.sole - feet.sole.min(1, keepdims=True), feet.speed, settings.contacts)
+    relative = feet.sole - feet.sole.min(1, keepdims=True)              # above the foot the body stands on
+    contacts = detect_contacts(relative, feet.speed, settings.contacts)
     hips = pose.p[:, [leg.hip for leg in rig.legs]][..., [0, 2]]
-    contacts, stepping = plan_steps(feet.ankle[..., [0, 2]], hips, contacts, settings.steps)
+    contacts = plan_steps(feet.ankle[..., [0, 2]], hips, contacts, settings.steps)
     if not contacts.any():
         idle.note = "no foot stays on the ground long enough to plant it"
         return idle
@@ -198,7 +190,7 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     root[:, 1] += dy
     pose.p[:, list(rig.chain), 1] += dy[:, None]
     feet = measure_feet(rig, pose, settings.floor, fps)
-    pos, rot = leg_targets(rig, feet, plans, stepping, settings, R_ankle)
+    pos, rot = leg_targets(rig, feet, plans, settings, R_ankle)
     out = local.copy()
     for f, leg in enumerate(rig.legs):
         sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],
@@ -207,7 +199,7 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
         out[:, leg.hip] = np.swapaxes(parent, -1, -2) @ sol.R_hip
         out[:, leg.knee] = np.swapaxes(sol.R_hip, -1, -2) @ sol.R_knee
         out[:, leg.ankle] = np.swapaxes(sol.R_knee, -1, -2) @ rot[:, f]
-    return Grounded(out, root, contacts)
+    return Grounded(out, root, np.stack([plan.contact for plan in plans], 1))
 
 
 __all__ = ["Feet", "Grounded", "GroundingSettings", "ground_legs", "measure_feet"]
