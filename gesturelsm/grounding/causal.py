@@ -50,6 +50,8 @@ class FootState:
     residual: np.ndarray = field(default_factory=lambda: np.zeros(3))   # shown - own ankle when the phase began
     shown: np.ndarray | None = None         # (3,) the last frame's ankle target
     step_frame: int = -1                    # frames into the current step (-1: not stepping)
+    step_frames: int = 0                    # how long the current step is in the air
+    step_height: float = 0.0                # how high its arc lifts the foot (m)
 
 
 @dataclass
@@ -130,10 +132,10 @@ class StreamGrounder:
         plan = Plan(np.zeros((T, F)), feet.ankle.copy(), R_ankle.copy(), np.zeros((T, F), bool), np.zeros((T, F, 3)),
                     np.zeros((T, F)))
         contacts = np.zeros((T, F), bool)
-        B, fade, n_step = s.targets.blend_frames, s.targets.fade_frames, s.steps.step_frames
+        B, fade = s.targets.blend_frames, s.targets.fade_frames
         for t in range(T):
             raw = self.detector.step(sole[t], speed[t]) & standing[t]
-            now, stepping = self.steps.step(feet.ankle[t][:, [0, 2]], hips[t], raw)
+            now = self.steps.step(feet.ankle[t][:, [0, 2]], hips[t], raw)
             contacts[t] = now
             for f, (leg, foot) in enumerate(zip(rig.legs, self.feet)):
                 own = feet.ankle[t, f]
@@ -148,13 +150,11 @@ class StreamGrounder:
                 x = (foot.since + 1) / (B + 1)
                 foot.weight = foot.start + (1 - foot.start) * _ease(x) if foot.contact else \
                     foot.start * (1 - _ease(x))
-                foot.step_frame = foot.step_frame + 1 if stepping[f] else -1
+                plan.lift[t, f] = self._lift(foot, self.steps.busy[f], own)
                 r = foot.residual * (1 - _ease((foot.since + 1) / (fade + 1)))
                 plan.weight[t, f], plan.pinned[t, f], plan.residual[t, f] = foot.weight, foot.contact, r
                 if foot.plant is not None:
                     plan.plant[t, f], plan.heading[t, f] = foot.plant, foot.heading
-                if foot.step_frame >= 0:
-                    plan.lift[t, f] = s.steps.lift * np.sin(np.pi * (foot.step_frame + 1) / (n_step + 1))
                 target = own + r
                 if foot.plant is not None:
                     w = foot.weight
@@ -164,6 +164,23 @@ class StreamGrounder:
                         target = w * foot.plant + (1 - w) * target
                 foot.shown = target
         return contacts, plan
+
+    def _lift(self, foot: FootState, busy: int, own: np.ndarray) -> float:
+        """How high a stepping foot is lifted this frame: when `StepPlanner` starts a step (its `busy` frames to go)
+        the foot travels from its plant to where its own motion is, over the step's frames, lifted by an arc (sin^2)
+        as offline (targets.py `clearance`: a share of the distance, at most `max_clearance`, lower for a quick one)."""
+        p = self.settings.targets
+        if foot.step_frame < 0 and busy > 0:                 # a step starts
+            travel = 0.0 if foot.plant is None else float(np.hypot(*(own - foot.plant)[[0, 2]]))
+            foot.step_frame, foot.step_frames = 0, busy + 1
+            quick = p.lift_speed * (foot.step_frames + 1) / (self.fps * np.pi)
+            foot.step_height = min(p.clearance * travel, p.max_clearance, quick)
+        elif 0 <= foot.step_frame < foot.step_frames - 1:
+            foot.step_frame += 1
+        else:
+            foot.step_frame = -1
+            return 0.0
+        return foot.step_height * float(np.sin(np.pi * (foot.step_frame + 1) / (foot.step_frames + 1))) ** 2
 
     def _land(self, foot: FootState, leg, shown: np.ndarray, R_ankle: np.ndarray) -> None:
         """A landing: the plant is where the foot is shown, as high as a level foot on the floor needs."""
@@ -219,7 +236,9 @@ class StreamGrounder:
             free = own + plan.residual[:, f]
             target = np.where(plan.pinned[:, f, None], plan.plant[:, f], w * plan.plant[:, f] + (1 - w) * free)
             target[:, 1] = np.where(plan.pinned[:, f], w[:, 0] * plan.plant[:, f, 1] + (1 - w[:, 0]) * free[:, 1],
-                                    target[:, 1]) + plan.lift[:, f]
+                                    target[:, 1])
+            lifted = plan.lift[:, f] > 0                  # a step: at least clearing the floor by its arc
+            target[lifted, 1] = np.maximum(target[lifted, 1], plan.plant[lifted, f, 1] + plan.lift[lifted, f])
             R = slerp(pose.R[:, leg.ankle], plan.heading[:, f], plan.weight[:, f])
             toe_y = (R @ rig.toe_offset(leg))[:, 1]
             lowest = s.floor + np.maximum(rig.ankle_height, rig.toe_height - toe_y)

@@ -137,19 +137,17 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
 
     try:
         try:
-            first = await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S)
+            sr, token = hello(first := await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
         except asyncio.TimeoutError:
             raise Refused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
-        sr, token = hello(first)
-        grounding = grounding_of(first)
         try:
-            session = manager.open(replace(manager.config, grounding=grounding),
+            session = manager.open(replace(manager.config, grounding=grounding_of(first)),
                                    on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         except LiveBusy as exc:
             await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
             return
         if token is not None:                   # before any motion: the page shows the character from frame 0
-            character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding)
+            character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding_of(first))
             if not await say(ws, encode(MotionRecord(meta=meta))):
                 return
         pusher = asyncio.create_task(push())
