@@ -191,3 +191,11 @@ def test_legs_that_cannot_be_grounded_pass_through_with_one_line(grounded, chara
     np.testing.assert_array_equal(on.local_rotation, off.local_rotation)
     np.testing.assert_array_equal(on.root_translation, off.root_translation)
     assert leg_problem(bad.skeleton) == on.note and leg_problem(character.skeleton) is None
+
+
+def test_a_motion_that_cannot_be_grounded_on_the_character_passes_through(grounded, character, body):
+    seq, _ = grounded
+    one = retarget_motion(seq.slice(0, 1), character, body)
+    assert "1 frame" in one.note
+    np.testing.assert_array_equal(one.local_rotation,
+                                  retarget_motion(seq.slice(0, 1), character, body, grounding=False).local_rotation)
