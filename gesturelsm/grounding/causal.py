@@ -5,7 +5,9 @@ carried over).
 
 What differs from the offline driver (solve.py), which sees the whole take:
 - contacts: `ContactDetector`'s causal state, so a landing is seen `frames_on` frames late and a lift `frames_off`
-  frames late (offline moves both back to where they began); steps: `StepPlanner`, as offline;
+  frames late (offline moves both back to where they began); steps: `StepPlanner`, as offline, a stepping foot
+  lifted over the floor by the offline clearance arc for the step's own length (offline also lifts a foot that
+  travels between two plants of its own motion: that needs the next plant, which a stream has not seen yet);
 - a foot is pinned where it is shown when its landing is seen (so the pin itself does not move it); its height and
   orientation ease onto the floor and level over `blend_frames` after the landing, and the whole foot eases back
   onto its own motion over `blend_frames` after the lift (offline eases in before the landing too);
@@ -55,7 +57,7 @@ class FootState:
 
 
 @dataclass
-class Plan:
+class ChunkPlan:
     """Per frame and foot of one chunk: weight (T, F), plant (T, F, 3), heading (T, F, 3, 3), pinned (T, F): in
     contact (the horizontal position is the plant's), residual (T, F, 3) fading, lift (T, F) of a step's arc."""
     weight: np.ndarray
@@ -111,7 +113,7 @@ class StreamGrounder:
         dy = self._height(pose, plan, lengths, standing)
         root[:, 1] += dy
         pose.p[:, list(self.rig.chain), 1] += dy[:, None]
-        out = self._solve(local, pose, plan, lengths, dy)
+        out = self._solve(local, pose, plan, lengths)
         self.frames += T
         return Grounded(out, root, contacts)
 
@@ -123,14 +125,14 @@ class StreamGrounder:
         leg = np.mean([sum(rig.lengths(leg)) for leg in rig.legs])
         return (hips - ankles) / leg >= self.settings.min_stance
 
-    def _plan(self, feet, pose: Posed, speed: np.ndarray, standing: np.ndarray) -> tuple[np.ndarray, Plan]:
+    def _plan(self, feet, pose: Posed, speed: np.ndarray, standing: np.ndarray) -> tuple[np.ndarray, ChunkPlan]:
         rig, s = self.rig, self.settings
         T, F = speed.shape
         sole = feet.sole - feet.sole.min(1, keepdims=True)
         hips = pose.p[:, [leg.hip for leg in rig.legs]][..., [0, 2]]
         R_ankle = pose.R[:, [leg.ankle for leg in rig.legs]]
-        plan = Plan(np.zeros((T, F)), feet.ankle.copy(), R_ankle.copy(), np.zeros((T, F), bool), np.zeros((T, F, 3)),
-                    np.zeros((T, F)))
+        plan = ChunkPlan(np.zeros((T, F)), feet.ankle.copy(), R_ankle.copy(), np.zeros((T, F), bool),
+                         np.zeros((T, F, 3)), np.zeros((T, F)))
         contacts = np.zeros((T, F), bool)
         B, fade = s.targets.blend_frames, s.targets.fade_frames
         for t in range(T):
@@ -199,7 +201,7 @@ class StreamGrounder:
             out[:, f] = np.minimum(self.reach[f].run(d), sum(self.rig.lengths(leg)) * (1 - 1e-6))
         return out
 
-    def _height(self, pose: Posed, plan: Plan, lengths: np.ndarray, standing: np.ndarray) -> np.ndarray:
+    def _height(self, pose: Posed, plan: ChunkPlan, lengths: np.ndarray, standing: np.ndarray) -> np.ndarray:
         """(T,) what to add to the root's height: as offline (solve.py `height_shift`), the most that lets every
         planted leg reach its plant, a soft minimum over the feet weighted by how planted each is; while no foot
         is fully planted it eases towards the last fully planted value (0 while not standing); low-passed forward
@@ -224,7 +226,7 @@ class StreamGrounder:
         return soft_min(self.height.run(raw), raw, SOFT_CAP)
 
     # ---- the legs -------------------------------------------------------------------------------------------
-    def _solve(self, local: np.ndarray, pose: Posed, plan: Plan, lengths: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    def _solve(self, local: np.ndarray, pose: Posed, plan: ChunkPlan, lengths: np.ndarray) -> np.ndarray:
         """The legs' local rotations reaching their targets (two-bone IK), never below the floor; frames where a
         foot has neither a plant to hold it, a residual, a step's lift nor the floor to keep it up keep that leg's
         input rotations."""
