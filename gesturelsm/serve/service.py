@@ -7,9 +7,9 @@ this.
     out.video, out.rows, out.downloads, out.glb, out.text_mode
 
 One request = load the upload -> prepare the speech once (features, word timings) -> generate per method ->
-post-process (stand in place, smoothing) -> render all methods side by side with the speech -> exports ->
-one timing row per method and stage. Generation and post-processing are the library's one request flow
-(`pipeline.generate_all`, `motion/postprocess.py`); this module adds the upload checks, rendering, exports and
+post-process (stand in place, smoothing, feet on the ground) -> render all methods side by side with the speech ->
+exports -> one timing row per method and stage. Generation and post-processing are the library's one request flow
+(`pipeline.generate_all`, `pipeline.finish`); this module adds the upload checks, rendering, exports and
 the timing table. A request run with `render=False` returns its `Result` at once; `render(result)` and
 `export(result)` then return new results with the video and the downloads (`serve/request.py`). Every problem a
 visitor can fix raises an `errors.GestureError` with a message meant for the page.
@@ -177,7 +177,7 @@ class GestureService:
         plan, speech, notes = self._speech(req, audio, prog)
         out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
         out.mkdir(parents=True)
-        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m))
+        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m), body=self.body)
         if not gen.motions:
             raise InputError("Nothing to show: choose a generator method.")
         labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
