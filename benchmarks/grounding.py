@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/grounding.py [--checkpoints assets] [--methods ...] [--seed 0]
                                             [--plot docs/grounding.png] [--out runs/grounding]
+    .venv/bin/python benchmarks/grounding.py --rig ../shared/assets/characters/cryptovoxels.vrm   # on a character
 
 Speech no training uses (assets/MODEL_CARD.md): BEAT2 2_scott_0_2_2 and 2_scott_0_3_3 (62 s, 68 s; speech and
 TextGrid only), the last 20 % of 2_scott_0_1_1 (12.7 s: its first 80 % trains the shipped models), and, as a
@@ -17,6 +18,11 @@ The bars (the feet issue), each checked per recording: foot skate <= the real ta
 <= 0.3 m/min, range <= 1.5 m, penetration <= 1 cm, bob <= the real take's, leg jerk <= ungrounded + 10 %, raised
 share / wrist height p95 / wrist speed within 2 % of ungrounded. Cost: grounding each take on one core (this process
 pinned to one CPU, torch on one thread), median of `--repeats`, per 60 s of motion.
+
+With `--rig CHARACTER` the same table is measured on the character's own joints: each motion retargeted onto it
+(before: the ungrounded motion as retargeted; after: the grounded motion grounded again on the character's own legs,
+as the page, the videos and the files show it; gesturelsm/retarget/grounding.py), the real take's rows too, in the
+character's units (metres for a VRM / glTF).
 """
 from __future__ import annotations
 
@@ -60,6 +66,44 @@ def measure(seq: MotionSequence) -> dict[str, float]:
     a = amplitude_stats(j)
     return {**feet_stats(j).as_dict(), "raised_share": a.raised_share, "height_p95": a.height_p95,
             "wrist_speed": a.wrist_speed}
+
+
+def on_rig(character, grounding: bool):
+    """`measure` on a character's own joints (gesturelsm/retarget/grounding.py `smplx_joints`, its world units:
+    metres for a glTF / VRM): the motion retargeted onto it, its feet planted on its own legs when `grounding`."""
+    from gesturelsm.retarget import retarget_motion
+    from gesturelsm.retarget.grounding import smplx_joints
+
+    def measure_on(seq: MotionSequence) -> dict[str, float]:
+        r = retarget_motion(seq, character, grounding=grounding)
+        if r.note:
+            print(f"  {r.note}", flush=True)
+        j = smplx_joints(r)
+        a = amplitude_stats(j)
+        return {**feet_stats(j).as_dict(), "raised_share": a.raised_share, "height_p95": a.height_p95,
+                "wrist_speed": a.wrist_speed}
+    return measure_on
+
+
+def rig_stats(runs: list[dict], take: MotionSequence, path: str) -> tuple[tuple[dict, dict], str]:
+    """--rig: every run's before / after measured on the character (before: the ungrounded motion retargeted as it
+    is; after: the grounded motion grounded again on the character's legs, what every output on a character shows),
+    the real take's rows the same way, and a line per method with the foot skate of the grounded motion retargeted
+    without the character's own grounding (what its other leg proportions leave)."""
+    from gesturelsm.retarget import load_character
+
+    character = load_character(path)
+    before, after, smplx_only = on_rig(character, False), on_rig(character, True), {}
+    for r in runs:
+        r["before_stats"], r["after_stats"] = before(r["before"]), after(r["after"])
+        smplx_only.setdefault(r["method"], []).append(before(r["after"])["foot_skate"])
+    grounded = finish(take, grounding=True)[0]
+    real = (before(take), after(grounded))
+    smplx_only["real take"] = [before(grounded)["foot_skate"]]
+    line = (f"On {character.name}, measured on its own joints. Grounded on the SMPL-X body only, its legs as "
+            "retargeted, the foot skate would be: " + ", ".join(f"{m} {np.mean(v):.1f} cm/s"
+                                                                 for m, v in smplx_only.items()) + ".")
+    return real, line
 
 
 def recordings() -> list[tuple[str, np.ndarray, list | None]]:
@@ -215,6 +259,8 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--plot", default=None, help="write the top-down trace of the first method's first recording here")
     ap.add_argument("--out", default=None, help="folder for grounding.md")
+    ap.add_argument("--rig", default=None, help="measure on this character's own joints (.vrm / .glb / .gltf / .bvh): "
+                    "the motions retargeted onto it, after = grounded again on its own legs")
     args = ap.parse_args()
     import torch
 
@@ -227,16 +273,21 @@ def main() -> int:
         return 2
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods)
     runs = generate(pipe, args.methods or pipe.methods, args.seed)
-    for r in runs:
-        r["before_stats"], r["after_stats"] = measure(r["before"]), measure(r["after"])
     take = MotionSequence.load(BEAT2 / "smplxflame_30" / f"{TAKE}.npz")
-    real = (measure(take), measure(finish(take, grounding=True)[0]))
+    rig_line = ""
+    if args.rig:
+        real, rig_line = rig_stats(runs, take, args.rig)
+    else:
+        for r in runs:
+            r["before_stats"], r["after_stats"] = measure(r["before"]), measure(r["after"])
+        real = (measure(take), measure(finish(take, grounding=True)[0]))
     long = [r["before"] for r in runs if r["seconds"] >= 30][:4]
     per = np.array([one_core_seconds(seq, args.repeats) for seq in long]) / [[s.duration / 60] for s in long]
     cost = dict(per_minute=float(np.median(per[:, 0])), cpu_per_minute=float(np.median(per[:, 1])),
                 repeats=args.repeats, takes=len(long), cpu=cpu_name(), load=os.getloadavg()[0])
     md = (f"Seed {args.seed}; {len({r['recording'] for r in runs})} recordings x {len(set(r['method'] for r in runs))} "
-          "methods; means over recordings, bars checked on each.\n\n" + table(runs, real, cost))
+          "methods; means over recordings, bars checked on each.\n\n" + table(runs, real, cost)
+          + (f"\n\n{rig_line}" if rig_line else ""))
     print(md)
     if args.out:
         Path(args.out).mkdir(parents=True, exist_ok=True)
