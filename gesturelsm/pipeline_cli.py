@@ -53,7 +53,7 @@ def run_generate(args: argparse.Namespace) -> int:
     motion, note = finish(res.motion, args.stand_in_place, args.smoothing, grounding_on(args))
     path = motion.save(args.out)
     if rig is not None:
-        print(f"wrote {export_rig(motion, rig, path)}")
+        print(f"wrote {export_rig(motion, rig, path, grounding=grounding_on(args))}")
     for w in res.warnings + ([note] if note else []):
         print(f"warning: {w}")
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())

@@ -78,6 +78,7 @@ class RenderJob:
     speech_seconds: float                              # the speech's length (motion frames / 30)
     size: int                                          # pixels per body, square
     started: float                                     # time.perf_counter() at the request's start
+    grounding: bool = True                             # feet on the ground: a character's too, on its own legs
 
 
 @dataclass(frozen=True, eq=False)

@@ -184,7 +184,7 @@ class GestureService:
         labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
         gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
         job = RenderJob(out, tuple(gen.motions.values()), tuple(labels), tuple(gen_s), speech.audio, speech.duration,
-                        int(req.size), t_start)
+                        int(req.size), t_start, plan.grounding)
         motion_s = time.perf_counter() - t_start
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows, timings = timing_rows(timings, gen.ground_truth is not None, speech.duration, 0.0, motion_s)
@@ -219,7 +219,8 @@ class GestureService:
                          body_path=body_path, gen_seconds=list(job.gen_seconds),
                          progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
                          nice=self.settings.render_nice, cancelled=cancelled,
-                         rig=character.path if character is not None and character.document is not None else None)
+                         rig=character.path if character is not None and character.document is not None else None,
+                         grounding=job.grounding)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
         render_s = time.perf_counter() - t_r

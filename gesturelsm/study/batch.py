@@ -165,12 +165,12 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
                 log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
                 continue
             render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
-                         character=rig)
+                         character=rig, grounding=base.grounding)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 
                 export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
+                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.grounding)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
     return done, skipped

@@ -178,7 +178,8 @@ class _Handlers:
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
         files, glb = self._files(out)
-        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body)]
+        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
+                                                out.job.grounding)]
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
