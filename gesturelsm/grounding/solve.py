@@ -37,6 +37,7 @@ class GroundingSettings:
     steps: StepParams = field(default_factory=StepParams)
     level: float = 1.0                                        # how much of a planted foot's tilt goes (1: flat)
     height_seconds: float = 0.3                               # smoothing of the root's height correction
+    bob: float = 0.6                # the root's rises above its median height are scaled by this (1: as the legs have them)
     reach: float = REACH                                      # a planted leg is stretched at most this much
     knee_seconds: float = 0.1                                # smoothing of each leg's hip-to-ankle distance
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
@@ -103,27 +104,37 @@ def leg_lengths(rig: LegRig, pose: Posed, settings: GroundingSettings, fps: int 
     return out
 
 
-def height_shift(rig: LegRig, pose: Posed, feet: Feet, plans: list[FootPlan], lengths: np.ndarray,
-                 settings: GroundingSettings, fps: int = FPS) -> np.ndarray:
-    """(T,) what to add to the root's height: the most that lets every planted leg reach its plant without
-    stretching beyond its own reach (`leg_lengths`: so the highest planted foot lands with its leg as it was and a
-    lower one bends its knee), as a soft minimum over the feet, a foot easing into or out of a plant holding the
-    height by as much as it is planted (so landing and lifting change the height smoothly); interpolated where no
-    foot is planted; smoothed over `height_seconds` and kept (softly) under the reachable height."""
-    T = len(feet.sole)
+def reachable(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray) -> np.ndarray:
+    """(T,) the most the root's height may rise while every planted leg still reaches its plant with at most
+    `lengths` (T, 2) from hip to ankle: a soft minimum over the feet, a foot easing into or out of a plant holding
+    the height by as much as it is planted (landing and lifting change it smoothly); interpolated where no foot is
+    planted."""
+    T = len(lengths)
     w = np.stack([plan.weight for plan in plans], 1)                       # (T, 2)
     s = np.empty((T, len(plans)))
     for f, (leg, plan) in enumerate(zip(rig.legs, plans)):
         hip, plant = pose.p[:, leg.hip], plan.plant
-        length = lengths[:, f]
         dh = np.linalg.norm((plant - hip)[:, [0, 2]], axis=-1)
-        s[:, f] = plant[:, 1] - hip[:, 1] + np.sqrt(np.maximum(length ** 2 - dh ** 2, 0.0))
+        s[:, f] = plant[:, 1] - hip[:, 1] + np.sqrt(np.maximum(lengths[:, f] ** 2 - dh ** 2, 0.0))
     s = w * s + (1 - w) * s.max(1, keepdims=True)          # a foot lifting lets go of the height gradually
     m = s.min(1)
     dy = m - SOFT_MIN * np.log(np.exp(-(s - m[:, None]) / SOFT_MIN).sum(1))
     ok = w.max(1) > 1e-3
-    dy = np.interp(np.arange(T), np.flatnonzero(ok), dy[ok])
-    return soft_min(smooth(dy, settings.height_seconds, fps), dy, SOFT_CAP)
+    return np.interp(np.arange(T), np.flatnonzero(ok), dy[ok])
+
+
+def height_shift(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray, settings: GroundingSettings,
+                 fps: int = FPS) -> np.ndarray:
+    """(T,) what to add to the root's height: where the planted legs, as they were (`leg_lengths`), put it (so the
+    highest planted foot lands with its leg as it was and a lower one bends its knee), smoothed over
+    `height_seconds`, its rises above their median scaled by `bob` (the knees bend a little more there: the body
+    bobs less; never higher than the legs put it), and kept softly under where they reach."""
+    root = pose.p[:, rig.parents.index(-1), 1]
+    reach = reachable(rig, pose, plans, lengths)
+    natural = root + smooth(reach, settings.height_seconds, fps)
+    rise = natural - float(np.median(natural))
+    soft = SOFT_CAP * np.logaddexp(0.0, rise / SOFT_CAP)                 # ~max(rise, 0), smooth
+    return soft_min(natural - (1 - settings.bob) * soft - root, reach, SOFT_CAP)
 
 
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
@@ -186,7 +197,7 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     plans = [plan_foot(feet.ankle[:, f], R_ankle[:, f], contacts[:, f], rig.foot_forward(leg), rig.toe_offset(leg),
                        heights, settings.floor, settings.level, settings.targets) for f, leg in enumerate(rig.legs)]
     lengths = leg_lengths(rig, pose, settings, fps)
-    dy = height_shift(rig, pose, feet, plans, lengths, settings, fps)
+    dy = height_shift(rig, pose, plans, lengths, settings, fps)
     root[:, 1] += dy
     pose.p[:, list(rig.chain), 1] += dy[:, None]
     feet = measure_feet(rig, pose, settings.floor, fps)
