@@ -4,15 +4,33 @@
     .venv/bin/python benchmarks/live_latency.py --seconds 600         # 10 minutes (the real take looped)
     .venv/bin/python benchmarks/live_latency.py --skip-quality --threads 2
     .venv/bin/python benchmarks/live_latency.py --skip-quality --character avatar.vrm   # also on a character
+    .venv/bin/python benchmarks/live_latency.py --skip-quality --grounding on off      # latency with and without
+    .venv/bin/python benchmarks/live_latency.py --skip-paced --skip-quality --feet     # feet of streamed takes
+    .venv/bin/python benchmarks/live_latency.py --skip-quality --chunk-ms 50 --streams 2   # + two sessions at once
+
+Before / after: every run streams the live setting main shipped before (`--before main`, BEFORE below: commit 5,
+look-ahead 1, all final latents held) beside the one measured (LiveConfig's defaults, or --commit ...), in the same
+paced run and through the same quality tables; `--before key=value,...` compares another setting, `--before none`
+measures one. --streams N: N live sessions at once (gesturelsm/live/session.py, a worker thread each, as the Live
+tab runs them), each fed the take at the pace of speech: each one's latency (also in its last quarter: no drift),
+real-time factor and frames behind at the end.
 
 Paced run: a real take (../shared) looped to --seconds, fed in --chunk-ms chunks at the pace of speech (chunk k
-arrives when its last sample would have been spoken). Latency of a chunk = when the motion of all its frames is
-available - its arrival. CPU share = process CPU time / wall time (1.0 = one core busy). Memory: resident set size
+arrives when its last sample would have been spoken; the page's microphone sends 50 ms). Latency of a chunk = when
+the motion of all its frames is available - its arrival. CPU share = process CPU time / wall time (1.0 = one core busy). Memory: resident set size
 sampled each chunk (first minute vs the end). Drift: motion frames available vs audio frames arrived at the end.
 Each motion chunk is also made into the live socket's message (gesturelsm/webapp/live.py `payload`: the page
 player's record); with --character PATH the same chunk is made a second time with the character section (retargeted
 onto the character, gesturelsm/webapp/live_character.py), in the same run, so the two latencies (chunk available +
-its message built) differ only by the character's cost.
+its message built) differ only by the character's cost. Every stream of a run (before and after; with --grounding
+on off each grounded, feet on the ground causally: gesturelsm/grounding/causal.py, and not) is fed the same chunks in
+one loop in an order that rotates chunk by chunk, each stream's latency leaving out the others' work in the same
+step, so their latencies come from the same minutes of the same machine; the grounder's own time per motion chunk is
+timed around it.
+
+Feet (--feet): the two held-out audio-only takes streamed as fast as possible with grounding on and off (same seed),
+measured as metrics/feet.py measures every method (foot skate, contact share, root drift and range, bob, floor
+penetration, leg jerk) with the upper body's gesture space (raised share, p95 wrist height, wrist speed) beside.
 
 Quality (as fast as possible, same seed): the held-out audio-only takes streamed with the live settings vs the
 offline pipeline at the same steps: speech-response tests (metrics.speech_response), upper-body speed and jitter,
@@ -28,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -35,6 +54,7 @@ import numpy as np
 import torch
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "benchmarks"))           # _live_sessions.py
 BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 
 
@@ -43,9 +63,9 @@ def rss_mb() -> float:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
 
 
-def messages(character: str | None):
+def messages(character: str | None, grounding: bool = True):
     """Functions chunk -> the socket's message bytes: the mannequin's record, and (with a character file) the record
-    with the character section; each keeps its stream's state."""
+    with the character section (its feet grounded on its own legs when `grounding`); each keeps its stream's state."""
     from dataclasses import replace
 
     from gesturelsm.body.model import resolve_body
@@ -58,7 +78,7 @@ def messages(character: str | None):
         from gesturelsm.retarget import load_character
         from gesturelsm.webapp.live_character import CharacterStream
 
-        stream = CharacterStream(load_character(character), body)
+        stream = CharacterStream(load_character(character), body, grounding=grounding)
 
         def with_character(mc) -> bytes:
             q, r, w = stream.chunk(mc.motion)
@@ -67,18 +87,36 @@ def messages(character: str | None):
     return out
 
 
-def paced(pipe, audio: np.ndarray, cfgs: dict, chunk_ms: float, character: str | None = None) -> dict:
-    """A paced run of one stream per named setting in `cfgs`, fed the same chunks in one loop, the order of the
-    streams rotating chunk by chunk; a stream's latencies leave out the time the other streams worked in the same
-    step before it (as if it ran alone), while a step that overruns its chunk delays every stream's next one."""
+def live_stream(pipe, cfg, character: str | None) -> dict:
+    """One paced stream's generator (its setting, grounded or not), its message builders and what it measured; the grounder's
+    time per chunk is recorded around its `push`."""
     from gesturelsm.live import StreamingGenerator
+
+    gen = StreamingGenerator(pipe, cfg)
+    make = messages(character, cfg.grounding)
+    st = {"gen": gen, "make": make, "lat": [], "ground_ms": [], "built": {k: [] for k in make}}
+    if gen.grounder is not None:
+        push = gen.grounder.push
+
+        def timed(seq):
+            t = time.perf_counter()
+            out = push(seq)
+            st["ground_ms"].append((time.perf_counter() - t) * 1000)
+            return out
+        gen.grounder.push = timed
+    return st
+
+
+def paced(pipe, audio: np.ndarray, cfgs: dict, chunk_ms: float, character: str | None = None) -> dict:
+    """A paced run of one stream per named live setting of `cfgs` (a setting, grounded or not), fed the same chunks
+    in one loop, the order of
+    the streams rotating chunk by chunk; a stream's latencies leave out the time the other streams worked in the same
+    step before it (as if it ran alone), while a step that overruns its chunk delays every stream's next one."""
     from gesturelsm.constants import SAMPLE_RATE
 
     n = int(round(chunk_ms * SAMPLE_RATE / 1000))
-    names = list(cfgs)
-    streams = {k: {"gen": StreamingGenerator(pipe, c), "make": messages(character), "lat": []} for k, c in cfgs.items()}
-    for st in streams.values():
-        st["built"] = {k: [] for k in st["make"]}                 # per message kind, (ms to build, latencies)
+    modes = tuple(cfgs)
+    streams = {m: live_stream(pipe, c, character) for m, c in cfgs.items()}
     mem = []
     c0, t0 = time.process_time(), time.perf_counter()
     for k, a in enumerate(range(0, len(audio), n)):
@@ -86,8 +124,8 @@ def paced(pipe, audio: np.ndarray, cfgs: dict, chunk_ms: float, character: str |
         arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
         time.sleep(max(0.0, arrival - time.perf_counter()))
         step0 = time.perf_counter()
-        for name in names[k % len(names):] + names[:k % len(names)]:
-            st = streams[name]
+        for m in modes[k % len(modes):] + modes[:k % len(modes)]:
+            st = streams[m]
             waited = time.perf_counter() - step0           # the other streams' work this step: not this stream's
             for mc in st["gen"].feed(chunk, arrival):
                 lat = [x - waited for x in mc.latencies]
@@ -101,76 +139,56 @@ def paced(pipe, audio: np.ndarray, cfgs: dict, chunk_ms: float, character: str |
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     m = np.array(mem)
     first = m[m[:, 0] <= 60, 1]
-    out = {"cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "streams": {},
-           "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max()}
-    for name, st in streams.items():
+    out = {"cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE),
+           "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(), "modes": {}}
+    for mode, st in streams.items():
         gen = st["gen"]
-        out["streams"][name] = {"lat": np.array(st["lat"]), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
-                                "built": st["built"], "frames": gen.emitted, "windows": gen.window,
-                                "compute_ms": 1000 * gen.compute_s / max(gen.window, 1),
-                                "behind_frames": gen.n_in * 30 / SAMPLE_RATE - gen.emitted,   # audio without motion
-                                "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
+        out["modes"][mode] = {"lat": np.array(st["lat"]), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
+                              "ground_ms": np.array(st["ground_ms"]), "built": st["built"], "frames": gen.emitted,
+                              "compute_ms": 1000 * gen.compute_s / max(gen.window, 1),
+                              "behind_frames": gen.n_in * 30 / SAMPLE_RATE - gen.emitted,   # audio without motion
+                              "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
     return out
 
 
 def paced_tables(r: dict, seconds: float, take: str, chunk_ms: float) -> None:
-    """Print the paced run: per setting, side by side; then the run's CPU and memory (all streams)."""
-    names = list(r["streams"])
-    cols = [r["streams"][k] for k in names]
-    print(f"| paced run ({seconds:.0f} s of {take}, {chunk_ms:.0f} ms chunks) | " + " | ".join(names) + " |")
-    print("|---|" + "---|" * len(names))
+    """Print the paced run: per stream (setting, grounded or not), side by side; then the run's CPU and memory (all
+    streams)."""
+    modes = list(r["modes"])
+    cols = [r["modes"][m] for m in modes]
+    print(f"| paced run ({seconds:.0f} s of {take}, {chunk_ms:.0f} ms chunks) | " + " | ".join(modes) + " |")
+    print("|---|" + "---|" * len(modes))
 
-    def row(label, f):
-        print(f"| {label} | " + " | ".join(f(c) for c in cols) + " |")
+    def row(name, f):
+        print(f"| {name} | " + " | ".join(f(c) for c in cols) + " |")
     row("latency median / p90 / max (s)", lambda c: f"**{np.median(c['lat']):.3f}** / "
         f"**{np.percentile(c['lat'], 90):.3f}** / {c['lat'].max():.3f}")
-    row("compute per window (ms)", lambda c: f"{c['compute_ms']:.0f}")
+    row("compute per window (ms, mean)", lambda c: f"{c['compute_ms']:.0f}")
+    row("grounding per motion chunk median / p90 (ms)", lambda c: f"{np.median(c['ground_ms']):.1f} / "
+        f"{np.percentile(c['ground_ms'], 90):.1f}" if len(c["ground_ms"]) else "-")
     row("real-time factor (audio s per compute s)", lambda c: f"{c['rtf']:.2f}")
     row("motion frames behind the audio at the end", lambda c: f"{c['behind_frames']:.0f} ({c['frames']} of "
         f"{c['audio_frames']})")
+    if len(modes) == 2:
+        a, b = (r["modes"][m]["lat"] for m in modes)
+        print(f"| median latency {modes[0]} - {modes[1]} (ms) | {1000 * (np.median(a) - np.median(b)):+.1f} |  |")
     print()
-    print(f"| the whole run ({len(names)} stream{'s' if len(names) > 1 else ''}) | value |")
+    print(f"| the whole run ({len(modes)} stream{'s' if len(modes) > 1 else ''}) | value |")
     print("|---|---|")
     print(f"| CPU share (cores) / CPU seconds per audio second | {r['cpu']:.2f} / {r['cpu_per_audio_s']:.2f} |")
     print(f"| RSS first minute min-max / at end / max (MB) | {r['mem_first_min'][0]:.0f}-{r['mem_first_min'][1]:.0f}"
           f" / {r['mem_end']:.0f} / {r['mem_max']:.0f} |")
     print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
-    print("| setting | socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / "
+    print("| stream | socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / "
           "max (s) |")
     print("|---|---|---|---|")
-    for name, c in zip(names, cols):
+    for mode, c in zip(modes, cols):
         for k, rows in c["built"].items():
             ms = np.array([x for x, _ in rows])
             lat = np.concatenate([x for _, x in rows])
-            print(f"| {name} | {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
+            print(f"| {mode} | {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
                   f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
     print()
-
-
-def simultaneous(pipe, audio: np.ndarray, cfg, streams: int, chunk_ms: float) -> list[dict]:
-    """`streams` live sessions at once, as the server runs them (gesturelsm/live/session.py: a worker thread each),
-    every one fed the same audio at the pace of speech; per session its latencies (the session's own, from each
-    chunk's arrival), real-time factor and how far behind the audio it ended."""
-    from gesturelsm.constants import SAMPLE_RATE
-    from gesturelsm.live.session import LiveManager
-
-    n = int(round(chunk_ms * SAMPLE_RATE / 1000))
-    manager = LiveManager(pipe, max_sessions=streams, config=cfg)
-    sessions = [manager.open() for _ in range(streams)]
-    t0 = time.perf_counter()
-    for a in range(0, len(audio), n):
-        time.sleep(max(0.0, t0 + (a + n) / SAMPLE_RATE - time.perf_counter()))
-        for s in sessions:
-            s.feed(audio[a:a + n])
-    out = []
-    time.sleep(0.5)                                              # the last window's compute
-    for s in sessions:
-        st, g = s.stats(), s.gen
-        lat = np.array(s.latencies)
-        out.append({"lat": lat, "rtf": st["real_time_factor"], "behind_frames": g.n_in * 30 / SAMPLE_RATE - g.emitted,
-                    "dropped": st["dropped_chunks"], "error": st["error"]})
-        s.stop()
-    return out
 
 
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
@@ -229,6 +247,31 @@ def pooled(pipe, cfg, takes: list[str], seeds: int) -> str:
             f"{np.mean([a.height_p95 for a in amps]):.2f} |")
 
 
+def feet_table(pipe, cfg, takes: list[str]) -> None:
+    """Print the feet of streamed takes, grounded causally and not (module docstring)."""
+    from dataclasses import replace
+
+    from gesturelsm.audio import load_audio
+    from gesturelsm.body import load_body_model
+    from gesturelsm.live.cli import run_file
+    from gesturelsm.metrics.amplitude import amplitude_stats
+    from gesturelsm.metrics.feet import feet_stats
+
+    body = load_body_model()
+    print("| take | grounding | foot skate (cm/s) | contact share | drift (m/min) | range (m) | bob (cm) | "
+          "penetration p99 (cm) | leg jerk (m/s^3) | raised | p95 wrist height (m) | wrist speed (m/s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name in takes:
+        y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
+        for on in (False, True):
+            mot = run_file(pipe, y, replace(cfg, grounding=on), 200.0).motion()
+            j = body.joints(mot.poses, mot.trans)
+            f, a = feet_stats(j), amplitude_stats(j)
+            print(f"| {name} | {'on' if on else 'off'} | {f.foot_skate:.1f} | {f.contact_share:.2f} | "
+                  f"{f.drift_per_min:.2f} | {f.root_range:.2f} | {f.bob:.1f} | {f.penetration:.1f} | "
+                  f"{f.leg_jerk:.0f} | {100 * a.raised_share:.1f} % | {a.height_p95:.3f} | {a.wrist_speed:.3f} |")
+
+
 # The live setting main shipped before the half-second work (LiveConfig's values then): `--before main`
 BEFORE = {"commit": 5, "lookahead": 1, "steps": 4, "cfg": 6.0, "decode_context": 16, "held": 0}
 
@@ -260,18 +303,6 @@ def quality_table(pipe, cfgs: dict) -> None:
     print()
 
 
-def simultaneous_table(rows: list[dict], seconds: float, chunk_ms: float) -> None:
-    print(f"| {len(rows)} live sessions at once ({seconds:.0f} s each, {chunk_ms:.0f} ms chunks) | latency median / "
-          "p90 (s) | median, last quarter (s) | real-time factor | frames behind at the end | dropped |")
-    print("|---|---|---|---|---|---|")
-    for i, r in enumerate(rows):
-        lat = r["lat"]
-        print(f"| session {i + 1}{' (' + r['error'] + ')' if r['error'] else ''} | {np.median(lat):.3f} / "
-              f"{np.percentile(lat, 90):.3f} | {np.median(lat[3 * len(lat) // 4:]):.3f} | {r['rtf']:.2f} | "
-              f"{r['behind_frames']:.0f} | {r['dropped']} |")
-    print()
-
-
 TAKES = ["2_scott_0_2_2", "2_scott_0_3_3"]
 
 
@@ -293,6 +324,11 @@ def main() -> None:
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-paced", action="store_true")
     ap.add_argument("--pooled", type=int, default=0, metavar="N", help="also stream both takes with seeds 0..N-1")
+    ap.add_argument("--grounding", nargs="+", choices=("on", "off"), default=["on"],
+                    help="feet on the ground in the paced run: on, off, or `on off` for both streams in one run, "
+                    "interleaved (the latency before and after grounding)")
+    ap.add_argument("--feet", action="store_true", help="also the feet of the two held-out takes, streamed grounded "
+                    "and not")
     ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
                     ".glb, .gltf, .bvh): the latency with and without it")
     args = ap.parse_args()
@@ -316,11 +352,18 @@ def main() -> None:
     take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
     y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
     if not args.skip_paced:
-        paced_tables(paced(pipe, y, cfgs, args.chunk_ms, args.character), args.seconds, args.take, args.chunk_ms)
+        modes = tuple(dict.fromkeys(args.grounding))
+        streams = {(k if len(modes) == 1 else f"{k}, grounding {m}"): replace(c, grounding=m == "on")
+                   for k, c in cfgs.items() for m in modes}
+        paced_tables(paced(pipe, y, streams, args.chunk_ms, args.character), args.seconds, args.take, args.chunk_ms)
     if args.streams:
+        from _live_sessions import simultaneous, simultaneous_table
+
         simultaneous_table(simultaneous(pipe, y, cfg, args.streams, args.chunk_ms), args.seconds, args.chunk_ms)
     if not args.skip_quality:
         quality_table(pipe, cfgs)
+    if args.feet:
+        feet_table(pipe, cfg, TAKES)
     if args.pooled:
         print("| setting | streamed (pooled) | loudness gain, mean | standard error | z | gains > 0 | raised | "
               "p95 wrist height (m) |")

@@ -29,8 +29,10 @@ from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
+from .grounding import ground_motion
 from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
 from .motion.sequence import FPS, MotionSequence
+from .presentation import label
 from .tokenizer.model import RVQVAE
 
 MIN_SECONDS = 0.5
@@ -71,6 +73,7 @@ class Plan:
     smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
+    grounding: bool = True                     # feet on the ground (gesturelsm.grounding), after smoothing
 
     def steps_for(self, method: str) -> int:
         return int(self.steps.get(method, backend_facts(method).default_steps))
@@ -87,6 +90,19 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
+
+
+def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
+           body=None) -> tuple[MotionSequence, str | None]:
+    """The post-processing every method and ground truth get: stand in place, then smoothing (motion/postprocess.py),
+    then feet on the ground (gesturelsm.grounding, on `body`). With stand in place and grounding both on, the root
+    stays on the spot horizontally and the legs plant the feet under it. Returns the motion and, when grounding had
+    to leave it as it was, why (one sentence)."""
+    seq = postprocess(seq, stand_in_place, smoothing)
+    if not grounding:
+        return seq, None
+    res = ground_motion(seq, body)
+    return res.motion, res.warning
 
 
 @dataclass
@@ -260,11 +276,12 @@ class GesturePipeline:
         gens = sorted(plan.generators, key=plan.steps_for)
         return [GROUND_TRUTH] * (GROUND_TRUTH in plan.methods) + gens
 
-    def generate_each(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+    def generate_each(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None, body=None,
                       keep_going: bool = False) -> Iterator[Made]:
         """The plan's methods one by one in `run_order`, each as soon as it is made: fitted to the speech's length
-        and post-processed (stand in place, smoothing). With `keep_going` a method that fails yields its error and
-        the next one is made; otherwise the error is raised."""
+        and post-processed (`finish`: stand in place, smoothing, feet on the ground on `body`, default the mannequin
+        or $GESTURELSM_SMPLX_MODEL). With `keep_going` a method that fails yields its error and the next one is
+        made; otherwise the error is raised."""
         self.check_plan(plan)
         T, order = speech.num_frames, self.run_order(plan)
         for i, m in enumerate(order):
@@ -279,20 +296,22 @@ class GesturePipeline:
                     res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed),
                                         method=m, progress=prog)
                     made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
+                if made.motion is not None:
+                    made.motion, note = finish(made.motion.slice(0, T), plan.stand_in_place, plan.smoothing,
+                                               plan.grounding, body)
+                    made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
             except Exception as exc:  # noqa: BLE001 (the caller reports it with the methods that were made)
                 if not keep_going:
                     raise
-                yield Made(m, None, error=exc)
-                continue
-            if made.motion is not None:
-                made.motion = postprocess(made.motion.slice(0, T), plan.stand_in_place, plan.smoothing)
+                made = Made(m, None, error=exc)
             yield made
 
-    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
+    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+                     body=None) -> Generated:
         """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing); the
-        generators in the plan's order, then the ground truth."""
-        made = {x.method: x for x in self.generate_each(speech, plan, progress)}
+        recognised), each fitted to the speech's length, then post-processed (`finish`, on `body`); the generators in
+        the plan's order, then the ground truth."""
+        made = {x.method: x for x in self.generate_each(speech, plan, progress, body)}
         warnings = list(speech.warnings)
         for x in made.values():
             warnings += [w for w in x.warnings if w not in warnings]
@@ -318,4 +337,4 @@ class GesturePipeline:
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG"]
+           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG", "finish"]

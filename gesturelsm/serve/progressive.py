@@ -70,7 +70,7 @@ class Growing:
         gen_s = [gens[m].generation_seconds if m in gens else None for m in motions]
         sp = self.speech
         job = RenderJob(self.folder, tuple(motions.values()), tuple(labels), tuple(gen_s), sp.audio, sp.duration,
-                        self.size, self.started)
+                        self.size, self.started, self.plan.grounding)
         has_gt = GROUND_TRUTH in motions
         rows, timings = timing_rows({m: dict(r.timings) for m, r in gens.items()}, has_gt, sp.duration, 0.0,
                                     self.ready_s)
@@ -97,7 +97,7 @@ def stream_request(service, req: Request, progress: Progress | None = None,
     plan, speech, notes = service._speech(req, audio, prog)
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
     each = service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
-                                          keep_going=True)
+                                          body=service.body, keep_going=True)
     if GROUND_TRUTH not in plan.methods:             # else the take's lookup comes first and settles its slot
         yield grow.result()
     for x in each:

@@ -87,5 +87,6 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     p["frames"] = p["frames"] or int(round(out.job.speech_seconds * p["fps"]))
     p["duration"] = p["frames"] / p["fps"]
     if character is not None and made:
-        p["character"] = page_character(character, {m: out.motions[m] for m in made}, folder, file_url, service.body)
+        p["character"] = page_character(character, {m: out.motions[m] for m in made}, folder, file_url, service.body,
+                                        out.job.grounding)
     return p
