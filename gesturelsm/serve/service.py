@@ -48,6 +48,7 @@ from .progressive import stream_request
 from .request import METHOD_LABELS, VIDEO_SIZES, Request, Result, ServiceSettings, timing_rows
 
 log = logging.getLogger("gesturelsm.app")
+WARMUP_SECONDS = (1, 4, 8, 15, 30, 60)      # speech lengths the warm-up generates for: 1-16 windows (kernel shapes)
 
 
 # ---- the service -------------------------------------------------------------------------------------------
@@ -75,16 +76,21 @@ class GestureService:
         return gens + (["ground_truth"] if self.settings.beat2 else [])
 
     # ---- housekeeping ----------------------------------------------------------------------------------
-    def warmup(self) -> float:
-        """Load the text encoder and the speech recogniser and run each generator and the recogniser once on 1 s
-        of a tone, so the first visitor does not wait for them (without it the first request for 10 s of speech took
-        2.02 s on the server against 1.41-1.61 s for later ones); returns the seconds it took."""
+    def warmup(self, seconds: tuple[float, ...] = WARMUP_SECONDS) -> float:
+        """Load the text encoder and the speech recogniser and run each generator once (1 step) on a tone of each
+        length in `seconds`, and the recogniser once, so the first visitor waits for none of it: the fast kernels
+        measure each new tensor shape at its first call (gesturelsm/kernels, ~1-3 s per method on a machine whose
+        choices are not cached yet), and the shapes grow with the speech (one window per 28 latents, speech features
+        for up to 16 windows at once, decoding up to 512 latents), so the lengths cover every size class a request
+        and a live stream use (lengths past the server's limit are left out); returns the seconds it took."""
         t0 = time.perf_counter()
-        y = (0.3 * np.sin(np.arange(SAMPLE_RATE) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)
-        speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
-        for m in self.pipeline.methods:
-            self.pipeline.generate(speech, steps=1, method=m)
-        automatic_words(y, remember=False)                   # says "unavailable" itself when not installed
+        for sec in [s for s in seconds if s <= self.pipeline.max_seconds] or [1.0]:
+            n = int(sec * SAMPLE_RATE)
+            y = (0.3 * np.sin(np.arange(n) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)
+            speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
+            for m in self.pipeline.methods:
+                self.pipeline.generate(speech, steps=1, method=m)
+        automatic_words(y[:SAMPLE_RATE], remember=False)     # says "unavailable" itself when not installed
         return time.perf_counter() - t0
 
     def prefetch(self, audio_path: str | None, text: str = "", textgrid_path: str | None = None,

@@ -266,8 +266,27 @@ def test_warmup_loads_the_speech_recogniser(service):
     except asr_model.RecognizerUnavailable as exc:
         pytest.skip(f"speech recogniser not installed: {exc}")
     asr_model._model = None
-    service.warmup()
+    service.warmup(seconds=(1,))
     assert asr_model._model is not None
+
+
+def test_warmup_measures_the_kernel_shapes_a_request_uses(service, monkeypatch):
+    """The fast kernels measure each new shape at its first call: after the warm-up over the speech lengths a
+    request can have, a request measures nothing more (so the first visitor does not wait for it); a warm-up on 1 s
+    alone leaves the shapes of longer speech to the first request that has them."""
+    from gesturelsm import kernels
+    from gesturelsm.serve.service import WARMUP_SECONDS
+
+    monkeypatch.setenv("GESTURELSM_KERNELS", "measure")            # measured (in memory: the test cache is off)
+    wav = service.workdir / "warm-7s.wav"
+    sf.write(wav, speech_like(7.0), 16000)
+    req = Request(str(wav), methods=["gesturelsm", "ddim"], steps=2, exports=False, render=False)
+    for seconds, more in (((1,), True), (WARMUP_SECONDS, False)):
+        kernels.forget()
+        service.warmup(seconds=seconds)
+        n = len(kernels.choices())
+        service.run(req)
+        assert (len(kernels.choices()) > n) == more, seconds
 
 
 def test_the_upload_is_prepared_before_the_click_and_reused(service, tmp_path, monkeypatch):
