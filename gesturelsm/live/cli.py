@@ -72,6 +72,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--commit", type=int, default=LiveConfig.commit, help="latents finalised per window (4 frames each)")
     p.add_argument("--lookahead", type=int, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--held", type=int, default=LiveConfig.held,
+                   help="final latents before the new ones held fixed while sampling (0: all in the window)")
     p.add_argument("--grounding", choices=("on", "off"), default="on",
                    help="feet on the ground, causally, chunk by chunk (off: the decoder's legs and root as they come)")
     p.add_argument("--threads", type=int, default=1,
@@ -83,7 +85,8 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.chunk_ms <= 0:
         raise ValueError("--chunk-ms must be positive")
-    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed,
+    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, held=args.held, steps=args.steps, cfg=args.cfg,
+                     seed=args.seed,
                      grounding=args.grounding == "on")
     audio = load_audio(args.audio)
     import torch

@@ -1,25 +1,28 @@
 """The generator in streaming form: 16 kHz audio chunks in (any size), 30 fps motion chunks out.
 
 Windows (t = 32 latents = 128 frames, seed s = 4 latents, as offline in generator/sampling.py): window i
-*finalises* latents [st, st + c) with st = i c (4 <= c <= t - s; offline is c = t - s = 28) and runs as soon as the
+*finalises* latents [st, st + c) with st = i c (1 <= c <= t - s; offline is c = t - s = 28) and runs as soon as the
 audio reaches latent e = st + c + `lookahead`. It covers [e - t, e) (from latent 0 while e < t): it *ends* at the
 newest audio, so the network sees real speech all through the window, as in training (windows anchored at st, with
 silence after the look-ahead, lose the loudness following: tests/live/test_stream.py). Its latents before st are
-already final: they are the seed (first s) and are kept fixed while sampling (replacement inpainting,
-flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. So the motion of a
-moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 5,
-lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a steady 1x delay must
-wait for the worst case (gesturelsm/webapp/player/src/live_clock.js `LiveClock`).
+already final: its first s are the seed, and the last `held` of them (all of them with held = 0) are kept fixed while
+sampling (replacement inpainting, flows/base.py `inpainting`), so the new latents continue them and nothing final is
+rewritten (the window's earlier latents are sampled afresh with the speech and dropped). So the motion of a moment
+needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 3,
+lookahead = 1 that is 0.53 s at worst, 0.33 s on average, plus compute; a player that plays at a steady 1x delay
+must wait for the worst case (gesturelsm/webapp/player/src/live_clock.js `LiveClock`).
 
-Why these defaults (figures and the commands that measure them: docs/BENCHMARKS.md, live mode): c = 5,
-lookahead = 1 is the largest commit whose speech-to-screen delay stays under the 1 s goal; smaller commits extend
-the motion a few latents at a time from a long fixed past, which carries its momentum more than the new speech's
-loudness, so they follow the loudness less. With lookahead 0 the decoder has no latent right of a chunk (jerk at
-seams many times the inside). Streamed motion is calmer than offline (every window start pulls the motion towards
-the mean, more so the shorter the commit); stronger guidance pays most of it back, so the live default is CFG 6.
-With lookahead >= t - c each window starts at st, is seeded with the previous window's latents there and
-cross-fades them exactly as offline: the windows, seeds, noise draws and latents are the offline ones (same seed ->
-same noise sequence).
+Why these defaults (figures and the commands that measure them: docs/BENCHMARKS.md, live mode): c = 3,
+lookahead = 1, held = 4 puts the median delay from speech to its motion under half a second. Holding every final
+latent of the window fixed, small commits extend the motion a few latents at a time from a long fixed past, which
+carries its momentum more than the new speech's loudness, so they follow the loudness less (c = 3: +0.10 against
++0.13 at c = 5); holding only the last 4 (the seed's length, what offline windows continue from) lets the window's
+earlier part follow its own speech again, and the new latents with it (+0.16). With lookahead 0 the decoder has no
+latent right of a chunk (jerk at seams many times the inside). Streamed motion is calmer than offline (every window
+start pulls the motion towards the mean, more so the shorter the commit); stronger guidance pays most of it back, so
+the live default is CFG 6. With lookahead >= t - c each window starts at st, is seeded with the previous window's
+latents there and cross-fades them exactly as offline: the windows, seeds, noise draws and latents are the offline
+ones (same seed -> same noise sequence).
 
 Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
 - envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of
@@ -68,7 +71,7 @@ from ..motion.sequence import MotionSequence
 
 @dataclass(frozen=True)
 class LiveConfig:
-    commit: int = 5                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
+    commit: int = 3                # c: latents finalised per window (1 latent = 4 frames = 133.3 ms)
     lookahead: int = 1             # latents of real audio past the finalised span before a window runs
     steps: int = 4                 # sampler steps per window
     cfg: float = 6.0               # guidance; offline's 2 streams calm motion (module docstring)
@@ -78,7 +81,7 @@ class LiveConfig:
     decode_context: int = 16       # final latents left of the emitted span given to the decoder
     decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
     blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
-    held: int = 0                  # final latents before the new ones held fixed while sampling (0: all in the window)
+    held: int = 4                  # final latents before the new ones held fixed while sampling (0: all in the window)
     grounding: bool = True         # feet on the ground, causally, chunk by chunk (grounding/stream.py)
 
     def check(self, t: int, s: int) -> None:

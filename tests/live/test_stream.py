@@ -119,7 +119,9 @@ def test_memory_is_bounded_on_long_streams(shipped_pipe):
 
 def test_bad_settings_and_input_are_refused(shipped_pipe):
     with pytest.raises(ValueError, match="commit"):
-        StreamingGenerator(shipped_pipe, LiveConfig(commit=2))
+        StreamingGenerator(shipped_pipe, LiveConfig(commit=0))
+    with pytest.raises(ValueError, match="commit"):
+        StreamingGenerator(shipped_pipe, LiveConfig(commit=29))
     g = StreamingGenerator(shipped_pipe, LiveConfig(steps=1))
     with pytest.raises(ValueError, match="invalid samples"):
         g.feed(np.array([0.0, np.nan], np.float32))
