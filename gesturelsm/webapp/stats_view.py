@@ -19,6 +19,8 @@ import gradio as gr
 from gesturelsm.evaluation.motion_stats import (STATISTICS, SpeakerReference, SpeechContext, format_value,
                                                 motion_statistics, speaker_reference)
 
+from .aside import aside
+
 log = logging.getLogger("gesturelsm.app")
 ELEMENT_ID = "motion-stats"
 EMPTY = f'<div id="{ELEMENT_ID}" data-state="empty"></div>'
@@ -88,7 +90,7 @@ def to_html(table: StatsTable | None) -> str:
 def show(out) -> str:
     """The follow-up event's handler: never fails the page (the motion is already playing)."""
     try:
-        return to_html(compute(out))
+        return to_html(aside(compute, out))                   # beside generating the next method, niced
     except Exception:                                         # a bug: log it, keep the page working
         log.exception("motion statistics failed")
         return EMPTY

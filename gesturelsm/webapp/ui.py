@@ -25,6 +25,7 @@ from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES,
 from gesturelsm.serve.service import GestureService
 
 from . import live, live_socket, stats_view, sweep_tab
+from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .live_character import LiveCharacters
 from .player import component as motion_player
@@ -182,7 +183,7 @@ class _Handlers:
         the downloads come with `add_exports`, after the video."""
         if out is None or not out.motions or out.downloads or self._replaced(request, out):
             return gr.skip()
-        return [str(p) for p in self.service.export_each(out)]
+        return [str(p) for p in aside(self.service.export_each, out)]       # beside generation, niced
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
         """The downloads; with a character, each method's motion in the character's own file too."""

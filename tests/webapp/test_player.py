@@ -46,9 +46,20 @@ def test_motion_file_round_trip_matches_the_glb_animation(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def shipped_url(tmp_path_factory):
-    with served(shipped_service(tmp_path_factory.mktemp("player_work"))) as url:
-        yield url
+def shipped(tmp_path_factory):
+    service = shipped_service(tmp_path_factory.mktemp("player_work"))
+    with served(service) as url:
+        yield service, url
+
+
+@pytest.fixture(scope="module")
+def shipped_url(shipped):
+    return shipped[1]
+
+
+# how many bodies had their motion in each payload handed to the player (one payload per method made)
+WATCH_PAYLOADS = """() => { const p = window.gesturelsmPlayer, load = p.load.bind(p); window.seen = [];
+    p.load = (q) => { window.seen.push(q.bodies.filter((b) => b.motion).length); return load(q); }; }"""
 
 
 def _motion(url: str, frames: int, expressions: int) -> np.ndarray:
@@ -71,8 +82,12 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
         page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
         page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        page.evaluate(WATCH_PAYLOADS)
         page.locator("#generate").click()
         page.wait_for_selector(f"{PLAYER}[data-state=playing]", timeout=120000)
+        page.wait_for_selector(f"{PLAYER}[data-bodies='2']", timeout=120000)
+        seen = page.evaluate("() => window.seen")
+        assert seen[0] == 0 and 1 in seen and seen[-1] == 2, seen          # the speech, one body, then both
         assert page.evaluate("() => window.gesturelsmPlayer.measure") is False    # no timings unless asked
         payload = page.evaluate("() => window.gesturelsmPlayer.payload")
         T, fps = payload["frames"], payload["fps"]
@@ -185,3 +200,26 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     assert cut.startswith("cut.bin: ") and "cut or padded" in cut
     assert head.startswith("head.bin: 12 bytes, shorter than the 28-byte header")
     assert wav.startswith("wav.bin: not a GestureLSM motion record")
+
+
+@pytest.mark.browser
+def test_the_page_plays_the_methods_made_when_one_fails(shipped, monkeypatch):
+    """A method that fails on the server: the page plays the others, and says which failed and why (above its place
+    and in the summary)."""
+    service, url = shipped
+
+    def broken(*a, **k):
+        raise RuntimeError("a bug in this method")
+    monkeypatch.setattr(service.pipeline.backends["rectified_flow"], "generate", broken)
+    with player_page(url, PLAYER) as page:
+        page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
+        page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        page.locator("#generate").click()
+        page.wait_for_selector(f"{PLAYER}[data-state=playing][data-failed='1']", timeout=120000)
+        assert page.get_attribute(PLAYER, "data-bodies") == "1"
+        assert page.locator(f"{PLAYER} .mp-label-failed").inner_text().endswith("failed: it failed on the server")
+        page.locator("#summary", has_text="Rectified flow: it failed on the server").wait_for(timeout=30000)
+        t0 = page.evaluate("() => window.gesturelsmPlayer.clock.currentTime")
+        page.wait_for_timeout(1000)
+        assert page.evaluate("() => window.gesturelsmPlayer.clock.currentTime") > t0 + 0.3     # it plays on
