@@ -200,7 +200,7 @@ class GestureService:
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Result:
         """Serve one request (see the module docstring). `audio` (16 kHz) skips reading req.audio_path."""
         prog = progress or (lambda f, m: None)
-        for result in self.stream(req, prog, audio):
+        for result in stream_request(self, req, prog, audio):
             pass
         if req.render:
             result = self.render(result, prog)
@@ -213,7 +213,11 @@ class GestureService:
     def stream(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None
                ) -> Iterator[Result]:
         """The request's result as each method is made, fastest first, without the video and the downloads
-        (`serve/progressive.py`): the page shows every body the moment its motion exists."""
+        (`serve/progressive.py`): the page shows every body the moment its motion exists. A service that makes its
+        results elsewhere (a subclass with its own `run` and no `stream` of its own: the replicas' front end) gives
+        one result, once `run` has made every method."""
+        if type(self).run is not GestureService.run and type(self).stream is GestureService.stream:
+            return iter([self.run(req, progress, audio)])
         return stream_request(self, req, progress, audio)
 
     def folder(self) -> Path:

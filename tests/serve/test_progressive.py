@@ -79,3 +79,20 @@ def test_ground_truth_of_unknown_speech_has_no_place(service, speech_wav):
     results = list(service.stream(_request(speech_wav, methods=["gesturelsm", GROUND_TRUTH])))
     assert [m for m, _ in results[0].slots] == ["gesturelsm"] and results[0].pending == ("gesturelsm",)
     assert any("not a take" in w for w in results[-1].warnings) and list(results[-1].motions) == ["gesturelsm"]
+
+
+def test_a_service_that_makes_results_elsewhere_gives_one(service, speech_wav):
+    """A service whose `run` makes the result elsewhere (the replicas' front end) and has no `stream` of its own: the
+    page gets that one result, made once."""
+    from gesturelsm.serve.service import GestureService
+
+    class Elsewhere(GestureService):
+        made = 0
+
+        def run(self, req, progress=None, audio=None):
+            Elsewhere.made += 1
+            return super().run(req, progress, audio)
+    other = Elsewhere(service.pipeline, service.settings, service.body)
+    results = list(other.stream(_request(speech_wav)))
+    assert len(results) == 1 and Elsewhere.made == 1 and list(results[0].motions) == ALL
+    assert results[0].pending == () and results[0].video is None
