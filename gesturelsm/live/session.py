@@ -38,7 +38,7 @@ class LiveOverloaded(RuntimeError):
 
 class LiveSession:
     def __init__(self, pipe, config: LiveConfig = LiveConfig(), max_pending: int = 64, max_ready: int = 256,
-                 idle_timeout: float = 30.0, on_close=None, on_publish=None):
+                 idle_timeout: float = 30.0, on_close=None, on_publish=None, threads: int | None = None):
         self.gen = StreamingGenerator(pipe, config)
         self.inbox: queue.Queue = queue.Queue(maxsize=max_pending)
         self.outbox: deque[MotionChunk] = deque(maxlen=max_ready)
@@ -53,7 +53,8 @@ class LiveSession:
         self._on_publish = on_publish          # called (from the worker thread) after new motion chunks are ready
         self._closed = False
         self._started = time.perf_counter()
-        self._threads = torch.get_num_threads()  # the creator's setting: a new thread would get torch's default
+        # math threads of the worker: `threads`, else the creator's (a new thread would get torch's default)
+        self._threads = threads or torch.get_num_threads()
         self._thread = threading.Thread(target=self._work, name="gesturelsm-live", daemon=True)
 
     # ---- control ---------------------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ import time
 from typing import Iterator
 
 import numpy as np
+import torch
 
 from ..constants import Progress
 from ..errors import GestureError, InputError
@@ -93,6 +94,7 @@ def stream_request(service, req: Request, progress: Progress | None = None,
     `GestureService` whose checks, prepared speech, pipeline and request folders it uses."""
     started = time.perf_counter()
     prog = progress or (lambda f, m: None)
+    torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
     plan, speech, notes = service._speech(req, audio, prog)
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)

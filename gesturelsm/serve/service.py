@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 import numpy as np
+import torch
 
 from ..align import Word
 from ..asr.source import automatic_words
@@ -84,6 +85,7 @@ class GestureService:
         for up to 16 windows at once, decoding up to 512 latents), so the lengths cover every size class a request
         and a live stream use (lengths past the server's limit are left out); returns the seconds it took."""
         t0 = time.perf_counter()
+        torch.set_num_threads(self.settings.threads)       # the kernels' choices are kept per thread count
         for sec in [s for s in seconds if s <= self.pipeline.max_seconds] or [1.0]:
             n = int(sec * SAMPLE_RATE)
             y = (0.3 * np.sin(np.arange(n) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)

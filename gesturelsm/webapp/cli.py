@@ -16,8 +16,8 @@ DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in
 
 Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
 GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
-GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR. No telemetry: Gradio analytics and the
-Hugging Face hub's telemetry are switched off before Gradio is imported.
+GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR, GESTURELSM_THREADS. No
+telemetry: Gradio analytics and the Hugging Face hub's telemetry are switched off before Gradio is imported.
 
 Logging (stderr): one line per refused request (what the visitor must change), per expired-file sweep and
 at shutdown; full tracebacks only for server errors.
@@ -50,6 +50,9 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", 32)),
                    help="requests that may wait; beyond that visitors get 'Queue is full' (default 32)")
     p.add_argument("--workdir", default=_env("GESTURELSM_WORKDIR"), help="output folder (default <tmp>/gesturelsm-app)")
+    p.add_argument("--threads", type=int, default=int(_env("GESTURELSM_THREADS", 1)),
+                   help="math threads per request and per live stream (default 1: on 2 cores a generator step is "
+                   "fastest on one, and two oversubscribe a machine that also runs a browser)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
     return p
 
@@ -85,7 +88,8 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
-                               keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency))
+                               keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency),
+                               threads=max(1, args.threads))
     try:
         service = GestureService.from_settings(settings)
     except (FileNotFoundError, ValueError) as exc:

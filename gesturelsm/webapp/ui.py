@@ -301,7 +301,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                 payload, video, summary, table, files, view, show3d, stats = _output_column(service)
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
-            manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
+            manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS, threads=settings.threads)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service)

@@ -96,3 +96,29 @@ def test_a_service_that_makes_results_elsewhere_gives_one(service, speech_wav):
     results = list(other.stream(_request(speech_wav)))
     assert len(results) == 1 and Elsewhere.made == 1 and list(results[0].motions) == ALL
     assert results[0].pending == () and results[0].video is None
+
+
+def test_requests_generate_at_the_servers_math_threads(service, speech_wav, monkeypatch):
+    """Each request generates at `ServiceSettings.threads` in the thread that serves it, whatever that thread had."""
+    from dataclasses import replace
+
+    import torch
+
+    from gesturelsm.serve.service import GestureService
+
+    seen = []
+    generate = service.pipeline.backends["ddim"].generate
+
+    def recorded(*a, **k):
+        seen.append(torch.get_num_threads())
+        return generate(*a, **k)
+    monkeypatch.setattr(service.pipeline.backends["ddim"], "generate", recorded)
+    before = torch.get_num_threads()
+    try:
+        for n in (2, 1):
+            torch.set_num_threads(3 - n)
+            other = GestureService(service.pipeline, replace(service.settings, threads=n), service.body)
+            other.run(_request(speech_wav, methods=["ddim"]))
+    finally:
+        torch.set_num_threads(before)
+    assert seen == [2, 1]
