@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/time_split.py                                   # both tables
     .venv/bin/python benchmarks/time_split.py --seconds 10 60 --repeat 3 --skip-live
     .venv/bin/python benchmarks/time_split.py --fresh-kernels --warmup 1        # the first visitor after a 1 s warm-up
+    .venv/bin/python benchmarks/time_split.py --skip-request --skip-live --schedules   # sequential vs parallel methods
 
 Generate (server side, in this process; the browser's part is benchmarks/player_latency.py): a GestureService over the
 shipped checkpoints, warmed up (`--warmup` lengths, default the service's), eSpeak NG speech (as app/measure.py) of each
@@ -180,6 +181,51 @@ def live_table(args) -> None:
     print(f"\n(rows are means per window; the load average at the end was {os.getloadavg()[0]:.1f})")
 
 
+def schedule_table(args) -> None:
+    """The three methods on 10 s of held-out speech (audio only), one after another at 1 and 2 math threads, and
+    all three at once in threads of one math thread each: when the first is ready and when all are."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    import torch
+
+    from live_latency import BEAT2
+    from gesturelsm.audio import load_audio
+    from gesturelsm.pipeline import GesturePipeline
+
+    pipe = GesturePipeline.from_pretrained()
+    y = load_audio(BEAT2 / "wave16k" / "2_scott_0_2_2.wav")[:160000]
+    sp = pipe.prepare_speech(y, transcribe=False)
+    steps = {"gesturelsm": 8, "rectified_flow": 8, "ddim": 20}
+
+    def one(m: str, threads: int, t0: float) -> float:
+        torch.set_num_threads(threads)
+        pipe.generate(sp, steps=steps[m], method=m)
+        return time.perf_counter() - t0
+
+    def sequential(threads: int) -> list[float]:
+        t0 = time.perf_counter()
+        return [one(m, threads, t0) for m in steps]
+
+    def parallel() -> list[float]:
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(len(steps)) as ex:
+            return list(ex.map(lambda m: one(m, 1, t0), steps))
+    runs = {"one after another, 1 math thread": lambda: sequential(1),
+            "one after another, 2 math threads": lambda: sequential(2),
+            "all three at once, 1 math thread each": parallel}
+    for f in runs.values():
+        f()                                                  # first calls of every shape at both thread counts
+    got: dict = {k: [] for k in runs}
+    for _ in range(args.repeat):
+        for k, f in runs.items():                            # interleaved
+            got[k].append(f())
+    print(f"scheduling the three methods (10 s of speech; medians of {args.repeat}, interleaved; load average "
+          f"{os.getloadavg()[0]:.1f})\n\n| schedule | first ready (s) | all ready (s) |\n|---|---|---|")
+    for k, rs in got.items():
+        print(f"| {k} | {median(min(r) for r in rs):.2f} | {median(max(r) for r in rs):.2f} |")
+    print()
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seconds", type=float, nargs="+", default=[10, 60])
@@ -188,6 +234,8 @@ def main() -> int:
     p.add_argument("--fresh-kernels", action="store_true", help="the kernels' choices in memory only (a new machine)")
     p.add_argument("--skip-request", action="store_true")
     p.add_argument("--skip-live", action="store_true")
+    p.add_argument("--schedules", action="store_true", help="also: the methods one after another at 1 and 2 math "
+                   "threads against all at once")
     p.add_argument("--live-seconds", type=float, default=40.0)
     p.add_argument("--live", nargs="+", metavar="SPEC", help="live settings (key=value,...; `main`; '' = defaults)")
     args = p.parse_args()
@@ -197,6 +245,8 @@ def main() -> int:
         os.environ["GESTURELSM_KERNELS_CACHE"] = ""
     if not args.skip_request:
         request_table(args)                  # math threads as the app has them (torch's default)
+    if args.schedules:
+        schedule_table(args)
     if not args.skip_live:
         live_table(args)
     return 0
