@@ -128,7 +128,8 @@ def test_bad_settings_and_input_are_refused(shipped_pipe):
 
 
 def test_final_latents_are_never_rewritten(shipped_pipe):
-    """A window that ends at the newest audio regenerates nothing already final: it inpaints around it."""
+    """A window that ends at the newest audio rewrites nothing already final: it inpaints after the latents it holds
+    and keeps the others as they were."""
     g = StreamingGenerator(shipped_pipe, LiveConfig(steps=1))
     final: dict[int, torch.Tensor] = {}
     for ch in chunks(speech_like(8.0, seed=7), 3200):
