@@ -111,7 +111,7 @@ def run(args) -> dict:
     service = GestureService.from_settings(ServiceSettings(workdir=str(work / "app")))
     service.warmup()
     demo, url = serve_locally(service)
-    over = {k: v for k in ("commit", "lookahead", "steps", "cfg") if (v := getattr(args, k)) is not None}
+    over = {k: v for k in ("commit", "lookahead", "held", "steps", "cfg") if (v := getattr(args, k)) is not None}
     if over:                                            # compare live settings (the app's defaults otherwise)
         demo.live_manager.config = dataclasses.replace(demo.live_manager.config, **over)
     config = demo.live_manager.config
@@ -162,8 +162,9 @@ def report(r: dict, seconds: float) -> None:
     rows = [
         ("speech streamed (s)", f"{seconds:g} (recording {r['wall']:.1f} s wall)"),
         ("body in the live player (data-character)", e["body"]),
-        ("live settings: commit / look-ahead (latents), steps, CFG",
-         f"{r['config'].commit} / {r['config'].lookahead}, {r['config'].steps}, {r['config'].cfg:g}"),
+        ("live settings: commit / look-ahead / held (latents), steps, CFG",
+         f"{r['config'].commit} / {r['config'].lookahead} / {r['config'].held}, {r['config'].steps}, "
+         f"{r['config'].cfg:g}"),
         ("server latency median (ms), #live-latency", med or "-"),
         ("server latency p90 (ms), #live-stats", p90),
         ("real-time factor (audio s / compute s)", rtf),
@@ -196,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workdir", default="/tmp/gesturelsm-live-browser")
     p.add_argument("--screenshot", help="also save a PNG of the Live tab while it streams")
     p.add_argument("--character", help="choose this .vrm / .glb / .gltf in the page first (the stream is on it)")
-    for k, t in (("commit", int), ("lookahead", int), ("steps", int), ("cfg", float)):
+    for k, t in (("commit", int), ("lookahead", int), ("held", int), ("steps", int), ("cfg", float)):
         p.add_argument(f"--{k}", type=t, help=f"live {k} (default: the app's, gesturelsm/live/stream.py LiveConfig)")
     args = p.parse_args(argv)
     if not Path(args.wav).exists():
