@@ -1,6 +1,7 @@
 """The `gesturelsm` command line. Each subcommand lives next to the code it drives and registers here.
 
-A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`.
+A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`. Every
+option's `--help` shows its default (`WithDefaults`), unless its own help already says it.
 User errors (`errors.GestureError`: bad files, bad settings) are printed as one clear line and exit with status 2.
 """
 from __future__ import annotations
@@ -10,6 +11,7 @@ import importlib
 import sys
 
 from .errors import GestureError
+from .settings import MISSING
 
 # module paths of subcommands; each has add_parser(subparsers)
 SUBCOMMANDS: tuple[str, ...] = (
@@ -29,8 +31,36 @@ SUBCOMMANDS: tuple[str, ...] = (
 )
 
 
+class WithDefaults(argparse.HelpFormatter):
+    """Adds "(default: X)" to an option's help when it has a default to show (not None, False or MISSING) and the
+    help does not already say its default."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        d = action.default
+        if (not action.option_strings or action.required or "default" in text or d is MISSING
+                or d in (None, False, argparse.SUPPRESS) or d == []):
+            return text
+        shown = " ".join(map(str, d)) if isinstance(d, (list, tuple)) else str(d)
+        return f"{text} (default: {shown.replace('%', '%%')})".strip()
+
+
+def with_defaults(formatter: type) -> type:
+    """`formatter` that also shows defaults (WithDefaults first, so its help string wins)."""
+    if issubclass(formatter, WithDefaults):
+        return formatter
+    return type(f"{formatter.__name__}WithDefaults", (WithDefaults, formatter), {})
+
+
+class Parser(argparse.ArgumentParser):
+    """The command line's parsers (subcommands' too: argparse makes them of the parent's class)."""
+
+    def __init__(self, *args, formatter_class: type = argparse.HelpFormatter, **kwargs):
+        super().__init__(*args, formatter_class=with_defaults(formatter_class), **kwargs)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="gesturelsm", description="Speech-to-gesture generation (GestureLSM).")
+    parser = Parser(prog="gesturelsm", description="Speech-to-gesture generation (GestureLSM).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for mod in SUBCOMMANDS:
         try:

@@ -14,9 +14,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load",  # conventions, the error family, request
-     "presentation"},                                          # limits, upload sniffing, safe loading, methods'
-                                                               # labels and colours
+    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load"},  # conventions, the error family, request
+                                                               # limits, upload sniffing, safe loading
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
                                                                # fp32 linear layers through oneDNN
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
@@ -25,10 +24,12 @@ FLOORS: list[set[str]] = [
     {"retarget"},                                              # motion onto characters (their skeletons and meshes)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
-    {"backends"},                                              # every method (ours, the authors') behind one call
+    {"backends"},                                              # every method (ours, the authors') behind one call,
+                                                               # each described once (its spec)
+    {"settings"},                                              # one generation's settings, defaults, validator
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"serve", "study", "evaluation", "pipeline_cli", "live"},  # what uses the pipeline (serve: one web request,
-                                                               # its checks and files; live: streaming)
+    {"study", "evaluation", "pipeline_cli", "live"},           # what uses the pipeline (live: streaming)
+    {"serve"},                                                 # one web request: checks, files, its sweep
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

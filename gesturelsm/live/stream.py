@@ -77,9 +77,9 @@ class LiveConfig:
 
     def check(self, t: int, s: int) -> None:
         if not s <= self.commit <= t - s:
-            raise ValueError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
+            raise InputError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
         if min(self.lookahead, self.decode_lag, self.decode_context, self.blend_frames) < 0:
-            raise ValueError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
+            raise InputError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
 
 
 @dataclass

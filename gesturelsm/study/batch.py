@@ -21,18 +21,18 @@ import hashlib
 import html
 import json
 import secrets
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable
 
 import numpy as np
 
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
-from ..backends import FACTS
-from ..motion.postprocess import DEFAULT_SMOOTHING
+from ..errors import InputError
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
+from ..settings import DEFAULTS, Settings
 from .design import SCALE_QUESTIONS, SCALES, Design, invite, read_raters, write_design
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
@@ -62,10 +62,10 @@ def blinded_name(salt: str, audio: str, method: str) -> str:
 def find_audio(audio_dir: str | Path) -> list[Path]:
     d = Path(audio_dir)
     if not d.is_dir():
-        raise FileNotFoundError(f"audio folder not found: {d}")
+        raise InputError(f"audio folder not found: {d}")
     files = sorted(p for p in d.iterdir() if p.suffix.lower() in AUDIO_EXTENSIONS and p.is_file())
     if not files:
-        raise ValueError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
+        raise InputError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
     return files
 
 
@@ -81,7 +81,7 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path) -> 
         salt_file.write_text(salt + "\n")
     items = [StudyItem(blinded_name(salt, a.name, m), a.name, m) for a in audio_files for m in methods]
     if len({i.video for i in items}) != len(items):
-        raise ValueError("two speech files share a name; rename them")
+        raise InputError("two speech files share a name; rename them")
     return StudyPlan(out, salt, items)
 
 
@@ -94,24 +94,25 @@ def _transcript(audio: Path):
     return None, (txt.read_text().strip() if txt.exists() else None)
 
 
-def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
-               steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
-               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
+def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Settings = DEFAULTS, *, raters: int = 10,
+               size: int = 512, body=None, beat2: str | None = None, design: Design = Design(),
+               log: Callable[[str], None] = print, rig=None) -> StudyPlan:
     """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
     web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
-    `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then shows the
-    character's own mesh and gets the motion on that character beside it (VIDEO.vrm / .glb, the same blinded
-    name)."""
-    methods = list(dict.fromkeys(methods))
-    steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
+    `settings`: the methods (ground truth among them needs `beat2`) and how each video is generated and
+    post-processed (`gesturelsm.settings`; a method without steps runs its default). `rig`: a retarget.Character;
+    each video then shows the character's own mesh and gets the motion on that character beside it (VIDEO.vrm /
+    .glb, the same blinded name)."""
+    methods = list(dict.fromkeys(settings.methods))
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
-            raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
+            raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
     if GROUND_TRUTH in methods and not beat2:
-        raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+        raise InputError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
-        raise ValueError("--raters must be at least 1")
+        raise InputError("--raters must be at least 1")
+    pipeline.check_plan(Plan(settings, beat2))
+    steps = {m: settings.steps_for(m) for m in settings.generators}
     audio_files = find_audio(audio_dir)
     plan = plan_study(audio_files, methods, out)
     out = Path(out)
@@ -128,11 +129,10 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         words, text = _transcript(a)
         try:
             speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
-        except ValueError as exc:  # InputError: too short, silent, too long
-            raise ValueError(f"{a.name}: {exc}") from None
+        except InputError as exc:  # too short, silent, too long
+            raise InputError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, Plan([it.method], steps, cfg, seed, stand_in_place, smoothing,
-                                                     beat2, a.name))
+            gen = pipeline.generate_all(speech, Plan(replace(settings, methods=(it.method,)), beat2, a.name))
             if it.method not in gen.motions:
                 log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
                 continue
@@ -145,17 +145,18 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                     ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
-    _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))
+    _write_key(plan, dict(steps=steps, cfg=settings.cfg, seed=settings.seed))
     for r in range(1, raters + 1):
-        _write_rater(plan, r, seed)
+        _write_rater(plan, r, settings.seed)
     write_mismatch(plan, audio_files, methods)
     write_design(out, design)
     have = len(read_raters(out))
     if have < raters:
         invite(out, raters - have)
     (out / "study.json").write_text(json.dumps(dict(audio_dir=str(audio_dir), methods=methods, raters=raters,
-                                                   steps=steps, cfg=cfg, seed=seed, size=size,
-                                                   stand_in_place=stand_in_place, smoothing=smoothing), indent=1))
+                                                   steps=steps, cfg=settings.cfg, seed=settings.seed, size=size,
+                                                   stand_in_place=settings.post.stand_in_place,
+                                                   smoothing=settings.post.smoothing), indent=1))
     log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
         f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters); web study links "
         f"(`gesturelsm study serve {out}`) in {out / 'key' / 'links.csv'}")
