@@ -15,6 +15,7 @@ from ..backends import SPECS, checkpoint_sources
 from ..errors import InputError
 from ..pipeline import GesturePipeline
 from ..settings.arguments import add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
+from ..settings.values import from_text
 from .sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, check_grid, run_sweep, sweep_grid
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
 
@@ -33,17 +34,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help=f"sampling step counts (default: {' '.join(map(str, DEFAULT_STEPS))})")
     p.add_argument("--cfg", nargs="+", default=list(DEFAULT_CFGS),
                    help=f"classifier-free guidance scales (default: {' '.join(f'{c:g}' for c in DEFAULT_CFGS)})")
-    p.add_argument("--seeds", default=1, help="seeds 0 .. N-1 per combination (default: 1)")
+    p.add_argument("--seeds", type=from_text, default=1, help="seeds 0 .. N-1 per combination (default: 1)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--text", default=None, help="transcript (word timings aligned automatically)")
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
-    p.add_argument("--max-work", default=LIMITS.max_work,
+    p.add_argument("--max-work", type=from_text, default=LIMITS.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
     add_max_seconds_flag(p)
-    p.add_argument("--threads", default=None, help="torch threads (default: torch's choice)")
+    p.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
     p.add_argument("--out", default="runs/sweep", help="output folder")
     p.set_defaults(func=run_sweep_cli)
 

@@ -101,7 +101,7 @@ def input_file(path: Any, field: str, problems: list[str]) -> Path | None:
     """A file that exists and is readable (not a folder)."""
     p = Path(path)
     if not p.exists():
-        problems.append(f"{field} {p}: no such file.")
+        problems.append(f"{field} {p}: file not found.")
     elif p.is_dir():
         problems.append(f"{field} {p} is a folder; give a file.")
     elif not os.access(p, os.R_OK):
@@ -114,7 +114,7 @@ def input_file(path: Any, field: str, problems: list[str]) -> Path | None:
 def input_folder(path: Any, field: str, problems: list[str]) -> Path | None:
     p = Path(path)
     if not p.is_dir():
-        problems.append(f"{field} {p}: " + ("is a file; give a folder." if p.exists() else "no such folder."))
+        problems.append(f"{field} {p}: " + ("is a file; give a folder." if p.exists() else "folder not found."))
         return None
     return p
 

@@ -98,6 +98,11 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
         if len(highs[setting]) > 1:
             field += f" for {method_spec(m).label}"
         steps[m] = whole_number(value, field, 1, limits.max_steps(method_spec(m)), found)
+    for setting in ("steps", "ddim_steps"):            # a value sent for no chosen method is still checked
+        value = getattr(asked, setting)
+        if setting not in highs and value is not MISSING and not isinstance(value, Mapping):
+            hi = max(limits.max_steps(s) for s in SPECS.values() if s.steps_setting == setting)
+            whole_number(value, getattr(names, setting), 1, hi, found)
     problems += list(dict.fromkeys(found))
     return None if found else steps
 

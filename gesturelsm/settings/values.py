@@ -111,8 +111,7 @@ def switch(value: Any, field: str, problems: list[str]) -> bool | None:
 
 
 def method_list(value: Any, available: list[str], problems: list[str], field: str = "Methods") -> list[str] | None:
-    """Chosen methods in order, without repeats (one name counts as a list of one)."""
-    value = [value] if isinstance(value, str) else value
+    """Chosen methods in order, without repeats."""
     if value is None or (isinstance(value, (list, tuple)) and not value):
         problems.append("Choose at least one method to show.")
         return None

@@ -87,10 +87,11 @@ def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_pat
     (out / "videos" / videos[0]).unlink()
     logs = []
     from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.settings import Settings
     from gesturelsm.study import make_study
 
     pipe = GesturePipeline.from_pretrained(study_assets)
-    make_study(pipe, audio_dir, ["gesturelsm", "ddim"], out, raters=3, steps={"gesturelsm": 1, "ddim": 2}, size=128,
+    make_study(pipe, audio_dir, out, Settings(("gesturelsm", "ddim"), {"gesturelsm": 1, "ddim": 2}), raters=3, size=128,
                log=logs.append)
     assert sorted(p.name for p in (out / "videos").iterdir()) == every
     assert "1 videos rendered, 3 already there" in logs[-1]
