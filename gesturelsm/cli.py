@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 
 from .errors import GestureError
@@ -31,14 +32,17 @@ SUBCOMMANDS: tuple[str, ...] = (
 )
 
 
+STATED = re.compile(r"\(default\b|default: ")      # a help text that says its default already
+
+
 class WithDefaults(argparse.HelpFormatter):
-    """Adds "(default: X)" to an option's help when it has a default to show (not None, False or MISSING) and the
-    help does not already say its default."""
+    """Adds "(default: X)" to an option's help when it has a default to show (not None, False, [] or MISSING) and
+    the help does not already say its default."""
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         d = action.default
-        if (not action.option_strings or action.required or "default" in text or d is MISSING
+        if (not action.option_strings or action.required or STATED.search(text) or d is MISSING
                 or d in (None, False, argparse.SUPPRESS) or d == []):
             return text
         shown = " ".join(map(str, d)) if isinstance(d, (list, tuple)) else str(d)

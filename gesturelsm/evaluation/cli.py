@@ -56,7 +56,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description="Time GestureLSM at several step counts against rectified flow and DDIM, shipped "
                                    "and paper-size, in one run.")
     b.add_argument("--checkpoints", default=None)
-    b.add_argument("--presets", nargs="+", default=["shipped", "paper"], choices=["shipped", "paper"])
+    b.add_argument("--presets", nargs="+", default=["shipped", "paper"], choices=["shipped", "paper"],
+                   help="model sizes to time: the shipped checkpoints and the paper's size")
     b.add_argument("--methods", nargs="+", default=None)
     b.add_argument("--steps", nargs="+", default=[1, 2, 4, 8, 20], help="sampling step counts (default: 1 2 4 8 20)")
     b.add_argument("--cfg", type=from_text, default=DEFAULT_CFG, help=f"CFG scale (default: {DEFAULT_CFG:g})")

@@ -38,8 +38,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    "(a VRM stays a VRM), --bvh its skeleton")
     p.add_argument("--bone-map", help="with --rig: bone names as 'mixamo', 'smplx' or a JSON file {SMPL-X joint: "
                    "bone} (default: the VRM humanoid map, else the preset that fits)")
-    p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style` "
-                   "(default | upper ...)")
+    p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style`, e.g. "
+                   "upper (default: default)")
     p.set_defaults(func=run)
 
 

@@ -69,8 +69,12 @@ def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
 def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
                  available: Sequence[str] | None = None, limits: Limits = Limits()) -> Settings | None:
     """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
-    asked = Asked(methods=MISSING if methods is None else list(methods),
-                  steps=getattr(args, "steps", MISSING), ddim_steps=getattr(args, "ddim_steps", MISSING),
+    steps = getattr(args, "steps", MISSING)
+    if hasattr(args, "ddim_steps"):          # two flags: each drives only its own methods, an omitted one none
+        given = {"steps": steps, "ddim_steps": args.ddim_steps}
+        steps = {m: given[SPECS[m].steps_setting] for m in methods or () if m in SPECS
+                 and given[SPECS[m].steps_setting] is not MISSING}
+    asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
                   cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
                   stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing", MISSING),
                   transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING)
@@ -131,7 +135,7 @@ def output_file(path: Any, field: str, suffix: str, problems: list[str]) -> Path
     """Where a file will be written, with `suffix` added when the name lacks it (as the writer would add it); not a
     folder, and under a folder (or a path that can become one)."""
     p = Path(path)
-    if not p.name.endswith(suffix):
+    if not p.name.endswith(suffix) and not p.is_dir():
         p = p.with_name(p.name + suffix)
     if p.is_dir():
         problems.append(f"{field} {p} is a folder; give a file name ending in {suffix}.")

@@ -86,21 +86,26 @@ def steps_per_method(asked: Asked, methods: Sequence[str]) -> dict[str, tuple[An
 
 
 def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Names, problems: list[str]) -> dict | None:
-    """Steps per method, each within its spec's bound and the entry point's cap for its setting; one problem per
-    setting and bound (a setting driving methods with different bounds names the method)."""
-    given = steps_per_method(asked, methods)
-    highs: dict[str, set[int]] = {}
-    for m, (_, setting) in given.items():
-        highs.setdefault(setting, set()).add(limits.max_steps(method_spec(m)))
+    """Steps per method, each within its spec's bound and the entry point's cap for its setting. A value is checked
+    once against the widest bound of the methods it drives (type, emptiness, below 1), then against each method's
+    own, naming the method when the bounds differ."""
+    groups: dict[tuple[str, str], list[str]] = {}
+    values: dict[tuple[str, str], Any] = {}
+    for m, (value, setting) in steps_per_method(asked, methods).items():
+        key = (setting, repr(value))
+        groups.setdefault(key, []).append(m)
+        values[key] = value
     steps, found = {}, []
-    for m, (value, setting) in given.items():
-        field = getattr(names, setting)
-        if len(highs[setting]) > 1:
-            field += f" for {method_spec(m).label}"
-        steps[m] = whole_number(value, field, 1, limits.max_steps(method_spec(m)), found)
+    for key, ms in groups.items():
+        field, value = getattr(names, key[0]), values[key]
+        highs = {m: limits.max_steps(method_spec(m)) for m in ms}
+        widest = whole_number(value, field, 1, max(highs.values()), found)
+        for m in ms if widest is not None else ():
+            named = field if len(set(highs.values())) == 1 else f"{field} for {method_spec(m).label}"
+            steps[m] = whole_number(widest, named, 1, highs[m], found)
     for setting in ("steps", "ddim_steps"):            # a value sent for no chosen method is still checked
         value = getattr(asked, setting)
-        if setting not in highs and value is not MISSING and not isinstance(value, Mapping):
+        if not any(k[0] == setting for k in groups) and value is not MISSING and not isinstance(value, Mapping):
             hi = max(limits.max_steps(s) for s in SPECS.values() if s.steps_setting == setting)
             whole_number(value, getattr(names, setting), 1, hi, found)
     problems += list(dict.fromkeys(found))

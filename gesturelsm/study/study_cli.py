@@ -20,7 +20,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>")
     s.add_argument("study_dir", help="folder made by `gesturelsm batch`")
     s.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; 0.0.0.0 opens it)")
-    s.add_argument("--port", type=int, default=8600)
+    s.add_argument("--port", type=int, default=8600, help="port to listen on")
     s.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
     s.set_defaults(func=run_serve)
     i = sub.add_parser("invite", help="add N raters; prints their link paths")
