@@ -164,10 +164,11 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
     """A sweep's lists: step counts and CFG scales (each within every chosen method's bounds) and a seed count."""
     n = len(problems)
     step_list = number_list(steps, names.steps, True, problems)
-    cfg_list = number_list(cfgs, names.cfg, False, problems)
     found: list[str] = []
     for s in step_list or ():
         check_steps(Asked(steps=s), methods, limits, names, found)
+    problems += list(dict.fromkeys(found))
+    cfg_list, found = number_list(cfgs, names.cfg, False, problems), []
     for c in cfg_list or ():
         real_number(c, names.cfg, 0.0, cfg_bound(methods), found)
     problems += list(dict.fromkeys(found))

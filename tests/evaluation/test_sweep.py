@@ -136,3 +136,31 @@ def test_write_sweep_replaces_an_earlier_sweep_in_place(pipe, wav, tmp_path):
     write_sweep(res, tmp_path / "out", metric="jerk")
     assert [p.name for p in tmp_path.iterdir()] == ["out"]            # no temporary folder left
     assert (tmp_path / "out" / "sweep.csv").read_text().startswith("method,steps,cfg")
+
+
+class Recording:
+    """A pipeline that records every generation it is asked for (method, steps, CFG, seed)."""
+
+    def __init__(self, pipe):
+        self.pipe, self.calls = pipe, []
+
+    def generate(self, speech, **kw):
+        self.calls.append((kw["method"], kw["steps"], kw["cfg"], kw["seed"]))
+        return self.pipe.generate(speech, **kw)
+
+    def __getattr__(self, name):
+        return getattr(self.pipe, name)
+
+
+def test_sweep_times_leave_out_each_methods_warm_up(pipe, wav):
+    """A method's first call pays one-off costs (the first cell took 0.52 s against 0.23 s for the next seed, so 1 step
+    plotted slower than 2): every method is run untimed once in each guidance mode before any cell is timed."""
+    from gesturelsm.audio import load_audio
+
+    speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
+    rec = Recording(pipe)
+    res = run_sweep(rec, speech, SweepGrid(("gesturelsm", "ddim"), (1, 2), (1.0, 2.0), 1), keep_motions=False)
+    timed = [(r.method, r.steps, r.cfg, r.seed) for r in res.runs]
+    untimed = rec.calls[:len(rec.calls) - len(timed)]
+    assert rec.calls[len(untimed):] == timed
+    assert {(m, c == 1.0) for m, _, c, _ in untimed} == {(m, c == 1.0) for m, _, c, _ in timed}
