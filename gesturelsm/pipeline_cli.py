@@ -104,6 +104,6 @@ def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: fl
           f"{', standing in place' if post.stand_in_place else ''}; {res.text_mode}")
     print("timings: " + ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items()))
     print(f"real-time factor {res.real_time_factor:.1f}x for generation (features, sampling, decoding: the paper's "
-          f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.1f} s: "
+          f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.2f} s: "
           f"reading the speech, its words, generation, post-processing, writing); loading the models {loading:.1f} s; "
           f"total {total:.1f} s")
