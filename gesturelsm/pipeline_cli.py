@@ -7,7 +7,6 @@ both ways: generation only (the paper's AITS convention) and end to end.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path

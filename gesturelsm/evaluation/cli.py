@@ -19,7 +19,7 @@ from ..data.beat2 import Beat2Dataset
 from ..metrics.fgd import default_extractors
 from ..pipeline import GesturePipeline
 from ..settings import CLI, DEFAULT_CFG, Limits, grid_problems
-from ..settings.arguments import input_file, input_folder, output_folder, positive, refuse, threads
+from ..settings.arguments import input_file, input_folder, output_folder, refuse, threads
 from ..settings.values import from_text, method_list, real_number, whole_number
 from .bench import run_bench
 from .clips import heldout_clips
