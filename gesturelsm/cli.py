@@ -42,8 +42,8 @@ class WithDefaults(argparse.HelpFormatter):
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         d = action.default
-        if (not action.option_strings or action.required or STATED.search(text) or d is MISSING
-                or d in (None, False, argparse.SUPPRESS) or d == []):
+        if (not action.option_strings or action.required or STATED.search(text) or d is MISSING or d is None
+                or d is False or d == argparse.SUPPRESS or d == []):
             return text
         shown = " ".join(map(str, d)) if isinstance(d, (list, tuple)) else str(d)
         return f"{text} (default: {shown.replace('%', '%%')})".strip()

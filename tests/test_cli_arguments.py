@@ -94,7 +94,7 @@ def test_every_option_shows_its_default_in_help():
     missing = []
     for name, parser, action in _options(build_parser()):
         d = action.default
-        if action.required or d in (None, False, argparse.SUPPRESS, []) or repr(d) == "MISSING" \
+        if action.required or d is None or d is False or d == argparse.SUPPRESS or d == [] or repr(d) == "MISSING" \
                 or action.help == argparse.SUPPRESS:
             continue
         entry = " ".join(parser._get_formatter()._format_action(action).split())

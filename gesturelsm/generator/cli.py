@@ -48,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="without a split file: the first fraction of each take is training, the rest held out")
     p.add_argument("--speakers", nargs="*")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda | cuda:N; several processes (torchrun): "
                    "cpu trains with gloo, cuda with nccl and one GPU per process")
     p.add_argument("--eval-every", type=int, default=500, help="steps between held-out evaluations")

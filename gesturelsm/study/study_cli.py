@@ -42,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--keep-all", action="store_true", help="keep every rater (no attention rule)")
     r.add_argument("--reference", help="method whose Bradley-Terry score is 0 (default: the key's first)")
     r.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples of raters")
-    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--seed", type=int, default=0, help="seed of the bootstrap resamples")
     r.set_defaults(func=run_results)
 
 

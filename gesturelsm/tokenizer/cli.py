@@ -28,7 +28,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--train-fraction", type=float, default=0.8,
                    help="without train_test_split.csv: the first fraction of every take trains")
     p.add_argument("--speakers", nargs="*", help="speaker ids or names to use")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda")
     p.add_argument("--eval-every", type=int, default=500, help="steps between held-out evaluations")
     p.add_argument("--ship", metavar="DIR", help="also write fp16 inference copies here (e.g. assets/tokenizer)")
