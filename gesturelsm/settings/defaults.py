@@ -22,8 +22,8 @@ SEED_MAX = 2 ** 32 - 1               # numpy's and torch's seed range
 MIN_SECONDS = 0.5                    # shorter speech has no gesture to follow
 # Longest speech accepted by every entry point unless configured (the server's --max-seconds, the pipeline's
 # max_seconds, the commands' --max-seconds). The work of one request grows with its length (transcription, each
-# method's sampling and a video of every frame), so at 5 minutes one request still holds a shared 2-core server for
-# minutes, not an hour, while covering a talk's answer or a long monologue.
+# method's sampling, a video of every frame): 5 minutes bounds what one visitor holds on a shared server and still
+# covers a long answer or monologue; the commands and Python take the same limit and raise it when asked.
 MAX_SECONDS = 300.0
 
 
