@@ -25,9 +25,10 @@ from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.check import cfg_bound
 
-from . import live, live_socket, motion_player, stats_view, sweep_tab
+from . import live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
 from .live_character import LiveCharacters
+from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")

@@ -10,16 +10,13 @@ import numpy as np
 import pytest
 import soundfile as sf
 
+from _support import quiet
 from gesturelsm.serve.request import Request
 from gesturelsm.webapp import stats_view
 from gesturelsm.webapp.sweep_tab import SweepHandlers
 from gesturelsm.cli import main
 from gesturelsm.evaluation.evaluate import motion_stats as eval_motion_stats
 from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, speaker_reference, stats_body
-
-
-def quiet(*_a, **_k) -> None:
-    return None
 
 
 def test_page_statistics_equal_the_eval_definitions_for_the_shown_motions(service, speech_wav):
@@ -52,9 +49,9 @@ def page_sweep(service, speech_wav):
                     progress=quiet)
 
 
-def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, app_assets, speech_wav, tmp_path):
+def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, tiny_assets, speech_wav, tmp_path):
     _, (table, plot, files, pick, state) = page_sweep
-    assert main(["sweep", str(speech_wav), "--checkpoints", str(app_assets), "--methods", "gesturelsm",
+    assert main(["sweep", str(speech_wav), "--checkpoints", str(tiny_assets), "--methods", "gesturelsm",
                  "rectified_flow", "--steps", "1", "2", "--cfg", "2", "--seeds", "2", "--no-transcribe",
                  "--out", str(tmp_path / "cli")]) == 0
     cli = json.loads((tmp_path / "cli" / "sweep.json").read_text())["rows"]
@@ -72,7 +69,7 @@ def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, app_as
 
 
 def test_a_sweep_run_opens_in_the_player_as_its_own_motion(page_sweep):
-    from gesturelsm.export.player import read_motion, motion_arrays
+    from gesturelsm.export.player_payload import read_motion, motion_arrays
 
     h, (*_, state) = page_sweep
     payload = h.open_run(state, "5")

@@ -12,11 +12,11 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.audio import AudioError, AudioTooLongError, load_audio
-from gesturelsm.serve.uploads import FLAC, MP3, MP4, OGG, WAV, WEBM, probe_duration, sniff_bytes, sniff_container
+from gesturelsm.audio.containers import FLAC, MP3, MP4, OGG, WAV, WEBM, probe_duration, sniff_bytes, sniff_container
 
 from _hostile import playlist_naming, silent_flac
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 # Runs in a fresh interpreter so its peak RSS is this load alone; prints JSON.
 _MEASURE = """
@@ -83,7 +83,7 @@ def test_ffmpeg_decoding_stops_at_the_limit(tmp_path):
     """M4A goes through the bundled ffmpeg: 12 s of audio with a 2 s limit yields at most 2 s + 1 sample."""
     import imageio_ffmpeg
 
-    from gesturelsm.audio import _decode_with_ffmpeg
+    from gesturelsm.audio.loading import _decode_with_ffmpeg
 
     m4a = tmp_path / "tone.m4a"
     subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-f", "lavfi", "-i",

@@ -16,7 +16,7 @@ PLAYER = "#motion-player"
 
 @pytest.mark.browser
 def test_a_small_sweep_runs_from_the_page_and_one_motion_opens_in_the_player(service):
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not BUNDLE.exists():
         pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")

@@ -1,4 +1,4 @@
-"""audio.py: any file -> float32 mono at 16 kHz, with human messages for files that cannot be used."""
+"""gesturelsm.audio.loading: any file -> float32 mono at 16 kHz, with human messages for files that cannot be used."""
 from __future__ import annotations
 
 import numpy as np

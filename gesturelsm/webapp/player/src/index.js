@@ -1,7 +1,7 @@
 // The bundle's entry (esbuild -> ../dist/player.js): mounts the page's players and publishes the one global API,
 //   window.gesturelsmPlayer        the page's MotionPlayer (#motion-player; player.js documents its methods)
 //   window.gesturelsmPlayer.live   the Live tab's LiveFeed (#live-player; live_feed.js), null without one
-// The page imports this module and calls mount(element) / mountLive(element, box) (gesturelsm/webapp/motion_player.py,
+// The page imports this module and calls mount(element) / mountLive(element, box) (../component.py,
 // gesturelsm/webapp/live.py) and chooseLiveCharacter(spec) when the visitor chooses or clears a character; the other
 // exports are for tools and tests that import the bundle.
 import { LiveFeed } from './live_feed.js';
@@ -10,7 +10,7 @@ import { MotionPlayer } from './player.js';
 export { Body } from './body.js';
 export { LiveClock } from './live_clock.js';
 export { LiveMic } from './microphone.js';
-export { decodeMotion } from './motion_format.js';
+export { decodeMotion } from './motion_decoder.js';
 export { LiveFeed, MotionPlayer };
 
 let liveFeed = null;            // the page's live feed, whichever of the two players mounts first

@@ -10,7 +10,7 @@ Uploads are hostile until proven otherwise: the file name says nothing (a playli
 - `probe_duration` reads the duration from the container header (libsndfile's header parse, or the
   bundled ffmpeg's demuxer without decoding) so a too-long file is refused before any sample is decoded.
   It is a hint, never trusted alone: headers can lie or be absent, so decoding is bounded as well (see
-  `gesturelsm.audio.load_audio`).
+  `loading.load_audio`).
 - `ffmpeg_input_args` pins ffmpeg to the sniffed demuxer and to the local-file protocol, so ffmpeg never
   opens another file or URL named inside the upload (HLS/concat playlists, MP4 data references).
 """

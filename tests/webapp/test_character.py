@@ -1,6 +1,6 @@
-"""The page's character, server side (gesturelsm/webapp/character.py) and in the browser (app/player/src/character.js):
-the payload carries the retargeted rotations exactly; bad uploads give one-line gr.Errors; three-vrm posed
-from the payload puts the right wrist where the retargeting does."""
+"""The page's character, server side (gesturelsm/webapp/character.py) and in the browser
+(gesturelsm/webapp/player/src/character.js): the payload carries the retargeted rotations exactly; bad uploads give
+one-line gr.Errors; three-vrm posed from the payload puts the right wrist where the retargeting does."""
 from __future__ import annotations
 
 import json
@@ -12,6 +12,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from _rigs import character_js_page
+from _support import quiet
 from gesturelsm.webapp.character import character_payload, decode, read_upload
 from gesturelsm.retarget import retarget_motion
 
@@ -111,10 +112,6 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
     np.testing.assert_allclose(np.asarray(got), want, atol=1e-3)
 
 
-def quiet(*args, **kwargs) -> None:
-    """Stands in for gr.Progress outside a Gradio event."""
-
-
 def _request(wav, methods) -> tuple:
     #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
     return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False)
@@ -174,12 +171,12 @@ def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, 
     import soundfile as sf
 
     from _support import player_page, speech_like
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not VRM.exists():
         pytest.skip(f"the shared character is not at {VRM} (../shared beside the repo)")
     if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd gesturelsm/webapp/player && npm ci && npm run build)")
     sf.write(tmp_path / "speech.wav", speech_like(8.0, seed=2), 16000)
     player = "#motion-player"
     with player_page(app_url, player) as page:

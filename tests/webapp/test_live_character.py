@@ -18,10 +18,9 @@ from scipy.spatial.transform import Rotation
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, write_gltf
 from _support import speech_like, synthetic_motion
-from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
-from gesturelsm.export.motion_format import CHARACTER_VERSION, HEADER, VERSION, decode, encode
-from gesturelsm.export.player import motion_record
+from gesturelsm.export.motion_codec import CHARACTER_VERSION, HEADER, VERSION, decode, encode
+from gesturelsm.export.player_payload import motion_record
 from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import load_character, retarget_motion
 
@@ -31,11 +30,6 @@ from gesturelsm.webapp.live import payload  # noqa: E402
 from gesturelsm.webapp.live_character import EXPIRED, CharacterStream, LiveCharacters  # noqa: E402
 
 CHUNKS = (20, 20, 7, 33, 20, 20)          # the live feed's 20-frame chunks, and uneven ones
-
-
-@pytest.fixture(scope="module")
-def body():
-    return resolve_body(None)
 
 
 @pytest.fixture(scope="module")

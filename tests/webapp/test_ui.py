@@ -54,7 +54,7 @@ def test_build_demo_has_the_controls(service):
         dep = early[event]
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
     # with the in-browser player, the mp4 waits in a closed accordion (a <video> on screen slows the player's draws)
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if BUNDLE.exists():
         box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "video-box")

@@ -1,4 +1,4 @@
-// One body of the player: a skinned SMPL-X mesh (the rest-body GLB of gesturelsm/export/player.py, cloned per
+// One body of the player: a skinned SMPL-X mesh (the rest-body GLB of gesturelsm/export/player_payload.py, cloned per
 // body) posed by three.js from the generated joint rotations, frame by frame.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';

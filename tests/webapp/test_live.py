@@ -8,7 +8,7 @@ import threading
 import numpy as np
 import pytest
 
-from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, decode
+from gesturelsm.export.motion_codec import AXIS_ANGLE, QUATERNION, MotionRecord, decode
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
@@ -44,7 +44,7 @@ def test_with_a_body_and_the_player_built_the_tab_serves_the_socket_route_it_is_
     live_socket.routes): without one, the tab is Gradio's microphone."""
     from gesturelsm.body.model import resolve_body
     from gesturelsm.webapp import live_socket
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not BUNDLE.exists():
         pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
@@ -95,7 +95,7 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
     gives without a body (streams are deterministic): quaternions that rotate like the axis-angle poses (plus the
     body's pose mean) and the root = trans + rest pelvis."""
     from gesturelsm.body.model import resolve_body
-    from gesturelsm.export.player import motion_arrays
+    from gesturelsm.export.player_payload import motion_arrays
     from gesturelsm.motion.sequence import MotionSequence
 
     body = resolve_body(None)

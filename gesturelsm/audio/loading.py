@@ -9,10 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .constants import SAMPLE_RATE
-from .errors import AudioError
-from .serve.uploads import describe_seconds, ffmpeg_input_args, probe_duration, sniff_container
-
+from ..constants import SAMPLE_RATE
+from ..errors import AudioError
+from .containers import describe_seconds, ffmpeg_input_args, probe_duration, sniff_container
 
 
 def resample(y: np.ndarray, sr_in: int, sr_out: int = SAMPLE_RATE) -> np.ndarray:
@@ -51,7 +50,7 @@ class AudioTooLongError(AudioError):
 def load_audio(path: str | Path, sr: int = SAMPLE_RATE, max_seconds: float | None = None) -> np.ndarray:
     """Read wav/flac/ogg/mp3/m4a/webm... -> (N,) float32 mono at `sr`.
 
-    The container is recognised by its content, on an allow-list (`gesturelsm.serve.uploads`): playlists and
+    The container is recognised by its content, on an allow-list (`containers.py`): playlists and
     anything else are refused before a decoder sees them. With `max_seconds`, the header's duration is
     checked first and decoding stops one sample past the limit (`AudioTooLongError`), so memory and time
     stay bounded by the limit, not by what the file claims or contains. soundfile reads wav/flac/ogg/mp3/

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gesturelsm.errors import InputError
-from gesturelsm.export.motion_format import (AXIS_ANGLE, HEADER, QUATERNION, MotionFormatError, MotionRecord,
+from gesturelsm.export.motion_codec import (AXIS_ANGLE, HEADER, QUATERNION, MotionFormatError, MotionRecord,
                                              decode, encode)
 
 
@@ -35,8 +35,8 @@ def test_round_trip_gives_back_every_field(kind, T, E):
 
 
 def test_header_layout_is_the_documented_one():
-    """Byte offsets the page's decoder (app/player/src/motion_format.js) reads: magic, version, kind, joints,
-    expressions, fps, start, frames, meta length, then the floats at byte 28."""
+    """Byte offsets the page's decoder (gesturelsm/webapp/player/src/motion_decoder.js) reads: magic, version, kind,
+    joints, expressions, fps, start, frames, meta length, then the floats at byte 28."""
     rec = _record(QUATERNION, T=2, E=3)
     data = encode(rec)
     assert HEADER.size == 28 and data[:4] == b"GLSM"
@@ -88,7 +88,7 @@ def test_a_character_section_round_trips_as_version_2_and_leaves_version_1_alone
     at byte 28; a record without a section is version 1 in version 1's layout."""
     from dataclasses import replace
 
-    from gesturelsm.export.motion_format import CHARACTER_VERSION, SECTION
+    from gesturelsm.export.motion_codec import CHARACTER_VERSION, SECTION
 
     rec = _record(QUATERNION, T=5, E=2)
     rng = np.random.default_rng(1)
@@ -118,7 +118,7 @@ def test_face_morph_weights_round_trip_after_the_hips_translation():
     the bone-only record); encode -> decode gives every weight back, wrong sizes are refused."""
     from dataclasses import replace
 
-    from gesturelsm.export.motion_format import SECTION
+    from gesturelsm.export.motion_codec import SECTION
 
     rng = np.random.default_rng(2)
     T, B, F = 6, 43, 7

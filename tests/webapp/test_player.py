@@ -1,4 +1,4 @@
-"""The in-browser motion player (app/player), driven in headless Chromium on the shipped checkpoints:
+"""The in-browser motion player (gesturelsm/webapp/player), driven in headless Chromium on the shipped checkpoints:
 it plays before the mp4 exists, shows exactly the generated frames of each method, follows the speech's clock,
 and scrubbing keeps speech and motion within one frame. Skips, saying why, without chromium, the player bundle
 (scripts/setup.sh builds it with npm) or the shipped checkpoints."""
@@ -18,7 +18,7 @@ PLAYER = "#motion-player"
 def test_motion_file_round_trip_matches_the_glb_animation(tmp_path):
     """The player's motion file carries the same joint rotations and root as the animated GLB export."""
     from gesturelsm.export.glb import accessor_array, export_glb, read_glb
-    from gesturelsm.export.player import read_motion, write_motion
+    from gesturelsm.export.player_payload import read_motion, write_motion
     from gesturelsm.motion.sequence import MotionSequence
     from gesturelsm.render.frames import resolve_body
 
@@ -53,7 +53,7 @@ def shipped_url(tmp_path_factory):
 
 def _motion(url: str, frames: int, expressions: int) -> np.ndarray:
     """(frames, 55, 4) rotations of a motion file the page was given (the app serves files by path)."""
-    from gesturelsm.export.player import read_motion
+    from gesturelsm.export.player_payload import read_motion
 
     rec = read_motion(url.split("file=", 1)[1])
     assert rec.frames == frames and rec.expressions.shape[1] == expressions
@@ -127,16 +127,16 @@ DECODE_JS = """async () => {
 
 @pytest.mark.browser
 def test_the_page_decodes_what_python_encodes(tmp_path):
-    """A live-style record (a chunk from frame 42, meta) written by gesturelsm/export/motion_format.py and decoded by
+    """A live-style record (a chunk from frame 42, meta) written by gesturelsm/export/motion_codec.py and decoded by
     the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame, also of a
     version-2 record's character section (with and without the face's morph weights); cut or foreign bytes give the
     decoder's message naming the source."""
     from playwright.sync_api import sync_playwright
 
     from _support import CHROMIUM
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
     from app.screenshot import CHROMIUM_ARGS
-    from gesturelsm.export.motion_format import MotionRecord, encode
+    from gesturelsm.export.motion_codec import MotionRecord, encode
 
     if CHROMIUM is None:
         pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")

@@ -1,5 +1,5 @@
 // The live player of the Live tab (gesturelsm/webapp/live.py): a MotionPlayer with one body, on a LiveClock, fed the motion
-// records (motion_format.js) the server pushes over the app's WebSocket (protocol in app/live_socket.py).
+// records (motion_decoder.js) the server pushes over the app's WebSocket (protocol in webapp/live_socket.py).
 // start() opens the microphone (microphone.js) and the socket (element data-socket), streams the speech and plays
 // the motion that comes back; stop() sends the end (the server generates the rest, then closes). push(buffer)
 // appends the frames a message carries; reset() starts a new stream; `last` is the meta of the latest message
@@ -8,7 +8,7 @@
 // {token, name, url, key, bones, nodes, align, scale, head, morphs} or null) fetches and parses it once (before the
 // first stream it stands there at rest), and from the next start() on the hello names its token; the server answers
 // with the character's bones (a frames-less first message, meta.character) and every record then carries the frames
-// on the character (motion_format.js character section), drawn with character.js' applyFrame, and its face's morph
+// on the character (motion_decoder.js character section), drawn with character.js' applyFrame, and its face's morph
 // weights when its VRM binds visemes or blink (meta.character.morphs); the element carries data-character (the file
 // name) while it is shown. A character the server no longer holds, or the browser cannot load, leaves the mannequin
 // with the reason in data-character-error.
@@ -21,7 +21,7 @@ import { fetchCharacter } from './character.js';
 import { el } from './dom.js';
 import { LiveClock } from './live_clock.js';
 import { LiveMic, SEND_S } from './microphone.js';
-import { decodeMotion } from './motion_format.js';
+import { decodeMotion } from './motion_decoder.js';
 import { MotionPlayer } from './player.js';
 
 export class LiveFeed {

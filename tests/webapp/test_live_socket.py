@@ -1,5 +1,5 @@
 """The Live tab's WebSocket (gesturelsm/webapp/live_socket.py), driven by Starlette's test client: int16 PCM in,
-motion records (gesturelsm/export/motion_format.py) out as soon as they exist; every frame of the speech arrives once,
+motion records (gesturelsm/export/motion_codec.py) out as soon as they exist; every frame of the speech arrives once,
 in order, whatever the sample rate; Stop generates the rest
 and closes; busy, bad messages and dropped connections end cleanly (no live worker left)."""
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, decode
+from gesturelsm.export.motion_codec import AXIS_ANGLE, QUATERNION, MotionRecord, decode
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 

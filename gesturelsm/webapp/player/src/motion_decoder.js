@@ -1,4 +1,4 @@
-// The page's decoder of the binary motion format (layout and encoder: gesturelsm/export/motion_format.py): the
+// The page's decoder of the binary motion format (layout and encoder: gesturelsm/export/motion_codec.py): the
 // offline player's motion files and the live feed's WebSocket messages are both one record,
 //   header (28 bytes, little-endian): magic "GLSM", version u16, kind u16 (1 quaternion, 2 axis-angle),
 //     joints u16, expressions u16, fps f32, start u32, frames u32, meta bytes u32

@@ -1,10 +1,10 @@
-"""What the page's in-browser player (app/player/src/player.js) loads: one rest body per shape, and a compact
-binary motion per method, so the bodies move seconds before the server-side mp4 exists.
+"""What the page's in-browser player (gesturelsm/webapp/player/src/player.js) loads: one rest body per shape, and a
+compact binary motion per method, so the bodies move seconds before the server-side mp4 exists.
 
 * body: a skinned GLB of the unposed body (`export_glb` of one rest frame): mesh, 55-joint skeleton, skin
   weights and expression morph targets. Written once per body shape (betas) into a cache folder and reused
   by every request; the browser caches it by URL as well.
-* motion (`.bin`): one record of the binary motion format (export/motion_format.py, kind quaternion, 30 fps,
+* motion (`.bin`): one record of the binary motion format (export/motion_codec.py, kind quaternion, 30 fps,
   metres, y up, the body faces +z), frames t = 0..T-1:
     rotations   (T, 55, 4)  each joint's local rotation, unit quaternion x, y, z, w (the pose plus the body
                             model's pose mean, exactly what `export_glb` animates; sign-continuous over time)
@@ -27,7 +27,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
-from .motion_format import MotionRecord, decode, encode
+from .motion_codec import MotionRecord, decode, encode
 from .skeleton import full_poses
 
 MAX_EXPRESSIONS = 10            # as export_glb's default: morph targets carried by the body GLB

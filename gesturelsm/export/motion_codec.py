@@ -1,6 +1,6 @@
 """The one binary motion format of the in-browser player: the offline player's motion files (`.bin`, one per
-method, export/player.py) and the live feed's WebSocket messages (gesturelsm/webapp/live.py `payload`) are both one record.
-The page decodes it in app/player/src/motion_format.js.
+method, export/player_payload.py) and the live feed's WebSocket messages (gesturelsm/webapp/live.py `payload`) are
+both one record. This module writes and reads it; the page decodes it in gesturelsm/webapp/player/src/motion_decoder.js.
 
 A record, little-endian throughout:
 
@@ -8,7 +8,7 @@ A record, little-endian throughout:
       0  magic        4 bytes  b"GLSM"
       4  version      uint16   1
       6  kind         uint16   1 = quaternion: rotations are each joint's local rotation x, y, z, w and root is the
-                               pelvis position (what the player draws, export/player.py `motion_arrays`);
+                               pelvis position (what the player draws, export/player_payload.py `motion_arrays`);
                                2 = axis-angle: rotations are SMPL-X poses (3 per joint) and root is trans
       8  joints       uint16   J (55 for SMPL-X)
      10  expressions  uint16   E (weights per frame, often 0)

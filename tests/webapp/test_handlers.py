@@ -7,11 +7,8 @@ from types import SimpleNamespace
 
 import gradio as gr
 
+from _support import quiet
 from gesturelsm.webapp.ui import _Handlers, build_demo
-
-
-def quiet(*args, **kwargs) -> None:
-    """Stands in for gr.Progress outside a Gradio event."""
 
 
 def inputs(wav, seed: int) -> tuple:

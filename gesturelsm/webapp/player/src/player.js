@@ -8,11 +8,11 @@
 //   await p.setBodies([{label, body: glbUrl}], fps=30)     // rest bodies (GLB cached per URL), frames cleared
 //   await p.setBodies(specs, fps, payload.character)      // the methods on the visitor's character (character.js)
 //   p.appendFrames(i, rotations, root, expressions)       // Float32Arrays: (n, 55, 4) x,y,z,w; (n, 3); (n, E)
-//   p.appendRecord(i, record)                             // a decoded motion record (motion_format.js); on a
+//   p.appendRecord(i, record)                             // a decoded motion record (motion_decoder.js); on a
 //                                                         // streamed character body, its character section
 //   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
 //   p.play(); p.pause(); p.seek(seconds)
-//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player.py
+//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player_payload.py
 //   p.measure = true                                      // benchmarks: timings in p.prof and data-marks (measure.js)
 // Frame shown = floor(clock.currentTime * fps), clamped to the frames received so far, so motion and speech
 // stay within one frame of each other whatever the clock does (play, scrub, seek, stall).
@@ -25,7 +25,7 @@ import { Body, JOINTS, clayMatcap, loadGlb } from './body.js';
 import { CharacterBody, fetchCharacter } from './character.js';
 import { adoptStyles, el } from './dom.js';
 import { drawProfile, lap, requested } from './measure.js';
-import { decodeMotion } from './motion_format.js';
+import { decodeMotion } from './motion_decoder.js';
 
 const SPACING = 1.2;           // metres between bodies, as in the server-side video
 
@@ -122,7 +122,7 @@ export class MotionPlayer {
     this.dirty = true;
   }
 
-  // A decoded motion record (motion_format.js) for body i; `source` names it in the error for other motion.
+  // A decoded motion record (motion_decoder.js) for body i; `source` names it in the error for other motion.
   appendRecord(i, record, source = 'motion') {
     const b = this.bodies[i];
     if (b.streamed) {                                  // the live stream on the visitor's character

@@ -41,12 +41,12 @@ def _hand(page, node: int) -> list[float]:
 def test_the_live_tab_streams_onto_the_chosen_character(app_url, speech_48k):
     from _support import player_page
     from gesturelsm.retarget import load_character
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not VRM.exists():
         pytest.skip(f"the shared character is not at {VRM} (../shared beside the repo)")
     if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd gesturelsm/webapp/player && npm ci && npm run build)")
     skel = load_character(VRM).skeleton
     hand = skel.nodes[skel.bones["right_wrist"]]
     args = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
@@ -102,7 +102,7 @@ def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, m
     from _skinned import face_vrm
     from _support import player_page
     from gesturelsm.motion.skeleton import JOINT_INDEX
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     sent, real = [], live_character.face_morph
 
@@ -115,7 +115,7 @@ def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, m
     monkeypatch.setattr(live_character, "face_morph", talking)
 
     if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (cd app/player && npm ci && npm run build)")
+        pytest.skip(f"the player bundle {BUNDLE} is not built (cd gesturelsm/webapp/player && npm ci && npm run build)")
     path = face_vrm(tmp_path / "face.vrm", vrm="1")
     args = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream",
             f"--use-file-for-fake-audio-capture={speech_48k}"]

@@ -1,12 +1,11 @@
-"""The page's in-browser motion player: the Gradio side of app/player/ (three.js, bundled offline).
+"""The Gradio side of the page's in-browser motion player (the player is `src/` beside this file).
 
-`player_component()` puts the player (element id `motion-player`) in the page; its JavaScript bundle
-(app/player/dist/player.js in a checkout, built from app/player/src/ by scripts/setup.sh with npm + esbuild, no CDN,
-its stylesheet player.css bundled in; `player/player.js` inside this package in a wheel built with it) is served by the
-app itself. `payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB once per shape, one
-motion record per method, gesturelsm/export/motion_format.py) and returns the JSON the page hands to
-`window.gesturelsmPlayer.load(payload)`, the page's one global player API (app/player/src/index.js; the Live tab's
-feed is its `.live`).
+`player_component()` puts the player (element id `motion-player`) in the page; its JavaScript bundle (`dist/player.js`
+beside this file, built from `src/` by scripts/setup.sh with npm + esbuild, no CDN, its stylesheet player.css bundled
+in) is served by the app itself. `payload(service, outcome)` writes what the player fetches (speech wav, rest-body GLB
+once per shape, one motion record per method, gesturelsm/export/motion_codec.py) and returns the JSON the page hands to
+`window.gesturelsmPlayer.load(payload)`, the page's one global player API (src/index.js; the Live tab's feed is its
+`.live`).
 """
 from __future__ import annotations
 
@@ -15,23 +14,15 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.constants import SAMPLE_RATE
-from gesturelsm.export.player import body_glb, player_payload
+from gesturelsm.export.player_payload import body_glb, player_payload
 from gesturelsm.motion.sequence import NUM_BETAS
 from gesturelsm.serve.request import Result
 from gesturelsm.serve.service import GestureService
 
-from .character import page_character
+from ..character import page_character
 
 
-def _bundle() -> Path:
-    """The built player: inside an installed wheel it is this package's `player/player.js` (setup.py maps the
-    checkout's app/player/dist there when it was built); in a checkout or an editable install, app/player/dist."""
-    here = Path(__file__).resolve().parent
-    installed = here / "player" / "player.js"
-    return installed if installed.is_file() else here.parents[1] / "app" / "player" / "dist" / "player.js"
-
-
-BUNDLE = _bundle()
+BUNDLE = Path(__file__).resolve().parent / "dist" / "player.js"     # in a checkout and in a wheel built with it
 ELEMENT = ('<div id="motion-player" data-state="empty" data-frames="0" data-frame="0" data-fps="0" '
            'data-preload="{preload}"></div>')
 MISSING = ('<div id="motion-player" data-state="empty" data-frames="0"><p>The in-browser player is not built '
