@@ -1,6 +1,6 @@
 """The values one web request passes through, each typed and never edited in place:
 
-- `ServiceSettings`: the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
+- `ServiceSettings` (`config.py`): the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
 - `Request`: what a visitor or API client asks for, as sent (`serve/checks.py` checks it with the settings'
   validator, `gesturelsm.settings`, and makes its `Plan`).
 - `RenderJob`: everything the side-by-side video of a request needs, fixed once the motions exist (motions,
@@ -19,34 +19,13 @@ import numpy as np
 from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
 from ..pipeline import generation_seconds
-from ..settings import DEFAULTS, MAX_SECONDS, MISSING, Limits
+from ..settings import DEFAULTS, MISSING
 
 VIDEO_SIZES = (256, 384, 512, 640)
 DEFAULT_SIZE = 384                                       # pixels per body in the page's video
 TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
                   "real-time factor"]                   # seconds, except the real-time factor
 STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")
-
-
-@dataclass(frozen=True)
-class ServiceSettings:
-    checkpoints: str | None = None          # folder with tokenizer/ and generator/ (default: shipped assets/)
-    body_model: str | None = None           # SMPL-X .npz (default: $GESTURELSM_SMPLX_MODEL or the mannequin)
-    beat2: str | None = None                # BEAT2-layout folder: ground truth for known takes
-    workdir: str | None = None              # where outputs go (default: <tmp>/gesturelsm-app)
-    max_seconds: float = MAX_SECONDS        # longest speech accepted
-    max_upload_mb: float = 50.0             # largest upload accepted
-    keep_minutes: float = 60.0              # outputs older than this are deleted
-    concurrency: int = 1                    # requests generated at the same time (the rest queue)
-    max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
-    max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
-
-    @property
-    def limits(self) -> Limits:
-        """What this server accepts beyond each method's own bounds: speech length, and the sliders' ends as step caps
-        for every request (Generate, Sweep, the API)."""
-        return Limits(self.max_seconds, {"steps": self.max_steps, "ddim_steps": self.max_ddim_steps})
 
 
 @dataclass

@@ -40,10 +40,12 @@ from ..export import export_arkit, export_bvh, export_glb, export_keypoints, exp
 from ..motion.sequence import MotionSequence
 from ..backends import GROUND_TRUTH, GROUND_TRUTH_LABEL, SPECS, checkpoint_sources, label
 from ..pipeline import GesturePipeline, Plan, SpeechInput
+from ..settings import Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
 from .limits import transcript_problems
-from .request import VIDEO_SIZES, RenderJob, Request, Result, ServiceSettings, timing_rows
+from .config import ServiceSettings
+from .request import VIDEO_SIZES, RenderJob, Request, Result, timing_rows
 from .sweep import SweepOutcome, SweepRequest, run_sweep_request
 
 log = logging.getLogger("gesturelsm.app")
@@ -64,6 +66,13 @@ class GestureService:
                                                max_seconds=settings.max_seconds)
         body = load_body_model(str(resolve_model_path(settings.body_model)))
         return cls(pipe, settings, body)
+
+    @property
+    def limits(self) -> Limits:
+        """What this server accepts beyond each method's own bounds: speech length, and the sliders' ends as step caps
+        for every request (Generate, Sweep, the API)."""
+        st = self.settings
+        return Limits(st.max_seconds, {"steps": st.max_steps, "ddim_steps": st.max_ddim_steps})
 
     @property
     def methods(self) -> list[str]:
@@ -136,7 +145,7 @@ class GestureService:
         server's limits): all problems at once (with `extra` ones found by the caller), one line each, before any
         work; returns the request with normalised values and its plan."""
         upload = self._upload(req.audio_path) if need_file else []
-        req, settings, problems = check_request(req, self.methods, self.settings.limits, VIDEO_SIZES)
+        req, settings, problems = check_request(req, self.methods, self.limits, VIDEO_SIZES)
         problems = upload + problems + (extra or [])
         if problems:
             raise InputError("\n".join(problems))

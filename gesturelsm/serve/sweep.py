@@ -52,7 +52,7 @@ def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress:
     grid = None
     try:
         grid = sweep_grid(req.methods, req.steps, req.cfgs, req.seeds, service.pipeline.methods, limits,
-                          service.settings.limits, PAGE)
+                          service.limits, PAGE)
     except InputError as exc:
         problems += str(exc).splitlines()
     metric = one_of(req.metric, "Statistic", PLOT_METRICS, problems)

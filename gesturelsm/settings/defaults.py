@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 from ..backends import GROUND_TRUTH, MethodSpec, method_spec
+from ..constants import MAX_SECONDS
 from ..motion.postprocess import DEFAULT_SMOOTHING, postprocess
 from ..motion.sequence import MotionSequence
 
@@ -20,11 +21,6 @@ DEFAULT_METHOD = "gesturelsm"        # the method a command runs when none is na
 DEFAULT_CFG = 2.0                    # the paper's guidance scale
 SEED_MAX = 2 ** 32 - 1               # numpy's and torch's seed range
 MIN_SECONDS = 0.5                    # shorter speech has no gesture to follow
-# Longest speech accepted by every entry point unless configured (the server's --max-seconds, the pipeline's
-# max_seconds, the commands' --max-seconds). The work of one request grows with its length (transcription, each
-# method's sampling, a video of every frame): 5 minutes bounds what one visitor holds on a shared server and still
-# covers a long answer or monologue; the commands and Python take the same limit and raise it when asked.
-MAX_SECONDS = 300.0
 
 
 @dataclass(frozen=True)

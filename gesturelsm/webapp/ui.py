@@ -19,6 +19,7 @@ from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.render.background import RenderCancelled
+from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
@@ -32,7 +33,6 @@ from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
-QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
@@ -191,7 +191,7 @@ def _step_slider(service: GestureService, setting: str) -> gr.Slider:
     the first one's default (each method's spec; the server's caps, ServiceSettings.limits)."""
     specs = [SPECS[m] for m in service.pipeline.methods if m in SPECS and SPECS[m].steps_setting == setting] or \
         [s for s in SPECS.values() if s.steps_setting == setting]
-    hi = max(service.settings.limits.max_steps(s) for s in specs)
+    hi = max(service.limits.max_steps(s) for s in specs)
     return pass_through(gr.Slider(1, hi, value=specs[0].default_steps, step=1, label=STEPS_SETTINGS[setting],
                                   info="for " + ", ".join(s.label for s in specs)))
 

@@ -116,7 +116,8 @@ def test_batch_renders_the_new_method(swing):
 
 def test_the_page_offers_and_runs_the_new_method(swing):
     from gesturelsm.pipeline import GesturePipeline
-    from gesturelsm.serve.request import Request, ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
+    from gesturelsm.serve.request import Request
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.ui import build_demo
 

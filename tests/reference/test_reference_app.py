@@ -11,7 +11,8 @@ import soundfile as sf
 from _support import served, speech_like
 from gesturelsm.backends import SPECS
 from gesturelsm.reference.runner import FACE_NOTE
-from gesturelsm.serve.request import TIMING_COLUMNS, ServiceSettings
+from gesturelsm.serve.config import ServiceSettings
+from gesturelsm.serve.request import TIMING_COLUMNS
 from gesturelsm.serve.service import GestureService
 
 
