@@ -196,6 +196,18 @@ def _step_slider(service: GestureService, setting: str) -> gr.Slider:
                                   info="for " + ", ".join(s.label for s in specs)))
 
 
+def _methods_info(methods: list[str]) -> str | None:
+    """What the choices' specs say a visitor should know: the authors' released weights run in our windowing, and
+    the methods that generate no face."""
+    specs = [SPECS[m] for m in methods if m in SPECS]
+    notes = ["Authors' weights: their released models; long speech uses our windowing with a neutral first seed."] \
+        if any(s.imported for s in specs) else []
+    faceless = [s.label for s in specs if "face" not in s.regions]
+    if faceless:
+        notes.append(f"{', '.join(faceless)} generate no face, so the face stays neutral.")
+    return " ".join(notes) or None
+
+
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
     """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
     specs); returns the request's inputs in `_Handlers.request` order, the button and the Character upload."""
@@ -210,11 +222,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
                                          label="Transcribe automatically when no transcript is given (English)"))
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                        file_types=[".TextGrid", ".textgrid"], type="filepath")
-    methods = pass_through(gr.CheckboxGroup(
-        choices, value=shown, label="Methods shown side by side", elem_id="methods",
-        info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
-              "long speech uses our windowing with a neutral first seed."
-              if any(m in SPECS and SPECS[m].imported for m in service.methods) else None)))
+    methods = pass_through(gr.CheckboxGroup(choices, value=shown, label="Methods shown side by side",
+                                            elem_id="methods", info=_methods_info(service.methods)))
     character = character_upload()
     with gr.Row():
         steps = _step_slider(service, "steps")
