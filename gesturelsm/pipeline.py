@@ -21,7 +21,7 @@ import torch
 from .align import align_words
 from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, resample, to_mono
-from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends,
+from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
                        load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
@@ -31,7 +31,7 @@ from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
 from .motion.postprocess import check_smoothing, fit_length
 from .motion.sequence import FPS, MotionSequence
-from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Settings, check_method_settings
+from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, PostProcess, Settings, check_method_settings
 from .tokenizer.model import RVQVAE
 
 NOT_GENERATION = ("alignment", "transcription", "rendering")    # stages outside generation time (the paper's AITS)
@@ -102,6 +102,13 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
+
+
+def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
+           body=None) -> tuple[MotionSequence, str | None]:
+    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
+    ground on `body`), and why grounding had to leave it as it was, when it had to."""
+    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 class GesturePipeline:
@@ -260,9 +267,11 @@ class GesturePipeline:
             self.check_settings(m, plan.steps_for(m), plan.settings.cfg)
         check_smoothing(plan.settings.post.smoothing)
 
-    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
+    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+                     body=None) -> Generated:
         """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing)."""
+        recognised), each fitted to the speech's length, then post-processed (`finish`: stand in place, smoothing,
+        feet on the ground on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL)."""
         self.check_plan(plan)
         T = speech.num_frames
         gens = plan.generators
@@ -284,7 +293,10 @@ class GesturePipeline:
                                 "it is left out.")
             else:
                 motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
-        motions = {k: plan.settings.post.apply(v.slice(0, T)) for k, v in motions.items()}
+        for k, v in motions.items():
+            motions[k], note = plan.settings.post.apply(v.slice(0, T), body)
+            if note:
+                warnings.append(f"{label(k)}: {note}")
         return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
@@ -307,4 +319,4 @@ class GesturePipeline:
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "GROUND_TRUTH", "generation_seconds"]
+           "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

@@ -84,12 +84,12 @@ def run_generate(args: argparse.Namespace) -> int:
         print(f'recognised: "{speech.transcript}"', flush=True)
     res = pipe.generate(speech, steps=a.settings.steps_for(args.method), cfg=a.settings.cfg, seed=a.settings.seed,
                         method=args.method, progress=say)
-    motion = a.settings.post.apply(res.motion)
+    motion, note = a.settings.post.apply(res.motion)
     path = motion.save(a.out)
     end_to_end = time.perf_counter() - t1
     if rig is not None:
-        print(f"wrote {export_rig(motion, rig, path)}")
-    for w in res.warnings:
+        print(f"wrote {export_rig(motion, rig, path, grounding=a.settings.post.grounding)}")
+    for w in res.warnings + ([note] if note else []):
         print(f"warning: {w}")
     report(res, a.settings, path, end_to_end, t1 - t0, time.perf_counter() - t0)
     return 0
@@ -100,7 +100,8 @@ def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: fl
     post = settings.post
     print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {res.method}, {res.steps} steps, "
           f"CFG {res.cfg:g}, seed {res.seed}, smoothing {post.smoothing}"
-          f"{', standing in place' if post.stand_in_place else ''}; {res.text_mode}")
+          f"{', standing in place' if post.stand_in_place else ''}, grounding {'on' if post.grounding else 'off'}; "
+          f"{res.text_mode}")
     print("timings: " + ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items()))
     print(f"real-time factor {res.real_time_factor:.1f}x for generation (features, sampling, decoding: the paper's "
           f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.2f} s: "

@@ -23,7 +23,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import GestureError, InputError
-from ..settings import CLI, DEFAULT_CFG, Limits, Names, grid_problems
+from ..settings import CLI, DEFAULT_CFG, Limits, Names, PostProcess, grid_problems
 from ..settings.values import method_list
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
@@ -122,6 +122,7 @@ class SweepResult:
     reference: SpeakerReference | None
     seconds: float = 0.0                 # the whole sweep, wall clock (warm-up included)
     warmup_seconds: float = 0.0          # of which the untimed warm-up (`warm_up`)
+    grounding: bool = True               # the motions' feet were grounded (settings.PostProcess)
 
     def cell_runs(self, cell: tuple[str, int, float]) -> list[SweepRun]:
         return [r for r in self.runs if (r.method, r.steps, r.cfg) == cell]
@@ -165,14 +166,16 @@ def warm_up(pipe, speech, grid: SweepGrid, progress: Progress | None = None) -> 
 
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
               progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
-              keep_motions: bool = True) -> SweepResult:
-    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion,
-    after `warm_up`. `cancelled()` is asked before every generation; True raises SweepCancelled.
+              keep_motions: bool = True, grounding: bool = True) -> SweepResult:
+    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
+    feet grounded (settings.PostProcess, without smoothing: the sampler's own motion otherwise) unless `grounding` is
+    off, after `warm_up`. `cancelled()` is asked before every generation; True raises SweepCancelled.
     `progress(fraction, message)` carries the estimate of the time left."""
     reference = reference if reference is not None else speaker_reference()
     context = SpeechContext.of(speech.audio, None if reference is None else reference.mean_speed)
     jobs = [(m, s, c, k) for (m, s, c) in grid.cells for k in range(grid.seeds)]
     total = sum(_units(s, c) for _, s, c, _ in jobs) or 1.0
+    post = PostProcess(smoothing="off", grounding=grounding)
     t0 = time.perf_counter()
     warmup_s = warm_up(pipe, speech, grid, progress)
     done, runs, t1 = 0.0, [], time.perf_counter()
@@ -184,11 +187,12 @@ def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerRefere
             eta = f", about {left:.0f} s left" if left is not None else ""
             progress(done / total, f"{i + 1} of {len(jobs)}: {m} {s} steps CFG {c:g} seed {k}{eta}")
         res = pipe.generate(speech, steps=s, cfg=c, seed=k, method=m)
-        motion = res.motion.slice(0, speech.num_frames)
+        motion, _ = post.apply(res.motion.slice(0, speech.num_frames), body)
         world, local = joint_positions(motion, body)
         runs.append(SweepRun(m, s, c, k, res.generation_seconds, statistics_of_joints(world, local, context),
                              motion if keep_motions else None, local))
         done += _units(s, c)
     if progress:
         progress(1.0, f"{len(jobs)} motions in {time.perf_counter() - t0:.0f} s")
-    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, warmup_s)
+    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, warmup_s,
+                       grounding)

@@ -1,7 +1,8 @@
 """`gesturelsm sweep`: methods x steps x CFG x seeds on one speech -> table (CSV, markdown, JSON) and plot.
 
     gesturelsm sweep speech.wav --methods gesturelsm rectified_flow ddim --steps 1 2 4 8 --cfg 1 2 3 --seeds 2 \
-        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] --out runs/sweep
+        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] [--grounding off] \
+        --out runs/sweep
 """
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import SPECS, checkpoint_sources
 from ..errors import InputError
+from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
 from ..settings.arguments import add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
 from ..settings.values import from_text
@@ -40,6 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
+    add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
     p.add_argument("--max-work", type=from_text, default=LIMITS.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
@@ -77,7 +80,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
                                  progress=say)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
-    result = run_sweep(pipe, speech, grid, keep_motions=False, progress=say)
+    result = run_sweep(pipe, speech, grid, keep_motions=False, progress=say, grounding=grounding_on(args))
     files = write_sweep(result, out, args.metric)
     print(markdown_text(result))
     print(f"\nwrote {', '.join(str(f) for f in files.values())}")

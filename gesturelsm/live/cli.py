@@ -2,6 +2,7 @@
 
     gesturelsm live speech.wav --chunk-ms 200 --out motion.npz            # as fast as possible
     gesturelsm live speech.wav --realtime                                 # chunks arrive at the pace of speech
+    gesturelsm live speech.wav --grounding off                            # the decoder's legs, feet not planted
 """
 from __future__ import annotations
 
@@ -75,6 +76,8 @@ def add_parser(sub) -> None:
     p.add_argument("--commit", type=from_text, default=LiveConfig.commit,
                    help="latents finalised per window (4 frames each)")
     p.add_argument("--lookahead", type=from_text, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--grounding", choices=("on", "off"), default="on",
+                   help="feet on the ground, causally, chunk by chunk (off: the decoder's legs and root as they come)")
     p.add_argument("--threads", type=from_text, default=1,
                    help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
@@ -95,7 +98,7 @@ def check_arguments(args: argparse.Namespace) -> tuple:
     out = output_file(args.out, "--out", ".npz", p) if args.out else None
     refuse(p)
     cfg = LiveConfig(commit=commit, lookahead=lookahead, steps=settings.steps_for(LiveConfig.method), cfg=settings.cfg,
-                     seed=settings.seed)
+                     seed=settings.seed, grounding=args.grounding == "on")
     return cfg, chunk_ms, n_threads, out
 
 
@@ -113,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     res = run_file(pipe, audio, cfg, chunk_ms, args.realtime)
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {chunk_ms:.0f} ms "
-          f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s")
+          f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s; "
+          f"feet on the ground: {args.grounding}")
     print(f"latency median {np.median(res.latencies) * 1000:.0f} ms, p90 {np.percentile(res.latencies, 90) * 1000:.0f}"
           f" ms; real-time factor {res.real_time_factor:.2f}x; {sum(c.motion.num_frames for c in res.chunks)} frames")
     if out:

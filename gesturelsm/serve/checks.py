@@ -26,7 +26,8 @@ def check_request(req: Any, available: Sequence[str], limits_: Limits, sizes: Se
     """(request with normalised values, its settings, problems). `available`: the methods a visitor may choose;
     `limits_`: the server's (speech length, step caps)."""
     settings, p = settings_problems(Asked(req.methods, req.steps, req.ddim_steps, req.cfg, req.seed,
-                                          req.stand_in_place, req.smoothing, req.transcribe), available, limits_, PAGE)
+                                          req.stand_in_place, req.smoothing, req.transcribe, req.grounding), available,
+                                    limits_, PAGE)
     size = whole_number(req.size, "Video size", min(sizes), max(sizes), p)
     if size is not None:
         size = one_of(size, "Video size", sizes, p)

@@ -45,6 +45,7 @@ class Request:
     exports: bool = True
     transcribe: bool = DEFAULTS.transcribe   # automatic transcript when neither text nor TextGrid is given
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
+    grounding: bool = DEFAULTS.post.grounding   # feet on the ground (gesturelsm.grounding)
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,6 +59,7 @@ class RenderJob:
     speech_seconds: float                              # the speech's length (motion frames / 30)
     size: int                                          # pixels per body, square
     started: float                                     # time.perf_counter() at the request's start
+    grounding: bool = True                             # feet on the ground: a character's too, on its own legs
 
 
 @dataclass(frozen=True, eq=False)

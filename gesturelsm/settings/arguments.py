@@ -23,6 +23,7 @@ from typing import Any, Sequence
 
 from ..backends import GROUND_TRUTH, SPECS
 from ..errors import InputError
+from ..grounding.cli import add_grounding_flag, grounding_on
 from ..motion.postprocess import SMOOTHING_WINDOWS
 from .check import CLI, MISSING, Asked, settings_problems
 from .defaults import DEFAULTS, MAX_SECONDS, Limits, Settings
@@ -54,11 +55,12 @@ def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
 
 
 def add_post_flags(p: argparse.ArgumentParser) -> None:
-    """--smoothing and --stand-in-place: the post-processing of every motion (`PostProcess`)."""
+    """--smoothing, --stand-in-place and --grounding: the post-processing of every motion (`PostProcess`)."""
     p.add_argument("--smoothing", default=DEFAULTS.post.smoothing, choices=list(SMOOTHING_WINDOWS),
                    help="post-processing (motion/postprocess.py); 'off' writes the raw model output "
                         f"(default: {DEFAULTS.post.smoothing})")
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
+    add_grounding_flag(p)
 
 
 def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
@@ -77,7 +79,8 @@ def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, proble
     asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
                   cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
                   stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing", MISSING),
-                  transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING)
+                  transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
+                  grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
     settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
     problems += found
     return settings

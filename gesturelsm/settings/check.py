@@ -38,13 +38,14 @@ class Names:
     seed: str
     stand_in_place: str
     smoothing: str
+    grounding: str
     transcribe: str
 
 
 PAGE = Names("Methods", "Steps", "DDIM steps", "CFG scale", "Seed", "Stand in place", "Smoothing",
-             "Automatic transcription")
+             "Feet on the ground", "Automatic transcription")
 CLI = Names("--methods", "--steps", "--ddim-steps", "--cfg", "--seed", "--stand-in-place", "--smoothing",
-            "--no-transcribe")
+            "--grounding", "--no-transcribe")
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,7 @@ class Asked:
     stand_in_place: Any = MISSING
     smoothing: Any = MISSING
     transcribe: Any = MISSING
+    grounding: Any = MISSING
 
 
 def _given(value: Any, default: Any) -> Any:
@@ -121,7 +123,8 @@ def check_post(asked: Asked, names: Names, problems: list[str]) -> PostProcess |
     n = len(problems)
     in_place = switch(_given(asked.stand_in_place, DEFAULTS.post.stand_in_place), names.stand_in_place, problems)
     smoothing = one_of(_given(asked.smoothing, DEFAULTS.post.smoothing), names.smoothing, SMOOTHING_WINDOWS, problems)
-    return None if len(problems) > n else PostProcess(in_place, smoothing)
+    grounding = switch(_given(asked.grounding, DEFAULTS.post.grounding), names.grounding, problems)
+    return None if len(problems) > n else PostProcess(in_place, smoothing, grounding)
 
 
 def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,

@@ -14,6 +14,7 @@ from typing import Mapping
 
 from ..backends import GROUND_TRUTH, MethodSpec, method_spec
 from ..constants import MAX_SECONDS
+from ..grounding import ground_motion
 from ..motion.postprocess import DEFAULT_SMOOTHING, postprocess
 from ..motion.sequence import MotionSequence
 
@@ -25,12 +26,21 @@ MIN_SECONDS = 0.5                    # shorter speech has no gesture to follow
 
 @dataclass(frozen=True)
 class PostProcess:
-    """What is done to every finished motion (each method's and ground truth's alike), `motion/postprocess.py`."""
+    """What is done to every finished motion, each method's and ground truth's alike: stand in place, then smoothing
+    (`motion/postprocess.py`), then feet on the ground (`gesturelsm.grounding`). With stand in place and grounding
+    both on, the root stays on the spot horizontally and the legs plant the feet under it."""
     stand_in_place: bool = False         # the root's horizontal movement removed
     smoothing: str = DEFAULT_SMOOTHING   # motion.postprocess.SMOOTHING_WINDOWS
+    grounding: bool = True               # planted feet, no drift, the body on the floor (docs/GROUNDING.md)
 
-    def apply(self, motion: MotionSequence) -> MotionSequence:
-        return postprocess(motion, self.stand_in_place, self.smoothing)
+    def apply(self, motion: MotionSequence, body=None) -> tuple[MotionSequence, str | None]:
+        """The motion post-processed (grounded on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL), and why
+        grounding had to leave it as it was, when it had to (one sentence)."""
+        motion = postprocess(motion, self.stand_in_place, self.smoothing)
+        if not self.grounding:
+            return motion, None
+        res = ground_motion(motion, body)
+        return res.motion, res.warning
 
 
 @dataclass(frozen=True)

@@ -161,17 +161,17 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
             raise InputError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
             gen = pipeline.generate_all(speech, replace(base, settings=replace(base.settings, methods=(it.method,)),
-                                                        filename=a.name))
+                                                        filename=a.name), body=body)
             if it.method not in gen.motions:
                 log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
                 continue
             render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
-                         character=rig)
+                         character=rig, grounding=base.settings.post.grounding)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 
                 export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
+                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.settings.post.grounding)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
     return done, skipped
