@@ -76,7 +76,7 @@ def test_generate_runs_the_new_method_with_its_spec(swing, capsys):
 
     out = swing / "swing.npz"
     assert main(["generate", str(swing / "speech.wav"), "--method", "swing", "--checkpoints", str(swing / "ckpt"),
-                 "--no-transcribe", "--smoothing", "off", "--out", str(out)]) == 0
+                 "--no-transcribe", "--smoothing", "off", "--grounding", "off", "--out", str(out)]) == 0
     assert "with swing, 3 steps" in capsys.readouterr().out              # its default steps
     got = MotionSequence.load(out)
     pipe = GesturePipeline.from_pretrained(checkpoints=[swing / "ckpt"], warm_up=False)

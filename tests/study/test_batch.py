@@ -184,6 +184,9 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
         def prepare_speech(self, *a, **k):
             return None
 
+        def check_plan(self, plan):
+            return None
+
         def generate_all(self, speech, plan, progress=None, body=None):
             plans.append(plan)
             raise Stop
@@ -196,7 +199,7 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
     with pytest.raises(Stop):
         main(["batch", "--audio-dir", str(tmp_path / "a"), "--methods", "gesturelsm", "--out", str(tmp_path / "o"),
               "--raters", "1", *flag])
-    assert [p.grounding for p in plans] == [want]
+    assert [p.settings.post.grounding for p in plans] == [want]
     assert json.loads((tmp_path / "o" / "study.json").read_text())["grounding"] is want
 
 
