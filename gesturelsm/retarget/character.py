@@ -41,13 +41,14 @@ def load_character(path: str | Path, bone_map: str | dict | None = None, limit: 
     return Character(path, gltf_skeleton(doc, bone_map), doc)
 
 
-def check_usable(character: Character, body=None) -> None:
+def check_usable(character: Character, body=None, draw: bool = True) -> None:
     """CharacterError now for what would otherwise fail later, on every use of the character: its rest pose
-    cannot be retargeted (an absurd scale, hips and head in one place), or the meshes a video draws break the
-    limits or hold NaN (their geometry is decoded and dropped; textures are not decoded, a bad one only becomes
-    a note when drawn). The page runs it once per upload."""
+    cannot be retargeted (an absurd scale, hips and head in one place), or (draw=True: it will be drawn) the meshes
+    a video draws break the limits or hold NaN (their geometry is decoded and dropped; textures are not decoded, a
+    bad one only becomes a note when drawn). The page runs it once per upload, `batch --rig` and `generate --rig`
+    before their work."""
     prepare(character.skeleton, SourceBody.of(resolve_body(body)))
-    if has_mesh(character.document):
+    if draw and has_mesh(character.document):
         character_mesh(character.document, character.skeleton, textures=False)
 
 

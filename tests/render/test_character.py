@@ -155,3 +155,29 @@ def test_primitives_sharing_vertices_draw_one_vertex_range(boxes, body, arms_dow
     assert figure.num_vertices == V and [(s.start, s.count) for s in figure.surfaces] == [(0, V), (0, V)]
     assert figure.faces.max() == V - 1
     assert figure.pose(0, np.arange(2)).vertices.shape == (2, V, 3)
+
+
+def test_a_large_mesh_is_framed_and_drawn_in_chunks_with_the_same_result(boxes, monkeypatch):
+    """The memory bounds for large meshes (frames.SAMPLE_BYTES, frames.POSED_BYTES, skinning.VERTEX_CHUNK) change
+    how much is held at once, never the result: shrunk so that every step runs in chunks, the camera, the floor
+    and the frames are the ones of the whole at once."""
+    from _support import synthetic_motion
+    from gesturelsm.render import frames
+    from gesturelsm.render.figure import make_figure
+    from gesturelsm.retarget import skinning
+
+    seqs = [synthetic_motion(frames=9, seed=1), synthetic_motion(frames=9, seed=2)]
+    style = RenderStyle(size=(128, 128))                                     # floor and contact shadows framed too
+
+    def run():
+        cam, floor = frames._layout(make_figure(seqs, None, boxes), style)
+        return cam, floor, render_frames(seqs, [0, 4, 8], style=style, character=boxes)
+
+    cam, floor, want = run()
+    monkeypatch.setattr(frames, "SAMPLE_BYTES", 1)
+    monkeypatch.setattr(frames, "POSED_BYTES", 1)
+    monkeypatch.setattr(skinning, "VERTEX_CHUNK", 7)
+    assert len(frames._sample_chunks(make_figure(seqs, None, boxes))[0]) == 9      # one frame per chunk
+    cam2, floor2, got = run()
+    assert floor2 == floor and np.array_equal(cam2.pose, cam.pose) and cam2.yfov == cam.yfov
+    np.testing.assert_array_equal(got, want)
