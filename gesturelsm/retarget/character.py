@@ -42,7 +42,7 @@ def load_character(path: str | Path, bone_map: str | dict | None = None, limit: 
 
 
 def check_usable(character: Character, body=None, draw: bool = True) -> None:
-    """CharacterError now for what would otherwise fail later, on every use of the character: its rest pose
+    """CharacterError at once for what would otherwise fail later, on every use of the character: its rest pose
     cannot be retargeted (an absurd scale, hips and head in one place), or (draw=True: it will be drawn) the meshes
     a video draws break the limits or hold NaN (their geometry is decoded and dropped; textures are not decoded, a
     bad one only becomes a note when drawn). The page runs it once per upload, `batch --rig` and `generate --rig`

@@ -64,7 +64,7 @@ def read_upload(path: str | Path | None) -> Character | None:
                 "uri" in im and not str(im["uri"]).startswith("data:") for im in gltf.get("images", [])):
             raise gr.Error(f"{path.name}: its buffers or textures are separate files; upload a .glb or .vrm",
                            print_exception=False)
-        check_usable(character)               # what a later Generate would refuse is refused now, once
+        check_usable(character)               # what a later Generate would refuse is refused here, once
     except GestureError as exc:
         raise gr.Error(str(exc), print_exception=False) from None
     return character
