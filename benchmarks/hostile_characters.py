@@ -16,8 +16,9 @@ NaN translations, cycles, absurd BVH hierarchies ... plus two controls, the gene
 
 Peak memory is the process tree's high-water mark (`os.wait4`'s ru_maxrss: the process and the render process it
 waited for). Linux carries a parent's high-water mark into its children, so this process imports neither gesturelsm
-nor torch: a child process builds the files and the motion. A row fails when an answer is a traceback, differs from what the generator says the file must get, or
-when its peak is more than 1 GB above the same entry point's control (cryptovoxels.vrm, else the valid VRM).
+nor torch: a child process builds the files and the motion. A row fails when an answer is a traceback, differs from
+what the generator says the file must get, or when its peak is more than 1 GB above the same entry point's control
+(cryptovoxels.vrm, else the valid VRM).
 `--quick` leaves out the slow files (1,000,000 vertices drawn, eight 8k textures, 40 and 65 MB files).
 """
 from __future__ import annotations
@@ -253,8 +254,9 @@ def main(argv: list[str] | None = None) -> int:
         def one(item) -> tuple:
             case, name, what, path = item
             results = {e: run_entry(case, path, e, work, motion) for e in entries}
-            print(f"{name}: " + ", ".join(f"{e} {results[e]['kind']} {results[e]['peak_mb']:.0f} MB "
-                                          f"{results[e]['seconds']:.0f} s" for e in entries), file=sys.stderr, flush=True)
+            said = ", ".join(f"{e} {results[e]['kind']} {results[e]['peak_mb']:.0f} MB {results[e]['seconds']:.0f} s"
+                             for e in entries)
+            print(f"{name}: {said}", file=sys.stderr, flush=True)
             return name, what, results, case
 
         with ThreadPoolExecutor(max(1, args.jobs)) as pool:

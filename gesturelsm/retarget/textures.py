@@ -143,8 +143,8 @@ class Textures:
     def _affordable(self, source: int, w: int, h: int) -> bool:
         """Whether a w x h image may be decoded (the limits in the module docstring); a note when not."""
         if w * h > MAX_TEXELS_PER_IMAGE:
-            self.notes.append(f"image {source} is {count(w)} x {count(h)} texels, over the {count(MAX_TEXELS_PER_IMAGE)}"
-                              " texels an image may have; drawn in its material's colour")
+            self.notes.append(f"image {source} is {count(w)} x {count(h)} texels, over the "
+                              f"{count(MAX_TEXELS_PER_IMAGE)} an image may have; drawn in its material's colour")
             return False
         if self._texels + w * h > MAX_TEXELS_TOTAL:
             self.notes.append(f"image {source} would take the decoded images over {count(MAX_TEXELS_TOTAL)} "
