@@ -120,7 +120,7 @@ def _cli_answer(r: dict) -> tuple[str, str]:
     if r["rc"] == 0:
         notes = [ln[6:] for ln in err.splitlines() if ln.startswith("note: ") and "silent" not in ln]
         return "ok", "; ".join(notes)
-    lines = [ln for ln in err.strip().splitlines() if ln.strip()]
+    lines = [ln for ln in err.strip().splitlines() if ln.strip() and not ln.startswith("note: ")]
     if r["rc"] == 2 and len(lines) == 1:
         return "refused", re.sub(r"^gesturelsm \w+: error: ", "", lines[0])
     return "crash", f"exit {r['rc']}: " + (lines[-1] if lines else "(nothing said)")

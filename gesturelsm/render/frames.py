@@ -24,8 +24,8 @@ from .style import RenderStyle
 
 MotionLike = MotionSequence | str | Path
 SAMPLE_FRAMES = 120          # frames sampled to frame the camera (evenly over the clip)
-SAMPLE_BYTES = 256 * 2 ** 20  # sampled vertices held at once; a larger mesh is framed in chunks of frames
-POSED_BYTES = 128 * 2 ** 20   # posed vertices and normals (float64) held at once while rendering
+SAMPLE_BYTES = 256 * 2 ** 20  # sampled vertices (float32) held to frame the camera; beyond, they are posed twice
+POSE_POINTS = 2_000_000       # vertex-frames posed at once (about 70 bytes each while posing and framing)
 MAX_BODIES = 8
 
 
@@ -61,16 +61,18 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
     return out
 
 
-def _sample_chunks(figure, max_frames: int = SAMPLE_FRAMES) -> list[list[np.ndarray]]:
-    """Per motion: its (k, V, 3) vertices at k <= max_frames evenly spaced frames (first and last included), as
-    one chunk; a figure whose samples would hold over SAMPLE_BYTES gets chunks of fewer frames instead, each
+def _sample_chunks(figure, max_frames: int = SAMPLE_FRAMES) -> list:
+    """Per motion: its framing vertices (`figure.frame_points`) at k <= max_frames evenly spaced frames (first and
+    last included), as chunks of frames (k_i, V, 3) of at most POSE_POINTS vertex-frames each (one chunk for a
+    mesh of a few thousand vertices). Held as arrays while they take at most SAMPLE_BYTES; beyond, each chunk is
     posed when it is read (`_Posing`), so a large mesh is framed within that memory."""
     ids = [np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
            for s in figure.seqs]
-    if sum(len(i) for i in ids) * figure.num_vertices * 12 <= SAMPLE_BYTES:
-        return [[figure.pose(k, i).vertices] for k, i in enumerate(ids)]
-    per = max(1, SAMPLE_BYTES // (figure.num_vertices * 12 * len(ids)))
-    return [_Posing(figure, k, [i[a:a + per] for a in range(0, len(i), per)]) for k, i in enumerate(ids)]
+    per = max(1, POSE_POINTS // figure.framing_vertices)
+    chunks = [[i[a:a + per] for a in range(0, len(i), per)] for i in ids]
+    if sum(len(i) for i in ids) * figure.framing_vertices * 12 <= SAMPLE_BYTES:
+        return [[figure.frame_points(k, c) for c in cs] for k, cs in enumerate(chunks)]
+    return [_Posing(figure, k, cs) for k, cs in enumerate(chunks)]
 
 
 class _Posing:
@@ -83,7 +85,7 @@ class _Posing:
         return len(self.chunks)
 
     def __iter__(self):
-        return (self.figure.pose(self.k, ids).vertices for ids in self.chunks)
+        return (self.figure.frame_points(self.k, ids) for ids in self.chunks)
 
 
 def clip_layout(motions: Sequence[MotionLike] | MotionLike, body=None, style: RenderStyle | None = None,
@@ -203,7 +205,7 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
         raise ValueError(f"frame indices must be in 0..{T - 1}")
     with SceneRenderer(figure.faces, figure.num_vertices, len(seqs), cam, style, floor_y, figure.rest_vertices(),
                        figure.surfaces) as renderer:
-        chunk = max(1, min(chunk, POSED_BYTES // (48 * figure.num_vertices * len(seqs))))    # a large mesh: fewer
+        chunk = max(1, min(chunk, POSE_POINTS // (figure.num_vertices * len(seqs))))    # a large mesh: fewer frames
         for s in range(0, len(idx), chunk):
             ids = idx[s:s + chunk]
             outs = [figure.pose(k, ids) for k in range(len(seqs))]
