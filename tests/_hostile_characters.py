@@ -199,7 +199,7 @@ def _textures(add) -> None:
             return out
         return b.mutated(change)
 
-    add("textures_8_of_8192.vrm", "8 textures of 8,192 x 8,192, each at the limit (4 fit the total)", many,
+    add("textures_8_of_8192.vrm", "8 more textures of 8,192 x 8,192, each at the limit (3 fit the total)", many,
         note="would take the decoded images over", slow=True)
 
 
