@@ -9,7 +9,8 @@ NaN translations, cycles, absurd BVH hierarchies ... plus two controls, the gene
 ../shared/assets/characters/cryptovoxels.vrm (the normal run). Each file goes through, each in a fresh process:
 
 * export: `gesturelsm export m.npz --rig FILE --glb out.vrm` (`--bvh out.bvh` for a BVH);
-* render: `gesturelsm render m.npz --rig FILE --out out.mp4 --size 256` (a 1 s video);
+* render: `gesturelsm render m.npz --rig FILE --out out.mp4 --size 256` (a 1 s video of the mannequin's standing
+          motion with moving arms, tests/_standing.py, so that its feet are planted on the character's legs);
 * page:   the Character upload's handler (`webapp.character.choose`), then what a Generate does with the character:
           the player's payload, the downloads (`rig_downloads`) and the video in its render process (`render_apart`,
           as the app service runs it, here not niced), for two methods.
@@ -50,12 +51,12 @@ BUILD = r"""
 import json, sys
 from pathlib import Path
 from _hostile_characters import character_cases, write_characters
-from _support import synthetic_motion
+from _standing import standing
 
 folder, motion, original, quick, names = sys.argv[1:6]
 cases = [c for c in character_cases(Path(original), slow=quick == "0") if c.name in json.loads(names)]
 write_characters(cases, Path(folder))
-synthetic_motion(frames=30).save(motion)
+standing(seconds=1.0).save(motion)
 """
 
 PAGE = r"""

@@ -59,14 +59,14 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
                  labels: Sequence[str] | None = None, size: tuple[int, int] | None = None, body=None,
                  progress: Progress | None = None, *, style: RenderStyle | None = None, sr: int = SAMPLE_RATE,
                  gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
-                 crf: int = 20, preset: str = "veryfast", character=None) -> Path:
+                 crf: int = 20, preset: str = "veryfast", character=None, grounding: bool = True) -> Path:
     """Render motions (side by side when several) with the speech into `out` (.mp4); returns the path.
 
     audio: samples at `sr` (16 kHz), a file path, or None for a silent video. It is trimmed / padded to the
     motion (a RenderWarning when they differ by more than 0.5 s). labels / gen_seconds: one per motion,
     drawn in each tile's top-left corner. size: one tile's (width, height), default 512 x 512.
     progress(fraction, message) is called every few frames. character: a retarget.Character whose own mesh is
-    drawn instead of the body (see `iter_frames`).
+    drawn instead of the body, its feet on its own legs unless `grounding` is off (see `iter_frames`).
     """
     import imageio_ffmpeg
     import soundfile as sf
@@ -82,7 +82,7 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
     W, H = style.width * len(seqs), style.height
     t0 = time.perf_counter()
     frames = iter_frames(seqs, body=body, style=style, labels=labels, gen_seconds=gen_seconds, camera=camera,
-                         character=character)
+                         character=character, grounding=grounding)
     try:
         first = next(frames)          # a figure that cannot be drawn stops here, before the encoder starts
         with tempfile.TemporaryDirectory(prefix="gesturelsm-render-") as tmp:
