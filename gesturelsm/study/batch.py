@@ -30,6 +30,7 @@ import numpy as np
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import FACTS
+from ..errors import AudioError, InputError, UserError
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
@@ -62,10 +63,10 @@ def blinded_name(salt: str, audio: str, method: str) -> str:
 def find_audio(audio_dir: str | Path) -> list[Path]:
     d = Path(audio_dir)
     if not d.is_dir():
-        raise FileNotFoundError(f"audio folder not found: {d}")
+        raise InputError(f"audio folder not found: {d}")
     files = sorted(p for p in d.iterdir() if p.suffix.lower() in AUDIO_EXTENSIONS and p.is_file())
     if not files:
-        raise ValueError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
+        raise InputError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
     return files
 
 
@@ -81,7 +82,7 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path) -> 
         salt_file.write_text(salt + "\n")
     items = [StudyItem(blinded_name(salt, a.name, m), a.name, m) for a in audio_files for m in methods]
     if len({i.video for i in items}) != len(items):
-        raise ValueError("two speech files share a name; rename them")
+        raise InputError("two speech files share a name; rename them")
     return StudyPlan(out, salt, items)
 
 
@@ -107,11 +108,11 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
-            raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
+            raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
     if GROUND_TRUTH in methods and not beat2:
-        raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+        raise UserError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
-        raise ValueError("--raters must be at least 1")
+        raise UserError("--raters must be at least 1")
     audio_files = find_audio(audio_dir)
     plan = plan_study(audio_files, methods, out)
     out = Path(out)
@@ -129,7 +130,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         try:
             speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
         except ValueError as exc:  # InputError: too short, silent, too long
-            raise ValueError(f"{a.name}: {exc}") from None
+            raise AudioError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
             gen = pipeline.generate_all(speech, Plan([it.method], steps, cfg, seed, stand_in_place, smoothing,
                                                      beat2, a.name))
