@@ -34,7 +34,9 @@ ABOUT_TIME: dict[str, tuple[str, ...]] = {
     "gesturelsm/live/stream.py": ("motion chunks available now", "now)"),
     "gesturelsm/pipeline.py": ("compile librosa's onset kernels now", "Transcribe now what"),
     "gesturelsm/render/background.py": ("what the process now has",),
-    "gesturelsm/study/db.py": ("holds the study now", "on the rater's screen now"),
+    "gesturelsm/study/db.py": ("holds the study now", "on the rater's screen now", "made just now"),
+    "gesturelsm/study/server.py": ("cannot take an answer just now",),
+    "gesturelsm/study/store.py": ("another one than before",),
     "gesturelsm/study/design.py": ("their trial lists are fixed now",),
     "benchmarks/transcribe_accuracy.py": ("resident now",),
 }
