@@ -29,7 +29,7 @@ HISTORY = re.compile(r"\b(now|no longer|previously|used to|formerly|any ?more|un
                      r"|(before|after) (this|that|the) (change|fix|rewrite|refactor|release|version))\b", re.I)
 # file -> pieces of the docstring sentences that use a word of HISTORY about time itself, not about the code's past
 ABOUT_TIME: dict[str, tuple[str, ...]] = {
-    "gesturelsm/kernels.py": ("take their fast path now",),
+    "gesturelsm/kernels/ops.py": ("may take a fast path now",),
     "gesturelsm/live/session.py": ("Stop now",),
     "gesturelsm/live/stream.py": ("motion chunks available now", "now)"),
     "gesturelsm/pipeline.py": ("compile librosa's onset kernels now", "Transcribe now what"),
