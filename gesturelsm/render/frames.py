@@ -15,6 +15,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ..body.model import resolve_body
+from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera
 from .figure import make_figure
@@ -39,14 +40,14 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
         motions = [motions]
     seqs = [m if isinstance(m, MotionSequence) else MotionSequence.load(m) for m in motions]
     if not seqs:
-        raise ValueError("nothing to render: no motions given")
+        raise InputError("nothing to render: no motions given")
     if len(seqs) > MAX_BODIES:
-        raise ValueError(f"{len(seqs)} motions: at most {MAX_BODIES} can be shown side by side")
+        raise InputError(f"{len(seqs)} motions: at most {MAX_BODIES} can be shown side by side")
     for i, s in enumerate(seqs):
         if s.num_frames == 0:
-            raise ValueError(f"motion {i + 1} has no frames")
+            raise InputError(f"motion {i + 1} has no frames")
         if s.fps != FPS:
-            raise ValueError(f"motion {i + 1} is at {s.fps} fps; rendering expects {FPS} fps (BEAT2)")
+            raise InputError(f"motion {i + 1} is at {s.fps} fps; rendering expects {FPS} fps (BEAT2)")
     T = max(s.num_frames for s in seqs)
     out = []
     for i, s in enumerate(seqs):
@@ -156,9 +157,9 @@ def _framed(figure, k: int, v: np.ndarray, style: RenderStyle, floor_y: float) -
 def _label_patches(n: int, labels: Sequence[str] | None, gen_seconds: Sequence[float | None] | None,
                    style: RenderStyle) -> list[LabelPatch | None]:
     if labels is not None and len(labels) != n:
-        raise ValueError(f"{len(labels)} labels for {n} motions: give one label per motion")
+        raise InputError(f"{len(labels)} labels for {n} motions: give one label per motion")
     if gen_seconds is not None and len(gen_seconds) != n:
-        raise ValueError(f"{len(gen_seconds)} generation times for {n} motions: give one per motion")
+        raise InputError(f"{len(gen_seconds)} generation times for {n} motions: give one per motion")
     if labels is None and gen_seconds is None:
         return [None] * n
     px = style.label_px or max(10, round(style.height / 30))
@@ -202,7 +203,7 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
     T = seqs[0].num_frames
     idx = np.arange(T) if frame_indices is None else np.asarray(frame_indices, np.int64).reshape(-1)
     if idx.size and (idx.min() < 0 or idx.max() >= T):
-        raise ValueError(f"frame indices must be in 0..{T - 1}")
+        raise InputError(f"frame indices must be in 0..{T - 1}")
     with SceneRenderer(figure.faces, figure.num_vertices, len(seqs), cam, style, floor_y, figure.rest_vertices(),
                        figure.surfaces) as renderer:
         chunk = max(1, min(chunk, POSE_POINTS // (figure.num_vertices * len(seqs))))    # a large mesh: fewer frames

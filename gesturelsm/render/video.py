@@ -20,6 +20,7 @@ import numpy as np
 
 from ..audio import SAMPLE_RATE, AudioError, load_audio, to_mono
 from ..constants import FPS, Progress
+from ..errors import InputError
 from .camera import Camera
 from .frames import MotionLike, RenderWarning, iter_frames, prepare_motions
 from .style import RenderStyle
@@ -73,7 +74,7 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
 
     out = Path(out)
     if out.suffix.lower() != ".mp4":
-        raise ValueError(f"{out}: the output must be an .mp4 file")
+        raise InputError(f"{out}: the output must be an .mp4 file")
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
     T = seqs[0].num_frames
