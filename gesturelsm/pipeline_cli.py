@@ -17,7 +17,7 @@ from .backends import SPECS, checkpoint_sources
 from .constants import SAMPLE_RATE
 from .export.rig import export_rig
 from .pipeline import GenerationResult, GesturePipeline
-from .retarget import load_character
+from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
 from .settings.arguments import (add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
                                  output_file, positive, refuse, say)
@@ -71,6 +71,8 @@ def run_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     a = check_arguments(args)
     rig = load_character(a.rig) if a.rig else None               # a bad character stops before the work
+    if rig is not None:
+        check_usable(rig, draw=False)
     words = read_words(a.textgrid) if a.textgrid else None
     say(0.0, f"loading the models ({args.method})")
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],

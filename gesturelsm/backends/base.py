@@ -9,15 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Protocol
+from typing import Protocol
 
 import numpy as np
 import torch
 
+from ..constants import Progress
 from ..motion.sequence import FPS, MotionSequence
 from .spec import MethodSpec
-
-Progress = Callable[[float, str], None]
 
 
 @dataclass

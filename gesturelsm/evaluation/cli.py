@@ -16,6 +16,7 @@ from pathlib import Path
 from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
 from ..data.beat2 import Beat2Dataset
+from ..errors import CheckpointError
 from ..metrics.fgd import default_extractors
 from ..pipeline import GesturePipeline
 from ..settings import CLI, DEFAULT_CFG, Limits, grid_problems
@@ -142,6 +143,9 @@ def run_eval(args: argparse.Namespace) -> int:
                                   max_clips=args.max_clips)
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods)
     methods = methods or pipe.methods
+    missing = [m for m in methods if m not in pipe.methods]
+    if missing:
+        raise CheckpointError(f"no checkpoint for {', '.join(missing)}; available: {', '.join(pipe.methods)}")
     for m in methods:
         for s in steps:
             for c in cfgs:

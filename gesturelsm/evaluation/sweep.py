@@ -22,13 +22,12 @@ from typing import Callable
 
 import numpy as np
 
+from ..constants import Progress
 from ..errors import GestureError, InputError
 from ..settings import CLI, DEFAULT_CFG, Limits, Names, PostProcess, grid_problems
 from ..settings.values import method_list
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
-
-Progress = Callable[[float, str], None]
 
 
 class SweepCancelled(GestureError):

@@ -7,6 +7,7 @@ this folder + one line below, and its spec line (label, default steps ...) in th
 (`gesturelsm.backends`), which serves it.
 `windows.py` is the long-audio window loop every backend's sampling runs in.
 """
+from ..errors import InputError
 from .base import LossResult, Method, MethodFacts, ModelFn, euler_sample, guided
 from .ddim import DDIM
 from .rectified import RectifiedFlow
@@ -22,7 +23,7 @@ FACTS: dict[str, MethodFacts] = {k: m.facts for k, m in METHODS.items()}
 
 def method_facts(name: str) -> MethodFacts:
     if name not in FACTS:
-        raise ValueError(f"unknown method {name!r}; choose from {', '.join(FACTS)}")
+        raise InputError(f"unknown method {name!r}; choose from {', '.join(FACTS)}")
     return FACTS[name]
 
 

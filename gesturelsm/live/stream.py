@@ -56,7 +56,7 @@ from ..constants import FPS, SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM
 from ..backends import FlowBackend
-from ..errors import InputError
+from ..errors import AudioError, InputError
 from ..flows import make_method
 from ..flows.base import inpainting
 from ..generator.data import samples_for
@@ -141,7 +141,7 @@ class StreamingGenerator:
             raise RuntimeError("this stream has finished; start a new one")
         y = np.asarray(chunk, np.float32).reshape(-1)
         if not np.isfinite(y).all():
-            raise ValueError("the audio chunk contains invalid samples (NaN or infinity)")
+            raise AudioError("the audio chunk contains invalid samples (NaN or infinity)")
         self.audio = np.concatenate([self.audio, y])
         self.n_in += len(y)
         self.arrivals.append((self.n_in, time.perf_counter() if arrival is None else arrival))

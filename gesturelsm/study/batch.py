@@ -25,7 +25,7 @@ from typing import Callable, Mapping
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
 from ..body.model import resolve_model_path
-from ..errors import InputError
+from ..errors import AudioError, InputError, UserError
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
 from ..settings import DEFAULTS, Settings
@@ -101,9 +101,9 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
         if m != GROUND_TRUTH and m not in pipeline.methods:
             raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
     if GROUND_TRUTH in methods and not beat2:
-        raise InputError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+        raise UserError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
-        raise InputError("--raters must be at least 1")
+        raise UserError("--raters must be at least 1")
     base = Plan(settings, beat2)
     pipeline.check_plan(base)
     steps = {m: settings.steps_for(m) for m in settings.generators}
@@ -158,7 +158,7 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
         try:
             speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
         except InputError as exc:  # too short, silent, too long
-            raise InputError(f"{a.name}: {exc}") from None
+            raise AudioError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
             gen = pipeline.generate_all(speech, replace(base, settings=replace(base.settings, methods=(it.method,)),
                                                         filename=a.name), body=body)

@@ -12,6 +12,7 @@ import os
 import signal
 import sys
 
+from gesturelsm.errors import GestureError
 from gesturelsm.serve.config import QUEUE_SIZE, ServiceSettings
 
 DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
@@ -90,18 +91,18 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency))
     try:
         service = GestureService.from_settings(settings)
-    except (FileNotFoundError, ValueError) as exc:
+    except GestureError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     if not args.no_warmup:
         service.warmup()
-    from .ui import build_demo, launch
+    from .ui import build_demo
 
     signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
     signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
     try:
-        launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+        build_demo(service, max(1, args.queue_size)).launch(host=args.host, port=args.port)
     except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
         pass
     return 0
