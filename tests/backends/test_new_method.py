@@ -123,10 +123,10 @@ def test_the_page_offers_and_runs_the_new_method(swing):
 
     pipe = GesturePipeline.from_pretrained(checkpoints=[swing / "ckpt"], warm_up=False)
     service = GestureService(pipe, ServiceSettings(workdir=str(swing / "work")))
-    cfg = build_demo(service).get_config_file()
+    cfg = build_demo(service).blocks.get_config_file()
     props = {c["props"].get("label"): c["props"] for c in cfg["components"]}
     assert [tuple(c) for c in props["Methods shown side by side"]["choices"]] == [("Arm swing", "swing")]
     assert (props["Steps"]["maximum"], props["Steps"]["value"]) == (9, 3)            # its spec's bound and default
     out = service.run(Request(str(swing / "speech.wav"), methods=("swing",), steps=2, transcribe=False, render=False,
                               exports=False))
-    assert list(out.motions) == ["swing"] and out.rows[0][0] == "Arm swing" and out.motions["swing"].num_frames == 60
+    assert list(out.motions) == ["swing"] and out.rows[0].method == "Arm swing" and out.motions["swing"].num_frames == 60
