@@ -214,7 +214,7 @@ def test_the_video_plants_the_characters_feet_on_its_own_legs(tmp_path, body):
     skel, _ = build_rig(other_legs(body.rest_joints()), fingers=False)
     write_skinned_glb(skel, tmp_path / "legs.vrm", vrm_body_bones(), half=0.04)
     character = load_character(tmp_path / "legs.vrm")
-    g = ground_motion(swaying(standing(seconds=4.0, seed=1)))
+    g = ground_motion(swaying(swaying(standing(seconds=4.0, seed=1))))        # twice the sway: +-10 cm, 8 cm down
     assert g.note is None and g.contacts.all()
     ids = np.arange(15, g.motion.num_frames - 15)
     moved = {}
@@ -222,7 +222,7 @@ def test_the_video_plants_the_characters_feet_on_its_own_legs(tmp_path, body):
         V = make_figure([g.motion], body, character, grounding=on).pose(0, ids).vertices
         feet = V[0, :, 1] <= np.percentile(V[0, :, 1], 3)                   # the soles' vertices
         moved[on] = float(np.linalg.norm(V[:, feet] - V[:1, feet], axis=-1).max())
-    assert moved[True] <= 0.01 < 0.015 < moved[False], moved
+    assert moved[True] <= 0.001 < 0.005 < moved[False], moved              # held to the millimetre; off: slides
     g.motion.save(tmp_path / "m.npz")
     args = ["render", str(tmp_path / "m.npz"), "--size", "96x96", "--quiet", "--frame", "60", "--rig",
             str(tmp_path / "legs.vrm")]
