@@ -88,7 +88,7 @@ def one_request(service, wav: Path, T: dict) -> dict:
 
 def request_table(args) -> None:
     from app.measure import speech
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import WARMUP_SECONDS, GestureService
     import gesturelsm.pipeline as P
     import gesturelsm.serve.service as S

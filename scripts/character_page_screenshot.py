@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     from app.screenshot import CHROMIUM_ARGS
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.ui import EXAMPLES, serve_locally
 

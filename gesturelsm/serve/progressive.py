@@ -17,9 +17,10 @@ import numpy as np
 import torch
 
 from ..constants import Progress
+from ..backends import GROUND_TRUTH_LABEL, label
 from ..errors import GestureError, InputError
 from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
-from .request import METHOD_LABELS, RenderJob, Request, Result, timing_rows
+from .request import RenderJob, Request, Result, timing_rows
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -31,8 +32,8 @@ class MethodFailed(GestureError):
 def slot_label(method: str, plan: Plan) -> str:
     """The label a method's body carries on the page and in the video."""
     if method == GROUND_TRUTH:
-        return "Ground truth (BEAT2)"
-    return f"{METHOD_LABELS.get(method, method)} {plan.steps_for(method)} steps CFG {plan.cfg:g}"
+        return f"{GROUND_TRUTH_LABEL} (BEAT2)"
+    return f"{label(method)} {plan.steps_for(method)} steps CFG {plan.settings.cfg:g}"
 
 
 def failure(method: str, exc: Exception) -> str:
@@ -71,14 +72,14 @@ class Growing:
         gen_s = [gens[m].generation_seconds if m in gens else None for m in motions]
         sp = self.speech
         job = RenderJob(self.folder, tuple(motions.values()), tuple(labels), tuple(gen_s), sp.audio, sp.duration,
-                        self.size, self.started, self.plan.grounding)
+                        self.size, self.started, self.plan.settings.post.grounding)
         has_gt = GROUND_TRUTH in motions
         rows, timings = timing_rows({m: dict(r.timings) for m, r in gens.items()}, has_gt, sp.duration, 0.0,
                                     self.ready_s)
         warnings = list(sp.warnings)
         for x in self.made.values():
             warnings += [w for w in x.warnings if w not in warnings]
-        warnings += [f"{METHOD_LABELS.get(m, m)}: {self.failed[m]}" for m in self.slots if m in self.failed]
+        warnings += [f"{label(m)}: {self.failed[m]}" for m in self.slots if m in self.failed]
         warnings += self.notes
         take = self.made[GROUND_TRUTH].take if has_gt else None
         pending = tuple(m for m in self.slots if m not in self.made)
@@ -96,7 +97,7 @@ def stream_request(service, req: Request, progress: Progress | None = None,
     prog = progress or (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
-    plan, speech, notes = service._speech(req, audio, prog)
+    plan, speech, notes = service.speech(req, audio, prog)
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
     each = service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
                                           body=service.body, keep_going=True)
@@ -110,6 +111,6 @@ def stream_request(service, req: Request, progress: Progress | None = None,
         if len(errors) == 1 and isinstance(errors[0], GestureError):
             raise errors[0]
         if errors:
-            raise MethodFailed("; ".join(f"{METHOD_LABELS.get(m, m)}: {grow.failed[m]}" for m in grow.slots
+            raise MethodFailed("; ".join(f"{label(m)}: {grow.failed[m]}" for m in grow.slots
                                          if m in grow.failed))
         raise InputError("Nothing to show: choose a generator method.")

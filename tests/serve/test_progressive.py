@@ -9,6 +9,7 @@ import pytest
 from gesturelsm.errors import GestureError, InputError
 from gesturelsm.pipeline import GROUND_TRUTH, Plan
 from gesturelsm.serve.request import Request
+from gesturelsm.settings import Settings
 
 ALL = ["gesturelsm", "rectified_flow", "ddim"]
 STEPS = {"gesturelsm": 3, "rectified_flow": 1, "ddim": 2}
@@ -22,9 +23,9 @@ def test_the_pipeline_makes_the_fewest_steps_first_and_reports_failures(tiny_pip
     from _support import speech_like
 
     speech = tiny_pipeline.prepare_speech(speech_like(2.0), transcribe=False)
-    plan = Plan(ALL, dict(STEPS))
+    plan = Plan(Settings(tuple(ALL), dict(STEPS)))
     assert tiny_pipeline.run_order(plan) == ["rectified_flow", "ddim", "gesturelsm"]
-    assert tiny_pipeline.run_order(Plan(ALL, {})) == ALL                       # equal steps: the plan's order
+    assert tiny_pipeline.run_order(Plan(Settings(tuple(ALL)))) == ALL        # equal steps: the plan's order
     each = [x.method for x in tiny_pipeline.generate_each(speech, plan)]
     assert each == ["rectified_flow", "ddim", "gesturelsm"]
     whole = tiny_pipeline.generate_all(speech, plan)

@@ -16,9 +16,15 @@ def inputs(wav, seed: int, grounding: bool = True) -> tuple:
     return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding)
 
 
+def made(h, *args, **kw):
+    """The request the button's handler ends with (it yields the page's outputs after each method made)."""
+    return list(h.show_motion(*args, **kw))[-1][3]
+
+
 def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
     demo = build_demo(service)
-    fns = list(demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)
+    fns = demo.blocks.fns
+    fns = list(fns.values() if isinstance(fns, dict) else fns)
     pools = {f.api_name: f.concurrency_id for f in fns}
     assert pools["generate_motion"] == "generation"
     assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
@@ -40,8 +46,8 @@ def test_gradio_hands_the_handlers_the_page_session():
 
 def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):
     h, page, other = _Handlers(service), SimpleNamespace(session_hash="page-1"), SimpleNamespace(session_hash="page-2")
-    first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
-    second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
+    first = made(h, *inputs(speech_wav, 0), request=page, progress=quiet)
+    second = made(h, *inputs(speech_wav, 1), request=page, progress=quiet)
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
     assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 4
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
@@ -55,7 +61,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     t = threading.Thread(target=lambda: result.update(r=h.show_video(second, request=page, progress=progress)))
     t.start()
     assert started.wait(120), "the render reported frames"
-    third = h.show_motion(*inputs(speech_wav, 2), request=page, progress=quiet)[3]   # generate again, meanwhile
+    third = made(h, *inputs(speech_wav, 2), request=page, progress=quiet)   # generate again, meanwhile
     t.join(120)
     assert result["r"] == (gr.skip(),) * 4
     folder = second.job.folder
@@ -77,14 +83,14 @@ def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_w
     from gesturelsm.grounding import CHANGED_JOINTS
     from gesturelsm.pipeline import finish
 
-    cfg = build_demo(service).get_config_file()
+    cfg = build_demo(service).blocks.get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "grounding")
     assert box["props"]["value"] is True
     deps = {d.get("api_name"): d for d in cfg["dependencies"]}
     assert box["id"] in deps["generate_motion"]["inputs"] and box["id"] in deps["generate"]["inputs"]
     h = _Handlers(service)
-    on = h.show_motion(*inputs(speech_wav, 0, True), progress=quiet)[3].motions["gesturelsm"]
-    off = h.show_motion(*inputs(speech_wav, 0, False), progress=quiet)[3].motions["gesturelsm"]
+    on = made(h, *inputs(speech_wav, 0, True), progress=quiet).motions["gesturelsm"]
+    off = made(h, *inputs(speech_wav, 0, False), progress=quiet).motions["gesturelsm"]
     want, note = finish(off, grounding=True, body=service.body)
     assert note is None
     np.testing.assert_array_equal(on.poses, want.poses)
