@@ -43,7 +43,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="the study's design: pairwise preference between methods on the same speech, or each "
                    "video rated 1-5 on realness, synchrony and smoothness (default: pairwise)")
     p.add_argument("--attention", type=from_text, default=0.15,
-                   help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
+                   help="attention checks per real trial (mismatched speech and repeated trials)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
                    "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
     p.set_defaults(func=run)
