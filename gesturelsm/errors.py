@@ -12,6 +12,8 @@ wrong and what to do. The app turns `GestureError` into a message on the page, t
     │   ├── BodyModelError    a body model file that cannot be used
     │   └── CheckpointError   a model file that cannot be used
     ├── RenderError           rendering cannot run here (no OpenGL backend, context creation failed)
+    ├── ClusterError          a cluster that cannot be used (unreachable, other versions, too few CPUs), or
+    │                         units of a distributed run that failed every try
     └── UserError             any other problem with a command's arguments
 All are ValueErrors (RenderError is also a RuntimeError), as they were before the family existed.
 """
@@ -54,9 +56,14 @@ class RenderError(GestureError, RuntimeError):
     """Rendering cannot run here (no OpenGL backend, context creation failed); the message says why."""
 
 
+class ClusterError(GestureError):
+    """A Ray cluster that cannot be used (unreachable, other versions, the package missing on its workers, too few
+    CPUs), or work units that failed on every try; the message names the address or the units and what to do."""
+
+
 class UserError(GestureError):
     """An error caused by a command's arguments; printed without a traceback."""
 
 
 __all__ = ["GestureError", "InputError", "AudioError", "TextGridError", "MotionFileError", "DatasetError",
-           "BodyModelError", "CheckpointError", "RenderError", "UserError"]
+           "BodyModelError", "CheckpointError", "RenderError", "ClusterError", "UserError"]

@@ -17,8 +17,9 @@ FLOORS: list[set[str]] = [
     {"constants", "errors", "serve.limits", "serve.uploads", "safe_load",  # conventions, the error family, request
      "presentation"},                                          # limits, upload sniffing, safe loading, methods'
                                                                # labels and colours
-    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
-                                                               # fp32 linear layers through oneDNN
+    {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech loading, files, the methods,
+     "cluster"},                                               # fp32 linear layers through oneDNN; units of work
+                                                               # here or as Ray tasks (no Ray until asked for)
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
