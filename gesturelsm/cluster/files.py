@@ -1,11 +1,11 @@
 """Files that travel with tasks, and results written whole or not at all.
 
 Workers share no disk with the machine that starts the work: a checkpoint folder, a body model or a character file
-given on the command line goes to them by value. `Files.of(path, ship=True)` reads the files once on the driver;
+given on the command line goes to them by value; the package's own assets/ (shipped checkpoints, the mannequin) do
+not travel, every worker has them (`connect.check_workers` makes sure they are the same). `Files.of(path, ship=True)` reads the files once on the driver;
 on a worker `.local()` writes them once per machine under <tmp>/gesturelsm-files/<content hash>/ (a folder renamed
 into place when complete, so concurrent workers never see half a copy) and returns the path there. Not shipped
-(`ship=False`, a run in this process), `.local()` is the original path. The content hash also names the files in
-caches, so two runs with the same files share them.
+(`ship=False`, a run in this process), nothing is read and `.local()` is the original path.
 
 `write_atomic(path, data)` is how the driver writes every result: a temporary name beside it, then a rename.
 """
@@ -19,26 +19,34 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable
 
+from ..constants import ASSETS
+
 CACHE = "gesturelsm-files"
 
 
 @dataclass(frozen=True)
 class Files:
     source: str                                   # the path on the machine that made this (file or folder)
-    digest: str                                   # sha256 over names and contents
+    digest: str                                   # sha256 over names and contents ("" when not shipped)
     names: tuple[str, ...] = ()                   # a folder's files (relative, posix), or the file's own name
     blobs: tuple[bytes, ...] | None = field(default=None, compare=False, repr=False)   # None: not shipped
     folder: bool = False
+    shipped_assets: bool = False                  # a file of the package's own assets/: every worker has it
 
     @classmethod
     def of(cls, path: str | os.PathLike | None, ship: bool, only: Iterable[str] | None = None) -> "Files | None":
         """The file or folder at `path` (None -> None); `only`: these relative names of a folder. `ship`: carry the
-        bytes (a task on another machine), else just the path and its hash."""
+        bytes (a task on another machine); else only the path, nothing is read."""
         if path is None:
             return None
         root = Path(path)
         if not root.exists():
             raise FileNotFoundError(f"{root} does not exist")
+        if not ship:
+            return cls(str(root), "", folder=root.is_dir())
+        if root.resolve().is_relative_to(ASSETS.resolve()):
+            return cls(root.resolve().relative_to(ASSETS.resolve()).as_posix(), "assets", folder=root.is_dir(),
+                       shipped_assets=True)
         if root.is_dir():
             names = sorted(only) if only is not None else sorted(
                 p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
@@ -52,14 +60,17 @@ class Files:
             h.update(f"{n}\0{len(data)}\0".encode())
             h.update(data)
             blobs.append(data)
-        return cls(str(root), h.hexdigest()[:24], tuple(names), tuple(blobs) if ship else None, root.is_dir())
+        return cls(str(root), h.hexdigest()[:24], tuple(names), tuple(blobs), root.is_dir())
 
     @property
     def shipped(self) -> bool:
         return self.blobs is not None
 
     def local(self) -> Path:
-        """A path to these files on this machine: the original when not shipped, else the shared copy."""
+        """A path to these files on this machine: the original when not shipped, this machine's assets/ for the
+        package's own files, else the shared copy."""
+        if self.shipped_assets:
+            return ASSETS / self.source
         if not self.shipped:
             return Path(self.source)
         home = Path(tempfile.gettempdir()) / CACHE / self.digest

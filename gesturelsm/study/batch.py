@@ -21,19 +21,21 @@ import hashlib
 import html
 import json
 import secrets
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Mapping
 
 import numpy as np
 
 from ..align import read_result
-from ..audio import SAMPLE_RATE, load_audio
-from ..backends import FACTS
+from ..audio import load_audio
+from ..backends import FACTS, checkpoint_sources
+from ..cluster import Connection, Files, Job, ProgressLine, RunReport, Unit, run_units
+from ..data.lookup import find_beat2_take
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
-from ..render import render_video
 from .design import SCALE_QUESTIONS, SCALES, Design, invite, read_raters, write_design
+from .videos import Built, VideoFiles, VideoSpec, VideoUnit, build, finished, make_video, write_video
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
 @dataclass
@@ -97,12 +99,15 @@ def _transcript(audio: Path):
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
+               design: Design = Design(), log: Callable[[str], None] = print, rig=None,
+               connection: Connection | None = None, checkpoints: list[Path] | None = None) -> StudyPlan:
     """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
     web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
     `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then shows the
     character's own mesh and gets the motion on that character beside it (VIDEO.vrm / .glb, the same blinded
-    name)."""
+    name). Each video is a unit of work (videos.py): in this process, or with `connection` (gesturelsm.cluster) a
+    task on its cluster, whose workers load `checkpoints` (what `checkpoint_sources` gave; default the shipped
+    ones). Videos that fail are listed in a ClusterError once everything else is written."""
     methods = list(dict.fromkeys(methods))
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
@@ -115,36 +120,15 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     audio_files = find_audio(audio_dir)
     plan = plan_study(audio_files, methods, out)
     out = Path(out)
-    (out / "videos").mkdir(parents=True, exist_ok=True)
-    by_audio: dict[str, list[StudyItem]] = {}
-    for it in plan.items:
-        by_audio.setdefault(it.audio, []).append(it)
-    done = skipped = 0
-    for a in audio_files:
-        todo = [it for it in by_audio[a.name] if not (out / "videos" / it.video).exists()]
-        skipped += len(by_audio[a.name]) - len(todo)
-        if not todo:
-            continue
-        words, text = _transcript(a)
-        try:
-            speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
-        except ValueError as exc:  # InputError: too short, silent, too long
-            raise ValueError(f"{a.name}: {exc}") from None
-        for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, Plan([it.method], steps, cfg, seed, stand_in_place, smoothing,
-                                                     beat2, a.name))
-            if it.method not in gen.motions:
-                log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
-                continue
-            render_video([gen.motions[it.method]], speech.audio, out / "videos" / it.video, size=(size, size),
-                         body=body, character=rig)
-            if rig is not None:
-                from ..export.rig import export_rig_glb
-
-                export_rig_glb(gen.motions[it.method], rig, (out / "videos" / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
-            done += 1
-            log(f"  {it.video}  ({done} rendered)")
+    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2)
+    spec = VideoSpec(tuple(Files.of(c, ship=connection is not None) for c in (checkpoints or checkpoint_sources(None))),
+                     tuple(m for m in methods if m != GROUND_TRUTH),
+                     Files.of(getattr(body, "path", None), ship=connection is not None),
+                     Files.of(rig.path, ship=connection is not None) if rig is not None else None, size)
+    done, skipped, report = _render_missing(plan, audio_files, base, spec, Built(pipeline, body, rig, size), log,
+                                            connection)
+    if not report.done and not skipped:
+        report.raise_failures("videos")             # nothing to write a study around
     _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))
     for r in range(1, raters + 1):
         _write_rater(plan, r, seed)
@@ -159,7 +143,61 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
         f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters); web study links "
         f"(`gesturelsm study serve {out}`) in {out / 'key' / 'links.csv'}")
+    report.raise_failures("videos")                 # after everything else is written: a rerun makes only these
     return plan
+
+
+def _units(plan: StudyPlan, audio_files: list[Path], base: Plan, ship: bool) -> tuple[list[Unit], int]:
+    """A unit per video that is missing, or whose motion is (that one only generates); and how many are finished."""
+    by_audio: dict[str, list[StudyItem]] = {}
+    for it in plan.items:
+        by_audio.setdefault(it.audio, []).append(it)
+    units, skipped = [], 0
+    for a in audio_files:
+        todo = [(it, *finished(plan.out, it.video)) for it in by_audio[a.name]]
+        todo = [(it, have_video) for it, have_video, have_motion in todo if not (have_video and have_motion)]
+        skipped += len(by_audio[a.name]) - len(todo)
+        if not todo:
+            continue
+        words, text = _transcript(a)
+        audio = load_audio(a)
+        for it, have_video in todo:
+            take = _take(base.beat2, audio, a.name, ship) if it.method == GROUND_TRUTH else None
+            unit = VideoUnit(it.video, a.name, it.method, replace(base, methods=[it.method], filename=a.name, beat2=None),
+                             audio, tuple(words) if words else None, text, take, render=not have_video)
+            units.append(Unit(it.video, unit, cost=1.0 if have_video else 4.0, label=f"{a.name}, {it.method}"))
+    return units, skipped
+
+
+def _take(beat2: str | None, audio, name: str, ship: bool) -> Files | None:
+    """The BEAT2 take this speech is (found here, where the folder is): its motion and speech as Files."""
+    take = find_beat2_take(beat2, audio, name)
+    if take is None:
+        return None
+    return Files.of(beat2, ship, only=[f"smplxflame_30/{take}.npz", f"wave16k/{take}.wav"])
+
+
+def _render_missing(plan: StudyPlan, audio_files: list[Path], base: Plan, spec: VideoSpec, built: Built,
+                    log: Callable[[str], None], connection: Connection | None) -> tuple[int, int, RunReport]:
+    """Every missing video through its unit, here or on the cluster; -> (videos written, videos already there, the
+    run's report)."""
+    units, skipped = _units(plan, audio_files, base, ship=connection is not None)
+    bar = ProgressLine()
+    rendered = 0
+
+    def write(unit: Unit, files: VideoFiles) -> None:
+        nonlocal rendered
+        if files.note:
+            bar.write(f"  {files.note}")
+        if write_video(plan.out, unit.inputs, files):
+            rendered += 1
+            bar.write(f"  {unit.key}  ({rendered} rendered)")
+
+    if connection is not None:
+        log(f"{len(units)} video(s) to make on the {connection.describe()}")
+    report = run_units(Job(make_video, build, spec), units, write, connection=connection,
+                       built=built if connection is None else None, progress=bar if units else None, noun="videos")
+    return rendered, skipped, report
 
 
 def write_mismatch(plan: StudyPlan, audio_files: list[Path], methods: list[str]) -> list[str]:

@@ -3,13 +3,18 @@ a randomised order and a rating sheet per rater. Rerunning skips finished videos
 
     gesturelsm batch --audio-dir speech/ --methods gesturelsm rectified_flow ddim --out study/ --raters 12
     (a transcript per speech file is used when speech/NAME.txt or speech/NAME.TextGrid exists)
+    gesturelsm batch ... --cluster local        (or auto, ray://HOST:PORT: each video a task, docs/CLUSTER.md)
+
+Each video's motion is kept beside the key (key/motion/v_XXXXXXXXXX.npz, BEAT2 layout).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 from ..body import load_body_model
 from ..body.model import resolve_model_path
+from ..cluster import add_cluster_argument, connect
 from ..errors import UserError
 from ..backends import FACTS, checkpoint_sources
 from ..presentation import steps_from_flags
@@ -44,6 +49,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
                    "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
+    add_cluster_argument(p, "each video (generate, render, exports)")
     p.set_defaults(func=run)
 
 
@@ -56,10 +62,12 @@ def run(args: argparse.Namespace) -> int:
     rig = _character(args.rig)
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=gens or None)
     body = load_body_model(str(resolve_model_path(args.model)))
-    make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
-               steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
-               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing,
-               design=Design(args.design, args.attention, args.seed), rig=rig)
+    with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
+        make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
+                   steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed,
+                   size=args.size, body=body, beat2=args.beat2, stand_in_place=args.stand_in_place,
+                   smoothing=args.smoothing, design=Design(args.design, args.attention, args.seed), rig=rig,
+                   connection=conn, checkpoints=checkpoint_sources(args.checkpoints))
     return 0
 
 

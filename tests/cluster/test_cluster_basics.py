@@ -57,9 +57,8 @@ def test_files_travel_by_value_and_land_whole(tmp_path, monkeypatch):
     (src / "generator" / "a.safetensors").write_bytes(b"weights" * 100)
     (src / "tokenizer.txt").write_text("t")
     here = Files.of(src, ship=False)
-    assert not here.shipped and here.local() == src
+    assert not here.shipped and here.local() == src and here.digest == ""          # nothing read
     shipped = Files.of(src, ship=True)
-    assert shipped == here and shipped.digest == here.digest            # equal by content, shipped or not
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path / "worker-tmp"))
     os.makedirs(tmp_path / "worker-tmp")
     got = shipped.local()
@@ -68,9 +67,16 @@ def test_files_travel_by_value_and_land_whole(tmp_path, monkeypatch):
     assert shipped.local() == got                                       # once per machine
     one = Files.of(src / "tokenizer.txt", ship=True)
     assert one.local().name == "tokenizer.txt" and one.local().read_text() == "t"
+    part = Files.of(src, ship=True, only=["generator/a.safetensors"])
+    assert part.names == ("generator/a.safetensors",) and part.digest != shipped.digest
+    assert sorted(p.name for p in part.local().iterdir()) == ["generator"]
     (src / "tokenizer.txt").write_text("changed")
-    assert Files.of(src, ship=False).digest != here.digest
+    assert Files.of(src, ship=True).digest != shipped.digest
     assert Files.of(None, ship=True) is None
+    from gesturelsm.constants import ASSETS
+
+    own = Files.of(ASSETS / "generator", ship=True)                     # the package's own files stay home
+    assert own.blobs is None and own.source == "generator" and own.local() == ASSETS / "generator"
     with pytest.raises(FileNotFoundError):
         Files.of(tmp_path / "missing", ship=True)
 

@@ -1,0 +1,150 @@
+"""One study video as a unit of work: generate one method's motion for one speech, render it, and hand back the
+files, for `gesturelsm batch` in this process or as a task on a Ray cluster (`--cluster`, gesturelsm.cluster).
+
+The unit's inputs carry everything it needs (the speech's samples, its transcript, the settings, the ground-truth
+take's two files when asked for); the checkpoints, body model and character go to each worker once (cluster.Files).
+The result comes back as bytes and the driver writes them, whole (`write_video`):
+
+    videos/v_XXXXXXXXXX.mp4           the video, written last: a video that exists is finished
+    videos/v_XXXXXXXXXX.vrm / .glb    with --rig: the motion on the character
+    key/motion/v_XXXXXXXXXX.npz       the motion behind the video (BEAT2 layout), to measure exactly what raters saw
+
+A unit's motion is the same bytes wherever it runs: it generates with one math thread (a Ray worker with one CPU
+has one; more threads sum in another order) and the npz carries no time of writing (export.npz_bytes).
+"""
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import tempfile
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+import torch
+
+from ..body import load_body_model
+from ..cluster import Files, write_atomic
+from ..export import npz_bytes
+from ..export.rig import export_rig_glb
+from ..pipeline import GesturePipeline, Plan
+from ..render import render_video
+from ..retarget import load_character
+
+MOTION_DIR = Path("key") / "motion"
+
+
+@dataclass(frozen=True)
+class VideoSpec:
+    """What every video of a study shares; built once per process (`build`)."""
+    checkpoints: tuple[Files, ...]           # what `checkpoint_sources` gave (the package's own assets stay home)
+    methods: tuple[str, ...]                 # generators to load (empty: ground truth only)
+    body: Files | None                       # the SMPL-X body model file (None: the built-in mannequin)
+    rig: Files | None                        # the character (.vrm / .glb), or None
+    size: int                                # pixels, square
+
+
+@dataclass(frozen=True)
+class VideoUnit:
+    video: str                               # file name under videos/
+    audio_name: str                          # the speech file's name (a ground-truth take is recognised by it)
+    method: str
+    plan: Plan                               # that one method with the study's settings; beat2 set by `take`
+    audio: np.ndarray = field(repr=False)    # (N,) 16 kHz mono
+    words: tuple | None = None               # from NAME.TextGrid
+    text: str | None = None                  # from NAME.txt
+    take: Files | None = None                # ground truth: the take's motion and speech, in BEAT2 layout
+    render: bool = True                      # False: the video exists, only its motion is missing
+
+
+@dataclass(frozen=True)
+class VideoFiles:
+    video: bytes | None                      # None when render was False, or nothing to show (note says why)
+    motion: bytes | None                     # the BEAT2 npz
+    rig: tuple[str, bytes] | None = None     # (suffix, bytes) of the motion on the character
+    note: str | None = None
+
+
+@dataclass
+class Built:
+    pipeline: GesturePipeline
+    body: object
+    rig: object
+    size: int
+    speech: dict = field(default_factory=dict)   # the last prepared speech by content: a speech's methods share it
+
+
+def build(spec: VideoSpec) -> Built:
+    checkpoints = [f.local() for f in spec.checkpoints] or None
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoints, methods=list(spec.methods) or None)
+    body = load_body_model(str(spec.body.local()) if spec.body is not None else None)
+    return Built(pipe, body, load_character(spec.rig.local()) if spec.rig is not None else None, spec.size)
+
+
+@contextlib.contextmanager
+def one_math_thread() -> Iterator[None]:
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
+def _speech(built: Built, unit: VideoUnit):
+    key = (hashlib.blake2b(unit.audio.tobytes(), digest_size=16).hexdigest(), unit.words, unit.text)
+    if key not in built.speech:
+        built.speech.clear()
+        try:
+            built.speech[key] = built.pipeline.prepare_speech(unit.audio, words=list(unit.words) if unit.words
+                                                              else None, text=unit.text)
+        except ValueError as exc:                # InputError: too short, silent, too long
+            raise type(exc)(f"{unit.audio_name}: {exc}") from None
+    return built.speech[key]
+
+
+def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
+    """The unit's motion (and, unless `render` is False, its video and character file), as bytes."""
+    with one_math_thread():
+        speech = _speech(built, unit)
+        plan = replace(unit.plan, beat2=str(unit.take.local()) if unit.take is not None else None)
+        gen = built.pipeline.generate_all(speech, plan)
+    motion = gen.motions.get(unit.method)
+    if motion is None:
+        return VideoFiles(None, None, note=f"{unit.audio_name}: not a take of the BEAT2 folder; no ground-truth video")
+    if not unit.render:
+        return VideoFiles(None, npz_bytes(motion))
+    with tempfile.TemporaryDirectory(prefix="gesturelsm-video-") as tmp:
+        path = Path(tmp) / unit.video
+        render_video([motion], speech.audio, path, size=(built.size, built.size), body=built.body,
+                     character=built.rig)
+        rig = None
+        if built.rig is not None:
+            suffix = ".vrm" if built.rig.skeleton.kind.startswith("vrm") else ".glb"
+            rig = (suffix, export_rig_glb(motion, built.rig, path.with_suffix(suffix), body=built.body).read_bytes())
+        return VideoFiles(path.read_bytes(), npz_bytes(motion), rig)
+
+
+def motion_path(out: Path, video: str) -> Path:
+    return out / MOTION_DIR / Path(video).with_suffix(".npz").name
+
+
+def finished(out: Path, video: str) -> tuple[bool, bool]:
+    """(the video exists, its motion exists)."""
+    return (out / "videos" / video).exists(), motion_path(out, video).exists()
+
+
+def write_video(out: Path, unit: VideoUnit, files: VideoFiles) -> bool:
+    """Write a unit's files, each whole, the video last; returns whether a video was written."""
+    if files.motion is not None:
+        write_atomic(motion_path(out, unit.video), files.motion)
+    if files.rig is not None:
+        write_atomic((out / "videos" / unit.video).with_suffix(files.rig[0]), files.rig[1])
+    if files.video is not None:
+        write_atomic(out / "videos" / unit.video, files.video)
+    return files.video is not None
+
+
+__all__ = ["Built", "MOTION_DIR", "VideoFiles", "VideoSpec", "VideoUnit", "build", "finished", "make_video",
+           "motion_path", "one_math_thread", "write_video"]

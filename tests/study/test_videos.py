@@ -1,0 +1,40 @@
+"""A study video as a unit of work (gesturelsm/study/videos.py): its motion does not depend on where it is made."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from gesturelsm.constants import ASSETS
+from gesturelsm.pipeline import Plan
+from gesturelsm.study.videos import VideoSpec, VideoUnit, build, make_video
+
+from _support import speech_like
+
+
+@pytest.mark.slow                        # loads the shipped network
+def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads():
+    """The shipped network's sums come out in another order with two math threads than with one (a Ray worker of
+    one CPU has one): a unit pins one, so the motion made here and on a worker is the same file."""
+    import torch
+
+    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
+        pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
+    built = build(VideoSpec((), ("gesturelsm",), None, None, 128))
+    unit = VideoUnit("v_0123456789.mp4", "a.wav", "gesturelsm", Plan(["gesturelsm"], {"gesturelsm": 4}),
+                     speech_like(2.0, seed=1), render=False)
+    before = torch.get_num_threads()
+    got = []
+    try:
+        for threads in (2, 1, 2):
+            torch.set_num_threads(threads)
+            files = make_video(built, unit)
+            assert files.video is None and files.rig is None
+            got.append(files.motion)
+    finally:
+        torch.set_num_threads(before)
+    assert got[0] == got[1] == got[2] and len(got[0]) > 30 * 165 * 4
+    assert torch.get_num_threads() == before
+    with np.load(io.BytesIO(got[0])) as d:
+        assert d["poses"].shape == (60, 165)
