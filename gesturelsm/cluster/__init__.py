@@ -13,12 +13,13 @@ Nothing here imports Ray until a cluster is asked for: without --cluster the sam
 """
 from __future__ import annotations
 
-from .address import ClusterAddress, add_cluster_argument, cluster_argument, parse_cluster
+from .address import (ClusterAddress, ReplicaCount, add_cluster_argument, cluster_argument, parse_cluster,
+                      parse_replicas, replicas_argument)
 from .connect import Connection, connect, package_fingerprint, require_cpus
 from .files import Files, write_atomic
 from .progress import ProgressLine, Tally
 from .runner import Failure, Job, RunReport, Stopped, Unit, run_units
 
-__all__ = ["ClusterAddress", "Connection", "Failure", "Files", "Job", "ProgressLine", "RunReport", "Stopped",
-           "Tally", "Unit", "add_cluster_argument", "cluster_argument", "connect", "package_fingerprint",
-           "parse_cluster", "require_cpus", "run_units", "write_atomic"]
+__all__ = ["ClusterAddress", "Connection", "Failure", "Files", "Job", "ProgressLine", "ReplicaCount", "RunReport",
+           "Stopped", "Tally", "Unit", "add_cluster_argument", "cluster_argument", "connect", "package_fingerprint",
+           "parse_cluster", "parse_replicas", "replicas_argument", "require_cpus", "run_units", "write_atomic"]

@@ -4,7 +4,8 @@
     auto             join the cluster that `ray start --head` started on this machine (or RAY_ADDRESS)
     ray://HOST:PORT  a remote cluster through its Ray Client server (`ray start --head` listens on port 10001)
 
-Parsing needs nothing of Ray: a bad value is refused before anything is imported or started.
+The web demo's `--replicas N` or `MIN:MAX` is parsed here too. Parsing needs nothing of Ray: a bad value is refused
+before anything is imported or started.
 """
 from __future__ import annotations
 
@@ -54,6 +55,42 @@ def parse_cluster(text: str | None) -> ClusterAddress:
     return ClusterAddress("client", m.group("host").strip("[]"), port)
 
 
+@dataclass(frozen=True)
+class ReplicaCount:
+    """`--replicas N` (fixed) or `MIN:MAX` (autoscaled on the number of requests waiting per replica)."""
+    low: int
+    high: int
+
+    @property
+    def fixed(self) -> bool:
+        return self.low == self.high
+
+    def __str__(self) -> str:
+        return str(self.low) if self.fixed else f"{self.low}:{self.high}"
+
+
+MAX_REPLICAS = 256
+
+
+def parse_replicas(text: str | int) -> ReplicaCount:
+    """'3' -> 3 replicas; '1:4' -> from 1 to 4 as the queue asks; anything else is a ClusterError."""
+    value = str(text).strip()
+    parts = value.split(":")
+    if len(parts) > 2 or not all(p.strip().isdigit() for p in parts):
+        raise ClusterError(f"--replicas must be a whole number N or MIN:MAX (got {value!r})")
+    low, high = int(parts[0]), int(parts[-1])
+    if not 1 <= low <= high <= MAX_REPLICAS:
+        raise ClusterError(f"--replicas {value}: give 1 to {MAX_REPLICAS} replicas, MIN at most MAX")
+    return ReplicaCount(low, high)
+
+
+def replicas_argument(text: str) -> ReplicaCount:
+    try:
+        return parse_replicas(text)
+    except ClusterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def cluster_argument(text: str) -> ClusterAddress:
     """argparse `type=`: a bad value becomes argparse's one-line usage error."""
     try:
@@ -70,4 +107,5 @@ def add_cluster_argument(parser: argparse.ArgumentParser, what: str, default: st
                              "without it everything runs in this process (docs/CLUSTER.md)")
 
 
-__all__ = ["CLIENT_PORT", "ClusterAddress", "add_cluster_argument", "cluster_argument", "parse_cluster"]
+__all__ = ["CLIENT_PORT", "ClusterAddress", "ReplicaCount", "add_cluster_argument", "cluster_argument",
+           "parse_cluster", "parse_replicas", "replicas_argument"]

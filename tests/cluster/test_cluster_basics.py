@@ -200,3 +200,23 @@ def test_an_unreachable_cluster_is_one_line_at_once(monkeypatch):
     import ray
 
     assert not ray.is_initialized()
+
+
+@pytest.mark.parametrize("text, low, high", [("1", 1, 1), ("4", 4, 4), ("2:8", 2, 8), (" 3:3 ", 3, 3)])
+def test_replica_counts(text, low, high):
+    from gesturelsm.cluster import parse_replicas
+
+    got = parse_replicas(text)
+    assert (got.low, got.high, got.fixed) == (low, high, low == high)
+    assert str(got) == (str(low) if low == high else f"{low}:{high}")
+
+
+@pytest.mark.parametrize("text, says", [("0", "give 1 to 256 replicas"), ("4:2", "MIN at most MAX"),
+                                        ("two", "a whole number N or MIN:MAX (got 'two')"), ("1:2:3", "MIN:MAX"),
+                                        ("-1", "(got '-1')"), ("1:", "(got '1:')"), ("300", "give 1 to 256")])
+def test_bad_replica_counts_are_one_line(text, says):
+    from gesturelsm.cluster import parse_replicas
+
+    with pytest.raises(ClusterError) as err:
+        parse_replicas(text)
+    assert says in str(err.value) and "\n" not in str(err.value)
