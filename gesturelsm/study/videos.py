@@ -24,11 +24,14 @@ from typing import Iterator
 import numpy as np
 import torch
 
+from ..align import read_result
+from ..audio import load_audio
 from ..body import load_body_model
-from ..cluster import Files, write_atomic
+from ..cluster import Connection, Files, Job, ProgressLine, RunReport, Unit, run_units, write_atomic
+from ..data.lookup import find_beat2_take
 from ..export import npz_bytes
 from ..export.rig import export_rig_glb
-from ..pipeline import GesturePipeline, Plan
+from ..pipeline import GROUND_TRUTH, GesturePipeline, Plan
 from ..render import render_video
 from ..retarget import load_character
 
@@ -146,5 +149,67 @@ def write_video(out: Path, unit: VideoUnit, files: VideoFiles) -> bool:
     return files.video is not None
 
 
+def transcript(audio: Path) -> tuple[list | None, str | None]:
+    """(words, text) from <stem>.TextGrid or <stem>.txt beside the audio, else (None, None)."""
+    tg = audio.with_suffix(".TextGrid")
+    if tg.exists():
+        return read_result(tg).words, None
+    txt = audio.with_suffix(".txt")
+    return None, (txt.read_text().strip() if txt.exists() else None)
+
+
+def units_to_make(items, audio_files: list[Path], out: Path, base: Plan, ship: bool) -> tuple[list[Unit], int]:
+    """A unit per study item (.video, .audio, .method) whose video or motion is missing (with the video there,
+    the unit only generates); and how many are finished."""
+    units, skipped = [], 0
+    for a in audio_files:
+        mine = [(it, *finished(out, it.video)) for it in items if it.audio == a.name]
+        todo = [(it, have_video) for it, have_video, have_motion in mine if not (have_video and have_motion)]
+        skipped += len(mine) - len(todo)
+        if not todo:
+            continue
+        words, text = transcript(a)
+        audio = load_audio(a)
+        for it, have_video in todo:
+            take = _take(base.beat2, audio, a.name, ship) if it.method == GROUND_TRUTH else None
+            unit = VideoUnit(it.video, a.name, it.method, replace(base, methods=[it.method], filename=a.name,
+                                                                  beat2=None),
+                             audio, tuple(words) if words else None, text, take, render=not have_video)
+            units.append(Unit(it.video, unit, cost=1.0 if have_video else 4.0, label=f"{a.name}, {it.method}"))
+    return units, skipped
+
+
+def _take(beat2: str | None, audio: np.ndarray, name: str, ship: bool) -> Files | None:
+    """The BEAT2 take this speech is (found here, where the folder is): its motion and speech file."""
+    take = find_beat2_take(beat2, audio, name)
+    if take is None:
+        return None
+    return Files.of(beat2, ship, only=[f"smplxflame_30/{take}.npz", f"wave16k/{take}.wav"])
+
+
+def render_missing(items, audio_files: list[Path], out: Path, base: Plan, spec: VideoSpec, built: Built,
+                   log, connection: Connection | None) -> tuple[int, int, RunReport]:
+    """Every missing video (or motion) through its unit, here (with `built`) or on the cluster; -> (videos written,
+    videos already there, the run's report)."""
+    (out / "videos").mkdir(parents=True, exist_ok=True)
+    units, skipped = units_to_make(items, audio_files, out, base, ship=connection is not None)
+    bar = ProgressLine()
+    rendered = 0
+
+    def write(unit: Unit, files: VideoFiles) -> None:
+        nonlocal rendered
+        if files.note:
+            bar.write(f"  {files.note}")
+        if write_video(out, unit.inputs, files):
+            rendered += 1
+            bar.write(f"  {unit.key}  ({rendered} rendered)")
+
+    if connection is not None:
+        log(f"{len(units)} video(s) to make on the {connection.describe()}")
+    report = run_units(Job(make_video, build, spec), units, write, connection=connection,
+                       built=built if connection is None else None, progress=bar if units else None, noun="videos")
+    return rendered, skipped, report
+
+
 __all__ = ["Built", "MOTION_DIR", "VideoFiles", "VideoSpec", "VideoUnit", "build", "finished", "make_video",
-           "motion_path", "one_math_thread", "write_video"]
+           "motion_path", "one_math_thread", "render_missing", "transcript", "units_to_make", "write_video"]

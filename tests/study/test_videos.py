@@ -38,3 +38,30 @@ def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads():
     assert torch.get_num_threads() == before
     with np.load(io.BytesIO(got[0])) as d:
         assert d["poses"].shape == (60, 165)
+
+
+@pytest.mark.slow                        # two batches over checkpoints
+def test_a_missing_motion_is_made_again_without_the_video(tiny_assets, tmp_path):
+    import soundfile as sf
+
+    from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.study import make_study
+
+    speech = tmp_path / "speech"
+    speech.mkdir()
+    for i, name in enumerate(("a.wav", "b.wav")):
+        sf.write(speech / name, speech_like(1.0, seed=i), 16000)
+    pipe = GesturePipeline.from_pretrained(tiny_assets)
+    out = tmp_path / "study"
+    kw = dict(raters=1, steps={"gesturelsm": 1, "ddim": 1}, size=128, log=lambda m: None)
+    make_study(pipe, speech, ["gesturelsm", "ddim"], out, **kw)
+    motions = {p.name: p.read_bytes() for p in (out / "key" / "motion").iterdir()}
+    videos = {p.name: p.stat().st_mtime_ns for p in (out / "videos").glob("v_*.mp4")}
+    assert len(motions) == 4 and {n[:-4] for n in motions} <= {n[:-4] for n in videos}
+    gone = sorted(motions)[0]
+    (out / "key" / "motion" / gone).unlink()
+    logs = []
+    make_study(pipe, speech, ["gesturelsm", "ddim"], out, **dict(kw, log=logs.append))
+    assert "0 videos rendered, 3 already there" in logs[-1]
+    assert {p.name: p.read_bytes() for p in (out / "key" / "motion").iterdir()} == motions   # the same bytes again
+    assert {p.name: p.stat().st_mtime_ns for p in (out / "videos").glob("v_*.mp4")} == videos  # no video touched
