@@ -2,16 +2,19 @@
 
     gesturelsm sweep speech.wav --methods gesturelsm rectified_flow ddim --steps 1 2 4 8 --cfg 1 2 3 --seeds 2 \
         [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] --out runs/sweep
+        [--cluster local|auto|ray://HOST:PORT]   (each method x steps x CFG x seed a task, docs/CLUSTER.md)
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import checkpoint_sources
+from ..cluster import ProgressLine, add_cluster_argument, connect
 from ..pipeline import GesturePipeline
 from .sweep import SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
@@ -40,6 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
     p.add_argument("--threads", type=int, default=None)
     p.add_argument("--out", default="runs/sweep")
+    add_cluster_argument(p, "each combination and seed")
     p.set_defaults(func=run_sweep_cli)
 
 
@@ -56,8 +60,9 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     check_grid(pipe, grid, len(audio) / SAMPLE_RATE, limits)
     words = read_words(args.textgrid) if args.textgrid else None
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe)
-    result = run_sweep(pipe, speech, grid, keep_motions=False,
-                       progress=lambda f, m: print(f"[{100 * f:3.0f} %] {m}", file=sys.stderr, flush=True))
+    with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
+        result = run_sweep(pipe, speech, grid, keep_motions=False, progress=ProgressLine(sys.stderr),
+                           connection=conn, checkpoints=checkpoint_sources(args.checkpoints))
     files = write_sweep(result, Path(args.out), args.metric)
     print(markdown_text(result))
     print(f"\nwrote {', '.join(str(p) for p in files.values())}")
