@@ -221,8 +221,10 @@ def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_r
                                              target_ongoing_requests=per_replica, upscale_delay_s=5,
                                              downscale_delay_s=120)
     app = serve.deployment(GestureReplica, name="GestureReplica").options(**options).bind(spec)
-    serve.start(proxy_location="Disabled")
-    serve._run(app, name=APP, route_prefix=None, _blocking=False)
+    quiet = {"log_level": "WARNING", "enable_access_log": False}
+    serve.start(proxy_location="Disabled", logging_config=quiet)
+    logging.getLogger("ray.serve").setLevel(logging.WARNING)          # Serve's progress lines in this process
+    serve._run(app, name=APP, route_prefix=None, logging_config=quiet, _blocking=False)
     _wait_running(timeout)
     return serve.get_app_handle(APP)
 

@@ -70,7 +70,6 @@ class ReplicatedService(GestureService):
         """Join or start the cluster, start the replicas (each with `settings.concurrency` requests at a time), and
         load the models here for the Live tab; the page then takes count.high x concurrency requests at once."""
         conn = connect(address)
-        logging.getLogger("ray.serve").setLevel(logging.WARNING)       # Serve's own progress lines
         deploying = False
         try:
             require_cpus(conn, count.low * replicas.REPLICA_CPUS, f"--replicas {count}")     # before any loading
