@@ -205,13 +205,10 @@ def _reply(result: Result, elapsed: float) -> Reply:
     return Reply(result, _collect(result.job.folder), elapsed)
 
 
-def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_replica: int = 1,
-           timeout: float = START_TIMEOUT_S):
-    """Start the replicas on the connected cluster and wait until they are ready; returns Serve's handle.
-    ClusterError when the cluster has too few CPUs for `count.low` replicas or they do not start in `timeout`."""
-    from ray import serve
-
-    require_cpus(connection, count.low * REPLICA_CPUS, f"--replicas {count}")
+def serve_options(count: ReplicaCount, per_replica: int) -> dict:
+    """The deployment's Serve options: one CPU and `per_replica` requests per replica; a fixed count, or MIN:MAX
+    scaled on the requests each replica has (running and waiting), up after 5 s above the target, down after 2 idle
+    minutes."""
     options = dict(ray_actor_options={"num_cpus": REPLICA_CPUS}, max_ongoing_requests=per_replica,
                    health_check_period_s=2, health_check_timeout_s=60, graceful_shutdown_timeout_s=5)
     if count.fixed:
@@ -220,7 +217,18 @@ def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_r
         options["autoscaling_config"] = dict(min_replicas=count.low, max_replicas=count.high,
                                              target_ongoing_requests=per_replica, upscale_delay_s=5,
                                              downscale_delay_s=120)
-    app = serve.deployment(GestureReplica, name="GestureReplica").options(**options).bind(spec)
+    return options
+
+
+def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_replica: int = 1,
+           timeout: float = START_TIMEOUT_S):
+    """Start the replicas on the connected cluster and wait until they are ready; returns Serve's handle.
+    ClusterError when the cluster has too few CPUs for `count.low` replicas or they do not start in `timeout`."""
+    from ray import serve
+
+    require_cpus(connection, count.low * REPLICA_CPUS, f"--replicas {count}")
+    app = serve.deployment(GestureReplica, name="GestureReplica").options(**serve_options(count, per_replica))
+    app = app.bind(spec)
     quiet = {"log_level": "WARNING", "enable_access_log": False}
     serve.start(proxy_location="Disabled", logging_config=quiet)
     logging.getLogger("ray.serve").setLevel(logging.WARNING)          # Serve's progress lines in this process
@@ -257,5 +265,5 @@ def stop() -> None:
         log.info("stopping the replicas: the cluster was already gone")
 
 
-__all__ = ["APP", "GestureReplica", "REPLICA_CPUS", "ReplicaSpec", "Reply", "Scratch", "Upload", "deploy", "stop",
-           "sweep_dead"]
+__all__ = ["APP", "GestureReplica", "REPLICA_CPUS", "ReplicaSpec", "Reply", "Scratch", "Upload", "deploy",
+           "serve_options", "stop", "sweep_dead"]
