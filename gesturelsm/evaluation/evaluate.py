@@ -115,7 +115,6 @@ def evaluate(pipe, clips: list[EvalClip], plan: list[EvalPlanItem], seeds: int =
     body = body or load_body_model()
     extractors = default_extractors() if extractors is None else extractors
     with_motion = [c for c in clips if c.motion is not None]
-    audio_only = [c for c in clips if c.motion is None]
     if mean_speed is None:
         if with_motion:
             sp = [joint_speed(body.joints(c.motion.poses, c.motion.trans)) for c in with_motion]

@@ -26,7 +26,7 @@ def test_join_run_units_on_both_nodes_and_list_failures(ray_cluster):
     written = {}
     with connect(AUTO) as conn:
         assert (conn.nodes, conn.cpus, conn.owned) == (2, 2.0, False)
-        assert conn.describe() == f"Ray cluster at auto: 2 node(s), 2 CPU(s)"
+        assert conn.describe() == "Ray cluster at auto: 2 node(s), 2 CPU(s)"
         todo = [Unit(f"u{i}", ("sleep", 0.5, i), label=f"item {i}") for i in range(8)]
         report = run_units(Job(units.work, units.build, 10), todo, lambda u, r: written.__setitem__(u.key, r),
                            connection=conn)

@@ -4,11 +4,8 @@ call is made again on another, with the same motion for the same seed), and the 
 Too few CPUs for the replicas is one line, before any model is loaded."""
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 import signal
-import threading
 import time
 from pathlib import Path
 
@@ -17,7 +14,7 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.cluster import parse_cluster, parse_replicas
-from gesturelsm.errors import ClusterError
+from gesturelsm.serve.replicas import Upload
 
 from _support import gradio_client, served, speech_like
 
@@ -119,3 +116,18 @@ def test_a_visitors_error_comes_back_as_one_line(replicated, tmp_path):
         replicated.run(Request(str(silent), methods=["gesturelsm"], transcribe=False))
     with pytest.raises(InputError, match="Unknown method"):        # checked here, no replica asked
         replicated.run(Request(str(silent), methods=["nope"]))
+
+
+def test_a_prefetched_transcript_goes_with_the_request(replicated, tmp_path):
+    """The page asks a replica to transcribe an upload while the visitor chooses the settings; the request then
+    carries those words, so whichever replica makes it does not transcribe again."""
+    from gesturelsm.serve.request import Request
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(2.0, seed=7), 16000)
+    assert replicated.prefetch(str(wav)) is True
+    assert replicated.prefetch(None) is False
+    out = replicated.run(Request(str(wav), methods=["gesturelsm"], render=False, exports=False))
+    remembered = replicated._remembered(Upload(wav.name, wav.read_bytes()))
+    assert remembered is not None and out.text_mode == remembered.text_mode
+    assert out.timings["gesturelsm"]["transcription"] < 0.05         # found ready, not recognised again
