@@ -9,13 +9,16 @@ The result comes back as bytes and the driver writes them, whole (`write_video`)
     videos/v_XXXXXXXXXX.vrm / .glb    with --rig: the motion on the character
     key/motion/v_XXXXXXXXXX.npz       the motion behind the video (BEAT2 layout), to measure exactly what raters saw
 
-A unit's motion is the same bytes wherever it runs: it generates with one math thread (a Ray worker with one CPU
-has one; more threads sum in another order) and the npz carries no time of writing (export.npz_bytes).
+A unit's motion is the same bytes wherever it runs on the same kind of CPU: it generates with one math thread (a Ray
+worker with one CPU has one; more threads sum in another order) and PyTorch's default kernels (the fast paths of
+gesturelsm.kernels are chosen by timing each process, and sum in another order too), and the npz carries no time of
+writing (export.npz_bytes).
 """
 from __future__ import annotations
 
 import contextlib
 import hashlib
+import os
 import tempfile
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -36,6 +39,7 @@ from ..render import render_video
 from ..retarget import load_character
 
 MOTION_DIR = Path("key") / "motion"
+KERNELS = "GESTURELSM_KERNELS"                # gesturelsm.kernels reads it at every choice
 
 
 @dataclass(frozen=True)
@@ -86,13 +90,19 @@ def build(spec: VideoSpec) -> Built:
 
 
 @contextlib.contextmanager
-def one_math_thread() -> Iterator[None]:
-    before = torch.get_num_threads()
+def reproducible() -> Iterator[None]:
+    """One math thread and the default kernels (GESTURELSM_KERNELS=none) while inside; both restored after."""
+    threads, kernels = torch.get_num_threads(), os.environ.get(KERNELS)
     torch.set_num_threads(1)
+    os.environ[KERNELS] = "none"
     try:
         yield
     finally:
-        torch.set_num_threads(before)
+        torch.set_num_threads(threads)
+        if kernels is None:
+            os.environ.pop(KERNELS, None)
+        else:
+            os.environ[KERNELS] = kernels
 
 
 def _speech(built: Built, unit: VideoUnit):
@@ -109,7 +119,7 @@ def _speech(built: Built, unit: VideoUnit):
 
 def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     """The unit's motion (and, unless `render` is False, its video and character file), as bytes."""
-    with one_math_thread():
+    with reproducible():
         speech = _speech(built, unit)
         plan = replace(unit.plan, beat2=str(unit.take.local()) if unit.take is not None else None)
         gen = built.pipeline.generate_all(speech, plan)
@@ -212,4 +222,4 @@ def render_missing(items, audio_files: list[Path], out: Path, base: Plan, spec: 
 
 
 __all__ = ["Built", "MOTION_DIR", "VideoFiles", "VideoSpec", "VideoUnit", "build", "finished", "make_video",
-           "motion_path", "one_math_thread", "render_missing", "transcript", "units_to_make", "write_video"]
+           "motion_path", "reproducible", "render_missing", "transcript", "units_to_make", "write_video"]

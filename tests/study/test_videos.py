@@ -14,9 +14,12 @@ from _support import speech_like
 
 
 @pytest.mark.slow                        # loads the shipped network
-def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads():
+def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads_or_kernels(monkeypatch):
     """The shipped network's sums come out in another order with two math threads than with one (a Ray worker of
-    one CPU has one): a unit pins one, so the motion made here and on a worker is the same file."""
+    one CPU has one), and with the fast kernels a process chose by timing than without: a unit pins one thread and
+    the default kernels, so the motion made here and on a worker is the same file."""
+    import os
+
     import torch
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
@@ -27,9 +30,14 @@ def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads():
     before = torch.get_num_threads()
     got = []
     try:
-        for threads in (2, 1, 2):
+        for threads, kernels in ((2, "all"), (1, None), (2, "linear,trace")):
             torch.set_num_threads(threads)
+            if kernels is None:
+                monkeypatch.delenv("GESTURELSM_KERNELS", raising=False)
+            else:
+                monkeypatch.setenv("GESTURELSM_KERNELS", kernels)
             files = make_video(built, unit)
+            assert os.environ.get("GESTURELSM_KERNELS") == kernels and torch.get_num_threads() == threads
             assert files.video is None and files.rig is None
             got.append(files.motion)
     finally:
