@@ -35,7 +35,7 @@ from .request import Request, Result, ServiceSettings
 from .service import GestureService
 
 log = logging.getLogger("gesturelsm.app")
-APP = "gesturelsm"                       # the Serve application's name
+APP = "gesturelsm"                       # the Serve application's name (a page on another port: APP-PORT)
 SCRATCH = "gesturelsm-replicas"
 REPLICA_CPUS = 1.0                       # Ray CPUs reserved per replica (its render process runs beside it, niced)
 START_TIMEOUT_S = 600.0                  # replicas load the models and warm up before the first call
@@ -221,9 +221,10 @@ def serve_options(count: ReplicaCount, per_replica: int) -> dict:
 
 
 def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_replica: int = 1,
-           timeout: float = START_TIMEOUT_S):
-    """Start the replicas on the connected cluster and wait until they are ready; returns Serve's handle.
-    ClusterError when the cluster has too few CPUs for `count.low` replicas or they do not start in `timeout`."""
+           timeout: float = START_TIMEOUT_S, name: str = APP):
+    """Start the replicas as the Serve application `name` on the connected cluster (replacing one of that name, a
+    page's earlier run) and wait until they are ready; returns Serve's handle. ClusterError when the cluster has too
+    few CPUs for `count.low` replicas or they do not start in `timeout`."""
     from ray import serve
 
     require_cpus(connection, count.low * REPLICA_CPUS, f"--replicas {count}")
@@ -232,17 +233,17 @@ def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_r
     quiet = {"log_level": "WARNING", "enable_access_log": False}
     serve.start(proxy_location="Disabled", logging_config=quiet)
     logging.getLogger("ray.serve").setLevel(logging.WARNING)          # Serve's progress lines in this process
-    serve._run(app, name=APP, route_prefix=None, logging_config=quiet, _blocking=False)
-    _wait_running(timeout)
-    return serve.get_app_handle(APP)
+    serve._run(app, name=name, route_prefix=None, logging_config=quiet, _blocking=False)
+    _wait_running(name, timeout)
+    return serve.get_app_handle(name)
 
 
-def _wait_running(timeout: float) -> None:
+def _wait_running(name: str, timeout: float) -> None:
     from ray import serve
 
     deadline = time.monotonic() + timeout
     while True:
-        status = serve.status().applications.get(APP)
+        status = serve.status().applications.get(name)
         state = str(getattr(status, "status", "")).rsplit(".", 1)[-1]
         if state == "RUNNING":
             return
@@ -254,13 +255,15 @@ def _wait_running(timeout: float) -> None:
         time.sleep(0.5)
 
 
-def stop() -> None:
-    """Remove the replicas (the cluster itself stays up when it was joined)."""
+def stop(name: str = APP) -> None:
+    """Remove the replicas of application `name`, and Serve itself when no other application is left on the cluster
+    (the cluster stays up when it was joined)."""
     from ray import serve
 
     try:
-        serve.delete(APP)
-        serve.shutdown()
+        serve.delete(name)
+        if not serve.status().applications:
+            serve.shutdown()
     except Exception:                            # the cluster is already gone: nothing left to stop
         log.info("stopping the replicas: the cluster was already gone")
 

@@ -58,17 +58,18 @@ class ReplicaLost(GestureError):
 
 class ReplicatedService(GestureService):
     def __init__(self, pipeline, settings: ServiceSettings, body, handle, count: ReplicaCount,
-                 connection: Connection | None = None):
+                 connection: Connection | None = None, name: str = replicas.APP):
         super().__init__(pipeline, settings, body)
-        self.handle, self.count, self.connection = handle, count, connection
+        self.handle, self.count, self.connection, self.name = handle, count, connection, name
         self._words: OrderedDict[str, AutomaticWords] = OrderedDict()
         self._lock = threading.Lock()
 
     @classmethod
     def start(cls, settings: ServiceSettings, count: ReplicaCount, address: ClusterAddress,
-              warmup: bool = True) -> "ReplicatedService":
-        """Join or start the cluster, start the replicas (each with `settings.concurrency` requests at a time), and
-        load the models here for the Live tab; the page then takes count.high x concurrency requests at once."""
+              warmup: bool = True, name: str = replicas.APP) -> "ReplicatedService":
+        """Join or start the cluster, start the replicas (each with `settings.concurrency` requests at a time) as the
+        Serve application `name` (one per page on a shared cluster), and load the models here for the Live tab; the
+        page then takes count.high x concurrency requests at once."""
         conn = connect(address)
         deploying = False
         try:
@@ -77,17 +78,17 @@ class ReplicatedService(GestureService):
             spec = ReplicaSpec(settings, Files.of(settings.checkpoints, ship=True),
                                Files.of(resolve_model_path(settings.body_model), ship=True), warmup)
             deploying = True
-            handle = replicas.deploy(spec, count, conn, per_replica=settings.concurrency)
+            handle = replicas.deploy(spec, count, conn, per_replica=settings.concurrency, name=name)
         except BaseException:
             if deploying:
-                replicas.stop()
+                replicas.stop(name)
             conn.close()
             raise
         page = replace(settings, concurrency=count.high * settings.concurrency)
-        return cls(here.pipeline, page, here.body, handle, count, conn)
+        return cls(here.pipeline, page, here.body, handle, count, conn, name)
 
     def close(self) -> None:
-        replicas.stop()
+        replicas.stop(self.name)
         if self.connection is not None:
             self.connection.close()
 

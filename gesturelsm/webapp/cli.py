@@ -120,7 +120,7 @@ def _service(args: argparse.Namespace, settings):
         from gesturelsm.serve.replicated import ReplicatedService
 
         return ReplicatedService.start(settings, args.replicas, args.cluster or parse_cluster("local"),
-                                       warmup=not args.no_warmup)
+                                       warmup=not args.no_warmup, name=f"gesturelsm-{args.port}")
     from gesturelsm.serve.service import GestureService
 
     return GestureService.from_settings(settings)
