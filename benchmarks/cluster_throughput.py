@@ -3,7 +3,8 @@
 on 1 and on 2 Ray Serve replicas (`python -m app --replicas N`), at a fixed offered load, with p50 / p95 latency.
 
     .venv/bin/python benchmarks/cluster_throughput.py [--speeches 4] [--methods gesturelsm ddim] [--size 256]
-                                                      [--requests 8] [--rate 6] [--replicas 1 2] [--skip-batch]
+                                                      [--batch-rounds 1] [--requests 8] [--rate 6]
+                                                      [--replicas 0 1 2] [--skip-batch]
 
 Inputs: the page's example speech (eSpeak NG, ~5 s each; the batch cycles through them under new names), the
 shipped checkpoints, the built-in mannequin. Batch: every video of speeches x methods, from an empty folder, wall
@@ -77,15 +78,16 @@ def ray_start_seconds() -> float:
 
 
 def batch_rows(args, root: Path) -> list[tuple]:
+    """`--batch-rounds` rounds, each from empty folders, the order of the two runs swapped every round."""
     speech = speech_folder(root, args.speeches)
     n = args.speeches * len(args.methods)
     rows = []
-    here = batch(speech, root / "here", args.methods, args.size)
-    there = batch(speech, root / "there", args.methods, args.size, "--cluster", "local")
-    start = ray_start_seconds()
-    for name, seconds in (("this process", here), ("--cluster local", there)):
-        rows.append((name, n, seconds, 60 * n / seconds))
-    return rows + [("(Ray start and worker check alone)", 0, start, float("nan"))]
+    for r in range(args.batch_rounds):
+        runs = [("this process", ()), ("--cluster local", ("--cluster", "local"))]
+        for name, extra in runs[::-1] if r % 2 else runs:
+            seconds = batch(speech, root / f"r{r}-{len(extra)}", args.methods, args.size, *extra)
+            rows.append((f"round {r + 1}: {name}", n, seconds, 60 * n / seconds))
+    return rows + [("(Ray start and worker check alone)", 0, ray_start_seconds(), float("nan"))]
 
 
 def rss_mb(pid: int) -> float:
@@ -165,7 +167,9 @@ def main() -> None:
     p.add_argument("--size", type=int, default=256)
     p.add_argument("--requests", type=int, default=8)
     p.add_argument("--rate", type=float, default=6.0, help="offered load, requests per minute")
-    p.add_argument("--replicas", type=int, nargs="+", default=[0, 1, 2], help="0: the demo in this process")
+    p.add_argument("--batch-rounds", type=int, default=1, help="batch runs of each kind, alternating which goes first")
+    p.add_argument("--replicas", type=int, nargs="*", default=[0, 1, 2],
+                   help="0: the demo in this process; none given: no web part")
     p.add_argument("--skip-batch", action="store_true")
     args = p.parse_args()
     print(f"machine: {cpu_name()}, {os.cpu_count()} cores; load average at start {os.getloadavg()[0]:.1f}\n")
@@ -176,9 +180,10 @@ def main() -> None:
                   "| videos per minute |\n|---|---|---|---|")
             for name, n, s, vpm in batch_rows(args, root):
                 print(f"| {name} | {n} | {s:.1f} | {vpm:.2f} |", flush=True)
-        print(f"\n| web: {args.requests} x /generate at {args.rate:g} per minute, {args.size} px, ~5 s speech | "
-              "start s | requests per minute | p50 latency s | p95 latency s | MB per replica |\n"
-              "|---|---|---|---|---|---|")
+        if args.replicas:
+            print(f"\n| web: {args.requests} x /generate at {args.rate:g} per minute, {args.size} px, ~5 s speech "
+                  "| start s | requests per minute | p50 latency s | p95 latency s | MB per replica |\n"
+                  "|---|---|---|---|---|---|")
         for n in args.replicas:
             name, start, rpm, p50, p95, mb = app_row(n, args, root)
             print(f"| {name} | {start:.0f} | {rpm:.2f} | {p50:.1f} | {p95:.1f} | {mb:.0f} |", flush=True)
