@@ -29,8 +29,10 @@ from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
+from .grounding import ground_motion
 from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
 from .motion.sequence import FPS, MotionSequence
+from .presentation import label
 from .tokenizer.model import RVQVAE
 
 MIN_SECONDS = 0.5
@@ -69,6 +71,7 @@ class Plan:
     smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
+    grounding: bool = True                     # feet on the ground (gesturelsm.grounding), after smoothing
 
     def steps_for(self, method: str) -> int:
         return int(self.steps.get(method, backend_facts(method).default_steps))
@@ -85,6 +88,19 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
+
+
+def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
+           body=None) -> tuple[MotionSequence, str | None]:
+    """The post-processing every method and ground truth get: stand in place, then smoothing (motion/postprocess.py),
+    then feet on the ground (gesturelsm.grounding, on `body`). With stand in place and grounding both on, the root
+    stays on the spot horizontally and the legs plant the feet under it. Returns the motion and, when grounding had
+    to leave it as it was, why (one sentence)."""
+    seq = postprocess(seq, stand_in_place, smoothing)
+    if not grounding:
+        return seq, None
+    res = ground_motion(seq, body)
+    return res.motion, res.warning
 
 
 class GesturePipeline:
@@ -245,9 +261,11 @@ class GesturePipeline:
             self.check_settings(m, plan.steps_for(m), plan.cfg)
         check_smoothing(plan.smoothing)
 
-    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
+    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+                     body=None) -> Generated:
         """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing)."""
+        recognised), each fitted to the speech's length, then post-processed (`finish`: stand in place, smoothing,
+        feet on the ground on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL)."""
         self.check_plan(plan)
         T = speech.num_frames
         gens = plan.generators
@@ -269,7 +287,10 @@ class GesturePipeline:
                                 "it is left out.")
             else:
                 motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
-        motions = {k: postprocess(v.slice(0, T), plan.stand_in_place, plan.smoothing) for k, v in motions.items()}
+        for k, v in motions.items():
+            motions[k], note = finish(v.slice(0, T), plan.stand_in_place, plan.smoothing, plan.grounding, body)
+            if note:
+                warnings.append(f"{label(k)}: {note}")
         return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
@@ -289,4 +310,4 @@ class GesturePipeline:
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG"]
+           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG", "finish"]

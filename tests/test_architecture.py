@@ -20,7 +20,8 @@ FLOORS: list[set[str]] = [
      "cluster"},                                               # it), files, the methods, fast CPU kernels; units
                                                                # of work here or as Ray tasks (no Ray until asked)
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
-    {"asr"},                                                   # speech recognition (times words with align)
+    {"asr", "grounding"},                                      # speech recognition (times words with align); feet on
+                                                               # the floor (leg IK on a body's or a rig's skeleton)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"retarget"},                                              # motion onto characters (their skeletons and meshes)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)

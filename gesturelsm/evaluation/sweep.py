@@ -23,7 +23,7 @@ import numpy as np
 from ..body import load_body_model
 from ..cluster import Connection, Files, Job, Stopped, Unit, run_units
 from ..errors import GestureError, InputError
-from ..pipeline import GesturePipeline, SpeechInput
+from ..pipeline import GesturePipeline, SpeechInput, finish
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
 
@@ -121,6 +121,7 @@ class SweepResult:
     text_mode: str
     reference: SpeakerReference | None
     seconds: float = 0.0                 # the whole sweep, wall clock
+    grounding: bool = True               # the motions' feet were grounded (pipeline.finish)
 
     def cell_runs(self, cell: tuple[str, int, float]) -> list[SweepRun]:
         return [r for r in self.runs if (r.method, r.steps, r.cfg) == cell]
@@ -158,6 +159,7 @@ class SweepSpec:
     context: SpeechContext = field(repr=False)
     body: Files | None = None                 # None: the statistics' own body
     keep_motions: bool = False
+    grounding: bool = True
 
 
 @dataclass
@@ -167,20 +169,21 @@ class SweepBuilt:
     context: SpeechContext
     body: object = None
     keep_motions: bool = True
+    grounding: bool = True
 
 
 def build_sweep(spec: SweepSpec) -> SweepBuilt:
     pipe = GesturePipeline.from_pretrained(checkpoints=[f.local() for f in spec.checkpoints] or None,
                                            methods=list(spec.methods) or None)
     body = load_body_model(str(spec.body.local())) if spec.body is not None else None
-    return SweepBuilt(pipe, spec.speech, spec.context, body, spec.keep_motions)
+    return SweepBuilt(pipe, spec.speech, spec.context, body, spec.keep_motions, spec.grounding)
 
 
 def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
     """One unit of a sweep: (method, steps, CFG, seed) generated, timed and measured."""
     method, steps, cfg, seed = job
     res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method)
-    motion = res.motion.slice(0, built.speech.num_frames)
+    motion, _ = finish(res.motion.slice(0, built.speech.num_frames), grounding=built.grounding, body=built.body)
     world, local = joint_positions(motion, built.body)
     return SweepRun(method, steps, cfg, seed, res.generation_seconds, statistics_of_joints(world, local, built.context),
                     motion if built.keep_motions else None, local)
@@ -188,29 +191,31 @@ def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
 
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
               progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
-              keep_motions: bool = True, connection: Connection | None = None,
+              keep_motions: bool = True, grounding: bool = True, connection: Connection | None = None,
               checkpoints: list | None = None) -> SweepResult:
-    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion,
-    each (cell, seed) a unit of work: in this process with `pipe`, or with `connection` (gesturelsm.cluster) a task
-    whose worker loads `checkpoints` (what `checkpoint_sources` gave). `cancelled()` is asked before every
-    generation; True raises SweepCancelled. `progress(fraction, message)` carries the estimate of the time left.
-    On a cluster, cells that fail are listed (ClusterError) after the others ran; here the first error stops."""
+    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
+    feet grounded (pipeline.finish, without smoothing: the sampler's own motion otherwise) unless `grounding` is
+    off. Each (cell, seed) is a unit of work: in this process with `pipe`, or with `connection`
+    (gesturelsm.cluster) a task whose worker loads `checkpoints` (what `checkpoint_sources` gave). `cancelled()` is
+    asked before every generation; True raises SweepCancelled. `progress(fraction, message)` carries the estimate
+    of the time left. On a cluster, cells that fail are listed (ClusterError) after the others ran; here the first
+    error stops."""
     reference = reference if reference is not None else speaker_reference()
     context = SpeechContext.of(speech.audio, None if reference is None else reference.mean_speed)
     units = [Unit(f"{m} {s} steps CFG {c:g} seed {k}", (m, s, c, k), cost=_units(s, c))
              for (m, s, c) in grid.cells for k in range(grid.seeds)]
     ship = connection is not None
     spec = SweepSpec(tuple(Files.of(p, ship) for p in (checkpoints or [])), tuple(grid.methods), speech, context,
-                     Files.of(getattr(body, "path", None), ship), keep_motions)
+                     Files.of(getattr(body, "path", None), ship), keep_motions, grounding)
     runs: dict[str, SweepRun] = {}
     t0 = time.perf_counter()
     try:
         report = run_units(Job(sweep_cell, build_sweep, spec), units, lambda u, r: runs.__setitem__(u.key, r),
                            connection=connection, progress=progress, cancelled=cancelled, noun="motions",
-                           built=None if ship else SweepBuilt(pipe, speech, context, body, keep_motions),
+                           built=None if ship else SweepBuilt(pipe, speech, context, body, keep_motions, grounding),
                            keep_going=ship)
     except Stopped:
         raise SweepCancelled("The sweep was cancelled; nothing was written.") from None
     report.raise_failures("sweep cells")
     return SweepResult(grid, [runs[u.key] for u in units], speech.duration, speech.text_mode, reference,
-                       time.perf_counter() - t0)
+                       time.perf_counter() - t0, grounding)

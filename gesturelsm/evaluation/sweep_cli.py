@@ -1,8 +1,8 @@
 """`gesturelsm sweep`: methods x steps x CFG x seeds on one speech -> table (CSV, markdown, JSON) and plot.
 
     gesturelsm sweep speech.wav --methods gesturelsm rectified_flow ddim --steps 1 2 4 8 --cfg 1 2 3 --seeds 2 \
-        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] --out runs/sweep
-        [--cluster local|auto|ray://HOST:PORT]   (each method x steps x CFG x seed a task, docs/CLUSTER.md)
+        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] [--grounding off] \
+        --out runs/sweep [--cluster local|auto|ray://HOST:PORT]   (each cell and seed a task, docs/CLUSTER.md)
 """
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import checkpoint_sources
 from ..cluster import ProgressLine, add_cluster_argument, connect
+from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
 from .sweep import SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
@@ -38,6 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
+    add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
     p.add_argument("--max-work", type=float, default=LIMITS.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
@@ -61,8 +63,9 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     words = read_words(args.textgrid) if args.textgrid else None
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe)
     with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
-        result = run_sweep(pipe, speech, grid, keep_motions=False, progress=ProgressLine(sys.stderr),
-                           connection=conn, checkpoints=checkpoint_sources(args.checkpoints))
+        result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
+                           progress=ProgressLine(sys.stderr), connection=conn,
+                           checkpoints=checkpoint_sources(args.checkpoints))
     files = write_sweep(result, Path(args.out), args.metric)
     print(markdown_text(result))
     print(f"\nwrote {', '.join(str(p) for p in files.values())}")

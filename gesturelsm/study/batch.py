@@ -84,7 +84,8 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
                design: Design = Design(), log: Callable[[str], None] = print, rig=None,
-               connection: Connection | None = None, checkpoints: list[Path] | None = None) -> StudyPlan:
+               grounding: bool = True, connection: Connection | None = None,
+               checkpoints: list[Path] | None = None) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
     before anything is rendered (naming.check_unchanged). `steps`: per method (missing: the method's default).
@@ -104,7 +105,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         raise ValueError("--raters must be at least 1")
     audio_files = find_audio(audio_dir)
     out = Path(out)
-    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2)
+    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2, grounding=grounding)
     render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
                   character=file_label(rig.path) if rig is not None else None)
     settings = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
@@ -112,7 +113,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     check_unchanged(out, settings, asdict(design))
     plan = plan_study(audio_files, methods, out, settings)
     record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=cfg, seed=seed, size=size,
-                  stand_in_place=stand_in_place, smoothing=smoothing, design=asdict(design))
+                  stand_in_place=stand_in_place, smoothing=smoothing, grounding=grounding, design=asdict(design))
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
     ship = connection is not None
     spec = VideoSpec(tuple(Files.of(c, ship) for c in (checkpoints or checkpoint_sources(None))),

@@ -122,7 +122,7 @@ def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     with reproducible():
         speech = _speech(built, unit)
         plan = replace(unit.plan, beat2=str(unit.take.local()) if unit.take is not None else None)
-        gen = built.pipeline.generate_all(speech, plan)
+        gen = built.pipeline.generate_all(speech, plan, body=built.body)
     motion = gen.motions.get(unit.method)
     if motion is None:
         return VideoFiles(None, None, note=f"{unit.audio_name}: not a take of the BEAT2 folder; no ground-truth video")
@@ -131,11 +131,12 @@ def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     with tempfile.TemporaryDirectory(prefix="gesturelsm-video-") as tmp:
         path = Path(tmp) / unit.video
         render_video([motion], speech.audio, path, size=(built.size, built.size), body=built.body,
-                     character=built.rig)
+                     character=built.rig, grounding=unit.plan.grounding)
         rig = None
         if built.rig is not None:
             suffix = ".vrm" if built.rig.skeleton.kind.startswith("vrm") else ".glb"
-            rig = (suffix, export_rig_glb(motion, built.rig, path.with_suffix(suffix), body=built.body).read_bytes())
+            rig = (suffix, export_rig_glb(motion, built.rig, path.with_suffix(suffix), body=built.body,
+                                          grounding=unit.plan.grounding).read_bytes())
         return VideoFiles(path.read_bytes(), npz_bytes(motion), rig)
 
 

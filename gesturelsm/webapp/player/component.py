@@ -71,5 +71,5 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     p = player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
                        service.workdir / "player-bodies", url=file_url, audio=wav)
     if character is not None:
-        p["character"] = page_character(character, out.motions, folder, file_url, service.body)
+        p["character"] = page_character(character, out.motions, folder, file_url, service.body, out.job.grounding)
     return p
