@@ -167,11 +167,13 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
     from gesturelsm.cli import main
     from gesturelsm.pipeline import GesturePipeline
     from gesturelsm.study import batch as batch_module
+    from gesturelsm.study import videos as videos_module
 
     plans = []
 
-    class Stop(Exception):
-        """Raised once the plan is seen: the plan is all this test needs."""
+    class Stop(BaseException):
+        """Raised once the plan is seen: the plan is all this test needs (a BaseException: the batch lists a video's
+        Exception among its failures and goes on)."""
 
     class Pipe:
         methods = ["gesturelsm"]
@@ -186,7 +188,7 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
 
     monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: Pipe()))
     monkeypatch.setattr(batch_module, "weights_digest", lambda backend: "w")
-    monkeypatch.setattr(batch_module, "load_audio", lambda path: np.zeros(16000, np.float32))
+    monkeypatch.setattr(videos_module, "load_audio", lambda path: np.zeros(16000, np.float32))
     (tmp_path / "a").mkdir()
     sf.write(tmp_path / "a" / "s.wav", np.zeros(16000, np.float32), 16000)
     with pytest.raises(Stop):
