@@ -82,6 +82,11 @@ class Scratch:
         path.mkdir()
         return path
 
+    def close(self) -> None:
+        """Delete this replica's folder (a replica that stops in order)."""
+        shutil.rmtree(self.folder, ignore_errors=True)
+        self._lock.close()
+
 
 def sweep_dead(root: Path) -> int:
     """Delete every replica-* folder under `root` whose lock can be taken (its replica is gone); returns how many."""
@@ -123,6 +128,12 @@ class GestureReplica:
 
     def pid(self) -> int:
         return os.getpid()
+
+    def __del__(self) -> None:
+        """Serve calls this when it stops the replica in order: its scratch folder goes with it."""
+        scratch = getattr(self, "scratch", None)
+        if scratch is not None:
+            scratch.close()
 
     def run(self, req: Request, audio: Upload, textgrid: Upload | None = None, words: AutomaticWords | None = None,
             take: Files | None = None) -> Reply:
@@ -266,6 +277,7 @@ def stop(name: str = APP) -> None:
             serve.shutdown()
     except Exception:                            # the cluster is already gone: nothing left to stop
         log.info("stopping the replicas: the cluster was already gone")
+    sweep_dead(Path(tempfile.gettempdir()) / SCRATCH)      # those of this machine that were stopped before cleaning
 
 
 __all__ = ["APP", "GestureReplica", "REPLICA_CPUS", "ReplicaSpec", "Reply", "Scratch", "Upload", "deploy",

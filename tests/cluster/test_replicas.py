@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import tempfile
 import time
 from pathlib import Path
 
@@ -14,11 +15,13 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.cluster import parse_cluster, parse_replicas
-from gesturelsm.serve.replicas import Upload
+from gesturelsm.serve.replicas import SCRATCH, Upload
 
 from _support import gradio_client, served, speech_like
 
 AUTO = parse_cluster("auto")
+SCRATCH_ROOT = Path(tempfile.gettempdir()) / SCRATCH
+pids_seen: set[int] = set()                 # every replica these tests saw, for the check after they stop
 
 
 def _settings(assets: Path, workdir: Path):
@@ -54,13 +57,17 @@ def replicated(ray_cluster, tiny_assets, tmp_path_factory):
         yield service
     finally:
         service.close()
+    left = [p.name for p in SCRATCH_ROOT.glob("replica-*") if int(p.name.split("-")[1]) in pids_seen]
+    assert left == [], f"stopped replicas left their folders: {left}"
 
 
 def _replica_pids() -> list[int]:
     import ray._private.state
 
-    return sorted(a["Pid"] for a in ray._private.state.actors(actor_state_name="ALIVE").values()
+    pids = sorted(a["Pid"] for a in ray._private.state.actors(actor_state_name="ALIVE").values()
                   if "GestureReplica" in a["Name"])
+    pids_seen.update(pids)
+    return pids
 
 
 def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tiny_assets, tmp_path):
@@ -74,9 +81,7 @@ def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tin
     assert replicated.settings.concurrency == 2                     # two replicas, one request each
     pids = _replica_pids()
     assert len(pids) == 2
-    from gesturelsm.serve.replicas import SCRATCH
-
-    scratch = Path(os.environ.get("TMPDIR", "/tmp")) / SCRATCH
+    scratch = SCRATCH_ROOT
     killed_folders = sorted(p.name for p in scratch.glob(f"replica-{pids[0]}-*"))
     assert len(killed_folders) == 1
     seeds = [0, 1, 0, 1]

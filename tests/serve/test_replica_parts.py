@@ -37,7 +37,10 @@ def test_the_scratch_of_a_dead_replica_is_removed_and_a_live_ones_kept(tmp_path)
     assert dead.is_dir() and dead != live.folder                    # its process ended: its lock is free
     assert sweep_dead(tmp_path) == 1
     assert not dead.exists() and live.folder.is_dir() and len(list(live.folder.glob("call-*/x.mp4"))) == 1
-    assert Scratch(tmp_path).removed == 0                           # nothing else dead
+    again = Scratch(tmp_path)
+    assert again.removed == 0                                       # nothing else dead
+    again.close()                                                   # a replica stopped in order leaves nothing
+    assert sorted(p.name for p in tmp_path.iterdir()) == [live.folder.name]
 
 
 def test_a_replicas_files_land_in_the_visitors_folder(tmp_path):
