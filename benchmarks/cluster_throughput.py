@@ -130,7 +130,7 @@ def offered_load(url: str, wav: Path, requests: int, rate: float, size: int) -> 
 
 def app_row(replicas: int, args, work: Path) -> tuple:
     from gesturelsm.cluster import parse_cluster, parse_replicas
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.ui import serve_locally
 

@@ -6,14 +6,14 @@ benchmarks and the tests all call this.
     res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
-against the method's registered bounds and calls the backend's `generate`.
+against the method's spec with the one validator (`gesturelsm.settings`) and calls the backend's `generate`.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 import torch
@@ -21,22 +21,26 @@ import torch
 from .align import align_words
 from .asr.source import AutomaticWords, automatic_words, remember_words
 from .audio import SAMPLE_RATE, resample, to_mono
-from .backends import (FACTS, MAX_CFG, Backend, BackendFacts, Bounds, FlowBackend, SpeechInput, backend_facts,
-                       flow_backends, load_backends)
+from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
+                       load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
-from .grounding import ground_motion
-from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
+from .motion.postprocess import check_smoothing, fit_length
 from .motion.sequence import FPS, MotionSequence
-from .presentation import label
+from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, PostProcess, Settings, check_method_settings
 from .tokenizer.model import RVQVAE
 
-MIN_SECONDS = 0.5
-GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
+NOT_GENERATION = ("alignment", "transcription", "rendering")    # stages outside generation time (the paper's AITS)
+
+
+def generation_seconds(timings: Mapping[str, float]) -> float:
+    """Generation time from per-stage seconds: features, sampling and decoding, without transcript alignment or
+    recognition (the paper's AITS convention) and without rendering."""
+    return sum(v for k, v in timings.items() if k not in NOT_GENERATION)
 
 
 @dataclass
@@ -52,33 +56,43 @@ class GenerationResult:
 
     @property
     def generation_seconds(self) -> float:
-        """Inference time without transcript alignment (the paper's AITS convention)."""
-        return sum(v for k, v in self.timings.items() if k not in ("alignment", "transcription"))
+        """Inference time without transcript alignment or recognition (the paper's AITS convention)."""
+        return generation_seconds(self.timings)
+
+    @property
+    def speech_seconds(self) -> float:
+        """Every stage this speech needed: generation plus alignment or recognition of the words."""
+        return sum(self.timings.values())
 
     @property
     def real_time_factor(self) -> float:
+        """Seconds of speech per second of generation (the paper's convention)."""
         return self.motion.duration / max(self.generation_seconds, 1e-9)
 
+    @property
+    def end_to_end_real_time_factor(self) -> float:
+        """Seconds of speech per second of everything done for it, transcription included."""
+        return self.motion.duration / max(self.speech_seconds, 1e-9)
 
-@dataclass
+
+@dataclass(frozen=True)
 class Plan:
-    """What to make from one prepared speech: which methods, with which settings, post-processed how."""
-    methods: Sequence[str]                     # generator keys and/or GROUND_TRUTH, in the order shown
-    steps: Mapping[str, int] = field(default_factory=dict)   # per method; missing: the method's default_steps
-    cfg: float = 2.0
-    seed: int = 0
-    stand_in_place: bool = False
-    smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
+    """What to make from one prepared speech: the settings (methods, steps, CFG, seed, post-processing) and where
+    the ground truth of a known take is looked up."""
+    settings: Settings = DEFAULTS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
-    grounding: bool = True                     # feet on the ground (gesturelsm.grounding), after smoothing
 
-    def steps_for(self, method: str) -> int:
-        return int(self.steps.get(method, backend_facts(method).default_steps))
+    @property
+    def methods(self) -> tuple[str, ...]:
+        return self.settings.methods
 
     @property
     def generators(self) -> list[str]:
-        return [m for m in dict.fromkeys(self.methods) if m != GROUND_TRUTH]
+        return self.settings.generators
+
+    def steps_for(self, method: str) -> int:
+        return self.settings.steps_for(method)
 
 
 @dataclass
@@ -92,26 +106,21 @@ class Generated:
 
 def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
            body=None) -> tuple[MotionSequence, str | None]:
-    """The post-processing every method and ground truth get: stand in place, then smoothing (motion/postprocess.py),
-    then feet on the ground (gesturelsm.grounding, on `body`). With stand in place and grounding both on, the root
-    stays on the spot horizontally and the legs plant the feet under it. Returns the motion and, when grounding had
-    to leave it as it was, why (one sentence)."""
-    seq = postprocess(seq, stand_in_place, smoothing)
-    if not grounding:
-        return seq, None
-    res = ground_motion(seq, body)
-    return res.motion, res.warning
+    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
+    ground on `body`), and why grounding had to leave it as it was, when it had to."""
+    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 class GesturePipeline:
-    def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu", max_seconds: float = 600.0):
+    def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu",
+                 max_seconds: float = MAX_SECONDS):
         self.backends = dict(backends)          # method -> backend (gesturelsm.backends), in registry order
         self.device = torch.device(device)
         self.max_seconds = max_seconds
 
     @classmethod
     def from_pretrained(cls, path: str | Path | None = None, device: str = "cpu", methods: list[str] | None = None,
-                        max_seconds: float = 600.0, warm_up: bool = True,
+                        max_seconds: float = MAX_SECONDS, warm_up: bool = True,
                         checkpoints: list[str | Path] | None = None) -> "GesturePipeline":
         """Every method with a checkpoint in `path`, a folder with tokenizer/<region>.safetensors and
         generator/<method>.safetensors and/or the authors' reference_*.safetensors (default: the shipped assets/),
@@ -128,7 +137,7 @@ class GesturePipeline:
 
     @classmethod
     def from_models(cls, tokenizers: dict[str, RVQVAE], generators: dict[str, GestureGenerator],
-                    device: str | torch.device = "cpu", max_seconds: float = 600.0) -> "GesturePipeline":
+                    device: str | torch.device = "cpu", max_seconds: float = MAX_SECONDS) -> "GesturePipeline":
         """A pipeline of our methods from models in memory ({method: generator} sharing `tokenizers`)."""
         return cls(flow_backends(tokenizers, generators), device, max_seconds)
 
@@ -142,12 +151,16 @@ class GesturePipeline:
     def methods(self) -> list[str]:
         return list(self.backends)
 
-    def facts(self, method: str) -> BackendFacts:
-        return self._backend(method).facts
+    def spec(self, method: str) -> MethodSpec:
+        return self._backend(method).spec
 
     def bounds(self, method: str) -> Bounds:
-        """The steps and CFG scales `method` accepts (its registered facts)."""
-        return self.facts(method).bounds
+        """The steps and CFG scales `method` accepts (its spec)."""
+        return self.spec(method).bounds
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(self.max_seconds)
 
     @property
     def generators(self) -> dict[str, GestureGenerator]:
@@ -177,8 +190,8 @@ class GesturePipeline:
         if dur < MIN_SECONDS:
             raise InputError(f"the audio is {dur:.2f} s long; at least {MIN_SECONDS} s of speech is needed")
         if dur > self.max_seconds:
-            raise InputError(f"the audio is {dur / 60:.1f} minutes long; the limit is {self.max_seconds / 60:.0f} "
-                             "minutes (a setting: max_seconds)")
+            raise InputError(f"the audio is {dur:.0f} s long; the limit is {self.max_seconds:g} s (a setting: "
+                             "max_seconds)")
         if np.abs(y).max() < 1e-4:
             raise InputError("the audio is silent: there is no speech to gesture to")
         T = int(len(y) * FPS // SAMPLE_RATE)
@@ -210,6 +223,8 @@ class GesturePipeline:
             progress(0.1, "audio features")
         mode, transcript = "audio-only (no transcript given)", None
         if text and text.strip():
+            if progress:
+                progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()
             res = align_words(y, text)
             timings["alignment"] = time.perf_counter() - t1
@@ -222,6 +237,8 @@ class GesturePipeline:
         elif words is not None:
             mode = "transcript with given word timings"
         elif transcribe:
+            if progress:
+                progress(0.1, "recognising the words (automatic transcription)")
             t1 = time.perf_counter()
             auto = automatic_words(y)
             timings["transcription"] = time.perf_counter() - t1
@@ -246,20 +263,14 @@ class GesturePipeline:
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
-        """The one place settings are checked: the method is loaded, steps and CFG scale within the method's
-        registered bounds (`bounds`)."""
-        b = self.bounds(method)
-        if not isinstance(steps, (int, np.integer)) or not b.min_steps <= steps <= b.max_steps:
-            raise InputError(f"The number of steps must be a whole number from {b.min_steps} to {b.max_steps} for "
-                             f"{method} (got {steps})")
-        if not np.isfinite(cfg) or not b.min_cfg <= cfg <= b.max_cfg:
-            raise InputError(f"CFG scale must be between {b.min_cfg:g} and {b.max_cfg:g} (got {cfg})")
+        """The method is loaded, its steps and CFG scale within its spec's bounds (the settings' validator)."""
+        check_method_settings(self.spec(method), steps, cfg)
 
     def check_plan(self, plan: Plan) -> None:
         """All of a plan's settings, before any work is done."""
         for m in plan.generators:
-            self.check_settings(m, plan.steps_for(m), plan.cfg)
-        check_smoothing(plan.smoothing)
+            self.check_settings(m, plan.steps_for(m), plan.settings.cfg)
+        check_smoothing(plan.settings.post.smoothing)
 
     def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
                      body=None) -> Generated:
@@ -275,8 +286,8 @@ class GesturePipeline:
         for i, m in enumerate(gens):
             lo, hi = i / max(1, len(gens)), (i + 1) / max(1, len(gens))
             prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
-            res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed), method=m,
-                                progress=prog)
+            res = self.generate(speech, steps=plan.steps_for(m), cfg=plan.settings.cfg, seed=plan.settings.seed,
+                                method=m, progress=prog)
             results[m], motions[m] = res, res.motion
             warnings += [w for w in res.warnings if w not in warnings]   # e.g. the authors' models: face neutral
         gt_name = None
@@ -288,16 +299,19 @@ class GesturePipeline:
             else:
                 motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
         for k, v in motions.items():
-            motions[k], note = finish(v.slice(0, T), plan.stand_in_place, plan.smoothing, plan.grounding, body)
+            motions[k], note = plan.settings.post.apply(v.slice(0, T), body)
             if note:
                 warnings.append(f"{label(k)}: {note}")
         return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
-                 text: str | None = None, steps: int = 8, cfg: float = 2.0, seed: int = 0,
-                 method: str = "gesturelsm", progress: Progress | None = None,
-                 transcribe: bool = True) -> GenerationResult:
+                 text: str | None = None, steps: int | None = None, cfg: float = DEFAULTS.cfg,
+                 seed: int = DEFAULTS.seed, method: str = DEFAULTS.methods[0], progress: Progress | None = None,
+                 transcribe: bool = DEFAULTS.transcribe) -> GenerationResult:
+        """One method's motion for the speech (audio, or speech prepared once by `prepare_speech`); `steps` None:
+        the method's spec default."""
+        steps = self.spec(method).default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe)
@@ -310,4 +324,4 @@ class GesturePipeline:
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG", "finish"]
+           "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
 
 
@@ -21,7 +22,7 @@ def export_npz(seq: MotionSequence, path: str | Path) -> Path:
     """Write `seq` as a BEAT2-layout npz after checking it; returns the path."""
     path = Path(path)
     if path.suffix.lower() != ".npz":
-        raise ValueError(f"{path}: use a .npz file name")
+        raise InputError(f"{path}: use a .npz file name")
     _check(seq)
     return seq.save(path)
 
@@ -41,9 +42,9 @@ def npz_bytes(seq: MotionSequence) -> bytes:
 
 def _check(seq: MotionSequence) -> None:
     if seq.num_frames == 0:
-        raise ValueError("the motion has no frames")
+        raise InputError("the motion has no frames")
     if seq.fps != FPS:
-        raise ValueError(f"the motion is at {seq.fps} fps; BEAT2 files are {FPS} fps")
+        raise InputError(f"the motion is at {seq.fps} fps; BEAT2 files are {FPS} fps")
     for name in ("poses", "trans", "expressions", "betas"):
         if not np.isfinite(getattr(seq, name)).all():
-            raise ValueError(f"the motion's {name} contain NaN or infinite values")
+            raise InputError(f"the motion's {name} contain NaN or infinite values")

@@ -14,7 +14,7 @@ from typing import Callable
 
 import torch
 
-Progress = Callable[[float, str], None]
+from ..constants import Progress
 # sample(window index, first latent, seed latents, noise generator) -> (B, t, ...) latents, time on dim 1
 WindowSampler = Callable[[int, int, torch.Tensor, torch.Generator], torch.Tensor]
 

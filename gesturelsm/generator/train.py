@@ -12,6 +12,7 @@ import torch
 import torch.distributed as dist
 from tqdm import tqdm
 
+from ..errors import InputError
 from ..flows import training_method
 from ..motion.regions import REGIONS
 from ..safe_load import load_tensors
@@ -71,7 +72,7 @@ def _build_model(takes: list[TakeTensors], tokenizers: dict[str, RVQVAE], tc: Ge
     base = config or PRESETS[tc.preset]
     cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
                              "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
-                             "prediction": tc.prediction if method.facts.predicts == "velocity" else "data"})
+                             "prediction": tc.prediction if method.facts.samples_with == "velocity" else "data"})
     model = GestureGenerator(cfg, tc.method)
     std, neutral = latent_stats(tokenizers, takes, cfg)
     model.latent_std.copy_(std)
@@ -124,7 +125,7 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     rank, world, device = setup_processes(tc.device)   # process group (gloo/nccl from tc.device), one GPU each
     torch.manual_seed(tc.seed)
     if tc.prediction not in ("data", "velocity"):
-        raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
+        raise InputError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
     method = training_method(tc.method, tc.prediction, tc.time_sampler)
     cfg, model, std, neutral = _build_model(takes, tokenizers, tc, method, config)
     model.to(device)

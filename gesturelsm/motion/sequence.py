@@ -96,8 +96,11 @@ class MotionSequence:
                     mocap_frame_rate=np.array(self.fps, dtype=np.int32))
 
     def save(self, path: str | Path) -> Path:
-        """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads)."""
+        """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads); returns the file written (numpy adds
+        .npz to a name without it)."""
         path = Path(path)
+        if not path.name.endswith(".npz"):
+            path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savez(path, **self.npz_arrays())
         return path

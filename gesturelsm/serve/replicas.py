@@ -31,7 +31,8 @@ from ..audio import SAMPLE_RATE, load_audio
 from ..cluster import Connection, Files, ReplicaCount, require_cpus
 from ..errors import ClusterError
 from ..retarget import load_character
-from .request import Request, Result, ServiceSettings
+from .config import ServiceSettings
+from .request import Request, Result
 from .service import GestureService
 
 log = logging.getLogger("gesturelsm.app")

@@ -12,7 +12,7 @@ What stays in this process, and why:
   streams, characters) are enforced in one place however many replicas there are;
 - the visitor's files: a replica's outputs come back as bytes and are written into the visitor's own request folder
   here (128 random bits in its name, as without replicas), so a visitor never sees another visitor's files and the
-  page serves them as before;
+  page serves them from there;
 - the models for the Live tab: a live stream sends audio every ~100 ms and gets motion back; its state lives in one
   process and a round trip through Ray Serve would add to every chunk, so live sessions run here (LIVE_STREAMS at once);
 - the player's payload and the motion statistics, made from the motions the replica returned.
@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import secrets
 import threading
 import time
 from collections import OrderedDict
@@ -44,8 +43,9 @@ from ..errors import ClusterError, GestureError
 from ..pipeline import GROUND_TRUTH
 from ..render.background import RenderCancelled
 from . import replicas
+from .config import ServiceSettings
 from .replicas import ReplicaSpec, Reply, Upload
-from .request import Request, Result, ServiceSettings
+from .request import Request, Result
 from .service import GestureService
 
 log = logging.getLogger("gesturelsm.app")
@@ -99,16 +99,14 @@ class ReplicatedService(GestureService):
         prog = progress or (lambda f, m: None)
         started = time.perf_counter()
         self.cleanup()
-        req, _plan = self._check(req)
+        req, plan = self.check(req)
         upload = _upload(req.audio_path)
         textgrid = _upload(req.textgrid_path) if req.textgrid_path else None
-        auto = transcript_source(req.text, bool(req.textgrid_path), bool(req.transcribe)) == AUTOMATIC
+        auto = transcript_source(req.text, bool(req.textgrid_path), plan.settings.transcribe) == AUTOMATIC
         words = self._remembered(upload) if auto else None
         prog(0.05, "generating on a replica")
         reply = self._call("run", req, upload, textgrid, words, self._take(req))
-        folder = self.workdir / f"req-{secrets.token_hex(16)}"    # the visitor's own folder, as without replicas
-        folder.mkdir(parents=True)
-        out = _receive(reply, folder, started)
+        out = _receive(reply, self.folder(), started)    # the visitor's own folder, as without replicas
         prog(1.0, "done")
         return out
 
@@ -133,7 +131,7 @@ class ReplicatedService(GestureService):
         if not audio_path:
             return False
         try:
-            self._check(Request(audio_path))
+            self.check(Request(audio_path))
             upload = _upload(audio_path)
             words = self._call("transcribe", upload)
         except GestureError as exc:

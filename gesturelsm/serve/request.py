@@ -1,7 +1,8 @@
 """The values one web request passes through, each typed and never edited in place:
 
-- `ServiceSettings`: the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
-- `Request`: what a visitor or API client asks for, as sent (`serve/checks.py` checks and normalises it).
+- `ServiceSettings` (`config.py`): the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
+- `Request`: what a visitor or API client asks for, as sent (`serve/checks.py` checks it with the settings'
+  validator, `gesturelsm.settings`, and makes its `Plan`).
 - `RenderJob`: everything the side-by-side video of a request needs, fixed once the motions exist (motions,
   labels, the speech, size, folder, the request's start time), so the video can be rendered later.
 - `Result`: what the visitor sees (video, timing rows, downloads, summary) plus the job that renders its video;
@@ -9,62 +10,63 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..flows import DEFAULT_STEPS
-from ..motion.postprocess import DEFAULT_SMOOTHING
+from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
-from ..pipeline import FACTS, GROUND_TRUTH, Plan
-from ..presentation import LABELS
+from ..pipeline import generation_seconds
+from ..settings import DEFAULTS, MISSING
 
-METHOD_LABELS = dict(LABELS)                            # every method, then ground truth: the page's order
 VIDEO_SIZES = (256, 384, 512, 640)
-TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
-                  "real-time factor"]                   # seconds, except the real-time factor
-STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")
+DEFAULT_SIZE = 384                                       # pixels per body in the page's video
+STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")      # seconds each
 
 
 @dataclass(frozen=True)
-class ServiceSettings:
-    checkpoints: str | None = None          # folder with tokenizer/ and generator/ (default: shipped assets/)
-    body_model: str | None = None           # SMPL-X .npz (default: $GESTURELSM_SMPLX_MODEL or the mannequin)
-    beat2: str | None = None                # BEAT2-layout folder: ground truth for known takes
-    workdir: str | None = None              # where outputs go (default: <tmp>/gesturelsm-app)
-    max_seconds: float = 300.0              # longest speech accepted
-    max_upload_mb: float = 50.0             # largest upload accepted
-    keep_minutes: float = 60.0              # outputs older than this are deleted
-    concurrency: int = 1                    # requests generated at the same time (the rest queue)
-    max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
-    max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
+class TimingRow:
+    """One row of the page's timing table: a method, the ground truth or the whole request (`method` is the label
+    shown); seconds per stage, the generation time and the real-time factor (speech seconds per generation second).
+    None: a cell left empty."""
+    method: str
+    features: float | None
+    alignment: float | None
+    transcription: float | None
+    sampling: float | None
+    decoding: float | None
+    rendering: float | None
+    generation: float | None
+    real_time_factor: float | None = field(metadata={"column": "real-time factor"})
+
+    def cells(self) -> list:
+        """The row as the table shows it, in TIMING_COLUMNS order."""
+        return [getattr(self, f.name) for f in fields(self)]
+
+
+TIMING_COLUMNS = [f.metadata.get("column", f.name) for f in fields(TimingRow)]
 
 
 @dataclass
 class Request:
+    """One request as sent; the settings fields take whatever arrived (`Asked`), MISSING: the default."""
     audio_path: str | None
     text: str = ""
     textgrid_path: str | None = None
-    methods: Sequence[str] = ("gesturelsm",)
-    steps: Mapping[str, int] | int = field(default_factory=lambda: dict(DEFAULT_STEPS))   # per method; an int:
-    cfg: float = 2.0                                                                      # the same for all
-    seed: int = 0
-    stand_in_place: bool = False
-    smoothing: str = DEFAULT_SMOOTHING
-    size: int = 384
+    methods: Sequence[str] = DEFAULTS.methods
+    steps: Mapping[str, Any] | Any = MISSING  # {method: steps}, or one value (for "Steps" methods when ddim_steps
+    ddim_steps: Any = MISSING                 # is given too); MISSING: each method's own default
+    cfg: float = DEFAULTS.cfg
+    seed: int = DEFAULTS.seed
+    stand_in_place: bool = DEFAULTS.post.stand_in_place
+    smoothing: str = DEFAULTS.post.smoothing
+    size: int = DEFAULT_SIZE
     exports: bool = True
-    transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
+    transcribe: bool = DEFAULTS.transcribe   # automatic transcript when neither text nor TextGrid is given
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
-    grounding: bool = True                   # feet on the ground (gesturelsm.grounding)
-
-    def plan(self, beat2: str | None = None) -> Plan:
-        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
-        return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
-                    bool(self.stand_in_place), str(self.smoothing), beat2,
-                    Path(self.audio_path).name if self.audio_path else None, bool(self.grounding))
+    grounding: bool = DEFAULTS.post.grounding   # feet on the ground (gesturelsm.grounding)
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +87,7 @@ class RenderJob:
 class Result:
     """What one request shows the visitor; `video` is None until rendered, `downloads` empty until exported."""
     video: Path | None
-    rows: list[list]                         # TIMING_COLUMNS per method, then a total row
+    rows: tuple[TimingRow, ...]              # per method, then the ground truth (if shown), then the whole request
     downloads: tuple[Path, ...]
     glb: Path | None
     text_mode: str
@@ -99,6 +101,11 @@ class Result:
     job: RenderJob = field(repr=False)
 
     @property
+    def table(self) -> list[list]:
+        """The timing rows as the page's table (and the API) shows them: one list of TIMING_COLUMNS cells each."""
+        return [r.cells() for r in self.rows]
+
+    @property
     def summary(self) -> str:
         lines = [f"**Transcript:** {self.text_mode}", f"**Motion ready in {self.motion_seconds:.1f} s.** " +
                  (f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")]
@@ -109,18 +116,18 @@ class Result:
 
 
 def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float, render_s: float,
-                ready: float) -> tuple[list[list], dict[str, dict[str, float]]]:
-    """(TIMING_COLUMNS per generator, ground truth, then the whole request; each generator's timings with its share
+                ready: float) -> tuple[tuple[TimingRow, ...], dict[str, dict[str, float]]]:
+    """(A row per generator, the ground truth's, then the whole request's; each generator's timings with its share
     of the rendering, which is split evenly over the shown motions)."""
     n = len(timings) + int(ground_truth)
     rows, shared = [], {}
     for m, t in timings.items():
         shared[m] = {**t, "rendering": render_s / n}
-        g = sum(v for k, v in t.items() if k not in ("alignment", "transcription", "rendering"))
-        rows.append([METHOD_LABELS[m], *(round(shared[m].get(k, 0.0), 3) for k in STAGES),
-                     round(g, 3), round(duration / max(g, 1e-9), 1)])
+        g = generation_seconds(t)
+        rows.append(TimingRow(label(m), *(round(shared[m].get(k, 0.0), 3) for k in STAGES), round(g, 3),
+                              round(duration / max(g, 1e-9), 1)))
     if ground_truth:
-        rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None])
-    rows.append([f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
-                 round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)])
-    return rows, shared
+        rows.append(TimingRow(GROUND_TRUTH_LABEL, 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None))
+    rows.append(TimingRow(f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
+                          round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)))
+    return tuple(rows), shared

@@ -25,11 +25,12 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping
 
-from ..backends import FACTS, checkpoint_sources
+from ..backends import checkpoint_sources
 from ..body.model import resolve_model_path
 from ..cluster import Connection, Files
-from ..motion.postprocess import DEFAULT_SMOOTHING
+from ..errors import InputError, UserError
 from ..pipeline import GROUND_TRUTH, Plan
+from ..settings import DEFAULTS, Settings
 from .design import Design, invite, read_raters, write_design
 from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
     weights_digest
@@ -54,10 +55,10 @@ class StudyPlan:
 def find_audio(audio_dir: str | Path) -> list[Path]:
     d = Path(audio_dir)
     if not d.is_dir():
-        raise FileNotFoundError(f"audio folder not found: {d}")
+        raise InputError(f"audio folder not found: {d}")
     files = sorted(p for p in d.iterdir() if p.suffix.lower() in AUDIO_EXTENSIONS and p.is_file())
     if not files:
-        raise ValueError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
+        raise InputError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
     return files
 
 
@@ -76,44 +77,44 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path,
     settings = {m: dict((settings or {}).get(m, {})) for m in methods}
     items = [StudyItem(blinded_name(salt, a.name, m, settings[m]), a.name, m) for a in audio_files for m in methods]
     if len({i.video for i in items}) != len(items):
-        raise ValueError("two speech files share a name; rename them")
+        raise InputError("two speech files share a name; rename them")
     return StudyPlan(out, salt, items, settings)
 
 
-def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
-               steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
-               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print, rig=None,
-               grounding: bool = True, connection: Connection | None = None,
+def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Settings = DEFAULTS, *, raters: int = 10,
+               size: int = 512, body=None, beat2: str | None = None, design: Design = Design(),
+               log: Callable[[str], None] = print, rig=None, connection: Connection | None = None,
                checkpoints: list[Path] | None = None) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
-    before anything is rendered (naming.check_unchanged). `steps`: per method (missing: the method's default).
-    `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion on that
-    character beside it (VIDEO.vrm / .glb, the same blinded name). Each video is a unit of work (videos.py): in this
-    process, or with `connection` (gesturelsm.cluster) a task on its cluster, whose workers load `checkpoints`
-    (what `checkpoint_sources` gave; default the shipped ones). Videos that fail are listed in a ClusterError once
-    everything else is written."""
-    methods = list(dict.fromkeys(methods))
-    steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
+    before anything is rendered (naming.check_unchanged). `settings`: the methods (ground truth among them needs
+    `beat2`) and how each video is generated and post-processed (`gesturelsm.settings`; a method without steps runs
+    its default). `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion
+    on that character beside it (VIDEO.vrm / .glb, the same blinded name). Each video is a unit of work
+    (videos.py): in this process, or with `connection` (gesturelsm.cluster) a task on its cluster, whose workers
+    load `checkpoints` (what `checkpoint_sources` gave; default the shipped ones). Videos that fail are listed in a
+    ClusterError once everything else is written."""
+    methods = list(dict.fromkeys(settings.methods))
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
-            raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
+            raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
     if GROUND_TRUTH in methods and not beat2:
-        raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+        raise UserError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
-        raise ValueError("--raters must be at least 1")
+        raise UserError("--raters must be at least 1")
+    base = Plan(settings, beat2)
+    pipeline.check_plan(base)
+    steps = {m: settings.steps_for(m) for m in settings.generators}
     audio_files = find_audio(audio_dir)
     out = Path(out)
-    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2, grounding=grounding)
     render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
                   character=file_label(rig.path) if rig is not None else None)
-    settings = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
-                                  weights_digest(pipeline.backends[m])) for m in methods}
-    check_unchanged(out, settings, asdict(design))
-    plan = plan_study(audio_files, methods, out, settings)
-    record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=cfg, seed=seed, size=size,
-                  stand_in_place=stand_in_place, smoothing=smoothing, grounding=grounding, design=asdict(design))
+    videos = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
+                                weights_digest(pipeline.backends[m])) for m in methods}
+    check_unchanged(out, videos, asdict(design))
+    plan = plan_study(audio_files, methods, out, videos)
+    record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=settings.cfg, seed=settings.seed,
+                  size=size, **asdict(settings.post), design=asdict(design))
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
     ship = connection is not None
     spec = VideoSpec(tuple(Files.of(c, ship) for c in (checkpoints or checkpoint_sources(None))),

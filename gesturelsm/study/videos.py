@@ -131,12 +131,12 @@ def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     with tempfile.TemporaryDirectory(prefix="gesturelsm-video-") as tmp:
         path = Path(tmp) / unit.video
         render_video([motion], speech.audio, path, size=(built.size, built.size), body=built.body,
-                     character=built.rig, grounding=unit.plan.grounding)
+                     character=built.rig, grounding=unit.plan.settings.post.grounding)
         rig = None
         if built.rig is not None:
             suffix = ".vrm" if built.rig.skeleton.kind.startswith("vrm") else ".glb"
             rig = (suffix, export_rig_glb(motion, built.rig, path.with_suffix(suffix), body=built.body,
-                                          grounding=unit.plan.grounding).read_bytes())
+                                          grounding=unit.plan.settings.post.grounding).read_bytes())
         return VideoFiles(path.read_bytes(), npz_bytes(motion), rig)
 
 
@@ -183,9 +183,9 @@ def units_to_make(items, audio_files: list[Path], out: Path, base: Plan, ship: b
         audio = load_audio(a)
         for it, have_video in todo:
             take = _take(base.beat2, audio, a.name, ship) if it.method == GROUND_TRUTH else None
-            unit = VideoUnit(it.video, a.name, it.method, replace(base, methods=[it.method], filename=a.name,
-                                                                  beat2=None),
-                             audio, tuple(words) if words else None, text, take, render=not have_video)
+            plan = replace(base, settings=replace(base.settings, methods=(it.method,)), filename=a.name, beat2=None)
+            unit = VideoUnit(it.video, a.name, it.method, plan, audio, tuple(words) if words else None, text, take,
+                             render=not have_video)
             units.append(Unit(it.video, unit, cost=1.0 if have_video else 4.0, label=f"{a.name}, {it.method}"))
     return units, skipped
 

@@ -14,6 +14,7 @@ import sys
 
 from gesturelsm.cluster import cluster_argument, parse_cluster, replicas_argument
 from gesturelsm.errors import GestureError
+from gesturelsm.serve.config import QUEUE_SIZE, ServiceSettings
 
 DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
 
@@ -38,6 +39,7 @@ def _env(name: str, default=None):
 
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    d = ServiceSettings()
     p.add_argument("--host", default=_env("GESTURELSM_HOST", "127.0.0.1"),
                    help="address to bind (default 127.0.0.1; 0.0.0.0 serves the network)")
     p.add_argument("--port", type=int, default=int(_env("GESTURELSM_PORT", 7860)), help="port (default 7860)")
@@ -47,16 +49,16 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="folder with tokenizer/ and generator/ checkpoints (default: shipped assets/)")
     p.add_argument("--beat2", default=_env("GESTURELSM_BEAT2"),
                    help="BEAT2-layout folder: offers ground truth when the speech is one of its takes")
-    p.add_argument("--max-seconds", type=float, default=float(_env("GESTURELSM_MAX_SECONDS", 300)),
-                   help="longest speech accepted, seconds (default 300)")
-    p.add_argument("--max-upload-mb", type=float, default=float(_env("GESTURELSM_MAX_UPLOAD_MB", 50)),
-                   help="largest upload, MB (default 50)")
-    p.add_argument("--keep-minutes", type=float, default=float(_env("GESTURELSM_KEEP_MINUTES", 60)),
-                   help="delete generated files after this many minutes (default 60)")
-    p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", 1)),
-                   help="requests processed at once; the rest wait in the queue (default 1)")
-    p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", 32)),
-                   help="requests that may wait; beyond that visitors get 'Queue is full' (default 32)")
+    p.add_argument("--max-seconds", type=float, default=float(_env("GESTURELSM_MAX_SECONDS", d.max_seconds)),
+                   help=f"longest speech accepted, seconds (default {d.max_seconds:g})")
+    p.add_argument("--max-upload-mb", type=float, default=float(_env("GESTURELSM_MAX_UPLOAD_MB", d.max_upload_mb)),
+                   help=f"largest upload, MB (default {d.max_upload_mb:g})")
+    p.add_argument("--keep-minutes", type=float, default=float(_env("GESTURELSM_KEEP_MINUTES", d.keep_minutes)),
+                   help=f"delete generated files after this many minutes (default {d.keep_minutes:g})")
+    p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", d.concurrency)),
+                   help=f"requests processed at once; the rest wait in the queue (default {d.concurrency})")
+    p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", QUEUE_SIZE)),
+                   help=f"requests that may wait; beyond that visitors get 'Queue is full' (default {QUEUE_SIZE})")
     p.add_argument("--workdir", default=_env("GESTURELSM_WORKDIR"), help="output folder (default <tmp>/gesturelsm-app)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
     p.add_argument("--replicas", type=replicas_argument, default=_env("GESTURELSM_REPLICAS"), metavar="N|MIN:MAX",
@@ -93,16 +95,14 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
-    # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
-    # answer without them
-    from gesturelsm.serve.request import ServiceSettings
-
+    # lazy (the service in `page_service`, .ui in `_serve`): the service loads torch, .ui imports gradio; `--help` and
+    # bad arguments answer without them
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency))
     try:
-        service = _service(args, settings)
-    except (FileNotFoundError, ValueError) as exc:      # GestureError included: one line each
+        service = page_service(args, settings)
+    except GestureError as exc:                          # one line each
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     try:
@@ -112,7 +112,7 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
             service.close()                             # the replicas stop; a joined cluster stays up
 
 
-def _service(args: argparse.Namespace, settings):
+def page_service(args: argparse.Namespace, settings):
     """The page's service: in this process, or with --replicas over Ray Serve replicas on --cluster."""
     if args.cluster and not args.replicas:
         raise GestureError("--cluster says where replicas run: give --replicas N too")
@@ -129,13 +129,13 @@ def _service(args: argparse.Namespace, settings):
 def _serve(service, args: argparse.Namespace) -> int:
     if not args.no_warmup:
         service.warmup()
-    from .ui import build_demo, launch
+    from .ui import build_demo
 
     signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
     signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
     try:
-        launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+        build_demo(service, max(1, args.queue_size)).launch(host=args.host, port=args.port)
     except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
         pass
     return 0

@@ -1,7 +1,9 @@
 """The page: Gradio Blocks over `gesturelsm.serve.service.GestureService` (no logic of its own).
 
-`build_demo(service)` builds everything inside the function, so tests can build and drive it. The main
-action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web app").
+`build_demo(service)` builds everything inside the function, so tests can build and drive it, and returns a
+`demo.Demo`: the Blocks with the live streams and socket routes that run beside it (`Demo.launch` serves them,
+`Demo.close` stops them). The main action is exposed to `gradio_client` as `api_name="/generate"` (see README,
+"Web app").
 """
 from __future__ import annotations
 
@@ -14,24 +16,26 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.backends import FACTS
+from gesturelsm.backends import SPECS, STEPS_SETTINGS, label, ours_default
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
-from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
-from gesturelsm.presentation import steps_from_flags
+from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.render.background import RenderCancelled
-from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
-from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
+from gesturelsm.serve.config import QUEUE_SIZE
+from gesturelsm.serve.lifetime import gradio_delete_cache
+from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
+from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings.check import cfg_bound
 
 from . import live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
+from .demo import Demo
 from .live_character import LiveCharacters
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
-QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
@@ -106,13 +110,11 @@ class _Handlers:
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                auto_text=True, grounding=True, *, exports: bool, render: bool = True) -> Request:
+                auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
-        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
-                       steps=steps_from_flags(steps, ddim_steps, FACTS), cfg=cfg, seed=seed,
-                       stand_in_place=in_place, grounding=grounding, smoothing=smoothing, size=size, exports=exports,
-                       transcribe=auto_text,
-                       render=render)
+        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods, steps=steps,
+                       ddim_steps=ddim_steps, cfg=cfg, seed=seed, stand_in_place=in_place, grounding=grounding,
+                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
 
     @staticmethod
     def _refuse(exc: GestureError):
@@ -137,7 +139,7 @@ class _Handlers:
             self.service.prefetch(audio)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, grounding=True, character=None, request: gr.Request = None, progress=gr.Progress()):
+                    auto_text, grounding=DEFAULTS.post.grounding, character=None, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first (on the page session's `character` when one is loaded); the video (`show_video`) and the downloads
         (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes the request and
@@ -147,7 +149,7 @@ class _Handlers:
         out = self._run(self.request(*args, exports=False, render=False), progress)
         self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return motion_player.payload(self.service, out, character), out.rows, out.summary, out, recognised
+        return motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised
 
     def _kept(self, request: gr.Request | None, out: Result):
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
@@ -170,7 +172,7 @@ class _Handlers:
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self._refuse(exc)
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
+        return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
         """The downloads; with a character, each method's motion in the character's own file too."""
@@ -183,49 +185,66 @@ class _Handlers:
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=True, grounding=True, progress=gr.Progress()):
+                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, exports=True), progress)
-        return (str(out.video), out.rows, out.summary, *self._files(out))
+        return (str(out.video), out.table, out.summary, *self._files(out))
+
+
+def _step_slider(service: GestureService, setting: str) -> gr.Slider:
+    """The slider of one step setting: up to the most steps this server accepts for the methods it drives, starting at
+    the first one's default (each method's spec; the server's caps, ServiceSettings.limits)."""
+    specs = [SPECS[m] for m in service.pipeline.methods if m in SPECS and SPECS[m].steps_setting == setting] or \
+        [s for s in SPECS.values() if s.steps_setting == setting]
+    hi = max(service.limits.max_steps(s) for s in specs)
+    return pass_through(gr.Slider(1, hi, value=specs[0].default_steps, step=1, label=STEPS_SETTINGS[setting],
+                                  info="for " + ", ".join(s.label for s in specs)))
+
+
+def _methods_info(methods: list[str]) -> str | None:
+    """What the choices' specs say a visitor should know: the authors' released weights run in our windowing, and
+    the methods that generate no face."""
+    specs = [SPECS[m] for m in methods if m in SPECS]
+    notes = ["Authors' weights: their released models; long speech uses our windowing with a neutral first seed."] \
+        if any(s.imported for s in specs) else []
+    faceless = [s.label for s in specs if "face" not in s.regions]
+    if faceless:
+        notes.append(f"{', '.join(faceless)} generate no face, so the face stays neutral.")
+    return " ".join(notes) or None
 
 
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
-    """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order, the button and
-    the Character upload."""
-    settings = service.settings
-    choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
-    default_methods = [m for m in FACTS if m in service.methods and not FACTS[m].imported][:3]     # ours
+    """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
+    specs); returns the request's inputs in `_Handlers.request` order, the button and the Character upload."""
+    choices = [(label(m), m) for m in service.methods]
+    shown = [m for m in ours_default() if m in service.methods][:3]
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                      elem_id="speech")
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
-    auto_text = pass_through(gr.Checkbox(value=True, elem_id="auto-transcribe",
+    auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
                                          label="Transcribe automatically when no transcript is given (English)"))
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                        file_types=[".TextGrid", ".textgrid"], type="filepath")
-    methods = pass_through(gr.CheckboxGroup(
-        choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
-        info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
-              "long speech uses our windowing with a neutral first seed."
-              if any(m in FACTS and FACTS[m].imported for m in service.methods) else None)))
+    methods = pass_through(gr.CheckboxGroup(choices, value=shown, label="Methods shown side by side",
+                                            elem_id="methods", info=_methods_info(service.methods)))
     character = character_upload()
     with gr.Row():
-        steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
-                                       value=FACTS["gesturelsm"].default_steps, step=1,
-                                       label="Steps (GestureLSM, rectified flow)"))
-        cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
+        steps = _step_slider(service, "steps")
+        cfg = pass_through(gr.Slider(0.0, cfg_bound(service.pipeline.methods), value=DEFAULTS.cfg, step=0.1,
+                                     label="CFG scale"))
     with gr.Row():
-        ddim_steps = pass_through(gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
-                                            value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
-        seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
+        ddim_steps = _step_slider(service, "ddim_steps")
+        seed = pass_through(gr.Number(value=DEFAULTS.seed, precision=0, label="Seed"))
     with gr.Accordion("Options", open=False):
-        grounding = pass_through(gr.Checkbox(value=True, elem_id="grounding",
+        grounding = pass_through(gr.Checkbox(value=DEFAULTS.post.grounding, elem_id="grounding",
                                              label="Feet on the ground (planted feet, no drift, on the floor)"))
-        in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
-        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULT_SMOOTHING, label="Smoothing"))
-        size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+        in_place = pass_through(gr.Checkbox(value=DEFAULTS.post.stand_in_place,
+                                            label="Stand in place (no horizontal root movement)"))
+        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULTS.post.smoothing, label="Smoothing"))
+        size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=DEFAULT_SIZE,
                                            label="Video size"), VIDEO_SIZES)
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
     ex = _examples()
@@ -270,7 +289,7 @@ VIEWER_MOUNTED_JS = """async (...args) => {
     return args; }"""
 
 
-def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
+def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
@@ -324,51 +343,17 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
-    demo.live_manager = manager                        # launch(): closing the app stops its live streams
-    demo.live_routes = routes                          # launch() serves them beside the page
-    return demo
+    return Demo(demo, service, live=manager, routes=routes)
 
 
-def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
-    """Launch with the upload limit and the output folder allowed, and sweep expired outputs on a timer
-    (gesturelsm.serve.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
-    and the live streams and deletes all outputs. Returns what `Blocks.launch` returns."""
-    keep = service.settings.keep_minutes
-    sweeper = Sweeper(service.cleanup, sweep_seconds(keep), final=lambda: service.cleanup(max_age_s=0)).start()
-    close = demo.close
-
-    def stop() -> None:
-        if getattr(demo, "live_manager", None) is not None:
-            demo.live_manager.stop_all()                # no live worker outlives the server
-        sweeper.stop()
-
-    def close_and_clean(*args, **kwargs):
-        try:
-            return close(*args, **kwargs)
-        finally:
-            stop()
-
-    demo.close = close_and_clean
-    app_kwargs = dict(kw.pop("app_kwargs", None) or {})
-    app_kwargs["routes"] = [*app_kwargs.get("routes", []), *getattr(demo, "live_routes", [])]
-    try:
-        return demo.launch(server_name=host, server_port=port,
-                           max_file_size=f"{int(service.settings.max_upload_mb)}mb",
-                           allowed_paths=[str(service.workdir), *motion_player.served_paths()],
-                           footer_links=["api"], app_kwargs=app_kwargs, **kw)
-    finally:
-        if not kw.get("prevent_thread_lock"):
-            stop()
-
-
-def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[gr.Blocks, str]:
+def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[Demo, str]:
     """Build and serve the app in this process on a free port of 127.0.0.1 (tests and dev tools);
-    returns the Blocks (close it when done) and the URL."""
+    returns the Demo (close it when done) and the URL."""
     import socket
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     demo = build_demo(service, queue_size)
-    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    demo.launch(port=port, prevent_thread_lock=True, quiet=True)
     return demo, f"http://127.0.0.1:{port}"

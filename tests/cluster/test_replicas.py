@@ -25,7 +25,7 @@ pids_seen: set[int] = set()                 # every replica these tests saw, for
 
 
 def _settings(assets: Path, workdir: Path):
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
 
     return ServiceSettings(checkpoints=str(assets), workdir=str(workdir), max_seconds=20, render_nice=0)
 

@@ -15,11 +15,11 @@ import sys
 from gesturelsm.cli import main
 assert main(["batch", "--audio-dir", {speech!r}, "--methods", "gesturelsm", "ddim", "--out", {out!r}, "--raters", "1",
              "--steps", "1", "--ddim-steps", "1", "--size", "128", "--checkpoints", {assets!r}]) == 0
-from gesturelsm.webapp.cli import _service, build_parser
-from gesturelsm.serve.request import ServiceSettings
+from gesturelsm.webapp.cli import build_parser, page_service
+from gesturelsm.serve.config import ServiceSettings
 from gesturelsm.webapp.ui import serve_locally
 args = build_parser().parse_args(["--checkpoints", {assets!r}, "--workdir", {work!r}, "--no-warmup"])
-service = _service(args, ServiceSettings(checkpoints=args.checkpoints, workdir=args.workdir))
+service = page_service(args, ServiceSettings(checkpoints=args.checkpoints, workdir=args.workdir))
 demo, url = serve_locally(service)
 demo.close()
 print("RAY:", sorted(m for m in sys.modules if m == "ray" or m.startswith("ray.")))

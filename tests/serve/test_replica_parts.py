@@ -61,3 +61,19 @@ def test_a_replicas_files_land_in_the_visitors_folder(tmp_path):
     assert got.downloads == (here / "m.npz", Path("/elsewhere/kept.txt")) and got.glb.read_bytes() == b"glb"
     assert got.job.folder == here and got.job.started == pytest.approx(time.perf_counter() - 2.5, abs=1)
     assert sorted(p.name for p in here.iterdir()) == ["gestures.mp4", "m.glb", "m.npz"]
+
+
+def test_a_request_reaches_a_replica_with_its_missing_fields_still_missing():
+    """A request travels to a replica pickled (Ray's cloudpickle); a field the page left MISSING (each method's own
+    steps) must arrive as the same MISSING, or the replica's checks read it as a value sent and refuse it."""
+    import pickle
+
+    from ray import cloudpickle
+
+    from gesturelsm.serve.request import Request
+    from gesturelsm.settings import MISSING
+
+    req = Request("speech.wav", methods=["gesturelsm", "ddim"])
+    for dumps, loads in ((pickle.dumps, pickle.loads), (cloudpickle.dumps, cloudpickle.loads)):
+        got = loads(dumps(req))
+        assert got.steps is MISSING and got.ddim_steps is MISSING and got == req

@@ -8,6 +8,7 @@ import pytest
 
 from gesturelsm.constants import ASSETS
 from gesturelsm.pipeline import Plan
+from gesturelsm.settings import Settings
 from gesturelsm.study.videos import VideoSpec, VideoUnit, build, make_video
 
 from _support import speech_like
@@ -25,7 +26,7 @@ def test_a_units_motion_is_the_same_bytes_whatever_this_process_threads_or_kerne
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
     built = build(VideoSpec((), ("gesturelsm",), None, None, 128))
-    unit = VideoUnit("v_0123456789.mp4", "a.wav", "gesturelsm", Plan(["gesturelsm"], {"gesturelsm": 4}),
+    unit = VideoUnit("v_0123456789.mp4", "a.wav", "gesturelsm", Plan(Settings(("gesturelsm",), {"gesturelsm": 4})),
                      speech_like(2.0, seed=1), render=False)
     before = torch.get_num_threads()
     got = []
@@ -53,6 +54,7 @@ def test_a_missing_motion_is_made_again_without_the_video(tiny_assets, tmp_path)
     import soundfile as sf
 
     from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.settings import Settings
     from gesturelsm.study import make_study
 
     speech = tmp_path / "speech"
@@ -61,15 +63,16 @@ def test_a_missing_motion_is_made_again_without_the_video(tiny_assets, tmp_path)
         sf.write(speech / name, speech_like(1.0, seed=i), 16000)
     pipe = GesturePipeline.from_pretrained(tiny_assets)
     out = tmp_path / "study"
-    kw = dict(raters=1, steps={"gesturelsm": 1, "ddim": 1}, size=128, log=lambda m: None)
-    make_study(pipe, speech, ["gesturelsm", "ddim"], out, **kw)
+    settings = Settings(("gesturelsm", "ddim"), {"gesturelsm": 1, "ddim": 1})
+    kw = dict(raters=1, size=128, log=lambda m: None)
+    make_study(pipe, speech, out, settings, **kw)
     motions = {p.name: p.read_bytes() for p in (out / "key" / "motion").iterdir()}
     videos = {p.name: p.stat().st_mtime_ns for p in (out / "videos").glob("v_*.mp4")}
     assert len(motions) == 4 and {n[:-4] for n in motions} <= {n[:-4] for n in videos}
     gone = sorted(motions)[0]
     (out / "key" / "motion" / gone).unlink()
     logs = []
-    make_study(pipe, speech, ["gesturelsm", "ddim"], out, **dict(kw, log=logs.append))
+    make_study(pipe, speech, out, settings, **dict(kw, log=logs.append))
     assert "0 videos rendered, 3 already there" in logs[-1]
     assert {p.name: p.read_bytes() for p in (out / "key" / "motion").iterdir()} == motions   # the same bytes again
     assert {p.name: p.stat().st_mtime_ns for p in (out / "videos").glob("v_*.mp4")} == videos  # no video touched

@@ -18,7 +18,8 @@ def inputs(wav, seed: int, grounding: bool = True) -> tuple:
 
 def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
     demo = build_demo(service)
-    fns = list(demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)
+    fns = demo.blocks.fns
+    fns = list(fns.values() if isinstance(fns, dict) else fns)
     pools = {f.api_name: f.concurrency_id for f in fns}
     assert pools["generate_motion"] == "generation"
     assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
@@ -77,7 +78,7 @@ def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_w
     from gesturelsm.grounding import CHANGED_JOINTS
     from gesturelsm.pipeline import finish
 
-    cfg = build_demo(service).get_config_file()
+    cfg = build_demo(service).blocks.get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "grounding")
     assert box["props"]["value"] is True
     deps = {d.get("api_name"): d for d in cfg["dependencies"]}

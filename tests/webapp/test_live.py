@@ -132,19 +132,19 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
 
 def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
     """`demo.close()` ends every running live session and joins its worker (none outlives the server)."""
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.ui import serve_locally
 
     service = GestureService(shipped_pipe, ServiceSettings(workdir=str(tmp_path)))
     demo, _ = serve_locally(service)
     try:
-        session = demo.live_manager.open(LiveConfig(steps=1))
+        session = demo.live.open(LiveConfig(steps=1))
         session.feed(speech_like(1.0, seed=3))
-        assert demo.live_manager.active == 1 and session._thread.is_alive()
+        assert demo.live.active == 1 and session._thread.is_alive()
     finally:
         demo.close()
-    assert demo.live_manager.active == 0
+    assert demo.live.active == 0
     assert not session._thread.is_alive()
 
 
