@@ -19,7 +19,7 @@ import numpy as np
 import torch
 
 from .align import align_words
-from .asr.source import automatic_words
+from .asr.source import AutomaticWords, automatic_words, remember_words
 from .audio import SAMPLE_RATE, resample, to_mono
 from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
                        load_backends)
@@ -197,10 +197,15 @@ class GesturePipeline:
         T = int(len(y) * FPS // SAMPLE_RATE)
         return y[: int(round(T * SAMPLE_RATE / FPS))], T
 
-    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> None:
+    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> AutomaticWords:
         """Transcribe now what prepare_speech(audio, sr) would transcribe, so that it finds the words ready
-        (asr.source remembers them by content). Bad audio raises InputError, as prepare_speech would."""
-        automatic_words(self._checked_audio(audio, sr)[0])
+        (asr.source remembers them by content); returns them. Bad audio raises InputError, as prepare_speech would."""
+        return automatic_words(self._checked_audio(audio, sr)[0])
+
+    def remember_transcript(self, audio: np.ndarray, sr: int, words: AutomaticWords) -> None:
+        """Words `prefetch_transcript` returned in another process for this audio: prepare_speech(audio, sr) here
+        uses them instead of transcribing again."""
+        remember_words(self._checked_audio(audio, sr)[0], words)
 
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
                        text: str | None = None, progress: Progress | None = None,

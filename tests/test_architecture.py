@@ -16,8 +16,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors"},                                   # conventions, the error family
     {"safe_load"},                                             # safe loading
-    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
-                                                               # it), files, the methods, fast CPU kernels
+    {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech input (what a file is, reading
+     "cluster"},                                               # it), files, the methods, fast CPU kernels; units
+                                                               # of work here or as Ray tasks (no Ray until asked)
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr", "grounding"},                                      # speech recognition (times words with align); feet on
                                                                # the floor (leg IK on a body's or a rig's skeleton)

@@ -88,6 +88,13 @@ class MotionSequence:
                 raise MotionFileError(f"{path}: contains NaN or infinite values")
         return cls(poses, trans, expr[:, :NUM_EXPRESSIONS], betas, fps)
 
+    def npz_arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of a BEAT2-compatible npz, by key (export/npz.py documents the layout)."""
+        return dict(poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
+                    expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
+                    model=np.array("smplx2020"), gender=np.array("neutral"),
+                    mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+
     def save(self, path: str | Path) -> Path:
         """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads); returns the file written (numpy adds
         .npz to a name without it)."""
@@ -95,10 +102,7 @@ class MotionSequence:
         if not path.name.endswith(".npz"):
             path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez(path, poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
-                 expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
-                 model=np.array("smplx2020"), gender=np.array("neutral"),
-                 mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+        np.savez(path, **self.npz_arrays())
         return path
 
     # ---- features ---------------------------------------------------------------------------------
