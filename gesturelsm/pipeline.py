@@ -4,12 +4,14 @@ benchmarks and the tests all call this.
     pipe = GesturePipeline.from_pretrained()            # shipped checkpoints in assets/
     res = pipe.generate(audio, sr, text="hello there", steps=8, cfg=2.0, seed=0, method="gesturelsm")
     res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
+    ed = pipe.edit(res.motion, audio, {"upper": [(3.0, 6.0)]}, seed=1)   # regenerate the upper body over 3-6 s
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
 against the method's registered bounds and calls the backend's `generate`.
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,11 +31,15 @@ from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
+from .motion.editing import KEY_SPACING, EditError, Keyframe, edit_spec, keyframe
+from .motion.merge import merge_edit, pin_pose, splice
 from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
+from .motion.regions import REGIONS
 from .motion.sequence import FPS, MotionSequence
 from .tokenizer.model import RVQVAE
 
 MIN_SECONDS = 0.5
+EDIT_LENGTH_SLACK = 1.0                # seconds the speech of an edit may differ from the motion (cut or padded)
 GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
 
 
@@ -281,6 +287,71 @@ class GesturePipeline:
             progress(1.0, f"{method}: done")
         return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **out.timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
+
+    # ---- editing -----------------------------------------------------------------------------------------
+    @torch.no_grad()
+    def edit(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, regenerate: Mapping[str, Sequence],
+             keyframes: Sequence = (), method: str = "gesturelsm", steps: int | None = None, cfg: float = 2.0,
+             seed: int = 0, sr: int = SAMPLE_RATE, words: list | None = None, text: str | None = None,
+             transcribe: bool = True, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
+             progress: Progress | None = None) -> GenerationResult:
+        """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
+        speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
+        motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
+        for bit wherever nothing is regenerated; an edited region blends back into the input over a short margin
+        at each end of its ranges (motion/merge.py). The regenerated motion is post-processed as a generation is
+        (stand in place, smoothing) before it is merged: the input is a finished motion and is not processed
+        again. Only methods whose sampler can hold known latents (`facts(method).inpaints`) can edit."""
+        facts = self._backend(method).facts
+        if not facts.inpaints:
+            able = [m for m in self.methods if self.facts(m).inpaints]
+            raise EditError(f"{method} cannot edit a motion: its sampler cannot hold known latents; methods that "
+                            f"can: {', '.join(able) or 'none is loaded'}")
+        steps = facts.default_steps if steps is None else steps
+        self.check_settings(method, steps, cfg)
+        check_smoothing(smoothing)
+        keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
+        spec = edit_spec(regenerate, motion.num_frames, keys, facts.regions, method)
+        speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress)
+        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        out = self.backends[method].edit(speech, motion, spec, steps, cfg, seed, prog)
+        t0 = time.perf_counter()
+        gen = postprocess(splice(motion, out.motion, out.start, spec.regions), stand_in_place, smoothing)
+        merged = merge_edit(motion, gen, spec)
+        for k in spec.keyframes:
+            joints = tuple(j for r in spec.pinned(k) for j in REGIONS[r].joints)
+            merged = pin_pose(merged, k.frame, k.pose, joints, KEY_SPACING)
+        timings = {**speech.timings, **out.timings, "merging": time.perf_counter() - t0}
+        if progress:
+            progress(1.0, f"{method}: edited {spec.describe()}")
+        return GenerationResult(merged, method, int(steps), float(cfg), int(seed), timings, speech.text_mode,
+                                warnings + out.warnings)
+
+    def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
+                     text: str | None, transcribe: bool, progress: Progress | None) -> tuple[SpeechInput, list[str]]:
+        """The speech of an edit, exactly as long as the motion: given prepared, it must be; given as samples, it
+        is cut or padded with silence when it differs by up to EDIT_LENGTH_SLACK seconds (said in a warning)."""
+        T = motion.num_frames
+        mismatch = ("the motion is {:.2f} s long but the speech {:.2f} s: give the speech the motion was made from "
+                    f"(they may differ by up to {EDIT_LENGTH_SLACK:g} s)")
+        if isinstance(speech, SpeechInput):
+            if speech.num_frames != T:
+                raise EditError(mismatch.format(T / FPS, speech.duration))
+            return speech, list(speech.warnings)
+        if sr <= 0:
+            raise InputError(f"invalid sample rate {sr}")
+        y = resample(to_mono(speech), int(sr), SAMPLE_RATE)
+        n = math.ceil(T * SAMPLE_RATE / FPS)                       # samples of exactly T frames
+        gap = (len(y) - n) / SAMPLE_RATE
+        if abs(gap) > EDIT_LENGTH_SLACK:
+            raise EditError(mismatch.format(T / FPS, len(y) / SAMPLE_RATE))
+        warnings = []
+        if abs(gap) >= 1 / FPS:
+            warnings.append(f"the speech is {abs(gap):.2f} s {'longer' if gap > 0 else 'shorter'} than the motion: "
+                            f"{'its end is left out' if gap > 0 else 'silence is added at its end'}")
+        y = np.pad(y[:n], (0, max(0, n - len(y))))
+        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe)
+        return prepared, warnings + prepared.warnings
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",

@@ -1,7 +1,8 @@
 """Every method the pipeline can run, ours and the authors', as a backend in one registry.
 
 `BACKENDS` maps each method's key to its registry line: the method's facts (`base.BackendFacts`: default and
-maximum steps, CFG bound, what it predicts, whether it takes a step size, which regions it generates) and how
+maximum steps, CFG bound, what it predicts, whether it takes a step size, which regions it generates, whether it
+can hold known latents to edit a motion) and how
 its checkpoint is found and loaded. `load_backends` builds the backends found in a list of checkpoint files
 and folders. A new method = a backend module in this folder (or, for one of ours, a method in `flows/`)
 and one line below.
@@ -23,7 +24,7 @@ from .ours import FlowBackend, Ours
 BACKENDS: dict[str, BackendKind] = {b.facts.key: b for b in (
     *(Ours.of(key) for key in METHODS),                  # ours: every method of the flows registry
     Authors.of("gesturelsm_authors", "shortcut", default_steps=2, max_steps=128, predicts="velocity",
-               uses_step_size=True),
+               uses_step_size=True, inpaints=True),
     Authors.of("meanflow_authors", "meanflow", default_steps=1, max_steps=128, predicts="velocity",
                uses_step_size=True),
     Authors.of("diffusion_authors", "diffusion", default_steps=20, max_steps=1000, predicts="data",

@@ -41,6 +41,7 @@ class BackendFacts:
     guidance: bool = True           # whether the CFG scale changes its output
     max_cfg: float = MAX_CFG        # the largest CFG scale accepted
     imported: bool = False          # True: the authors' released weights (`gesturelsm import-reference`)
+    inpaints: bool = False          # whether its sampler can hold known latents, so it can edit a motion
 
     @property
     def bounds(self) -> Bounds:
@@ -81,6 +82,11 @@ class Backend(Protocol):
                  progress: Progress | None = None) -> BackendOutput:
         """Motion for the prepared speech; settings are already checked against `facts`. `progress(f, msg)`
         with f in [0, 1]."""
+
+    def edit(self, speech: SpeechInput, motion: MotionSequence, spec, steps: int, cfg: float, seed: int,
+             progress: Progress | None = None):
+        """Where `facts.inpaints`: `motion` (as long as the speech) with `spec` (motion.editing.EditSpec) regenerated
+        in latent space, as a backends.editing.EditOutput (the decoded span around the regenerated latents)."""
 
 
 class BackendKind(Protocol):

@@ -7,6 +7,11 @@
 - diffusion: DDIM (eta 0) on the 1000-step squared-cosine schedule, x0 prediction, 'leading' spacing
   (steps 950, 900, ..., 0 for 20), final alpha 1; the first latent is sqrt(1 - abar_950) * noise.
 Guidance whenever scale > 1: u + s (c - u) with the learned null condition, both halves in one batch.
+
+Holding known latents (edits): the shortcut sampler takes `hold` = (known, mask) like the noise, and before every
+network call sets the known entries to t known + (1 - t) noise at the call's time t (its own path from its own
+noise), so the rest is sampled in their context; the result has them exactly (mixed in, where the mask is a float
+weight: flows/base.py `hold`). The other two samplers cannot.
 """
 from __future__ import annotations
 
@@ -15,6 +20,7 @@ from typing import Callable
 
 import torch
 
+from ..flows.base import hold as held
 from .denoiser import ReferenceDenoiser
 
 KV = list[tuple[torch.Tensor, torch.Tensor]]
@@ -44,14 +50,16 @@ def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float
 
 
 def shortcut(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
-             steps: int, scale: float) -> torch.Tensor:
+             steps: int, scale: float, hold: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
     f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     ts = torch.linspace(1e-8, 1 - 1e-8, steps + 1)
     d = torch.tensor([1.0 / steps])
     x = noise
     for k in range(steps):
+        if hold is not None:
+            x = held(x, ts[k] * hold[0] + (1 - ts[k]) * noise, hold[1])
         x = x + (ts[k + 1] - ts[k]) * f(x, ts[k:k + 1], d)
-    return x
+    return x if hold is None else held(x, hold[0], hold[1])
 
 
 def meanflow(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
