@@ -8,8 +8,8 @@ each side (weights 0.5 (1 + cos(pi d / (KEY_REACH + 1))) at d latents away: flow
 every step), so the sampled motion turns into the pose and out of it over about half a second instead of flicking
 to it in one latent (a latent held alone is ignored by its sampled neighbours: the motion reached the pose for
 4 frames and left it at up to 12 rad/s on the shipped model; with 4 latents of reach it came within 2.1 degrees
-per joint at 1.1-4.3 rad/s, docs/EDITING.md). Only the frames near the regenerated latents are decoded (`decoded_span`): the pipeline keeps the input's
-own frames everywhere else (motion/merge.py).
+per joint, moving at 2.1-4.3 rad/s: docs/EDITING.md). Only the frames near the regenerated latents are decoded
+(`decoded_span`): the pipeline keeps the input's own frames everywhere else (motion/merge.py).
 """
 from __future__ import annotations
 

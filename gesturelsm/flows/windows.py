@@ -51,8 +51,12 @@ class Held:
         """x with the known entries set to their values (mixed, where the mask is a weight)."""
         return hold(x, self.known.to(x), self.mask if self.mask.dtype == torch.bool else self.mask.to(x))
 
+    def full(self) -> "Held":
+        """Only the entries known in full (a bool mask)."""
+        return self if self.mask.dtype == torch.bool else Held(self.known, self.mask >= 1)
+
     def all_known(self) -> bool:
-        return bool(self.mask.all()) if self.mask.dtype == torch.bool else bool((self.mask >= 1).all())
+        return bool(self.full().mask.all())
 
 
 def window_layout(num_latents: int, t: int, s: int) -> list[int]:
@@ -101,4 +105,4 @@ def sample_windows(num_latents: int, t: int, s: int, first_seed: torch.Tensor, s
         seed_lat = x[:, t - s:]
         if progress:
             progress((i + 1) / len(starts), f"window {i + 1}/{len(starts)}")
-    return held.hold(out) if held is not None else out
+    return held.full().hold(out) if held is not None else out      # exact again after the cross-fades
