@@ -18,7 +18,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "gesturelsm.align.cli",
     "gesturelsm.asr.cli",
     "gesturelsm.tokenizer.cli",
-    "gesturelsm.generator.cli", "gesturelsm.pipeline_cli",
+    "gesturelsm.generator.cli", "gesturelsm.pipeline_cli", "gesturelsm.edit_cli",
     "gesturelsm.render.cli", "gesturelsm.export.cli",
     "gesturelsm.study.cli", "gesturelsm.study.study_cli",
     "gesturelsm.evaluation.cli",

@@ -27,8 +27,9 @@ FLOORS: list[set[str]] = [
     {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
     {"backends"},                                              # every method (ours, the authors') behind one call
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"serve", "study", "evaluation", "pipeline_cli", "live"},  # what uses the pipeline (serve: one web request,
-                                                               # its checks and files; live: streaming)
+    {"serve", "study", "evaluation", "pipeline_cli", "edit_cli",  # what uses the pipeline (serve: one web request,
+     "live"},                                                  # its checks and files; live: streaming; the generate
+                                                               # and edit commands)
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

@@ -1,0 +1,126 @@
+"""`gesturelsm edit`: regenerate body regions of a motion over time ranges, keep the rest, pin key poses
+(GesturePipeline.edit), one floor above the pipeline.
+
+    gesturelsm edit take.npz speech.wav --regenerate upper,hands@3.0-6.0 --seed 2 --out take_v2.npz
+    gesturelsm edit take.npz speech.wav --regenerate upper@3-6 --regenerate face@10-12 \\
+        --keyframe pose.npz:120@4.5 --out take_v3.npz      # frame 120 of pose.npz is the upper body at 4.5 s
+    gesturelsm edit take.npz speech.wav --regenerate upper@3-6 --keyframe 40@4.5 --out take_v4.npz
+                                                           # frame 40 of take.npz itself, at 4.5 s
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import time
+
+from .align.textgrid import read_words
+from .audio import load_audio
+from .backends import FACTS, checkpoint_sources
+from .body.model import resolve_body
+from .constants import SAMPLE_RATE
+from .errors import UserError
+from .export import export_bvh, export_glb
+from .export.rig import export_rig
+from .motion.editing import keyframe
+from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
+from .motion.regions import GENERATED_REGIONS
+from .motion.sequence import MotionSequence
+from .pipeline import GesturePipeline
+from .retarget import load_character
+
+_RANGE = re.compile(r"^\s*([a-z_, ]+)@\s*([0-9.]+)\s*-\s*([0-9.]+)\s*$")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    g = sub.add_parser("edit", help="regenerate body regions of a motion over time ranges, keep the rest",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    g.add_argument("motion", help="the motion to edit (BEAT2-layout .npz, e.g. written by `gesturelsm generate`)")
+    g.add_argument("audio", help="the speech the motion goes with (wav, flac, mp3, ...)")
+    g.add_argument("--regenerate", action="append", default=[], metavar="REGIONS@START-END",
+                   help=f"regions ({', '.join(GENERATED_REGIONS)}; comma-separated) and a range in seconds to "
+                   "regenerate, e.g. upper,hands@3.0-6.0; repeat for more")
+    g.add_argument("--keyframe", action="append", default=[], metavar="POSE.npz:FRAME@TIME",
+                   help="pin the upper body (and the hands, where regenerated) at TIME s to frame FRAME of POSE.npz "
+                   "(a BEAT2-layout motion; FRAME alone: a frame of MOTION); repeat for more")
+    src = g.add_mutually_exclusive_group()
+    src.add_argument("--text", help="transcript; word timings are aligned automatically")
+    src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
+    src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
+    g.add_argument("--method", default="gesturelsm", choices=list(FACTS),
+                   help="a method whose sampler can hold known latents: "
+                   + ", ".join(k for k, f in FACTS.items() if f.inpaints))
+    g.add_argument("--steps", type=int, help="sampling steps (default: the method's)")
+    g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
+    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
+    g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
+                   help=f"post-processing of the regenerated motion (default {DEFAULT_SMOOTHING})")
+    g.add_argument("--stand-in-place", action="store_true", help="no horizontal root movement where regenerated")
+    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
+    g.add_argument("--bvh", help="also write the edited motion as BVH")
+    g.add_argument("--glb", help="also write the edited motion as an animated GLB")
+    g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
+                   "character's suffix, the edited motion on it (docs/CHARACTERS.md)")
+    g.set_defaults(func=run_edit)
+
+
+def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
+    """['upper,hands@3-6', 'face@10-12'] -> {'upper': [(3, 6)], 'hands': [(3, 6)], 'face': [(10, 12)]}."""
+    out: dict[str, list[tuple[float, float]]] = {}
+    for item in items:
+        m = _RANGE.match(item)
+        if not m:
+            raise UserError(f"--regenerate {item!r}: write REGIONS@START-END in seconds, e.g. upper,hands@3.0-6.0")
+        try:
+            rng = (float(m.group(2)), float(m.group(3)))
+        except ValueError:
+            raise UserError(f"--regenerate {item!r}: {m.group(2)}-{m.group(3)} is not a range of seconds") from None
+        for region in (r.strip() for r in m.group(1).split(",") if r.strip()):
+            out.setdefault(region, []).append(rng)
+    if not out:
+        raise UserError("nothing to regenerate: give --regenerate REGIONS@START-END, e.g. upper,hands@3.0-6.0")
+    return out
+
+
+def parse_keyframes(items: list[str], motion: MotionSequence) -> list:
+    """['pose.npz:120@4.5', '40@6'] -> keyframes (a bare FRAME is a frame of `motion`)."""
+    keys = []
+    for item in items:
+        source, sep, when = item.rpartition("@")
+        try:
+            t = float(when)
+        except ValueError:
+            t = None
+        if not sep or not source or t is None:
+            raise UserError(f"--keyframe {item!r}: write POSE.npz:FRAME@TIME (or FRAME@TIME for a frame of the motion "
+                            "being edited), e.g. pose.npz:120@4.5")
+        keys.append(keyframe(t, int(source) if source.isdigit() else source, current=motion))
+    return keys
+
+
+def run_edit(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    regenerate = parse_regenerate(args.regenerate)
+    rig = load_character(args.rig) if args.rig else None            # a bad file stops before the work
+    motion = MotionSequence.load(args.motion)
+    keys = parse_keyframes(args.keyframe, motion)
+    audio = load_audio(args.audio)
+    words = read_words(args.textgrid) if args.textgrid else None
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
+    res = pipe.edit(motion, audio, regenerate, keys, method=args.method, steps=args.steps, cfg=args.cfg,
+                    seed=args.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
+                    stand_in_place=args.stand_in_place, smoothing=args.smoothing)
+    path = res.motion.save(args.out)
+    done = [p for p in (rig and export_rig(res.motion, rig, path),
+                        args.bvh and export_bvh(res.motion, args.bvh, body=resolve_body(None)),
+                        args.glb and export_glb(res.motion, args.glb, body=resolve_body(None))) if p]
+    for p in done:
+        print(f"wrote {p}")
+    for w in res.warnings:
+        print(f"warning: {w}")
+    asked = "; ".join(f"{r} {', '.join(f'{a:g}-{b:g} s' for a, b in rr)}" for r, rr in regenerate.items())
+    print(f"{path}: {asked} regenerated with {args.method}, {res.steps} steps, CFG {res.cfg:g}, seed {res.seed}"
+          f"{f', {len(keys)} keyframe(s)' if keys else ''}; {res.text_mode}")
+    stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
+    print(f"timings: {stages}; total {time.perf_counter() - t0:.1f}s")
+    return 0
