@@ -14,8 +14,9 @@ PYTEST := $(PY) -m pytest -q -n $(TEST_WORKERS) --dist loadgroup
 .PHONY: setup test test-fast demo clean
 setup: $(STAMP)
 
-$(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh app/player/package-lock.json \
-          app/player/package.json $(wildcard app/player/src/*)
+PLAYER := gesturelsm/webapp/player
+$(STAMP): requirements.txt pyproject.toml setup.py scripts/setup.sh $(PLAYER)/package-lock.json \
+          $(PLAYER)/package.json $(wildcard $(PLAYER)/src/*)
 	VENV=$(VENV) bash scripts/setup.sh
 	touch $@
 

@@ -49,8 +49,8 @@ def messages(character: str | None):
     from dataclasses import replace
 
     from gesturelsm.body.model import resolve_body
-    from gesturelsm.export.motion_format import encode
-    from gesturelsm.export.player import motion_record
+    from gesturelsm.export.motion_codec import encode
+    from gesturelsm.export.player_payload import motion_record
 
     body = resolve_body(None)
     out = {"mannequin": lambda mc: encode(motion_record(mc.motion, body, mc.start))}

@@ -6,7 +6,7 @@ generating again with another seed on the same page (the bodies are replaced), o
 renders. Shipped checkpoints, eSpeak NG
 speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384. Each case runs --repeat times, every run
 transcribing its upload afresh; prints a markdown table of medians. The page is opened with the player's measurement
-hooks on (`?measure=1`, app/player/src/measure.js): its load marks and the split of its draws.
+hooks on (`?measure=1`, gesturelsm/webapp/player/src/measure.js): its load marks and the split of its draws.
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--checkpoints DIR] [--think-s 3]
                                                   [--repeat 3] [--character avatar.vrm]

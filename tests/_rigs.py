@@ -196,12 +196,12 @@ def write_gltf(skel: Skeleton, path, humanoid: dict[str, str] | None = None, vrm
     return gltf
 
 
-PLAYER = Path(__file__).resolve().parents[1] / "app" / "player"
+PLAYER = Path(__file__).resolve().parents[1] / "gesturelsm" / "webapp" / "player"
 
 
 def bundle_character_js(folder: Path) -> Path | None:
-    """app/player/src/character.js bundled (esbuild, iife) so a page gets `window.C`; None when the player's
-    npm packages are not installed."""
+    """gesturelsm/webapp/player/src/character.js bundled (esbuild, iife) so a page gets `window.C`; None when the
+    player's npm packages are not installed."""
     import json
     import subprocess
 
@@ -250,7 +250,7 @@ def character_js_page(folder: Path) -> Iterator:
         pytest.skip("chromium is not installed (scripts/setup.sh installs it)")
     bundle = bundle_character_js(folder)
     if bundle is None:
-        pytest.skip("the player's npm packages are not installed (cd app/player && npm ci)")
+        pytest.skip("the player's npm packages are not installed (cd gesturelsm/webapp/player && npm ci)")
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         try:

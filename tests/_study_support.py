@@ -43,13 +43,13 @@ def make_synthetic_study(out: Path, methods=("alpha", "beta", "gamma"), speeches
         f = audio_dir / f"speech{s}.wav"
         sf.write(f, speech_like(seconds, seed=s), 16000)
         files.append(f)
-    plan = plan_study(files, list(methods), out)
+    plan = plan_study(files, list(methods), out, {m: dict(steps=1, cfg=2.0, seed=0) for m in methods})
     (out / "videos").mkdir(parents=True, exist_ok=True)
     colours = [(200, 40, 40), (40, 160, 40), (40, 40, 200), (200, 160, 0)]
     for it in plan.items:
         a = sf.read(audio_dir / it.audio, dtype="float32")[0]
         synthetic_video(out / "videos" / it.video, a, colours[list(methods).index(it.method) % 4], seconds)
-    _write_key(plan, dict(steps={m: 1 for m in methods}, cfg=2.0, seed=0))
+    _write_key(plan)
     write_mismatch(plan, files, list(methods))
     write_design(out, Design(mode, attention, 0))
     invite(out, raters)

@@ -11,6 +11,10 @@ import numpy as np
 from gesturelsm.motion import MotionSequence
 
 
+def quiet(*args, **kwargs) -> None:
+    """Stands in for a progress callback (gr.Progress outside a Gradio event, a pipeline's progress)."""
+
+
 def assert_close_rel(got, want, rel: float = 1e-5) -> None:
     """max |got - want| <= rel * max |want|: two float computations of the same quantity agree to a tolerance
     relative to the tensor's scale. Element-wise tolerances fail on elements near zero, whose rounding error is
@@ -122,7 +126,7 @@ def shipped_service(workdir):
     from gesturelsm.constants import ASSETS
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
-    from gesturelsm.webapp.motion_player import BUNDLE
+    from gesturelsm.webapp.player.component import BUNDLE
 
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")

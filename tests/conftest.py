@@ -9,6 +9,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"      # no telemetry from the apps the tests build
+os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 # Each test process its own Gradio cache (read when gradio is imported, so before any test imports it): Gradio names
 # an upload's copy by its content and a closing demo deletes the copies it made, so a demo closed in one test process
 # could delete the same speech's copy that another process's app was about to read. pytest-xdist's workers inherit
@@ -36,6 +38,14 @@ def beat2_root() -> Path:
     if not (BEAT2 / "smplxflame_30" / f"{REAL_TAKE}.npz").exists():
         pytest.skip(f"real BEAT2 sample not found at {BEAT2} (../shared beside the repo)")
     return BEAT2
+
+
+@pytest.fixture(scope="session")
+def body():
+    """The built-in mannequin (the body every test draws, exports and retargets on unless it says otherwise)."""
+    from gesturelsm.body import resolve_body
+
+    return resolve_body(None)
 
 
 @pytest.fixture(scope="session")
@@ -130,6 +140,74 @@ def tiny_pipeline(tiny_assets):
     return GesturePipeline.from_pretrained(tiny_assets)
 
 
+# The web app's tests: a GestureService over the tiny checkpoints with a BEAT2 folder to find ground truth in,
+# speech to send it, and the app served in this process on a free local port.
+@pytest.fixture(scope="session")
+def beat2_dir(tmp_path_factory) -> Path:
+    """A BEAT2-layout folder with one 2 s take (motion, a tone as speech, TextGrid)."""
+    import soundfile as sf
+
+    from gesturelsm.motion import MotionSequence
+
+    from _support import speech_like, synthetic_motion
+
+    root = tmp_path_factory.mktemp("beat2")
+    synthetic_motion(frames=60, seed=3).save(root / "smplxflame_30" / "2_scott_0_9_9.npz")
+    (root / "wave16k").mkdir()
+    sf.write(root / "wave16k" / "2_scott_0_9_9.wav", speech_like(2.0, seed=5)[::-1].copy(), 16000)
+    assert isinstance(MotionSequence.load(root / "smplxflame_30" / "2_scott_0_9_9.npz"), MotionSequence)
+    return root
+
+
+@pytest.fixture(scope="session")
+def service(tiny_assets, beat2_dir, tmp_path_factory):
+    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.service import GestureService
+
+    settings = ServiceSettings(checkpoints=str(tiny_assets), beat2=str(beat2_dir), max_seconds=20,
+                               workdir=str(tmp_path_factory.mktemp("app_work")))
+    return GestureService.from_settings(settings)
+
+
+@pytest.fixture(scope="session")
+def speech_wav(tmp_path_factory) -> Path:
+    """2 s of speech-like sound as a 44.1 kHz stereo wav (the app resamples)."""
+    import soundfile as sf
+
+    from _support import speech_like
+
+    y = speech_like(2.0, sr=44100)
+    path = tmp_path_factory.mktemp("speech") / "speech.wav"
+    sf.write(path, np.stack([y, y], 1), 44100)
+    return path
+
+
+@pytest.fixture(scope="session")
+def app_url(service):
+    """The app served from this process (as `python -m app` serves it) at a local URL."""
+    from _support import served
+
+    with served(service) as url:
+        yield url
+
+
+@pytest.fixture(scope="session")
+def shipped_pipe():
+    """The shipped GestureLSM generator (assets/) for live-mode tests: the streaming logic is checked on the real
+    network."""
+    import torch
+
+    from gesturelsm.features.audio import audio_channels
+    from gesturelsm.pipeline import ASSETS, GesturePipeline
+
+    if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
+        pytest.skip("shipped checkpoints not found in assets/")
+    torch.set_num_threads(1)
+    pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"], warm_up=False)
+    audio_channels(np.random.default_rng(0).normal(scale=0.1, size=16000).astype(np.float32))  # librosa's JIT, once
+    return pipe
+
+
 # The wheel `pip wheel` builds from a copy of the checkout's packaging inputs (so the checkout gets no build/ or
 # egg-info folders), once per test process: tests/test_packaging.py reads it, tests/test_constants.py installs it.
 @pytest.fixture(scope="session")
@@ -138,7 +216,7 @@ def built_wheel(tmp_path_factory) -> Path:
     for name in ("setup.py", "pyproject.toml", "README.md"):
         shutil.copy2(REPO / name, src / name)
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules", "*.egg-info")
-    for name in ("gesturelsm", "assets", "app"):
+    for name in ("gesturelsm", "assets"):
         shutil.copytree(REPO / name, src / name, ignore=ignore)
     out = tmp_path_factory.mktemp("wheel")
     subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "wheel", "--no-deps",

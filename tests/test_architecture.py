@@ -1,9 +1,9 @@
 """The package's import graph flows downward only: a module may import from its own part of the package or
-from a lower floor, never from the same floor's other parts (sideways) or from above. Floors, lowest first;
-a part is a top-level module or subpackage of gesturelsm, or one module of a subpackage that spans floors
-(SPLIT: serve's request rules and upload sniffing sit on the lowest floor, its service above the pipeline).
-And no module imports itself through others: the module graph has no circle, within a part either.
-Imports inside functions count too."""
+from a lower floor, never from the same floor's other parts (sideways) or from above. Floors, lowest first; a part
+is a top-level module or subpackage of gesturelsm, and every module of a subpackage belongs to its part (no part
+spans floors). No import circle, neither between files nor between parts: when a part imports another, nothing of
+the other imports it back, directly or through others. Imports inside functions count too. No file over
+MAX_FILE_LINES lines and no function over MAX_FUNCTION_LINES."""
 from __future__ import annotations
 
 import ast
@@ -14,17 +14,17 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "serve.limits", "serve.uploads", "safe_load",  # conventions, the error family, request
-     "presentation"},                                          # limits, upload sniffing, safe loading, methods'
-                                                               # labels and colours
-    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech loading, files, the methods,
-                                                               # fp32 linear layers through oneDNN
+    {"constants", "errors", "safe_load", "presentation"},      # conventions, the error family, safe loading,
+                                                               # methods' labels and colours
+    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
+                                                               # it), files, the methods, fast CPU kernels
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr"},                                                   # speech recognition (times words with align)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"retarget"},                                              # motion onto characters (their skeletons and meshes)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)
-    {"generator", "export", "reference"},                                   # the denoisers (ours; the authors', reference/); BVH / GLB / keypoints (render's camera)
+    {"generator", "export", "reference"},                      # the denoisers (ours; the authors', reference/);
+                                                               # BVH / GLB / keypoints (render's camera)
     {"backends"},                                              # every method (ours, the authors') behind one call
     {"pipeline"},                                              # speech -> motion, one request flow
     {"serve", "study", "evaluation", "pipeline_cli", "edit_cli",  # what uses the pipeline (serve: one web request,
@@ -35,16 +35,16 @@ FLOORS: list[set[str]] = [
     {"__main__"},                                              # python -m gesturelsm
 ]
 FLOOR = {part: i for i, parts in enumerate(FLOORS) for part in parts}
-SPLIT = {p.split(".")[0] for p in FLOOR if "." in p}          # subpackages whose modules have floors of their own
+MAX_FILE_LINES = 400
+MAX_FUNCTION_LINES = 80
+# (file relative to the package, or "file:function") -> why it may be longer; empty: every file and function fits
+LONGER: dict[str, str] = {}
 
 
 def part_of(module: str) -> str:
-    """'gesturelsm.render.frames' -> 'render'; 'gesturelsm.serve.limits' -> 'serve.limits' (a split subpackage's
-    module with a floor of its own), 'gesturelsm.serve.service' -> 'serve'; 'gesturelsm' (the package's __init__)
-    -> ''."""
+    """'gesturelsm.render.frames' -> 'render'; 'gesturelsm.pipeline' -> 'pipeline'; 'gesturelsm' (the package's
+    __init__) -> ''."""
     parts = module.split(".")
-    if len(parts) > 2 and parts[1] in SPLIT and f"{parts[1]}.{parts[2]}" in FLOOR:
-        return f"{parts[1]}.{parts[2]}"
     return parts[1] if len(parts) > 1 else ""
 
 
@@ -91,7 +91,6 @@ def test_every_part_of_the_package_has_a_floor():
     parts = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
              if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").exists()}
     assert parts <= set(FLOOR), f"parts without a floor: {sorted(parts - set(FLOOR))}"
-    assert all((PACKAGE / f"{p.replace('.', '/')}.py").is_file() for p in FLOOR if "." in p)
 
 
 def module_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
@@ -149,6 +148,21 @@ def test_no_module_imports_itself_through_others():
     assert circles(module_graph()) == []
 
 
+def part_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """The module graph with each part (a top-level module, or a subpackage with all its modules) as one node;
+    the package's own __init__ is the node ''."""
+    parts: dict[str, set[str]] = {}
+    for mod, targets in graph.items():
+        parts.setdefault(part_of(mod), set()).update(part_of(t) for t in targets if part_of(t) != part_of(mod))
+    return parts
+
+
+def test_no_part_imports_itself_through_others():
+    """Counting each subpackage (and each top-level module) as one unit: when one imports another, nothing of the
+    other imports it back, directly or through other parts."""
+    assert circles(part_graph(module_graph())) == []
+
+
 def package(root: Path, files: dict[str, str]) -> Path:
     """A throwaway gesturelsm package under `root`: {relative path: source}, with the __init__ files it needs."""
     pkg = root / "gesturelsm"
@@ -167,6 +181,43 @@ def test_a_circle_is_caught(tmp_path):
     assert circles(module_graph(pkg)) == [["gesturelsm.webapp.a", "gesturelsm.webapp.b"]]
 
 
+def test_a_circle_between_parts_is_caught(tmp_path):
+    """Files without a circle of their own: audio.loading -> serve.uploads -> webapp.ui -> audio.containers."""
+    pkg = package(tmp_path, {"audio/loading.py": "from ..serve import uploads\n",
+                             "serve/uploads.py": "from ..webapp.ui import page\n",
+                             "webapp/ui.py": "from ..audio.containers import sniff\n",
+                             "audio/containers.py": "", "motion/x.py": "from ..audio import loading\n"})
+    assert circles(module_graph(pkg)) == []
+    assert circles(part_graph(module_graph(pkg))) == [["audio", "serve", "webapp"]]
+
+
+def _too_long(root: Path = PACKAGE) -> list[str]:
+    """Files over MAX_FILE_LINES lines and functions (methods too) over MAX_FUNCTION_LINES, not in LONGER."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        text = path.read_text()
+        if len(text.splitlines()) > MAX_FILE_LINES and rel not in LONGER:
+            found.append(f"{rel}: {len(text.splitlines())} lines")
+        for node in ast.walk(ast.parse(text, str(path))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES and f"{rel}:{node.name}" not in LONGER:
+                    found.append(f"{rel}:{node.lineno}: {node.name}, {n} lines")
+    return found
+
+
+def test_no_file_or_function_is_too_long():
+    assert _too_long() == []
+    assert all(why.strip() for why in LONGER.values()), "every exception says why"
+
+
+def test_a_long_function_is_caught(tmp_path):
+    body = "".join(f"    x{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))
+    pkg = package(tmp_path, {"motion/x.py": f"def long():\n{body}\n\ndef short():\n    return 1\n"})
+    assert _too_long(pkg) == [f"motion/x.py:1: long, {MAX_FUNCTION_LINES + 1} lines"]
+
+
 def test_imports_only_go_down():
     assert violations() == []
 
@@ -183,7 +234,7 @@ def test_an_upward_import_is_caught(tmp_path):
 
 @pytest.mark.parametrize("module, part", [("gesturelsm.render.frames", "render"), ("gesturelsm", ""),
                                           ("gesturelsm.pipeline", "pipeline"),
-                                          ("gesturelsm.serve.limits", "serve.limits"),
+                                          ("gesturelsm.serve.limits", "serve"), ("gesturelsm.audio.containers", "audio"),
                                           ("gesturelsm.serve.service", "serve"), ("gesturelsm.serve", "serve")])
 def test_part_of(module, part):
     assert part_of(module) == part

@@ -33,10 +33,10 @@ def test_the_wheel_carries_the_page_its_examples_and_the_shipped_assets(wheel):
                  "gesturelsm/_assets/MODEL_CARD.md", "gesturelsm/_assets/generator/gesturelsm.safetensors",
                  "gesturelsm/_assets/body/SMPLX_MANNEQUIN.npz"):
         assert path in names, path
-    built = (REPO / "app" / "player" / "dist" / "player.js").is_file()
-    assert ("gesturelsm/webapp/player/player.js" in names) == built      # the player only when npm built it
-    assert not any(n.startswith("gesturelsm/webapp/player/") and n != "gesturelsm/webapp/player/player.js"
-                   for n in names)
+    built = (REPO / "gesturelsm" / "webapp" / "player" / "dist" / "player.js").is_file()
+    player = sorted(n for n in names if n.startswith("gesturelsm/webapp/player/"))
+    expected = ["gesturelsm/webapp/player/__init__.py", "gesturelsm/webapp/player/component.py"]
+    assert player == sorted(expected + ["gesturelsm/webapp/player/dist/player.js"] * built)   # no sources, no npm
 
 
 def test_the_wheel_installs_the_gesturelsm_command_with_serve(wheel):

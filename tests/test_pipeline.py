@@ -1,5 +1,5 @@
 """The pipeline on tiny checkpoints. Audio-only (transcribe=False) wherever a test is not about where the words come
-from (tests/generator/test_pipeline_transcript.py and the CLI test are): the recogniser rejects these synthetic tones
+from (tests/test_pipeline_transcript.py and the CLI test are): the recogniser rejects these synthetic tones
 anyway, after 21 s of CPU for 30 s of them, far longer than generating."""
 import numpy as np
 import pytest

@@ -9,7 +9,7 @@ already final: they are the seed (first s) and are kept fixed while sampling (re
 flows/base.py `inpainting`), so the new latents continue them and nothing final is rewritten. So the motion of a
 moment needs at most c + lookahead latents of later audio (4 frames = 133.3 ms per latent): with the defaults c = 5,
 lookahead = 1 that is 0.8 s at worst, 0.47 s on average, plus compute; a player that plays at a steady 1x delay must
-wait for the worst case (app/player/src/live_clock.js `LiveClock`).
+wait for the worst case (gesturelsm/webapp/player/src/live_clock.js `LiveClock`).
 
 Why these defaults (figures and the commands that measure them: docs/BENCHMARKS.md, live mode): c = 5,
 lookahead = 1 is the largest commit whose speech-to-screen delay stays under the 1 s goal; smaller commits extend

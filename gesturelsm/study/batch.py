@@ -1,39 +1,37 @@
 """Batch rendering for user studies (`gesturelsm batch`).
 
 Output folder:
-    videos/v_<10 hex>.mp4        one body per video, no labels; the name says nothing about the condition
-    key/conditions.csv           video -> speech file, method, steps, CFG, seed (keep away from raters)
+    videos/v_<10 hex>.mp4        one body per video, no labels; the name says nothing about the condition (it
+                                 hashes a secret salt with the speech, the method and every setting that makes
+                                 the video: naming.py)
+    key/conditions.csv           video -> speech file, method and its settings (keep away from raters)
     key/salt.txt                 the secret that makes the names; reused on reruns so names stay stable
-    raters/rater_NN/order.csv    that rater's randomised presentation order
-    raters/rater_NN/sheet.csv    the same order with empty 1-5 columns: realness, synchrony, smoothness
-    raters/rater_NN/form.html    the videos in that order with 1-5 radio buttons; "Save ratings" downloads
-                                 a filled sheet.csv (works offline from the folder, no server)
     key/mismatch.csv             attention-check videos: one clip's video (motion_of) with another clip's speech
-    key/design.json, raters.json, links.csv   the web study (see design.py): mode, attention checks, one
-                                 unguessable link per rater for `gesturelsm study serve`
-    study.json                   settings used
-Reruns skip videos that exist (videos are written under a temporary name and renamed when complete).
+    key/design.json, raters.json, links.csv   the study's one design (see design.py): pairwise or rating, its
+                                 attention checks, one unguessable link per rater for `gesturelsm study serve`
+    study.json                   the settings of the videos and the design; a rerun with other ones is refused
+Reruns skip videos that exist (videos are written under a temporary name and renamed when complete) and may add
+speech files, methods and raters; the key and the attention checks keep the rows of earlier runs.
 """
 from __future__ import annotations
 
 import csv
-import hashlib
-import html
 import json
 import secrets
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Mapping
-
-import numpy as np
 
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import FACTS
+from ..body.model import resolve_model_path
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
-from .design import SCALE_QUESTIONS, SCALES, Design, invite, read_raters, write_design
+from .design import Design, invite, read_raters, write_design
+from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
+    weights_digest
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
 @dataclass
@@ -48,15 +46,7 @@ class StudyPlan:
     out: Path
     salt: str
     items: list[StudyItem] = field(default_factory=list)
-
-    def order(self, rater: int, seed: int = 0) -> list[StudyItem]:
-        """Rater's presentation order: a permutation drawn from (seed, rater)."""
-        rng = np.random.default_rng([seed, rater])
-        return [self.items[i] for i in rng.permutation(len(self.items))]
-
-
-def blinded_name(salt: str, audio: str, method: str) -> str:
-    return "v_" + hashlib.sha256(f"{salt}|{audio}|{method}".encode()).hexdigest()[:10] + ".mp4"
+    settings: Mapping[str, Mapping] = field(default_factory=dict)     # method -> its videos' settings
 
 
 def find_audio(audio_dir: str | Path) -> list[Path]:
@@ -69,8 +59,10 @@ def find_audio(audio_dir: str | Path) -> list[Path]:
     return files
 
 
-def plan_study(audio_files: list[Path], methods: list[str], out: str | Path) -> StudyPlan:
-    """Names for every speech x method; the salt is created once and kept in key/salt.txt."""
+def plan_study(audio_files: list[Path], methods: list[str], out: str | Path,
+               settings: Mapping[str, Mapping] | None = None) -> StudyPlan:
+    """Names for every speech x method made with `settings[method]` (naming.video_settings); the salt is created
+    once and kept in key/salt.txt."""
     out = Path(out)
     salt_file = out / "key" / "salt.txt"
     if salt_file.exists():
@@ -79,10 +71,11 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path) -> 
         salt = secrets.token_hex(8)
         salt_file.parent.mkdir(parents=True, exist_ok=True)
         salt_file.write_text(salt + "\n")
-    items = [StudyItem(blinded_name(salt, a.name, m), a.name, m) for a in audio_files for m in methods]
+    settings = {m: dict((settings or {}).get(m, {})) for m in methods}
+    items = [StudyItem(blinded_name(salt, a.name, m, settings[m]), a.name, m) for a in audio_files for m in methods]
     if len({i.video for i in items}) != len(items):
         raise ValueError("two speech files share a name; rename them")
-    return StudyPlan(out, salt, items)
+    return StudyPlan(out, salt, items, settings)
 
 
 def _transcript(audio: Path):
@@ -98,11 +91,11 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
                design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
-    """Render what is missing and (re)write key, orders, sheets and forms, the attention-check videos, the
-    web study's design, and links up to `raters` raters (existing links are kept); returns the plan.
-    `steps`: per method (missing: the method's default). `rig`: a retarget.Character; each video then shows the
-    character's own mesh and gets the motion on that character beside it (VIDEO.vrm / .glb, the same blinded
-    name)."""
+    """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
+    to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
+    before anything is rendered (naming.check_unchanged). `steps`: per method (missing: the method's default).
+    `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion on that
+    character beside it (VIDEO.vrm / .glb, the same blinded name)."""
     methods = list(dict.fromkeys(methods))
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
@@ -113,15 +106,50 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     if raters < 1:
         raise ValueError("--raters must be at least 1")
     audio_files = find_audio(audio_dir)
-    plan = plan_study(audio_files, methods, out)
     out = Path(out)
-    (out / "videos").mkdir(parents=True, exist_ok=True)
+    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2)
+    render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
+                  character=file_label(rig.path) if rig is not None else None)
+    settings = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
+                                  weights_digest(pipeline.backends[m])) for m in methods}
+    check_unchanged(out, settings, asdict(design))
+    plan = plan_study(audio_files, methods, out, settings)
+    record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=cfg, seed=seed, size=size,
+                  stand_in_place=stand_in_place, smoothing=smoothing, design=asdict(design))
+    _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
+    done, skipped = _render_missing(pipeline, plan, audio_files, base, size, body, rig, log)
+    _write_key(plan)
+    write_mismatch(plan, audio_files, methods)
+    write_design(out, design)
+    have = len(read_raters(out))
+    if have < raters:
+        invite(out, raters - have)
+    _write_settings(out, plan, record)
+    log(f"{done} videos rendered, {skipped} already there; the key is {out / 'key' / 'conditions.csv'} (do not "
+        f"give it to raters); {max(have, raters)} rater links (`gesturelsm study serve {out}`) in "
+        f"{out / 'key' / 'links.csv'}")
+    return plan
+
+
+def _write_settings(out: Path, plan: StudyPlan, record: dict) -> None:
+    """study.json: this run's settings, with the methods and video settings of earlier runs kept."""
+    old = read_settings(out)
+    videos = {**old.get("videos", {}), **plan.settings}
+    methods = list(dict.fromkeys([*old.get("methods", []), *plan.settings]))
+    (out / SETTINGS_FILE).write_text(json.dumps(dict(record, methods=methods, videos=videos), indent=1) + "\n")
+
+
+def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Plan, size: int, body, rig,
+                    log: Callable[[str], None]) -> tuple[int, int]:
+    """Every video of the plan that is not there yet, one speech at a time; (rendered, already there)."""
+    videos = plan.out / "videos"
+    videos.mkdir(parents=True, exist_ok=True)
     by_audio: dict[str, list[StudyItem]] = {}
     for it in plan.items:
         by_audio.setdefault(it.audio, []).append(it)
     done = skipped = 0
     for a in audio_files:
-        todo = [it for it in by_audio[a.name] if not (out / "videos" / it.video).exists()]
+        todo = [it for it in by_audio[a.name] if not (videos / it.video).exists()]
         skipped += len(by_audio[a.name]) - len(todo)
         if not todo:
             continue
@@ -131,54 +159,40 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         except ValueError as exc:  # InputError: too short, silent, too long
             raise ValueError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, Plan([it.method], steps, cfg, seed, stand_in_place, smoothing,
-                                                     beat2, a.name))
+            gen = pipeline.generate_all(speech, replace(base, methods=[it.method], filename=a.name))
             if it.method not in gen.motions:
-                log(f"  {a.name}: not a take of {beat2}; no ground-truth video")
+                log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
                 continue
-            render_video([gen.motions[it.method]], speech.audio, out / "videos" / it.video, size=(size, size),
-                         body=body, character=rig)
+            render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
+                         character=rig)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 
-                export_rig_glb(gen.motions[it.method], rig, (out / "videos" / it.video).with_suffix(
+                export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
                     ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
-    _write_key(plan, dict(steps=steps, cfg=cfg, seed=seed))
-    for r in range(1, raters + 1):
-        _write_rater(plan, r, seed)
-    write_mismatch(plan, audio_files, methods)
-    write_design(out, design)
-    have = len(read_raters(out))
-    if have < raters:
-        invite(out, raters - have)
-    (out / "study.json").write_text(json.dumps(dict(audio_dir=str(audio_dir), methods=methods, raters=raters,
-                                                   steps=steps, cfg=cfg, seed=seed, size=size,
-                                                   stand_in_place=stand_in_place, smoothing=smoothing), indent=1))
-    log(f"{done} videos rendered, {skipped} already there; {raters} rater sheets in {out / 'raters'}; "
-        f"the key is {out / 'key' / 'conditions.csv'} (do not give it to raters); web study links "
-        f"(`gesturelsm study serve {out}`) in {out / 'key' / 'links.csv'}")
-    return plan
+    return done, skipped
 
 
 def write_mismatch(plan: StudyPlan, audio_files: list[Path], methods: list[str]) -> list[str]:
     """Attention-check videos: the video of speech k+1 (method k mod M) with the speech of file k, muxed
-    without re-encoding the picture; key/mismatch.csv says which. Needs two speech files at least."""
+    without re-encoding the picture; key/mismatch.csv says which (with the rows of earlier runs whose videos are
+    there). Needs two speech files at least. Returns this run's check videos."""
     import subprocess
 
     import imageio_ffmpeg
 
-    rows = []
     if len(audio_files) < 2:
         return []
+    rows = []
     by = {(it.audio, it.method): it.video for it in plan.items}
     for k, a in enumerate(audio_files):
         b, m = audio_files[(k + 1) % len(audio_files)], methods[k % len(methods)]
         src = plan.out / "videos" / by[(b.name, m)]
         if not src.exists():
             continue
-        name = blinded_name(plan.salt, a.name, f"mismatch|{m}|{b.name}")
+        name = blinded_name(plan.salt, a.name, "mismatch", {"motion_of": src.name})
         dst = plan.out / "videos" / name
         if not dst.exists():
             tmp = dst.with_name(dst.stem + ".part.mp4")
@@ -186,71 +200,35 @@ def write_mismatch(plan: StudyPlan, audio_files: list[Path], methods: list[str])
                             "-map", "0:v:0", "-map", "1:a:0", "-c:v", "copy", "-c:a", "aac", "-shortest",
                             "-movflags", "+faststart", str(tmp)], check=True)
             tmp.replace(dst)
-        rows.append((name, a.name, src.name))
-    with open(plan.out / "key" / "mismatch.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["video", "audio", "motion_of"])
-        w.writerows(rows)
-    return [r[0] for r in rows]
+        rows.append(dict(video=name, audio=a.name, motion_of=src.name))
+    _merge_csv(plan.out / "key" / "mismatch.csv", rows, ["video", "audio", "motion_of"])
+    return [r["video"] for r in rows]
 
 
-def _write_key(plan: StudyPlan, settings: dict) -> None:
-    with open(plan.out / "key" / "conditions.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["video", "audio", "method", "steps", "cfg", "seed"])
-        for it in plan.items:
-            w.writerow([it.video, it.audio, it.method, "" if it.method == GROUND_TRUTH else settings["steps"][it.method],
-                        settings["cfg"], settings["seed"]])
+def _write_key(plan: StudyPlan) -> None:
+    """key/conditions.csv: every video of the plan with its speech, method and settings, and the rows of
+    earlier runs whose videos are there (the same settings: a rerun with others is refused)."""
+    rows = [dict(video=it.video, audio=it.audio, method=it.method, **plan.settings.get(it.method, {}))
+            for it in plan.items]
+    _merge_csv(plan.out / "key" / "conditions.csv", rows, ["video", "audio", "method", "steps", "cfg", "seed"])
 
 
-def _write_rater(plan: StudyPlan, rater: int, seed: int) -> None:
-    d = plan.out / "raters" / f"rater_{rater:02d}"
-    d.mkdir(parents=True, exist_ok=True)
-    videos = [it.video for it in plan.order(rater, seed) if (plan.out / "videos" / it.video).exists()]
-    with open(d / "order.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["position", "video"])
-        w.writerows((i + 1, v) for i, v in enumerate(videos))
-    with open(d / "sheet.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["rater", "position", "video", *SCALES, "comment"])
-        w.writerows((rater, i + 1, v, *[""] * len(SCALES), "") for i, v in enumerate(videos))
-    (d / "form.html").write_text(_form(rater, videos))
+def _merge_csv(path: Path, rows: list[dict], first: list[str]) -> None:
+    """Write `rows` to `path`, after the rows already there whose video exists and is not among `rows`."""
+    new = {r["video"] for r in rows}
+    old = []
+    if path.exists():
+        with open(path, newline="") as fh:
+            old = [r for r in csv.DictReader(fh) if r["video"] not in new and (path.parent.parent / "videos" /
+                                                                                r["video"]).exists()]
+    every = [*old, *rows]
+    columns = list(dict.fromkeys([*first, *(k for r in every for k in r)]))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=columns, restval="")
+        w.writeheader()
+        w.writerows({k: ("" if v is None else v) for k, v in r.items()} for r in every)
 
 
-def _form(rater: int, videos: list[str]) -> str:
-    blocks = []
-    for i, v in enumerate(videos, 1):
-        scales = "".join(
-            f'<p>{html.escape(SCALE_QUESTIONS[s])}<br>' + " ".join(
-                f'<label><input type="radio" name="{s}_{i}" value="{k}"> {k}</label>' for k in range(1, 6)) + "</p>"
-            for s in SCALES)
-        blocks.append(f'<section data-video="{html.escape(v)}"><h3>Video {i} of {len(videos)}</h3>'
-                      f'<video src="../../videos/{html.escape(v)}" controls preload="none" width="480"></video>'
-                      f'{scales}<p>Comment: <input type="text" name="comment_{i}" size="60"></p></section>')
-    return f"""<!doctype html><html><head><meta charset="utf-8"><title>Gesture rating, rater {rater}</title>
-<style>body{{font-family:sans-serif;max-width:900px;margin:auto}}section{{border-bottom:1px solid #ccc;padding:1em 0}}</style>
-</head><body><h1>Gesture rating (rater {rater})</h1>
-<p>Watch each video with sound, then rate it on the three 1-5 scales. Rate every video in the order shown.
-When done, press <b>Save ratings</b> and send the downloaded file back.</p>
-{''.join(blocks)}
-<button id="save">Save ratings</button>
-<script>
-document.getElementById('save').onclick = () => {{
-  const scales = {json.dumps(list(SCALES))};
-  const rows = [['rater','position','video',...scales,'comment']];
-  document.querySelectorAll('section').forEach((s, j) => {{
-    const i = j + 1, get = n => (s.querySelector(`input[name="${{n}}_${{i}}"]:checked`) || {{value: ''}}).value;
-    const c = s.querySelector(`input[name="comment_${{i}}"]`).value.replaceAll('"', '""');
-    rows.push([{rater}, i, s.dataset.video, ...scales.map(get), `"${{c}}"`]);
-  }});
-  const blob = new Blob([rows.map(r => r.join(',')).join('\\n') + '\\n'], {{type: 'text/csv'}});
-  const a = document.createElement('a'); a.href = URL.createObjectURL(blob);
-  a.download = 'ratings_rater_{rater:02d}.csv'; a.click();
-}};
-</script></body></html>
-"""
-
-
-__all__ = ["AUDIO_EXTENSIONS", "SCALES", "StudyItem", "StudyPlan", "blinded_name", "find_audio", "make_study",
-           "plan_study", "write_mismatch"]
+__all__ = ["AUDIO_EXTENSIONS", "StudyItem", "StudyPlan", "blinded_name", "find_audio", "make_study", "plan_study",
+           "write_mismatch"]

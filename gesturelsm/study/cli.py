@@ -1,5 +1,6 @@
-"""`gesturelsm batch`: blinded videos of every speech x method for a user study, with a key kept apart,
-a randomised order and a rating sheet per rater. Rerunning skips finished videos.
+"""`gesturelsm batch`: blinded videos of every speech x method for a user study, with a key kept apart, and the
+study's one design (pairwise or 1-5 ratings, with attention checks) with a link per rater for
+`gesturelsm study serve`. Rerunning skips finished videos; a rerun with other settings than the study's is refused.
 
     gesturelsm batch --audio-dir speech/ --methods gesturelsm rectified_flow ddim --out study/ --raters 12
     (a transcript per speech file is used when speech/NAME.txt or speech/NAME.TextGrid exists)
@@ -20,13 +21,14 @@ from .design import MODES, Design
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("batch", help="render blinded user-study videos, key and rating sheets (resumable)",
-                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = subparsers.add_parser("batch", help="render blinded user-study videos, their key and the study's design and "
+                              "links (resumable)", description=__doc__,
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--audio-dir", required=True, help="folder of speech files (wav, flac, mp3, ...)")
     p.add_argument("--methods", nargs="+", default=["gesturelsm", "rectified_flow", "ddim"],
                    help="gesturelsm, rectified_flow, ddim, ground_truth (needs --beat2)")
-    p.add_argument("--out", required=True, help="output folder (videos/, key/, raters/)")
-    p.add_argument("--raters", type=int, default=10, help="number of raters: one order + sheet + form each")
+    p.add_argument("--out", required=True, help="output folder (videos/, key/, study.json)")
+    p.add_argument("--raters", type=int, default=10, help="number of rater links (a rerun with more adds links)")
     p.add_argument("--steps", type=int, default=8, help="sampling steps for GestureLSM and rectified flow")
     p.add_argument("--ddim-steps", type=int, default=20, help="DDIM steps")
     p.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
@@ -39,7 +41,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
     p.add_argument("--design", default="pairwise", choices=MODES,
-                   help="web study: pairwise preference between methods on the same speech, or 1-5 ratings")
+                   help="the study's design: pairwise preference between methods on the same speech, or each "
+                   "video rated 1-5 on realness, synchrony and smoothness")
     p.add_argument("--attention", type=float, default=0.15,
                    help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "

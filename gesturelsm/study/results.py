@@ -20,9 +20,12 @@ from itertools import combinations
 from pathlib import Path
 
 import numpy as np
+from sqlalchemy.exc import DBAPIError
 
+from ..errors import UserError
 from . import db, stats
 from .design import SCALES, Rater, Trial, read_conditions, read_design, read_raters
+from .store import marker_key, missing_message, read_markers
 
 
 @dataclass(frozen=True)
@@ -87,13 +90,31 @@ def check_rater(rater: Rater, answers: dict[int, dict], rule: Rule) -> RaterChec
     return RaterCheck(rater.id, len(answers), (mm_ok, mm), (rep_ok, rep), not reasons, ", ".join(reasons))
 
 
+def read_answers(study: str | Path, url: str | None = None) -> list[dict]:
+    """Every answer in the study's database, read without making or changing anything: a study nobody has
+    answered yet has no database file, and gets none. A database that held answers and is gone is a UserError."""
+    study = Path(study)
+    full = url or db.default_url(study)
+    file = db.sqlite_file(full)
+    if file is not None and not file.exists():
+        entry = read_markers(study).get(marker_key(url))
+        if entry:
+            raise UserError(missing_message(str(file), entry))
+        return []
+    try:
+        return db.all_answers(db.open_db(full, create=False))
+    except DBAPIError as exc:
+        raise UserError(f"cannot read the answers database {file or marker_key(url)}: {exc.orig}") from None
+
+
 def analyse(study: str | Path, url: str | None = None, rule: Rule = Rule(), reference: str | None = None,
             n_boot: int = 1000, seed: int = 0) -> Results:
+    """The results of the study's answers (`Results.raters` is empty when no rater of the study answered)."""
     study = Path(study)
     design, cond = read_design(study), read_conditions(study)
     raters = {r.id: r for r in read_raters(study).values()}
     by_rater: dict[int, dict[int, dict]] = {}
-    for a in db.all_answers(db.open_db(url or db.default_url(study))):
+    for a in read_answers(study, url):
         by_rater.setdefault(a["rater"], {})[a["trial"]] = a
     checks = [check_rater(raters[r], by_rater[r], rule) for r in sorted(by_rater) if r in raters]
     kept = [c.rater for c in checks if c.kept]
@@ -216,4 +237,4 @@ def markdown(res: Results, rule: Rule) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["Results", "Rule", "analyse", "check_rater", "markdown", "write"]
+__all__ = ["Results", "Rule", "analyse", "check_rater", "markdown", "read_answers", "write"]

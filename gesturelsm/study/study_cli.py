@@ -4,6 +4,8 @@
     gesturelsm study serve study/ --port 8600                          # raters open http://HOST:8600/r/<token>
     gesturelsm study invite study/ 5                                   # 5 more links (the server picks them up)
     gesturelsm study results study/                                    # results/ : CSV, markdown, PNG
+
+`study results` exits 0 with results written, 1 when nobody has answered yet, 2 on a bad argument or folder.
 """
 from __future__ import annotations
 
@@ -77,6 +79,10 @@ def run_results(args: argparse.Namespace) -> int:
     rule = Rule(0.0, 0.0, 0) if args.keep_all else Rule(args.mismatch_pass, args.repeat_pass, args.min_checks)
     folder = _folder(args.study_dir)
     res = analyse(folder, args.db, rule, args.reference, args.bootstrap, args.seed)
+    if not res.raters:
+        print(f"no answers yet: hand each rater a link from {folder / 'key' / 'links.csv'} and serve the study "
+              f"(`gesturelsm study serve {folder}`); nothing was written")
+        return 1
     if not any(c.kept for c in res.raters):
         raise UserError(f"no rater passes the attention rule ({len(res.raters)} answered); "
                         "see --mismatch-pass, --repeat-pass, --keep-all")

@@ -1,6 +1,6 @@
 """The visitor's character on the page, server side: the upload (`elem_id="character"`, .vrm / .glb / .gltf)
 is read and checked once, each method's motion is retargeted onto it, and the player gets per-bone rotations
-to apply with three-vrm (app/player/src/character.js `applyFrame`).
+to apply with three-vrm (gesturelsm/webapp/player/src/character.js `applyFrame`).
 
     upload = character_upload()                        # gr.File(elem_id="character") beside the methods
     character = read_upload(path)                      # Character, or gr.Error with one line

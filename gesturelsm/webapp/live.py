@@ -15,19 +15,19 @@ Each stream gets its own `LiveSession` (gesturelsm/live/session.py), per socket 
 button, when the tab closes (the socket closes, or Gradio deletes the state and the delete callback stops the
 session), or when no audio arrived for the session's idle timeout (network drop). When all streams are taken the
 visitor reads a "busy" line.
-Each message is one record of the binary motion format (gesturelsm/export/motion_format.py, decoded by its `decode`
-and by the page's app/player/src/motion_format.js): the frames since the last message, numbered from `start`, and a
+Each message is one record of the binary motion format (gesturelsm/export/motion_codec.py, decoded by its `decode`
+and by the page's player/src/motion_decoder.js): the frames since the last message, numbered from `start`, and a
 meta object {"frames": frames so far, "audio_seconds": audio received so far, "median_latency_ms", "p90_latency_ms",
 "real_time_factor", "status"}. With a body (the page's) the frames are the in-browser player's arrays (kind
-quaternion: 55 local rotations x, y, z, w, the root in metres, E expression weights; gesturelsm/export/player.py
-`motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3 poses and trans). With the visitor's
-character (live_character.py: the socket's hello names the page session's token) each record also carries the frames on
-the character (the format's version 2 character section); without one the records are version 1. Over the socket
-a record is a binary message; Gradio's microphone puts it base64-encoded in the hidden textbox `live-motion`
-(`decode(base64.b64decode(text))`).
+quaternion: 55 local rotations x, y, z, w, the root in metres, E expression weights;
+gesturelsm/export/player_payload.py `motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3
+poses and trans). With the visitor's character (live_character.py: the socket's hello names the page session's token)
+each record also carries the frames on the character (the format's version 2 character section); without one the
+records are version 1. Over the socket a record is a binary message; Gradio's microphone puts it base64-encoded in the
+hidden textbox `live-motion` (`decode(base64.b64decode(text))`).
 The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
-factor beside it. The player `live-player` (app/player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
+factor beside it. The player `live-player` (player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
 delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms); on the visitor's
 character it carries data-character (the file name), like `motion-player`.
 """
@@ -42,8 +42,8 @@ import gradio as gr
 import numpy as np
 
 from gesturelsm.audio import resample, to_mono
-from gesturelsm.export.motion_format import AXIS_ANGLE, QUATERNION, MotionRecord, encode
-from gesturelsm.export.player import motion_record
+from gesturelsm.export.motion_codec import AXIS_ANGLE, QUATERNION, MotionRecord, encode
+from gesturelsm.export.player_payload import motion_record
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.motion.sequence import MotionSequence
@@ -144,8 +144,8 @@ def _delete(session: LiveSession | None) -> None:
 def character_js() -> str:
     """The Character upload's last chained event: hands the page session's live spec (live_character.py
     `LiveCharacters.choose`: token, name, url, key; null for the mannequin) to the live player, which uses it from the
-    next Record on (app/player/src/index.js `chooseLiveCharacter`)."""
-    from .motion_player import BUNDLE, file_url
+    next Record on (gesturelsm/webapp/player/src/index.js `chooseLiveCharacter`)."""
+    from .player.component import BUNDLE, file_url
 
     return ("(spec) => { import(new URL('" + file_url(BUNDLE) + "', document.baseURI).href)"
             ".then((m) => m.chooseLiveCharacter(spec || null)); }")
@@ -155,10 +155,10 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
     """The live player (element id `live-player`, same data-state / data-frames contract as `motion-player`) with
     its controls and meter, streaming over the app's WebSocket (live_socket.py), or None when the player bundle
     is not built. `cache`: folder for the rest body's GLB (shared with the page's)."""
-    from gesturelsm.export.player import body_glb
+    from gesturelsm.export.player_payload import body_glb
     from gesturelsm.motion.sequence import NUM_BETAS
 
-    from .motion_player import BUNDLE, file_url
+    from .player.component import BUNDLE, file_url
 
     if not BUNDLE.exists():
         return None

@@ -44,7 +44,7 @@ from gesturelsm.retarget import Character, Ground, SourceBody, retarget
 from gesturelsm.retarget.solve import prepare
 
 from .character import bone_order, face_channels, face_morph
-from .motion_player import file_url
+from .player.component import file_url
 
 TTL_S = 6 * 3600          # an entry unused this long is dropped (its page session has long gone quiet)
 MAX_ENTRIES = 64          # characters held at once (each holds its parsed file); the oldest go first

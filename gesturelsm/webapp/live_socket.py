@@ -2,7 +2,7 @@
 
 Gradio's streaming microphone uploads every chunk as a file through its queue; on the 2-core machine that put the
 speech 1-2.6 s behind the voice before any generation (README, live mode). Here the page captures the microphone
-with an AudioWorklet (app/player/src/microphone.js `LiveMic`) and sends it as it comes, and the server sends each motion
+with an AudioWorklet (player/src/microphone.js `LiveMic`) and sends it as it comes, and the server sends each motion
 chunk the moment the session's worker has it (no polling):
 
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate); with
@@ -16,7 +16,7 @@ chunk the moment the session's worker has it (no polling):
                                                                  or {"status": "streaming", "character_error": why}
                                                                  for a token the server does not hold (the mannequin)
     server -> client   binary a motion record                   per motion chunk (live.py `payload`; layout in
-                                                                 gesturelsm/export/motion_format.py): its meta's status
+                                                                 gesturelsm/export/motion_codec.py): its meta's status
                                                                  is "streaming", then "stopped" or a message (busy,
                                                                  overloaded, bad input) and close
 
@@ -39,7 +39,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gesturelsm.audio import MAX_SAMPLE_RATE
 from gesturelsm.errors import GestureError
-from gesturelsm.export.motion_format import MotionRecord, encode
+from gesturelsm.export.motion_codec import MotionRecord, encode
 from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
 
 from .live import PATH, payload, to_float

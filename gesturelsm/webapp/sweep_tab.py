@@ -23,7 +23,7 @@ from gesturelsm.evaluation.sweep import SweepGrid, SweepLimits, SweepResult, che
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, label, sweep_plot, write_sweep
 from gesturelsm.presentation import steps_setting
 
-from . import motion_player
+from .player import component as motion_player
 
 log = logging.getLogger("gesturelsm.app")
 PAGE_LIMITS = SweepLimits(max_cells=36, max_seeds=3, max_work=720.0)
@@ -149,7 +149,7 @@ class SweepHandlers:
 
     def open_run(self, state: PageSweep | None, run: str | None) -> dict | None:
         """The player's payload for one run of the sweep (written once into the sweep's folder)."""
-        from gesturelsm.export.player import player_payload
+        from gesturelsm.export.player_payload import player_payload
 
         if state is None or run is None:
             self._refuse("Run a sweep first, then choose one of its motions.")

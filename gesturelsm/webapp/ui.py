@@ -24,9 +24,10 @@ from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_second
 from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 
-from . import live, live_socket, motion_player, stats_view, sweep_tab
+from . import live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
 from .live_character import LiveCharacters
+from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")

@@ -8,13 +8,6 @@ from gesturelsm.motion import MotionSequence
 
 
 @pytest.fixture(scope="session")
-def body():
-    from gesturelsm.render import resolve_body
-
-    return resolve_body(None)
-
-
-@pytest.fixture(scope="session")
 def wild_motion() -> MotionSequence:
     """12 frames: random rotations up to ~2.5 rad on every joint (incl. the root), translation drift, some
     joints exactly / nearly at the BVH Euler order's gimbal lock (middle angle x = +-90 deg), expressions."""

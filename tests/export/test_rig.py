@@ -98,7 +98,7 @@ def test_glb_passes_the_khronos_validator(exported, tmp_path):
     _, _, out = exported
     report = gltf_validator_errors(out / "take.vrm", tmp_path)
     if report is None:
-        pytest.skip("node or npm gltf-validator is not installed (cd app/player && npm ci)")
+        pytest.skip("node or npm gltf-validator is not installed (cd gesturelsm/webapp/player && npm ci)")
     assert report[0] == 0, report[1]
 
 

@@ -2,7 +2,6 @@
 their labels beside ours, generated, rendered side by side and timed through the page's API."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -14,9 +13,6 @@ from gesturelsm.presentation import LABELS
 from gesturelsm.reference.runner import FACE_NOTE
 from gesturelsm.serve.request import TIMING_COLUMNS, ServiceSettings
 from gesturelsm.serve.service import GestureService
-
-os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
-os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
 
 @pytest.fixture(scope="module")

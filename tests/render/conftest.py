@@ -21,13 +21,6 @@ def pose_motion(frames: int, arm_angle: float | np.ndarray, x: float = 0.0) -> M
     return MotionSequence(poses, trans, np.zeros((frames, 100)))
 
 
-@pytest.fixture(scope="session")
-def body():
-    from gesturelsm.render import resolve_body
-
-    return resolve_body(None)
-
-
 @pytest.fixture
 def make_pose():
     """make_pose(frames, arm_angle, x=0.0) -> MotionSequence (see pose_motion)."""

@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, direction_errors, write_gltf
-from gesturelsm.body.model import resolve_body
 from gesturelsm.cli import main
 from gesturelsm.errors import InputError
-from gesturelsm.retarget import CharacterError, SourceBody, load_character, retarget
+from gesturelsm.retarget import CharacterError, load_character, retarget
 from gesturelsm.retarget.names import MIXAMO, VRM_BONES
 from gesturelsm.retarget.names import VRM0_THUMB, VRM1_THUMB
 
@@ -20,16 +19,6 @@ from gesturelsm.retarget.names import VRM0_THUMB, VRM1_THUMB
 @pytest.fixture(scope="module")
 def take(real_motion):
     return real_motion.slice(0, 120)
-
-
-@pytest.fixture(scope="module")
-def source(take):
-    return SourceBody.of(resolve_body(None), take.betas)
-
-
-@pytest.fixture(scope="module")
-def smplx_joints(take):
-    return resolve_body(None).forward(take.poses, take.trans, betas=take.betas).joints[:, :55].astype(np.float64)
 
 
 def _vrm_names(skel, thumb: tuple[str, ...]) -> dict[str, str]:

@@ -70,11 +70,6 @@ def test_mouth_opens_with_the_jaw(tmp_path):
         assert report is None or report[0] == 0, report                  # checked where node is installed
 
 
-@pytest.fixture(scope="module")
-def body():
-    return resolve_body(None)
-
-
 def _jaw(values, expressions=None):
     poses = np.zeros((len(values), 165))
     poses[:, 3 * JOINT_INDEX["jaw"]] = values

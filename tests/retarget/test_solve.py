@@ -8,10 +8,9 @@ import pytest
 import torch
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, direction_errors, posed_world
-from gesturelsm.body.model import resolve_body
 from gesturelsm.motion.rotations import axis_angle_to_matrix
 from gesturelsm.motion.skeleton import JOINT_INDEX
-from gesturelsm.retarget import SourceBody, retarget
+from gesturelsm.retarget import retarget
 
 FRAMES = 450          # 15 s of the take: enough variety, quick
 
@@ -19,18 +18,6 @@ FRAMES = 450          # 15 s of the take: enough variety, quick
 @pytest.fixture(scope="module")
 def take(real_motion):
     return real_motion.slice(300, 300 + FRAMES)
-
-
-@pytest.fixture(scope="module")
-def source(take):
-    return SourceBody.of(resolve_body(None), take.betas)
-
-
-@pytest.fixture(scope="module")
-def smplx_joints(take):
-    """SMPL-X's posed joints from the body model's own forward pass (not the retargeting's kinematics)."""
-    out = resolve_body(None).forward(take.poses, take.trans, betas=take.betas)
-    return out.joints[:, :55].astype(np.float64)
 
 
 RIGS = {

@@ -1,8 +1,10 @@
-"""`gesturelsm batch` on tiny checkpoints: blinded names, key kept apart, per-rater orders and sheets,
-HTML forms, attention-check videos, the web study's design and links, resumability."""
+"""`gesturelsm batch` on tiny checkpoints: blinded names that change with every setting that changes a video, key
+kept apart, attention-check videos, the study's one design and its links, resumability, and a rerun with other
+settings refused before it could make the key lie."""
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +36,7 @@ def _rows(path):
 
 
 @pytest.mark.slow                       # a whole command in subprocesses: the full tier
-def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_path):
+def test_batch_makes_one_study_design_blinded_and_resumable(study_assets, audio_dir, tmp_path):
     from gesturelsm.cli import main
 
     out = tmp_path / "study"
@@ -67,20 +69,9 @@ def test_batch_study_layout_blinding_and_resume(study_assets, audio_dir, tmp_pat
         assert len(r.trials) > 2
     assert {(r["audio"], r["method"]) for r in key} == {(a, m) for a in ("alpha.wav", "beta.flac")
                                                          for m in ("gesturelsm", "ddim")}
-    assert not any("conditions" in p.name for p in (out / "raters").rglob("*"))   # key kept apart
-    orders = []
-    for r in (1, 2, 3):
-        d = out / "raters" / f"rater_{r:02d}"
-        order = [row["video"] for row in _rows(d / "order.csv")]
-        assert sorted(order) == videos
-        sheet = _rows(d / "sheet.csv")
-        assert [s["video"] for s in sheet] == order
-        assert set(sheet[0]) >= {"realness", "synchrony", "smoothness"}
-        form = (d / "form.html").read_text()
-        assert form.count('type="radio"') == 4 * 3 * 5 and "../../videos/" in form
-        assert all(f"../../videos/{v}" in form for v in order)
-        orders.append(order)
-    assert len({tuple(o) for o in orders}) > 1                # orders differ between raters
+    assert not (out / "raters").exists()                      # one design: no second, unanalysable one beside it
+    assert not any("conditions" in p.name for p in out.iterdir())  # key kept apart
+    assert main(["study", "results", str(out)]) == 1          # the study reads as one: nobody answered yet
 
     # resumable: a rerun renders nothing, a deleted video is rendered again under the same name
     mtimes = {v: (out / "videos" / v).stat().st_mtime_ns for v in every}
@@ -115,3 +106,92 @@ def test_batch_errors_are_clear(study_assets, tmp_path, capsys):
     assert main(["batch", "--audio-dir", str(d), "--out", str(tmp_path / "o"), "--methods", "ground_truth",
                  "--checkpoints", str(study_assets)]) == 2
     assert "--beat2" in capsys.readouterr().err
+
+
+def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
+    """Each setting the key records, and any setting added to the pipeline's Plan, gives the video another name,
+    so a video made otherwise never passes for one already there; ground truth does not depend on steps."""
+    from dataclasses import fields
+
+    from gesturelsm.pipeline import GROUND_TRUTH, Plan
+    from gesturelsm.study.batch import plan_study
+    from gesturelsm.study.naming import video_settings
+
+    render = dict(size=512, body="SMPLX_MANNEQUIN.npz mannequin-sha", character=None)
+    base = Plan(["gesturelsm"], {"gesturelsm": 8}, 2.0, 0, False, "light")
+    settings = video_settings(base, "gesturelsm", render, "weights-one")
+    changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, size=256,
+                   body="SMPLX_NEUTRAL.npz mannequin-sha", character="me.vrm mannequin-sha", weights="weights-two")
+    plan_fields = {f.name for f in fields(Plan)} - {"methods", "steps", "filename", "beat2"}
+    assert plan_fields <= set(changed), "a setting of Plan is missing from this test"
+    assert set(settings) == set(changed)
+    files = [Path("a.wav")]
+    name = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": settings}).items[0].video
+    names = {name}
+    for key, value in changed.items():
+        other = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": dict(settings, **{key: value})})
+        names.add(other.items[0].video)
+        assert other.items[0].video != name, key
+    assert len(names) == len(changed) + 1
+    added = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": dict(settings, grounding="off")})
+    assert added.items[0].video != name                      # a setting added later renames too
+    gt = video_settings(base, GROUND_TRUTH, render, None)
+    assert "steps" not in gt and "weights" not in gt
+
+
+def test_a_changed_setting_is_refused_by_name(tmp_path):
+    from gesturelsm.errors import UserError
+    from gesturelsm.study.naming import check_unchanged
+
+    videos = {"gesturelsm": dict(steps=8, cfg=2.0, smoothing="light"), "ddim": dict(steps=20, cfg=2.0)}
+    design = dict(mode="pairwise", attention=0.15, seed=0)
+    (tmp_path / "study.json").write_text(json.dumps(dict(videos=videos, design=design)))
+    check_unchanged(tmp_path, videos, design)                                           # the same: fine
+    check_unchanged(tmp_path, {**videos, "rectified_flow": dict(steps=8)}, design)      # a method added: fine
+    with pytest.raises(UserError, match=r"--steps / --ddim-steps for gesturelsm was 8, this run 4"):
+        check_unchanged(tmp_path, {**videos, "gesturelsm": dict(videos["gesturelsm"], steps=4)}, design)
+    with pytest.raises(UserError, match=r"--smoothing for gesturelsm was 'light', this run 'off'"):
+        check_unchanged(tmp_path, {**videos, "gesturelsm": dict(videos["gesturelsm"], smoothing="off")}, design)
+    with pytest.raises(UserError, match=r"--design was 'pairwise', this run 'rating'"):
+        check_unchanged(tmp_path, videos, dict(design, mode="rating"))
+    (tmp_path / "study.json").write_text(json.dumps(dict(steps={"gesturelsm": 8}, cfg=2.0)))   # no record
+    with pytest.raises(UserError, match="new --out folder"):
+        check_unchanged(tmp_path, videos, design)
+
+
+@pytest.mark.slow                       # renders: the full tier
+def test_a_rerun_with_other_settings_is_refused_and_the_key_describes_the_videos(study_assets, audio_dir, tmp_path,
+                                                                                 capsys):
+    from gesturelsm.cli import main
+
+    def batch(out, steps="1", *extra):
+        return main(["batch", "--audio-dir", str(audio_dir), "--methods", "gesturelsm", "ddim", "--out", str(out),
+                     "--raters", "1", "--steps", steps, "--ddim-steps", "1", "--size", "128", "--checkpoints",
+                     str(study_assets), *extra])
+
+    out = tmp_path / "study"
+    assert batch(out) == 0
+    before = {p.name: p.read_bytes() for p in [out / "study.json", *(out / "key").iterdir()]}
+    videos = sorted(p.name for p in (out / "videos").iterdir())
+    capsys.readouterr()
+    assert batch(out, "2") == 2
+    err = capsys.readouterr().err
+    assert "--steps / --ddim-steps for gesturelsm was 1, this run 2" in err and "for ddim" not in err
+    assert batch(out, "1", "--smoothing", "off") == 2
+    assert "--smoothing" in capsys.readouterr().err
+    assert batch(out, "1", "--design", "rating") == 2
+    assert "--design" in capsys.readouterr().err
+    assert sorted(p.name for p in (out / "videos").iterdir()) == videos                 # nothing rendered
+    assert {p.name: p.read_bytes() for p in [out / "study.json", *(out / "key").iterdir()]} == before
+    key = _rows(out / "key" / "conditions.csv")
+    assert {(r["method"], r["steps"], r["size"], r["smoothing"]) for r in key} == {
+        ("gesturelsm", "1", "128", "light"), ("ddim", "1", "128", "light")}
+    other = tmp_path / "other"                    # the same salt and speech, 2 steps: only gesturelsm is renamed
+    (other / "key").mkdir(parents=True)
+    (other / "key" / "salt.txt").write_bytes((out / "key" / "salt.txt").read_bytes())
+    assert batch(other, "2") == 0
+
+    def named(folder, method):
+        return {r["video"] for r in _rows(folder / "key" / "conditions.csv") if r["method"] == method}
+    assert not named(out, "gesturelsm") & named(other, "gesturelsm")
+    assert named(out, "ddim") == named(other, "ddim")

@@ -121,3 +121,21 @@ def test_rating_study_through_the_server_gives_the_raters_means(tmp_path):
             assert float(row["mean"]) == v and float(row["ci_low"]) == v and row["raters"] == "2"
             assert row["trials"] == "4"                             # 2 raters x 2 speeches
     assert "Raters kept: 2 of 2" in (folder / "results" / "results.md").read_text()
+
+
+def test_results_with_no_answers_says_so_and_creates_no_database(tmp_path, capsys):
+    from gesturelsm.cli import main
+    from gesturelsm.study import db
+
+    folder = make_synthetic_study(tmp_path / "study", raters=2)
+    for extra in ([], ["--keep-all"]):
+        assert main(["study", "results", str(folder), *extra]) == 1
+        out = capsys.readouterr()
+        assert "no answers yet" in out.out and "attention" not in out.out + out.err
+        assert not list(folder.glob("responses.sqlite*")) and not (folder / "results").exists()
+    db.open_db(db.default_url(folder))                  # a database the server made, nobody answered yet
+    assert main(["study", "results", str(folder)]) == 1
+    assert "no answers yet" in capsys.readouterr().out
+    (folder / "responses.sqlite").write_bytes(b"not a database" * 100)
+    assert main(["study", "results", str(folder)]) == 2
+    assert "cannot read the answers database" in capsys.readouterr().err

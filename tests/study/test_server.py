@@ -14,12 +14,12 @@ def folder(tmp_path_factory):
     return make_synthetic_study(tmp_path_factory.mktemp("srv") / "study", raters=3)
 
 
-def _client(folder, db_url):
+def _client(folder, db_url, **kw):
     from starlette.testclient import TestClient
 
     from gesturelsm.study.server import Study, build_app
 
-    return TestClient(build_app(Study.open(folder, db_url)))
+    return TestClient(build_app(Study.open(folder, db_url)), **kw)
 
 
 def _tokens(folder):
@@ -127,3 +127,48 @@ def test_two_servers_on_one_database_count_a_doubled_answer_once(folder, tmp_pat
     codes = sorted(c.post(f"/api/{rater.token}/answer", json=body).status_code for c in (one, two))
     assert codes == [200, 409]
     assert [(r["rater"], r["trial"]) for r in db.all_answers(db.open_db(url))] == [(1, 0)]
+
+
+def test_video_headers_carry_nothing_that_orders_or_links_videos(folder, tmp_path):
+    """No modification time (it orders methods by render time and marks the attention-check videos as the newest)
+    and no validator shared by two trials (the same ETag in two trials gives away a reused video)."""
+    from gesturelsm.study import db
+
+    url = f"sqlite:///{tmp_path / 'r.sqlite'}"
+    rater = _tokens(folder)[1]
+    c = _client(folder, url)
+    session = c.post(f"/api/{rater.token}/open").json()["session"]
+    allowed = {"content-type", "content-length", "content-range", "accept-ranges", "cache-control", "date",
+               "server"}
+    seen: dict[str, list[tuple[int, str]]] = {}
+    for t in rater.trials:
+        for side in ("left", "right"):
+            for headers in ({}, {"Range": "bytes=0-99"}):
+                r = c.get(f"/api/{rater.token}/video/{t.index}/{side}", headers=headers)
+                assert r.status_code in (200, 206)
+                assert set(r.headers) <= allowed, set(r.headers) - allowed
+            seen.setdefault(t.left if side == "left" else t.right, []).append((t.index, side))
+        c.post(f"/api/{rater.token}/answer", json=dict(session=session, trial=t.index, choice="left", played=True))
+    assert any(len(v) > 1 for v in seen.values())        # a video shown in two trials was among those checked
+    assert len(db.all_answers(db.open_db(url))) == len(rater.trials)
+
+
+@pytest.mark.parametrize("body, expect", [
+    (b'{"session": "s", "trial": 0, "choice": "left", "x": ' + b"[" * 2000 + b"]" * 2000 + b"}", "nested"),
+    (b'{"session": "s", "trial": ' + b"9" * 4000 + b', "choice": "left"}', "too long"),
+])
+def test_hostile_json_gets_a_400_with_a_message(folder, tmp_path, body, expect):
+    rater = _tokens(folder)[2]
+    c = _client(folder, f"sqlite:///{tmp_path / 'r.sqlite'}", raise_server_exceptions=False)
+    c.post(f"/api/{rater.token}/open")
+    r = c.post(f"/api/{rater.token}/answer", content=body, headers={"Content-Type": "application/json"})
+    assert r.status_code == 400 and expect in r.json()["error"]
+
+
+def test_a_video_trial_of_5000_digits_is_a_404_with_a_message(folder, tmp_path):
+    rater = _tokens(folder)[2]
+    c = _client(folder, f"sqlite:///{tmp_path / 'r.sqlite'}", raise_server_exceptions=False)
+    c.post(f"/api/{rater.token}/open")
+    for trial in ("9" * 5000, "-1", "1.5", "٣"):
+        r = c.get(f"/api/{rater.token}/video/{trial}/left")
+        assert r.status_code == 404 and r.json()["error"], trial

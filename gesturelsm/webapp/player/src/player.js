@@ -1,0 +1,281 @@
+// The in-browser motion player of the GestureLSM page: every method's body side by side, skinned by three.js
+// from the generated joint rotations, driven by one clock (the speech's <audio> element), orbit camera.
+// Bundled with three.js into ../dist/player.js by esbuild (entry index.js, scripts/setup.sh); no network at run
+// time. The page's player is window.gesturelsmPlayer (index.js).
+//
+// API (also for a live tab that streams motion, live_feed.js):
+//   const p = new MotionPlayer(element)                   // builds canvas, controls, labels inside element
+//   await p.setBodies([{label, body: glbUrl}], fps=30)     // rest bodies (GLB cached per URL), frames cleared
+//   await p.setBodies(specs, fps, payload.character)      // the methods on the visitor's character (character.js)
+//   p.appendFrames(i, rotations, root, expressions)       // Float32Arrays: (n, 55, 4) x,y,z,w; (n, 3); (n, E)
+//   p.appendRecord(i, record)                             // a decoded motion record (motion_decoder.js); on a
+//                                                         // streamed character body, its character section
+//   p.attachClock(clock)                                  // anything with currentTime (s), paused, play(), pause()
+//   p.play(); p.pause(); p.seek(seconds)
+//   await p.load(payload)                                 // the page: payload of gesturelsm/export/player_payload.py
+//   p.measure = true                                      // benchmarks: timings in p.prof and data-marks (measure.js)
+// Frame shown = floor(clock.currentTime * fps), clamped to the frames received so far, so motion and speech
+// stay within one frame of each other whatever the clock does (play, scrub, seek, stall).
+// Test contract on the element: data-state = empty | loading | playing | paused, data-frames = motion frames
+// drawn so far, data-frame = index of the frame on screen, data-fps = draws in the last second, data-character =
+// the file name of the character on screen (absent: the mannequin).
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { Body, JOINTS, clayMatcap, loadGlb } from './body.js';
+import { CharacterBody, fetchCharacter } from './character.js';
+import { adoptStyles, el } from './dom.js';
+import { drawProfile, lap, requested } from './measure.js';
+import { decodeMotion } from './motion_decoder.js';
+
+const SPACING = 1.2;           // metres between bodies, as in the server-side video
+
+export class MotionPlayer {
+  constructor(element, { width = 640, height = 300 } = {}) {  // drawing size; CSS scales it
+    adoptStyles();
+    this.element = element;
+    this.fps = 30; this.bodies = []; this.clock = null; this.shown = -1; this.drawn = 0;
+    this.dirty = true; this.draws = []; this.generation = 0;
+    this.live = null;                                  // the page's live feed (index.js), on the page's player
+    this.prof = null; this.marks = null;
+    this.measure = requested();
+    element.innerHTML = '';
+    element.classList.add('motion-player');
+    const stage = el('div', { class: 'mp-stage' }, element);
+    this.renderer = new THREE.WebGLRenderer({ antialias: false, powerPreference: 'high-performance' });
+    this.renderer.setPixelRatio(1);
+    this.renderer.setSize(width, height, false);       // the drawing buffer; its size on the page is player.css's
+    new ResizeObserver(() => { this.dirtyLayout = true; this.dirty = true; }).observe(this.renderer.domElement);
+    stage.appendChild(this.renderer.domElement);
+    this.labelBox = el('div', { class: 'mp-labels' }, stage);
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0xf4f4f2);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8a84, 2.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6); sun.position.set(1.5, 3, 4); this.scene.add(sun);
+    const floor = new THREE.Mesh(new THREE.CircleGeometry(4, 48), new THREE.MeshBasicMaterial({ color: 0xdcdad5 }));
+    floor.rotation.x = -Math.PI / 2; this.scene.add(floor);
+    this.material = new THREE.MeshMatcapMaterial({ matcap: clayMatcap() });   // lit look, no light maths
+    this.camera = new THREE.PerspectiveCamera(30, width / height, 0.05, 50);
+    this.camera.position.set(0, 1.2, 4.6);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.target.set(0, 1.0, 0); this.controls.update();
+    this.controls.addEventListener('change', () => { this.dirty = true; });
+    const bar = el('div', { class: 'mp-bar' }, element);
+    this.button = el('button', { class: 'mp-play', type: 'button', text: 'Play' }, bar);
+    this.range = el('input', { class: 'mp-seek', type: 'range', min: '0', max: '0', step: '0.001', value: '0' }, bar);
+    this.time = el('span', { class: 'mp-time', text: '0.00 / 0.00 s' }, bar);
+    this.button.addEventListener('click', () => (this.clock && this.clock.paused ? this.play() : this.pause()));
+    this.range.addEventListener('input', () => this.seek(parseFloat(this.range.value)));
+    this.audio = el('audio', { class: 'mp-audio', preload: 'auto' }, element);
+    this.audio.addEventListener('ended', () => this._state());
+    this.audio.addEventListener('pause', () => this._state());
+    this.audio.addEventListener('playing', () => this._state());
+    this._setState('empty');
+    const tick = () => { this._frame(); this.raf = requestAnimationFrame(tick); };
+    this.raf = requestAnimationFrame(tick);
+  }
+
+  // ---- API -----------------------------------------------------------------------------------------------
+  get measure() { return this.prof !== null; }
+
+  set measure(on) {                                  // measure.js: draw timings in prof, load marks in data-marks
+    this.prof = on ? drawProfile() : null;
+    if (!on) { this.marks = null; delete this.element.dataset.marks; }
+  }
+
+  async setBodies(specs, fps = 30, character = null) {
+    const gen = ++this.generation;
+    this._setState('loading');
+    const gltfs = await Promise.all(specs.map((s) => loadGlb(s.body)));
+    const ch = character ? await fetchCharacter(character).catch((e) => {     // it cannot load: the mannequin
+      this.element.dataset.characterError = String(e.message || e);
+      return null;
+    }) : null;
+    if (gen !== this.generation) return false;            // a newer request replaced these bodies
+    for (const b of this.bodies) this.scene.remove(b.root);
+    this.labelBox.innerHTML = '';
+    this.fps = fps; this.shown = -1; this.drawn = 0;
+    const n = specs.length;
+    this.labelBox.style.setProperty('--mp-bodies', String(Math.max(n, 1)));
+    if (ch) this.element.dataset.character = character.name;
+    else delete this.element.dataset.character;
+    this.bodies = specs.map((s, i) => {
+      const x = (i - (n - 1) / 2) * SPACING;
+      const b = ch ? new CharacterBody(ch, character, s.method, x) : new Body(gltfs[i], s.label, x, this.material);
+      this.scene.add(b.root);
+      b.tag = el('div', { class: 'mp-label' }, this.labelBox);
+      // "GestureLSM 8 steps CFG 2" -> method on the first line, settings on the second
+      const m = /^(\D+?)\s+(\d.*)$/.exec(s.label);
+      b.tag.textContent = m ? m[1] : s.label;
+      if (m) { el('br', {}, b.tag); el('span', { class: 'mp-label-settings', text: m[2] }, b.tag); }
+      return b;
+    });
+    this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
+    this.dirty = true;
+    return true;
+  }
+
+  appendFrames(i, rotations, root, expressions = null) {
+    const b = this.bodies[i];
+    const E = expressions ? expressions.length / (rotations.length / (JOINTS * 4)) : 0;
+    b.append(rotations, root, expressions || new Float32Array(0), E);
+    this.range.max = String(this.frames() / this.fps);
+    this.dirty = true;
+  }
+
+  // A decoded motion record (motion_decoder.js) for body i; `source` names it in the error for other motion.
+  appendRecord(i, record, source = 'motion') {
+    const b = this.bodies[i];
+    if (b.streamed) {                                  // the live stream on the visitor's character
+      if (!record.character || record.character.bones !== b.payload.nodes.length) {
+        throw new Error(`${source}: no frames for the ${b.payload.nodes.length} bones of the character`);
+      }
+      b.appendBones(record.character.rotations, record.character.root, record.character.morph);
+      this.range.max = String(this.frames() / this.fps);
+      this.dirty = true;
+      return;
+    }
+    if (record.kind !== 'quaternion' || record.joints !== JOINTS) {
+      throw new Error(`${source}: ${record.kind} motion of ${record.joints} joints; the player draws quaternion ` +
+        `motion of ${JOINTS} joints`);
+    }
+    this.appendFrames(i, record.rotations, record.root, record.expressionCount ? record.expressions : null);
+  }
+
+  attachClock(clock) { this.clock = clock; this.dirty = true; this._state(); }
+
+  frames() {                                         // runs every animation frame: no allocation
+    let n = Infinity;
+    for (const b of this.bodies) n = Math.min(n, b.frames);
+    return this.bodies.length ? n : 0;
+  }
+
+  async play() {
+    if (!this.clock) return;
+    try { await this.clock.play(); } catch (e) { /* autoplay refused: the visitor presses Play */ }
+    this._state();
+  }
+
+  pause() { if (this.clock) this.clock.pause(); this._state(); }
+
+  seek(t) {
+    if (!this.clock) return;
+    this.clock.currentTime = Math.max(0, Math.min(t, this.frames() / this.fps));
+    this.dirty = true;
+  }
+
+  // Load and compile a body before any motion exists, so the first payload only fetches motion files.
+  async preload(url) {
+    const gltf = await loadGlb(url);
+    const b = new Body(gltf, '', 0, this.material);
+    this.scene.add(b.root);
+    this.renderer.compile(this.scene, this.camera);
+    this.renderer.render(this.scene, this.camera);
+    this.scene.remove(b.root);
+    this.dirty = true;
+  }
+
+  // The page's payload: the speech, one body and one motion file per method; plays once all are in. A motion file
+  // that cannot be fetched or decoded puts its message in the element's data-error.
+  async load(payload) {
+    const gen = this.generation + 1;
+    const marks = this.measure ? { start: performance.now() } : null;
+    this.payload = payload;
+    delete this.element.dataset.error; delete this.element.dataset.characterError;
+    this.pause();
+    this.audio.src = payload.audio || '';          // the speech loads while bodies and motion do
+    const motions = Promise.all(payload.bodies.map((b) => fetch(b.motion).then((r) => {
+      if (!r.ok) throw new Error(`${b.motion}: HTTP ${r.status}`);
+      return r.arrayBuffer();
+    }).then((buf) => decodeMotion(buf, b.motion))));
+    motions.catch(() => {});                        // reported below, once the bodies are in
+    if (!(await this.setBodies(payload.bodies, payload.fps, payload.character))) return;
+    if (marks) marks.bodies = performance.now() - marks.start;
+    try {
+      const records = await motions;
+      if (gen !== this.generation) return;
+      if (marks) marks.motion = performance.now() - marks.start;
+      records.forEach((rec, i) => this.appendRecord(i, rec, payload.bodies[i].motion));
+    } catch (e) {
+      this.element.dataset.error = String(e.message || e);
+      throw e;
+    }
+    this.audio.currentTime = 0;
+    this.attachClock(this.audio);
+    await this.play();
+    if (marks && this.measure) {
+      marks.play = performance.now() - marks.start;
+      this.marks = marks;
+      this.element.dataset.marks = JSON.stringify(marks);
+    }
+  }
+
+  // ---- internals -----------------------------------------------------------------------------------------
+  _setState(s) { if (this.element.dataset.state !== s) this.element.dataset.state = s; }
+
+  _state() {
+    if (!this.bodies.length || !this.clock) return this._setState(this.bodies.length ? 'loading' : 'empty');
+    // HTMLMediaElement: playing once the 'playing' event fired (data arrived), not merely after play()
+    const ready = this.clock.readyState === undefined || this.clock.readyState >= 3;
+    const playing = !this.clock.paused && !this.clock.ended && ready;
+    this._setState(playing ? 'playing' : 'paused');
+    const label = playing ? 'Pause' : 'Play';
+    if (this.button.textContent !== label) this.button.textContent = label;
+  }
+
+  _frame() {
+    const T = this.frames();
+    if (!T || !this.clock) return;
+    const prof = this.prof;                          // null unless measuring
+    let t0 = prof ? performance.now() : 0;
+    const t = this.clock.currentTime || 0;
+    const f = Math.max(0, Math.min(T - 1, Math.floor(t * this.fps + 1e-6)));
+    if (f !== this.shown) {
+      for (const b of this.bodies) b.pose(f);
+      this.shown = f; this.drawn += 1; this.dirty = true;
+      if (Math.floor(t * 4) !== this.tick4 || this.clock.paused) {   // the page's layout: 4 times a second
+        this.tick4 = Math.floor(t * 4);
+        this.range.value = String(t);
+        this.time.textContent = `${t.toFixed(2)} / ${(T / this.fps).toFixed(2)} s`;
+      }
+    }
+    if (!this.dirty) return;
+    if (prof) t0 = lap(prof, 'pose', t0);
+    this.renderer.render(this.scene, this.camera);
+    if (prof) t0 = lap(prof, 'render', t0);
+    this._labels();
+    this.dirty = false;
+    const now = performance.now();
+    if (prof) { prof.labels += now - t0; prof.draws += 1; }
+    this.draws.push(now);
+    while (this.draws.length && this.draws[0] < now - 1000) this.draws.shift();
+    const d = this.element.dataset;
+    d.frames = String(this.drawn); d.frame = String(f);
+    if (d.fps !== String(this.draws.length)) d.fps = String(this.draws.length);
+    this._state();
+    if (prof) lap(prof, 'dom', now);
+  }
+
+  _labels() {
+    const v = this._v || (this._v = new THREE.Vector3());
+    if (!this.stageH || this.dirtyLayout) { this.stageH = this.renderer.domElement.clientHeight; this.dirtyLayout = false; }
+    for (const b of this.bodies) {                // layout read once above, writes only here (no forced layout)
+      (b.head || b.bones[15]).getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
+      const left = Math.round(((v.x + 1) / 2) * 1000) / 10, top = Math.round(((1 - v.y) / 2) * this.stageH);
+      if (left === b.left && top === b.top) continue;                            // unchanged: no style write
+      b.left = left; b.top = top;
+      b.tag.style.left = `${left}%`; b.tag.style.top = `${top}px`;
+    }
+  }
+
+  // test and tool helper: the local joint rotations of body i on screen now, 55 x (x, y, z, w)
+  jointRotations(i) {
+    return this.bodies[i].bones.slice(0, JOINTS).map((b) => b.quaternion.toArray());
+  }
+
+  // test and tool helper: world position of joint j of body i on screen now (metres)
+  jointWorld(i, j) {
+    const v = new THREE.Vector3();
+    this.bodies[i].bones[j].getWorldPosition(v);
+    return [v.x, v.y, v.z];
+  }
+}

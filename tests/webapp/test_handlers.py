@@ -1,0 +1,68 @@
+"""The page's chained events (gesturelsm/webapp/ui.py _Handlers): the video renders in a pool of its own beside
+generation, and a video for a request that a newer request of the same page replaced is not rendered, or is stopped mid-way."""
+from __future__ import annotations
+
+import threading
+from types import SimpleNamespace
+
+import gradio as gr
+
+from _support import quiet
+from gesturelsm.webapp.ui import _Handlers, build_demo
+
+
+def inputs(wav, seed: int) -> tuple:
+    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
+    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False)
+
+
+def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
+    demo = build_demo(service)
+    fns = list(demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)
+    pools = {f.api_name: f.concurrency_id for f in fns}
+    assert pools["generate_motion"] == "generation"
+    assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
+    # a newer request's video step is queued while an older one's is pending (Gradio's default "once" drops it)
+    modes = {f.api_name: f.trigger_mode for f in fns}
+    assert modes["show_video"] == modes["add_exports"] == "multiple"
+
+
+def test_gradio_hands_the_handlers_the_page_session():
+    """Gradio passes gr.Request (and progress) only to positional parameters: a *args handler gets none, and then
+    nothing is ever marked replaced."""
+    from gradio.helpers import special_args
+
+    h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
+    for fn, n_inputs, progress in ((h.show_motion, 13, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
+        filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
+        assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
+
+
+def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):
+    h, page, other = _Handlers(service), SimpleNamespace(session_hash="page-1"), SimpleNamespace(session_hash="page-2")
+    first = h.show_motion(*inputs(speech_wav, 0), request=page, progress=quiet)[3]
+    second = h.show_motion(*inputs(speech_wav, 1), request=page, progress=quiet)[3]
+    assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
+    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 4
+    assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
+
+    started, result = threading.Event(), {}
+
+    def progress(fraction, desc=""):
+        if desc.startswith("rendering: frame"):
+            started.set()
+
+    t = threading.Thread(target=lambda: result.update(r=h.show_video(second, request=page, progress=progress)))
+    t.start()
+    assert started.wait(120), "the render reported frames"
+    third = h.show_motion(*inputs(speech_wav, 2), request=page, progress=quiet)[3]   # generate again, meanwhile
+    t.join(120)
+    assert result["r"] == (gr.skip(),) * 4
+    folder = second.job.folder
+    assert not [p.name for p in folder.iterdir() if p.suffix == ".mp4" or p.name.startswith(".render-job")]
+    video, _rows, _summary, rendered = h.show_video(third, request=page, progress=quiet)   # the newest one renders
+    assert third.video is None, "the state's result is not edited: the rendered one replaces it"
+    assert video == str(rendered.video) and rendered.video.stat().st_size > 1000 and rendered.job is third.job
+    files, glb, summary, exported = h.add_exports(rendered, request=page)          # and then its downloads
+    assert exported.video == rendered.video and glb == str(exported.glb) and "Video ready" in summary
+    assert sorted(files) == sorted(map(str, exported.downloads)) and rendered.downloads == ()

@@ -1,0 +1,139 @@
+"""The page's motion statistics (gesturelsm/webapp/stats_view.py) and Sweep tab (gesturelsm/webapp/sweep_tab.py), driven through their handlers
+on tiny checkpoints: the numbers are `gesturelsm eval`'s definitions and the same as `gesturelsm sweep` prints."""
+from __future__ import annotations
+
+import json
+import re
+
+import gradio as gr
+import numpy as np
+import pytest
+import soundfile as sf
+
+from _support import quiet
+from gesturelsm.serve.request import Request
+from gesturelsm.webapp import stats_view
+from gesturelsm.webapp.sweep_tab import SweepHandlers
+from gesturelsm.cli import main
+from gesturelsm.evaluation.evaluate import motion_stats as eval_motion_stats
+from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, speaker_reference, stats_body
+
+
+def test_page_statistics_equal_the_eval_definitions_for_the_shown_motions(service, speech_wav):
+    out = service.run(Request(str(speech_wav), methods=("gesturelsm", "ddim"), render=False, exports=False))
+    page = stats_view.show(out)
+    shown = stats_view.values(page)
+    assert list(shown) == ["gesturelsm", "ddim", "speaker"]
+    ref = speaker_reference()
+    speech = SpeechContext.of(out.job.audio, ref.mean_speed)
+    for method, motion in out.motions.items():
+        want = eval_motion_stats(motion, stats_body(), speech.beats, ref.mean_speed, extractors=[])
+        got = shown[method]
+        assert got["diversity"] == pytest.approx(want.diversity, rel=1e-5)
+        for k in ("raised_share", "height_p95", "wrist_speed", "hand_spread", "jerk"):
+            assert got[k] == pytest.approx(want.amplitude[k], rel=1e-9), (method, k)
+        assert (np.isnan(got["bc"]) and np.isnan(want.bc)) or got["bc"] == pytest.approx(want.bc), method
+    assert shown["speaker"] == pytest.approx(ref.statistics)
+    titles = re.findall(r'<th title="([^"]+)" data-key="(\w+)"', page)
+    assert [k for _, k in titles] == [s.key for s in STATISTICS] and all("Better:" in t for t, _ in titles)
+
+
+def test_page_statistics_are_empty_without_motion():
+    assert 'data-state="empty"' in stats_view.show(None)
+
+
+@pytest.fixture(scope="module")
+def page_sweep(service, speech_wav):
+    h = SweepHandlers(service)
+    return h, h.run(str(speech_wav), ["gesturelsm", "rectified_flow"], "1 2", "2", 2, "hand_spread", "",
+                    progress=quiet)
+
+
+def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, tiny_assets, speech_wav, tmp_path):
+    _, (table, plot, files, pick, state) = page_sweep
+    assert main(["sweep", str(speech_wav), "--checkpoints", str(tiny_assets), "--methods", "gesturelsm",
+                 "rectified_flow", "--steps", "1", "2", "--cfg", "2", "--seeds", "2", "--no-transcribe",
+                 "--out", str(tmp_path / "cli")]) == 0
+    cli = json.loads((tmp_path / "cli" / "sweep.json").read_text())["rows"]
+    rows = re.findall(r'<tr data-method="(\w+)" data-steps="(\d+)" data-cfg="([\d.]+)">(.*?)</tr>', table)
+    assert [(m, int(s), float(c)) for m, s, c, _ in rows] == [(r["method"], r["steps"], r["cfg"]) for r in cli]
+    for (_, _, _, cells), want in zip(rows, cli):
+        got = {k: float(v) for k, v in re.findall(r'data-key="(\w+)" data-value="([^"]+)"', cells)}
+        for s in STATISTICS:
+            w = want[s.key]
+            assert (w is None and np.isnan(got[s.key])) or got[s.key] == pytest.approx(w, rel=1e-6), s.key
+        assert got["seed_spread"] == pytest.approx(want["seed_spread"], rel=1e-6)
+    assert plot.endswith("sweep.png") and sorted(p.rsplit("/", 1)[1] for p in files) == \
+        ["sweep.csv", "sweep.json", "sweep.md", "sweep.png"]
+    assert len(pick["choices"]) == 8 and pick["value"] == "0"
+
+
+def test_a_sweep_run_opens_in_the_player_as_its_own_motion(page_sweep):
+    from gesturelsm.export.player_payload import read_motion, motion_arrays
+
+    h, (*_, state) = page_sweep
+    payload = h.open_run(state, "5")
+    run = state.result.runs[5]
+    assert [b["method"] for b in payload["bodies"]] == [run.method] and payload["frames"] == run.motion.num_frames
+    b = payload["bodies"][0]
+    got = read_motion(b["motion"].split("file=", 1)[1]).rotations
+    want = motion_arrays(run.motion, h.service.body)["rotations"]
+    np.testing.assert_allclose(got, want, atol=1e-6)
+
+
+def test_a_new_statistic_replots_without_generating(page_sweep):
+    h, (*_, state) = page_sweep
+    n = len(state.result.runs)
+    path = h.replot(state, "jerk")
+    assert path.endswith("sweep-jerk.png") and open(path, "rb").read(4) == b"\x89PNG" and len(state.result.runs) == n
+
+
+@pytest.mark.parametrize("args, message", [
+    (("", "2", 1), "Give at least one step count."),
+    (("1 40", "2", 1), "at most 32 steps (got 40)"),
+    (("1 200", "2", 1), "at most 32 steps (got 200)"),
+    (("1", "11", 1), "CFG scale must be between 0 and"),
+    (("1 2 3 4 5 6 7", "0 1 2 3 4 5", 1), "a sweep takes at most 36"),
+    (("1", "2", 5), "Seeds must be from 1 to 3"),
+])
+def test_bad_sweeps_are_refused_with_one_clear_message(service, speech_wav, args, message):
+    steps, cfg, seeds = args
+    with pytest.raises(gr.Error, match=re.escape(message)):
+        SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], steps, cfg, seeds, "bc", "", progress=quiet)
+
+
+def test_a_sweep_on_silence_or_without_speech_is_refused(service, tmp_path):
+    silent = tmp_path / "silence.wav"
+    sf.write(silent, np.zeros(32000, np.float32), 16000)
+    with pytest.raises(gr.Error, match="silent"):
+        SweepHandlers(service).run(str(silent), ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
+    with pytest.raises(gr.Error, match="upload speech"):
+        SweepHandlers(service).run(None, ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
+
+
+def test_cancel_stops_the_sweep_before_its_next_motion(service, speech_wav):
+    h = SweepHandlers(service)
+    calls = []
+
+    def progress(f, desc=""):
+        calls.append(desc)
+        if len(calls) == 3:                      # speech features, motion 1, then motion 2 starts: cancel now
+            h.cancel(None)
+
+    before = set(service.workdir.glob("req-*"))
+    with pytest.raises(gr.Error, match="cancelled"):
+        h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "0", 1, "bc", "", progress=progress)
+    assert len(calls) == 3 and set(service.workdir.glob("req-*")) == before
+
+
+def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service):
+    from gesturelsm.webapp.ui import build_demo
+
+    demo = build_demo(service)
+    deps = {d.get("api_name"): d for d in demo.get_config_file()["dependencies"]}
+    gen = deps["generate_motion"]["id"]
+    assert deps["motion_stats"]["trigger_after"] == gen                  # right after the motions exist ...
+    player = [d for d in deps.values() if d["trigger_after"] == gen and d.get("js") and "gesturelsmPlayer" in d["js"]]
+    assert len(player) == 1                                              # ... beside the player's step, not before it
+    pools = {f.api_name: f.concurrency_id for f in (demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)}
+    assert pools["motion_stats"] == "stats" and pools["sweep"] == "generation"
