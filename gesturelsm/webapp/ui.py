@@ -24,7 +24,7 @@ from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_second
 from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 
-from . import live, live_socket, stats_view, sweep_tab
+from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
 from .live_character import LiveCharacters
 from .player import component as motion_player
@@ -229,8 +229,10 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
 
 
 def _output_column(service: GestureService) -> tuple:
-    """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
+    """Player (with the Edit section under it), video, summary, timings, downloads, GLB viewer: (payload, video,
+    summary, table, files, view, show3d, stats, edit)."""
     motion_player.player_component(service)
+    edit = edit_section.component()
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
     # sharing. A <video> on screen, even paused, holds headless Chromium's software-composited page at ~20 redraws
@@ -250,7 +252,7 @@ def _output_column(service: GestureService) -> tuple:
     show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")
     view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420, elem_id="view3d",
                       visible=False)
-    return payload, video, summary, table, files, view, show3d, stats
+    return payload, video, summary, table, files, view, show3d, stats, edit
 
 
 # Runs in the browser before the GLB is requested (Gradio awaits it): waits until the viewer shown by the step
@@ -277,7 +279,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             with gr.Column(scale=1):
                 inputs, button, upload = _input_column(service)
             with gr.Column(scale=2):
-                payload, video, summary, table, files, view, show3d, stats = _output_column(service)
+                payload, video, summary, table, files, view, show3d, stats, edit = _output_column(service)
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS)
@@ -302,12 +304,18 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
                      concurrency_limit=1, concurrency_id="prefetch")
         shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
                              api_name="generate_motion", **gen)
-        stats_view.attach(shown, state, stats)         # beside the chain below: neither waits for the other
-        shown.then(None, payload, None, js=motion_player.LOAD_JS) \
-            .then(h.show_video, [state, character], [video, table, summary, state], api_name="show_video",
-                  api_visibility="private", show_progress="hidden", **render) \
-            .then(h.add_exports, [state, character], [files, view, summary, state], api_name="add_exports",
-                  api_visibility="private", **render)
+
+        def follow(event, named: bool = False) -> None:     # after Generate, an edit or an undo (motions in state)
+            stats_view.attach(event, state, stats, named)      # beside the chain below: neither waits for the other
+            event.then(None, payload, None, js=motion_player.LOAD_JS) \
+                .then(h.show_video, [state, character], [video, table, summary, state],
+                      api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
+                      **render) \
+                .then(h.add_exports, [state, character], [files, view, summary, state],
+                      api_name="add_exports" if named else None, api_visibility="private", **render)
+        follow(shown, named=True)
+        edit_section.attach(edit, h, shown, state, character, dict(payload=payload, table=table, summary=summary,
+                                                                   video=video, files=files), follow)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
         show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False,
                      api_visibility="private") \
