@@ -65,7 +65,7 @@ def main() -> None:
     from gesturelsm.generator.data import samples_for
     from gesturelsm.generator.model import GestureGenerator
     from gesturelsm.generator.sampling import generate_latents
-    from gesturelsm.kernels import onednn_linear_available
+    from gesturelsm.kernels import choices
 
     models = {"default": GestureGenerator.load(CKPT, accelerated=False), "accelerated": GestureGenerator.load(CKPT)}
     c = models["default"].config
@@ -102,7 +102,8 @@ def main() -> None:
             rows.append((name, wall, cpu, rel(outs["accelerated"], outs["default"])))
             print(f"done: {name}", flush=True)
     print(f"\n{hardware_name('cpu')}, torch {torch.__version__} ({torch.backends.cpu.get_cpu_capability()}), "
-          f"{args.threads} thread(s), oneDNN linear taken: {onednn_linear_available()}; speech: {source}\n")
+          f"{args.threads} thread(s), fast paths taken: {sum(c.taken for c in choices())} of {len(choices())} choices "
+          f"(benchmarks/kernels_speed.py lists them); speech: {source}\n")
     print("| case | default wall ms | accelerated wall ms | speed-up (wall) | default CPU ms | accelerated CPU ms "
           "| speed-up (CPU) | max rel. diff |")
     print("|---|---|---|---|---|---|---|---|")

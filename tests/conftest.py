@@ -22,6 +22,12 @@ if "GRADIO_TEMP_DIR" not in os.environ or os.environ.get("GESTURELSM_TEST_GRADIO
     os.environ["GESTURELSM_TEST_GRADIO_PID"] = _PID
     atexit.register(shutil.rmtree, os.environ["GRADIO_TEMP_DIR"], True)
 
+# Kernel choices are forced in tests, never measured (gesturelsm/kernels/choice.py): every fast path is taken where
+# it is available, so results do not depend on this machine's timings and every path is exercised; the choice file
+# stays in memory, so no test writes the user's cache. Subprocesses inherit both; a test that measures sets its own.
+os.environ.setdefault("GESTURELSM_KERNELS", "all")
+os.environ.setdefault("GESTURELSM_KERNELS_CACHE", "")
+
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 

@@ -9,20 +9,18 @@ import torch.nn as nn
 import torch.nn.functional as F
 from torch.profiler import profile
 
-from gesturelsm import kernels
-from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, linear,
-                                onednn_linear_available)
+from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, conv_add_available,
+                                linear, onednn_linear_available, ops)
 
-needs_onednn = pytest.mark.skipif(not kernels._available("linear", kernels._check_linear),
-                                  reason="this PyTorch build has no working oneDNN linear op")
+needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no working oneDNN linear op")
+needs_conv_add = pytest.mark.skipif(not conv_add_available(),
+                                    reason="this PyTorch build has no oneDNN in-place convolution op")
 
 
 @pytest.fixture(autouse=True)
-def onednn_worth_taking(monkeypatch):
-    """oneDNN's path is checked on every machine, also where it is not taken for speed (no AVX-512)."""
-    monkeypatch.setattr(kernels, "worth_onednn", lambda: True)
-needs_conv_add = pytest.mark.skipif(not kernels._available("conv_add", kernels._check_conv_add),
-                                    reason="this PyTorch build has no oneDNN in-place convolution op")
+def every_path_taken(monkeypatch):
+    """oneDNN's paths are checked on every machine, also where they are not measured faster."""
+    monkeypatch.setenv("GESTURELSM_KERNELS", "all")
 
 
 def ops_run(fn) -> set[str]:
@@ -78,7 +76,7 @@ def test_autograd_falls_back_to_f_linear():
 
 
 def test_a_failing_self_check_means_f_linear(monkeypatch):
-    monkeypatch.setattr(kernels, "_state", {"linear": False, "conv_add": False})
+    monkeypatch.setattr(ops, "_state", {"linear": False, "conv_add": False})
     x, layer = torch.randn(4, 16), nn.Linear(16, 8)
     with torch.no_grad():
         assert torch.equal(lin(layer, x), F.linear(x, layer.weight, layer.bias))
@@ -119,8 +117,8 @@ def test_linear_steps_aside_when_onednn_is_disabled_or_not_x86(monkeypatch):
     x, layer = torch.randn(4, 16), nn.Linear(16, 8)
     with torch.no_grad(), torch.backends.mkldnn.flags(enabled=False):
         assert "mkldnn::_linear_pointwise" not in ops_run(lambda: lin(layer, x))
-    monkeypatch.setattr(kernels, "X86", False)
-    monkeypatch.setattr(kernels, "_state", {})
+    monkeypatch.setattr(ops, "X86", False)
+    monkeypatch.setattr(ops, "_state", {})
     assert not onednn_linear_available()
     with torch.no_grad():
         assert "mkldnn::_linear_pointwise" not in ops_run(lambda: lin(layer, x))

@@ -131,14 +131,14 @@ def test_loaders_hand_out_accelerated_models(tmp_path):
         assert_close_rel(tok_fast.decode(q), tok.decode(q), 1e-5)
 
 
-needs_op = pytest.mark.skipif(not kernels._available("linear", kernels._check_linear),
+needs_op = pytest.mark.skipif(not kernels.onednn_linear_available(),
                               reason="this PyTorch build has no working oneDNN linear op")
 
 
 @needs_op
 def test_on_onednn_the_accelerated_generator_samples_what_the_plain_one_samples(monkeypatch):
-    """Where oneDNN is not worth taking (no AVX-512) it is forced here, so its path is checked on every machine."""
-    monkeypatch.setattr(kernels, "worth_onednn", lambda: True)
+    """Where oneDNN is not measured faster it is forced here, so its path is checked on every machine."""
+    monkeypatch.setenv("GESTURELSM_KERNELS", "all")
     model = generator()
     fast = accelerate(copy.deepcopy(model))
     with torch.no_grad():
@@ -150,7 +150,7 @@ def test_on_onednn_the_accelerated_generator_samples_what_the_plain_one_samples(
 @needs_op
 def test_the_swapped_linear_runs_on_onednn(monkeypatch):
     from torch.profiler import profile
-    monkeypatch.setattr(kernels, "worth_onednn", lambda: True)
+    monkeypatch.setenv("GESTURELSM_KERNELS", "all")
     layer = accelerate(nn.Sequential(nn.Linear(16, 8), nn.GELU()))
     with torch.no_grad(), profile() as p:
         layer(torch.randn(4, 16))

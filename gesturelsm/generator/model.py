@@ -9,7 +9,6 @@ Shapes (B batch, R regions, t = 32 latent frames per 128-frame window, D latent 
 """
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 from typing import NamedTuple
 
@@ -20,7 +19,7 @@ import torch.nn.functional as F
 from ..checkpoint import config_from_dict, load_checkpoint, save_checkpoint
 from ..features.audio import AudioEncoder
 from ..flows import method_facts
-from ..kernels import WeightsCache, accelerate, fast_path, faster_version_of, linear
+from ..kernels import WeightsCache, accelerate, fast_path, faster_version_of, linear, traced_or_eager
 from ..flows.base import velocity_from_data
 from .config import GeneratorConfig
 from .layers import CrossBlock, STBlock, sinusoidal
@@ -150,7 +149,8 @@ class FastDenoiser(Denoiser):
             h = h + ctx.frames[:, None, :tt]
         kv = [a for kv_i in ctx.kv for a in kv_i]
         key = ("trunk", h.shape, *(a.shape for a in kv))
-        trunk = self._cache.get(key, list(self.parameters()), lambda: _trace(_Trunk(self, len(ctx.kv[0])), h, kv))
+        trunk = self._cache.get(key, list(self.parameters()),
+                                lambda: traced_or_eager(_Trunk(self, len(ctx.kv[0])), (h, *kv), "denoiser trunk"))
         return trunk(h, *kv)
 
     @property
@@ -160,7 +160,8 @@ class FastDenoiser(Denoiser):
 
 class _Trunk(nn.Module):
     """The denoiser after its input embedding: cross blocks, spatial-temporal blocks, output layer, on (B, R, t, C)
-    tokens and the speech context's tensors flattened (what tracing needs: tensors in, tensor out)."""
+    tokens and the speech context's tensors flattened (what tracing needs: tensors in, tensor out). FastDenoiser
+    runs it recorded once per shape where that is measured faster (kernels.traced_or_eager)."""
 
     def __init__(self, den: Denoiser, per_block: int):
         super().__init__()
@@ -175,19 +176,6 @@ class _Trunk(nn.Module):
         for block in self.st:
             h = block(h)
         return self.out(self.out_norm(h))
-
-
-def _trace(trunk: _Trunk, h: torch.Tensor, kv: list[torch.Tensor]) -> nn.Module:
-    """The trunk recorded once for these shapes (torch.jit.trace): the same ATen calls, replayed without the
-    Python interpreter and module-call overhead between them, a sizeable share of a step at the shipped model's
-    width. The recording reads the same parameter tensors (FastDenoiser drops it when one changes). The tracer
-    cannot record oneDNN's fused linear op (taken on AVX-512 CPUs); there the trunk runs as it is."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return torch.jit.trace(trunk, (h, *kv), check_trace=False)
-    except RuntimeError:
-        return trunk
 
 
 class GestureGenerator(nn.Module):

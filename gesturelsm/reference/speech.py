@@ -20,10 +20,11 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from ..features.audio import envelope
-from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_
+from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, onednn_enabled, taken
 from .config import GeneratorConfig
 
 ENVELOPE_WINDOW = 1024
+PROBE_SAMPLES = 32768      # the encoder's fast path is measured on this much of one clip (~2 s)
 PAD_TOKEN, UNK_TOKEN = 0, 3
 
 
@@ -127,13 +128,23 @@ class ReferenceSpeechEncoder(nn.Module):
         self._cache = WeightsCache()
 
     def _wav(self, audio: torch.Tensor) -> torch.Tensor:
-        """(B, S, 2) -> (B, A, T'). In eval mode the BatchNorms are folded into the convolutions (kept until a
-        weight changes) and the convolutions run channels-last (kernels.py): ~25 ms per window here instead of ~40
-        (benchmarks/reference_profile.py)."""
-        if self.training or torch.is_grad_enabled():
-            return self.wav(audio.transpose(1, 2))
+        """(B, S, 2) -> (B, A, T'). In eval mode, where measured faster on this machine (the `conv` path, timed on
+        the first PROBE_SAMPLES samples of one clip), the BatchNorms are folded into the convolutions (kept until
+        a weight changes) and the convolutions run channels-last (kernels): ~25 ms per window instead of ~40 on
+        an AMD EPYC with AVX-512 (benchmarks/reference_profile.py)."""
+        a = audio.transpose(1, 2)
+        if self.training or torch.is_grad_enabled() or not onednn_enabled():
+            return self.wav(a)
+        probe = a[:1, :, :PROBE_SAMPLES]
+        if not taken("conv", ("reference speech encoder", f"{self.cfg.audio_dim} channels"),
+                     lambda: ((lambda: self.wav(probe)), (lambda: self._wav_folded(probe)))):
+            return self.wav(a)
+        return self._wav_folded(a)
+
+    def _wav_folded(self, a: torch.Tensor) -> torch.Tensor:
+        """(B, 2, S) -> (B, A, T'): eval-mode `wav` with folded BatchNorms on channels-last tensors."""
         folded = self.folded_convs()
-        x = channels_last_1d(audio.transpose(1, 2))          # may be a view of `audio` (same memory layout)
+        x = channels_last_1d(a)                               # may be a view of the caller's audio (same layout)
         if self.wav[0].down is None:
             x = x.clone()                                     # such a block would write into the caller's audio
         for blk, f in zip(self.wav, folded):
