@@ -1,6 +1,7 @@
 """What an edit costs against regenerating the take: a 2 s range of a 60 s take, per method that can edit.
 
     .venv/bin/python benchmarks/edit_speed.py [--checkpoints DIR ...] [--threads 2] [--rounds 5] [--seconds 60]
+    .venv/bin/python benchmarks/edit_speed.py --page [--rounds 5]        # the page, in headless Chromium
 
 For every loaded method whose sampler can hold known latents (`facts.inpaints`), on one prepared speech (speech
 features are computed once and counted in neither): `generate` of the whole take at the method's default steps,
@@ -9,6 +10,11 @@ range touches, decoding around it, merging). Rounds alternate generate and edit,
 both alike; medians of wall time, and their ratio. Speech: the real BEAT2 take 2_scott_0_2_2 (from ../shared) cut
 to --seconds when present, else synthetic speech. The authors' GestureLSM is measured when --checkpoints includes
 its converted weights (`gesturelsm import-reference`).
+
+--page: the page's Edit section on the shipped models in headless Chromium (Debian's, as the browser tests): Generate
+10 s of speech with GestureLSM alone, then per round a new seed, upper + hands over 2-4 s and a click on
+#edit-run, timed until the player shows the edited motion (its payload replaced and the A/B toggle on the edit);
+medians over the rounds.
 """
 from __future__ import annotations
 
@@ -82,6 +88,44 @@ def measure(pipe, speech, method: str, rounds: int) -> dict:
             "windows": (len(sampled_windows(L, t, s, held)), len(window_layout(L, t, s)))}
 
 
+PAGE_SHOWN_JS = """(old) => { const p = window.gesturelsmPlayer;
+    return p.payload && p.payload.id !== old && p.element.dataset.ab === 'edited'; }"""
+
+
+def measure_page(rounds: int) -> list[float]:
+    """Seconds from a click on #edit-run to the edited motion in the player, per round (see the docstring)."""
+    import tempfile
+
+    import soundfile as sf
+
+    from _support import player_page, served, shipped_service
+
+    work = Path(tempfile.mkdtemp(prefix="edit-page-"))
+    audio, _ = load_speech(10.0)
+    sf.write(work / "speech.wav", audio, 16000)
+    times = []
+    with served(shipped_service(work / "service")) as url, player_page(url, "#motion-player") as page:
+        for label in ("DDIM", "Rectified flow"):
+            page.locator("#methods label", has_text=label).click()
+        page.locator("#auto-transcribe input[type=checkbox]").uncheck()
+        page.locator("#speech input[type=file]").first.set_input_files(str(work / "speech.wav"))
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        page.locator("#generate").click()
+        page.locator("#edit-run").wait_for(state="visible", timeout=180000)
+        for box, value in (("#edit-start input", "2"), ("#edit-end input", "4")):
+            page.locator(box).fill(value)
+            page.locator(box).press("Enter")
+        for r in range(rounds):
+            page.locator("#edit-seed input").fill(str(r + 2))
+            page.locator("#edit-seed input").press("Enter")
+            old = page.evaluate("() => window.gesturelsmPlayer.payload.id")
+            t0 = time.perf_counter()
+            page.locator("#edit-run").click()
+            page.wait_for_function(PAGE_SHOWN_JS, arg=old, timeout=120000)
+            times.append(time.perf_counter() - t0)
+    return times
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--checkpoints", nargs="+", default=None, help="checkpoint folders/files (default: shipped)")
@@ -89,8 +133,15 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--methods", nargs="+", default=None, help="only these (default: every method that can edit)")
+    ap.add_argument("--page", action="store_true", help="time the page's edit in headless Chromium instead")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
+    if args.page:
+        t = measure_page(args.rounds)
+        print(f"the page, 10 s of speech, GestureLSM, upper + hands over 2-4 s; {cpu_name()}; {len(t)} rounds\n")
+        print("| click on #edit-run -> edited motion in the player (s) | median | min | max |\n|---|---|---|---|")
+        print(f"| {', '.join(f'{x:.2f}' for x in t)} | {statistics.median(t):.2f} | {min(t):.2f} | {max(t):.2f} |")
+        return
     from gesturelsm.constants import ASSETS
     from gesturelsm.pipeline import GesturePipeline
 

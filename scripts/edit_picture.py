@@ -1,6 +1,6 @@
 """The before/after picture of docs/EDITING.md: the real BEAT2 take's own motion, and the same take with its upper
 body and hands regenerated over 8-11 s by the shipped GestureLSM (seed 1) with a keyframe at 9.5 s posed as the
-take's frame 1400. Top: the mannequin at four times, before (input) and after (edited); bottom: the right elbow's
+take's frame 408 (both hands raised, at 13.6 s). Top: the mannequin at four times, before (input) and after (edited); bottom: the right elbow's
 bend and the right wrist's height over time, before and after, with the range and the keyframe marked.
 
     .venv/bin/python scripts/edit_picture.py [--out docs/editing.png]
@@ -17,7 +17,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 REPO = Path(__file__).resolve().parents[1]
 BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 TAKE = "2_scott_0_1_1"
-SECONDS, A, B, KEY_TIME, KEY_FRAME, SEED = 20, 8.0, 11.0, 9.5, 1400, 1
+SECONDS, A, B, KEY_TIME, KEY_FRAME, SEED = 20, 8.0, 11.0, 9.5, 408, 1     # frame 408: both hands raised
 TIMES = (7.5, 8.8, 9.5, 10.5)
 
 
@@ -78,8 +78,8 @@ def main() -> None:
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left", ncol=2)
     fig.suptitle(f"BEAT2 {TAKE}: upper body and hands regenerated over {A:g}-{B:g} s (GestureLSM, seed {SEED}), "
-                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}; everything else is the take's own motion",
-                 fontsize=10)
+                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}\neverything else is the take's own motion, "
+                 "bit for bit", fontsize=10)
     fig.tight_layout()
     fig.savefig(args.out)
     print(f"wrote {args.out}")
