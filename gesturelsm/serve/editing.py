@@ -37,33 +37,45 @@ def root_folder(result: Result) -> Path:
     return result.job.folder
 
 
-def _checked(pipeline, result: Result | None, method: str, start, end, regions, seed) -> tuple[list[str], int]:
+def _number(value) -> float | None:
+    """A finite number from what a page or an API client sent, else None."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if np.isfinite(v) else None
+
+
+def _checked(pipeline, result: Result | None, method: str, start, end, regions, seed
+             ) -> tuple[list[str], float, float, int]:
     if result is None or not result.motions or result.speech is None or result.plan is None:
         raise InputError("Generate first: there is no motion to edit yet.")
     able = editable(pipeline, result)
     if method not in able:
         names = ", ".join(METHOD_LABELS.get(m, m) for m in able) or "none of the shown ones"
         raise InputError(f"Choose a shown motion to edit; the methods that can edit: {names}.")
-    if start is None or end is None or not np.isfinite(float(start)) or not np.isfinite(float(end)):
+    a, b, s = _number(start), _number(end), _number(seed)
+    if a is None or b is None:
         raise InputError("Give the time range to regenerate: its start and end in seconds.")
-    chosen = [r for r in GENERATED_REGIONS if r in set(regions or ())]
-    unknown = sorted(set(regions or ()) - set(GENERATED_REGIONS))
+    regions = [regions] if isinstance(regions, str) else list(regions or ())
+    chosen = [r for r in GENERATED_REGIONS if r in set(regions)]
+    unknown = sorted(set(map(str, regions)) - set(GENERATED_REGIONS))
     if unknown:
         raise InputError(f"Unknown body region {unknown[0]!r}; the regions are {', '.join(GENERATED_REGIONS)}.")
     if not chosen:
         raise InputError("Choose at least one body region to regenerate (upper, hands, lower, face).")
-    if seed is None or not np.isfinite(float(seed)) or float(seed) != int(float(seed)) or not 0 <= float(seed) < 2**63:
+    if s is None or s != int(s) or not 0 <= s < 2**63:
         raise InputError(f"The seed must be a whole number from 0 (got {seed}).")
-    return chosen, int(float(seed))
+    return chosen, a, b, int(s)
 
 
 def edit_result(pipeline, result: Result | None, method: str, start, end, regions: Sequence[str], seed,
                 progress: Progress | None = None) -> Result:
     """`result` with `method`'s motion regenerated over [start, end] seconds in `regions` (module docstring)."""
-    chosen, seed = _checked(pipeline, result, method, start, end, regions, seed)
+    chosen, start, end, seed = _checked(pipeline, result, method, start, end, regions, seed)
     t0 = time.perf_counter()
     plan = result.plan
-    res = pipeline.edit(result.motions[method], result.speech, {r: [(float(start), float(end))] for r in chosen},
+    res = pipeline.edit(result.motions[method], result.speech, {r: [(start, end)] for r in chosen},
                         method=method, steps=plan.steps_for(method), cfg=plan.cfg, seed=seed,
                         stand_in_place=plan.stand_in_place, smoothing=plan.smoothing, progress=progress)
     folder = root_folder(result) / f"edit-{len(result.edits) + 1}-{secrets.token_hex(4)}"
@@ -76,7 +88,7 @@ def edit_result(pipeline, result: Result | None, method: str, start, end, region
     seconds = time.perf_counter() - t0
     job = replace(result.job, folder=folder, motions=tuple(motions.values()), labels=tuple(labels),
                   started=time.perf_counter() - seconds)
-    what = (f"{METHOD_LABELS.get(method, method)}: {', '.join(chosen)} {float(start):.2f}-{float(end):.2f} s, "
+    what = (f"{METHOD_LABELS.get(method, method)}: {', '.join(chosen)} {start:.2f}-{end:.2f} s, "
             f"seed {seed} ({seconds:.2f} s)")
     warnings = (*result.warnings, *(w for w in res.warnings if w not in result.warnings))
     return replace(result, video=None, downloads=(), glb=None, warnings=warnings, seconds=seconds,

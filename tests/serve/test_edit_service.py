@@ -56,6 +56,8 @@ def test_edits_chain_undo_is_the_previous_result_and_downloads_follow_the_edit(g
     (("first", "ground_truth", 1, 2, ["upper"], 0), "Choose a shown motion to edit; the methods that can edit: "
                                                      "GestureLSM, DDIM"),
     (("first", "gesturelsm", None, 2, ["upper"], 0), "Give the time range to regenerate"),
+    (("first", "gesturelsm", "soon", 2, ["upper"], 0), "Give the time range to regenerate"),
+    (("first", "gesturelsm", 1, 2, ["upper"], "x"), "The seed must be a whole number from 0"),
     (("first", "gesturelsm", 1, 2, [], 0), "Choose at least one body region"),
     (("first", "gesturelsm", 1, 2, ["arms"], 0), "Unknown body region 'arms'"),
     (("first", "gesturelsm", 1, 2, ["upper"], -1), "The seed must be a whole number from 0"),
