@@ -28,7 +28,7 @@ BACKENDS: dict[str, BackendKind] = {b.facts.key: b for b in (
     Authors.of("meanflow_authors", "meanflow", default_steps=1, max_steps=128, predicts="velocity",
                uses_step_size=True),
     Authors.of("diffusion_authors", "diffusion", default_steps=20, max_steps=1000, predicts="data",
-               uses_step_size=False),
+               uses_step_size=False, inpaints=True),
 )}
 FACTS: dict[str, BackendFacts] = {k: b.facts for k, b in BACKENDS.items()}
 

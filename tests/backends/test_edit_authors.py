@@ -20,7 +20,7 @@ def test_the_registry_says_which_methods_can_edit_and_the_others_refuse(ckpt_dir
     from gesturelsm.pipeline import GesturePipeline
 
     assert {k for k, f in FACTS.items() if f.inpaints} == {"gesturelsm", "rectified_flow", "ddim",
-                                                             "gesturelsm_authors"}
+                                                             "gesturelsm_authors", "diffusion_authors"}
     pipe = GesturePipeline.from_pretrained(checkpoints=[ckpt_dir], warm_up=False)
     speech = pipe.prepare_speech(speech_like(6.0), 16000, transcribe=False)
     motion = pipe.generate(speech, steps=2, method="gesturelsm_authors").motion
