@@ -298,8 +298,8 @@ class GesturePipeline:
         """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
         speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
         motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
-        for bit wherever nothing is regenerated; an edited region blends back into the input over a short margin
-        at each end of its ranges (motion/merge.py). The regenerated motion is post-processed as a generation is
+        for bit wherever nothing is regenerated; inside a range an edited region crosses over from the input's
+        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed as a generation is
         (stand in place, smoothing) before it is merged: the input is a finished motion and is not processed
         again. Only methods whose sampler can hold known latents (`facts(method).inpaints`) can edit."""
         facts = self._backend(method).facts
