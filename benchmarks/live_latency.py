@@ -4,6 +4,8 @@
     .venv/bin/python benchmarks/live_latency.py --seconds 600         # 10 minutes (the real take looped)
     .venv/bin/python benchmarks/live_latency.py --skip-quality --threads 2
     .venv/bin/python benchmarks/live_latency.py --skip-quality --character avatar.vrm   # also on a character
+    .venv/bin/python benchmarks/live_latency.py --skip-quality --grounding on off      # latency with and without
+    .venv/bin/python benchmarks/live_latency.py --skip-paced --skip-quality --feet     # feet of streamed takes
 
 Paced run: a real take (../shared) looped to --seconds, fed in --chunk-ms chunks at the pace of speech (chunk k
 arrives when its last sample would have been spoken). Latency of a chunk = when the motion of all its frames is
@@ -12,7 +14,15 @@ sampled each chunk (first minute vs the end). Drift: motion frames available vs 
 Each motion chunk is also made into the live socket's message (gesturelsm/webapp/live.py `payload`: the page
 player's record); with --character PATH the same chunk is made a second time with the character section (retargeted
 onto the character, gesturelsm/webapp/live_character.py), in the same run, so the two latencies (chunk available +
-its message built) differ only by the character's cost.
+its message built) differ only by the character's cost. With --grounding on off the run streams twice at once, one
+stream grounded (feet on the ground, causally: gesturelsm/grounding/causal.py) and one not, fed the same chunks in
+one loop in an order that rotates chunk by chunk, each stream's latency leaving out the other's work in the same
+step, so the latencies before and after grounding come from the same minute of the same machine; the grounder's own
+time per motion chunk is timed around it.
+
+Feet (--feet): the two held-out audio-only takes streamed as fast as possible with grounding on and off (same seed),
+measured as metrics/feet.py measures every method (foot skate, contact share, root drift and range, bob, floor
+penetration, leg jerk) with the upper body's gesture space (raised share, p95 wrist height, wrist speed) beside.
 
 Quality (as fast as possible, same seed): the held-out audio-only takes streamed with the live settings vs the
 offline pipeline at the same steps: speech-response tests (metrics.speech_response), upper-body speed and jitter,
@@ -43,9 +53,9 @@ def rss_mb() -> float:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2 ** 20
 
 
-def messages(character: str | None):
+def messages(character: str | None, grounding: bool = True):
     """Functions chunk -> the socket's message bytes: the mannequin's record, and (with a character file) the record
-    with the character section; each keeps its stream's state."""
+    with the character section (its feet grounded on its own legs when `grounding`); each keeps its stream's state."""
     from dataclasses import replace
 
     from gesturelsm.body.model import resolve_body
@@ -58,7 +68,7 @@ def messages(character: str | None):
         from gesturelsm.retarget import load_character
         from gesturelsm.webapp.live_character import CharacterStream
 
-        stream = CharacterStream(load_character(character), body)
+        stream = CharacterStream(load_character(character), body, grounding=grounding)
 
         def with_character(mc) -> bytes:
             q, r, w = stream.chunk(mc.motion)
@@ -67,35 +77,107 @@ def messages(character: str | None):
     return out
 
 
-def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float, character: str | None = None) -> dict:
+def live_stream(pipe, cfg, grounding: bool, character: str | None) -> dict:
+    """One paced stream's generator (grounded or not), its message builders and what it measured; the grounder's
+    time per chunk is recorded around its `push`."""
+    from dataclasses import replace
+
     from gesturelsm.live import StreamingGenerator
+
+    gen = StreamingGenerator(pipe, replace(cfg, grounding=grounding))
+    make = messages(character, grounding)
+    st = {"gen": gen, "make": make, "lat": [], "ground_ms": [], "built": {k: [] for k in make}}
+    if gen.grounder is not None:
+        push = gen.grounder.push
+
+        def timed(seq):
+            t = time.perf_counter()
+            out = push(seq)
+            st["ground_ms"].append((time.perf_counter() - t) * 1000)
+            return out
+        gen.grounder.push = timed
+    return st
+
+
+def paced(pipe, audio: np.ndarray, cfg, chunk_ms: float, character: str | None = None,
+          modes: tuple[str, ...] = ("on",)) -> dict:
+    """A paced run of one stream per grounding mode ("on" / "off"), fed the same chunks in one loop, the order of
+    the streams rotating chunk by chunk; a stream's latencies leave out the time the other streams worked in the same
+    step before it (as if it ran alone), while a step that overruns its chunk delays every stream's next one."""
     from gesturelsm.constants import SAMPLE_RATE
 
     n = int(round(chunk_ms * SAMPLE_RATE / 1000))
-    gen = StreamingGenerator(pipe, cfg)
-    make = messages(character)
-    lat, mem, built = [], [], {k: [] for k in make}          # built: per message kind, (ms to build, latencies)
+    streams = {m: live_stream(pipe, cfg, m == "on", character) for m in modes}
+    mem = []
     c0, t0 = time.process_time(), time.perf_counter()
-    for a in range(0, len(audio), n):
+    for k, a in enumerate(range(0, len(audio), n)):
         chunk = audio[a:a + n]
         arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
         time.sleep(max(0.0, arrival - time.perf_counter()))
-        for mc in gen.feed(chunk, arrival):
-            lat += mc.latencies
-            for k, f in make.items():
-                t = time.perf_counter()
-                f(mc)
-                dt = time.perf_counter() - t
-                built[k].append((dt * 1000, [x + dt for x in mc.latencies]))
+        step0 = time.perf_counter()
+        for m in modes[k % len(modes):] + modes[:k % len(modes)]:
+            st = streams[m]
+            waited = time.perf_counter() - step0           # the other streams' work this step: not this stream's
+            for mc in st["gen"].feed(chunk, arrival):
+                lat = [x - waited for x in mc.latencies]
+                st["lat"] += lat
+                for kind, f in st["make"].items():
+                    t = time.perf_counter()
+                    f(mc)
+                    dt = time.perf_counter() - t
+                    st["built"][kind].append((dt * 1000, [x + dt for x in lat]))
         mem.append((a / SAMPLE_RATE, rss_mb()))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    behind = gen.n_in * 30 / SAMPLE_RATE - gen.emitted                            # frames of audio without motion yet
     m = np.array(mem)
     first = m[m[:, 0] <= 60, 1]
-    return {"lat": np.array(lat), "cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
-            "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(),
-            "behind_frames": behind, "frames": gen.emitted, "audio_frames": gen.n_in * 30 // SAMPLE_RATE,
-            "built": built}
+    out = {"cpu": cpu / wall, "cpu_per_audio_s": cpu / (len(audio) / SAMPLE_RATE),
+           "mem_first_min": (first.min(), first.max()), "mem_end": m[-1, 1], "mem_max": m[:, 1].max(), "modes": {}}
+    for mode, st in streams.items():
+        gen = st["gen"]
+        out["modes"][mode] = {"lat": np.array(st["lat"]), "rtf": len(audio) / SAMPLE_RATE / gen.compute_s,
+                              "ground_ms": np.array(st["ground_ms"]), "built": st["built"], "frames": gen.emitted,
+                              "behind_frames": gen.n_in * 30 / SAMPLE_RATE - gen.emitted,   # audio without motion
+                              "audio_frames": gen.n_in * 30 // SAMPLE_RATE}
+    return out
+
+
+def paced_tables(r: dict, seconds: float, take: str, chunk_ms: float) -> None:
+    """Print the paced run: per grounding mode, side by side; then the run's CPU and memory (all streams)."""
+    modes = list(r["modes"])
+    cols = [r["modes"][m] for m in modes]
+    print(f"| paced run ({seconds:.0f} s of {take}, {chunk_ms:.0f} ms chunks) | "
+          + " | ".join(f"grounding {m}" for m in modes) + " |")
+    print("|---|" + "---|" * len(modes))
+
+    def row(name, f):
+        print(f"| {name} | " + " | ".join(f(c) for c in cols) + " |")
+    row("latency median / p90 / max (s)", lambda c: f"{np.median(c['lat']):.3f} / {np.percentile(c['lat'], 90):.3f}"
+        f" / {c['lat'].max():.3f}")
+    row("grounding per motion chunk median / p90 (ms)", lambda c: f"{np.median(c['ground_ms']):.1f} / "
+        f"{np.percentile(c['ground_ms'], 90):.1f}" if len(c["ground_ms"]) else "-")
+    row("real-time factor (audio s per compute s)", lambda c: f"{c['rtf']:.2f}")
+    row("motion frames behind the audio at the end", lambda c: f"{c['behind_frames']:.0f} ({c['frames']} of "
+        f"{c['audio_frames']})")
+    if len(modes) == 2:
+        a, b = (r["modes"][m]["lat"] for m in modes)
+        print(f"| median latency {modes[0]} - {modes[1]} (ms) | {1000 * (np.median(a) - np.median(b)):+.1f} |  |")
+    print()
+    print(f"| the whole run ({len(modes)} stream{'s' if len(modes) > 1 else ''}) | value |")
+    print("|---|---|")
+    print(f"| CPU share (cores) / CPU seconds per audio second | {r['cpu']:.2f} / {r['cpu_per_audio_s']:.2f} |")
+    print(f"| RSS first minute min-max / at end / max (MB) | {r['mem_first_min'][0]:.0f}-{r['mem_first_min'][1]:.0f}"
+          f" / {r['mem_end']:.0f} / {r['mem_max']:.0f} |")
+    print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
+    print("| grounding | socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / "
+          "max (s) |")
+    print("|---|---|---|---|")
+    for mode, c in zip(modes, cols):
+        for k, rows in c["built"].items():
+            ms = np.array([x for x, _ in rows])
+            lat = np.concatenate([x for _, x in rows])
+            print(f"| {mode} | {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
+                  f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
+    print()
 
 
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
@@ -154,6 +236,31 @@ def pooled(pipe, cfg, takes: list[str], seeds: int) -> str:
             f"{np.mean([a.height_p95 for a in amps]):.2f} |")
 
 
+def feet_table(pipe, cfg, takes: list[str]) -> None:
+    """Print the feet of streamed takes, grounded causally and not (module docstring)."""
+    from dataclasses import replace
+
+    from gesturelsm.audio import load_audio
+    from gesturelsm.body import load_body_model
+    from gesturelsm.live.cli import run_file
+    from gesturelsm.metrics.amplitude import amplitude_stats
+    from gesturelsm.metrics.feet import feet_stats
+
+    body = load_body_model()
+    print("| take | grounding | foot skate (cm/s) | contact share | drift (m/min) | range (m) | bob (cm) | "
+          "penetration p99 (cm) | leg jerk (m/s^3) | raised | p95 wrist height (m) | wrist speed (m/s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name in takes:
+        y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
+        for on in (False, True):
+            mot = run_file(pipe, y, replace(cfg, grounding=on), 200.0).motion()
+            j = body.joints(mot.poses, mot.trans)
+            f, a = feet_stats(j), amplitude_stats(j)
+            print(f"| {name} | {'on' if on else 'off'} | {f.foot_skate:.1f} | {f.contact_share:.2f} | "
+                  f"{f.drift_per_min:.2f} | {f.root_range:.2f} | {f.bob:.1f} | {f.penetration:.1f} | "
+                  f"{f.leg_jerk:.0f} | {100 * a.raised_share:.1f} % | {a.height_p95:.3f} | {a.wrist_speed:.3f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0, help="paced run length (the take is looped)")
@@ -167,6 +274,11 @@ def main() -> None:
     ap.add_argument("--skip-quality", action="store_true")
     ap.add_argument("--skip-paced", action="store_true")
     ap.add_argument("--pooled", type=int, default=0, metavar="N", help="also stream both takes with seeds 0..N-1")
+    ap.add_argument("--grounding", nargs="+", choices=("on", "off"), default=["on"],
+                    help="feet on the ground in the paced run: on, off, or `on off` for both streams in one run, "
+                    "interleaved (the latency before and after grounding)")
+    ap.add_argument("--feet", action="store_true", help="also the feet of the two held-out takes, streamed grounded "
+                    "and not")
     ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
                     ".glb, .gltf, .bvh): the latency with and without it")
     args = ap.parse_args()
@@ -188,26 +300,8 @@ def main() -> None:
     if not args.skip_paced:
         take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
         y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
-        r = paced(pipe, y, cfg, args.chunk_ms, args.character)
-        print(f"| paced run ({args.seconds:.0f} s of {args.take}, {args.chunk_ms:.0f} ms chunks) | value |")
-        print("|---|---|")
-        print(f"| latency median / p90 / max (s) | {np.median(r['lat']):.2f} / {np.percentile(r['lat'], 90):.2f} / "
-              f"{r['lat'].max():.2f} |")
-        print(f"| real-time factor (audio s per compute s) | {r['rtf']:.2f} |")
-        print(f"| CPU share (cores) / CPU seconds per audio second | {r['cpu']:.2f} / {r['cpu_per_audio_s']:.2f} |")
-        print(f"| RSS first minute min-max / at end / max (MB) | {r['mem_first_min'][0]:.0f}-{r['mem_first_min'][1]:.0f}"
-              f" / {r['mem_end']:.0f} / {r['mem_max']:.0f} |")
-        print(f"| motion frames behind the audio at the end | {r['behind_frames']:.0f} "
-              f"({r['frames']} of {r['audio_frames']}) |")
-        print(f"| load average at the end (1 min) | {os.getloadavg()[0]:.1f} |\n")
-        print("| socket message | build per chunk median / p90 (ms) | latency incl. message median / p90 / max (s) |")
-        print("|---|---|---|")
-        for k, rows in r["built"].items():
-            ms = np.array([m for m, _ in rows])
-            lat = np.concatenate([x for _, x in rows])
-            print(f"| {k} | {np.median(ms):.1f} / {np.percentile(ms, 90):.1f} | {np.median(lat):.3f} / "
-                  f"{np.percentile(lat, 90):.3f} / {lat.max():.3f} |")
-        print()
+        r = paced(pipe, y, cfg, args.chunk_ms, args.character, tuple(dict.fromkeys(args.grounding)))
+        paced_tables(r, args.seconds, args.take, args.chunk_ms)
     if not args.skip_quality:
         rows = quality(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"], cfg.steps)
         print("| take | motion | beat timing gain (z) | loudness following gain (z) | upper speed (m/s) | "
@@ -216,6 +310,8 @@ def main() -> None:
         for name, label, bt, ef, sp, acc, seam, amp in rows:
             print(f"| {name} | {label} | {bt.gain:+.3f} ({bt.z:.1f}) | {ef.gain:+.3f} ({ef.z:.1f}) | {sp:.3f} | "
                   f"{acc:.2f} | {seam:.2f} | {100 * amp.raised_share:.1f} % | {amp.height_p95:.2f} |")
+    if args.feet:
+        feet_table(pipe, cfg, ["2_scott_0_2_2", "2_scott_0_3_3"])
     if args.pooled:
         print("\n| streamed (pooled) | loudness gain, mean | standard error | z | gains > 0 | raised | "
               "p95 wrist height (m) |")

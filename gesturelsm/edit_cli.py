@@ -21,6 +21,7 @@ from .constants import SAMPLE_RATE
 from .errors import UserError
 from .export import export_bvh, export_glb
 from .export.rig import export_rig
+from .grounding.cli import add_grounding_flag, grounding_on
 from .motion.editing import keyframe
 from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from .motion.regions import GENERATED_REGIONS
@@ -56,6 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing of the regenerated motion (default {DEFAULT_SMOOTHING})")
     g.add_argument("--stand-in-place", action="store_true", help="no horizontal root movement where regenerated")
+    add_grounding_flag(g)
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
     g.add_argument("--bvh", help="also write the edited motion as BVH")
     g.add_argument("--glb", help="also write the edited motion as an animated GLB")
@@ -109,9 +111,9 @@ def run_edit(args: argparse.Namespace) -> int:
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
     res = pipe.edit(motion, audio, regenerate, keys, method=args.method, steps=args.steps, cfg=args.cfg,
                     seed=args.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
-                    stand_in_place=args.stand_in_place, smoothing=args.smoothing)
+                    stand_in_place=args.stand_in_place, smoothing=args.smoothing, grounding=grounding_on(args))
     path = res.motion.save(args.out)
-    done = [p for p in (rig and export_rig(res.motion, rig, path),
+    done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=grounding_on(args)),
                         args.bvh and export_bvh(res.motion, args.bvh, body=resolve_body(None)),
                         args.glb and export_glb(res.motion, args.glb, body=resolve_body(None))) if p]
     for p in done:

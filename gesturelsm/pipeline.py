@@ -31,11 +31,13 @@ from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
+from .grounding import ground_motion
 from .motion.editing import KEY_SPACING, EditError, Keyframe, edit_spec, keyframe
 from .motion.merge import merge_edit, pin_pose, splice
 from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
 from .motion.regions import REGIONS
 from .motion.sequence import FPS, MotionSequence
+from .presentation import label
 from .tokenizer.model import RVQVAE
 
 MIN_SECONDS = 0.5
@@ -75,6 +77,7 @@ class Plan:
     smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
+    grounding: bool = True                     # feet on the ground (gesturelsm.grounding), after smoothing
 
     def steps_for(self, method: str) -> int:
         return int(self.steps.get(method, backend_facts(method).default_steps))
@@ -91,6 +94,19 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
+
+
+def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
+           body=None) -> tuple[MotionSequence, str | None]:
+    """The post-processing every method and ground truth get: stand in place, then smoothing (motion/postprocess.py),
+    then feet on the ground (gesturelsm.grounding, on `body`). With stand in place and grounding both on, the root
+    stays on the spot horizontally and the legs plant the feet under it. Returns the motion and, when grounding had
+    to leave it as it was, why (one sentence)."""
+    seq = postprocess(seq, stand_in_place, smoothing)
+    if not grounding:
+        return seq, None
+    res = ground_motion(seq, body)
+    return res.motion, res.warning
 
 
 class GesturePipeline:
@@ -246,9 +262,11 @@ class GesturePipeline:
             self.check_settings(m, plan.steps_for(m), plan.cfg)
         check_smoothing(plan.smoothing)
 
-    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None) -> Generated:
+    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
+                     body=None) -> Generated:
         """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (stand in place, smoothing)."""
+        recognised), each fitted to the speech's length, then post-processed (`finish`: stand in place, smoothing,
+        feet on the ground on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL)."""
         self.check_plan(plan)
         T = speech.num_frames
         gens = plan.generators
@@ -270,7 +288,10 @@ class GesturePipeline:
                                 "it is left out.")
             else:
                 motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
-        motions = {k: postprocess(v.slice(0, T), plan.stand_in_place, plan.smoothing) for k, v in motions.items()}
+        for k, v in motions.items():
+            motions[k], note = finish(v.slice(0, T), plan.stand_in_place, plan.smoothing, plan.grounding, body)
+            if note:
+                warnings.append(f"{label(k)}: {note}")
         return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
@@ -294,14 +315,16 @@ class GesturePipeline:
              keyframes: Sequence = (), method: str = "gesturelsm", steps: int | None = None, cfg: float = 2.0,
              seed: int = 0, sr: int = SAMPLE_RATE, words: list | None = None, text: str | None = None,
              transcribe: bool = True, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-             progress: Progress | None = None) -> GenerationResult:
+             grounding: bool = True, body=None, progress: Progress | None = None) -> GenerationResult:
         """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
         speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
         motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
         for bit wherever nothing is regenerated; inside a range an edited region crosses over from the input's
-        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed as a generation is
-        (stand in place, smoothing) before it is merged: the input is a finished motion and is not processed
-        again. Only methods whose sampler can hold known latents (`facts(method).inpaints`) can edit."""
+        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed as a
+        generation is (`finish`: stand in place, smoothing, feet on the ground on `body`; grounding only when the
+        lower body is regenerated, the only region it changes) before it is merged: the input is a finished motion
+        and is not processed again. Only methods whose sampler can hold known latents (`facts(method).inpaints`)
+        can edit."""
         facts = self._backend(method).facts
         if not facts.inpaints:
             able = [m for m in self.methods if self.facts(m).inpaints]
@@ -316,7 +339,8 @@ class GesturePipeline:
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
         out = self.backends[method].edit(speech, motion, spec, steps, cfg, seed, prog)
         t0 = time.perf_counter()
-        gen = postprocess(splice(motion, out.motion, out.start, spec.regions), stand_in_place, smoothing)
+        gen, note = finish(splice(motion, out.motion, out.start, spec.regions), stand_in_place, smoothing,
+                           grounding and "lower" in spec.regions, body)
         merged = merge_edit(motion, gen, spec)
         for k in spec.keyframes:
             joints = tuple(j for r in spec.pinned(k) for j in REGIONS[r].joints)
@@ -325,7 +349,7 @@ class GesturePipeline:
         if progress:
             progress(1.0, f"{method}: edited {spec.describe()}")
         return GenerationResult(merged, method, int(steps), float(cfg), int(seed), timings, speech.text_mode,
-                                warnings + out.warnings)
+                                warnings + out.warnings + ([note] if note else []))
 
     def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
                      text: str | None, transcribe: bool, progress: Progress | None) -> tuple[SpeechInput, list[str]]:
@@ -355,4 +379,4 @@ class GesturePipeline:
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG"]
+           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG", "finish"]

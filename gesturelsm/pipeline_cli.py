@@ -7,10 +7,11 @@ import time
 from .align.textgrid import read_words
 from .audio import load_audio
 from .constants import SAMPLE_RATE
-from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS, postprocess
+from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from .backends import FACTS, checkpoint_sources
 from .export.rig import export_rig
-from .pipeline import GesturePipeline
+from .grounding.cli import add_grounding_flag, grounding_on
+from .pipeline import GesturePipeline, finish
 from .retarget import load_character
 
 
@@ -31,6 +32,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing (motion/postprocess.py); 'off' writes the raw model output (default {DEFAULT_SMOOTHING})")
     g.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
+    add_grounding_flag(g)
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
     g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
                    "character's suffix, the motion on it (docs/CHARACTERS.md)")
@@ -48,14 +50,14 @@ def run_generate(args: argparse.Namespace) -> int:
     steps = args.steps or FACTS[args.method].default_steps
     res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
                         method=args.method, transcribe=not args.no_transcribe)
-    motion = postprocess(res.motion, args.stand_in_place, args.smoothing)
+    motion, note = finish(res.motion, args.stand_in_place, args.smoothing, grounding_on(args))
     path = motion.save(args.out)
     if rig is not None:
-        print(f"wrote {export_rig(motion, rig, path)}")
-    for w in res.warnings:
+        print(f"wrote {export_rig(motion, rig, path, grounding=grounding_on(args))}")
+    for w in res.warnings + ([note] if note else []):
         print(f"warning: {w}")
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
     print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {args.method}, {steps} steps, "
-          f"CFG {args.cfg}, seed {args.seed}, smoothing {args.smoothing}; {res.text_mode}")
+          f"CFG {args.cfg}, seed {args.seed}, smoothing {args.smoothing}, grounding {args.grounding}; {res.text_mode}")
     print(f"timings: {stages}; real-time factor {res.real_time_factor:.1f}x; total {time.perf_counter() - t0:.1f}s")
     return 0

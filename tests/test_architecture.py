@@ -19,7 +19,8 @@ FLOORS: list[set[str]] = [
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
                                                                # it), files, the methods, fast CPU kernels
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
-    {"asr"},                                                   # speech recognition (times words with align)
+    {"asr", "grounding"},                                      # speech recognition (times words with align); feet on
+                                                               # the floor (leg IK on a body's or a rig's skeleton)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"retarget"},                                              # motion onto characters (their skeletons and meshes)
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)

@@ -165,17 +165,24 @@ def test_generate_cli_writes_beat2_npz(tiny_assets, tmp_path, capsys):
         assert d["poses"].shape == (90, 165) and d["trans"].shape == (90, 3) and d["expressions"].shape == (90, 100)
         assert int(d["mocap_frame_rate"]) == 30
     assert "real-time factor" in capsys.readouterr().out
-    # the default post-processing is light smoothing of the raw model output (the same seed, --smoothing off)
+    # the default post-processing is light smoothing then feet on the ground, of the raw model output (the same
+    # seed with --smoothing off --grounding off); --grounding off leaves the smoothed motion's root and legs
     from gesturelsm.motion import MotionSequence
     from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, postprocess
+    from gesturelsm.pipeline import finish
 
-    raw = tmp_path / "raw.npz"
-    assert main(["generate", str(wav), "--checkpoints", str(tiny_assets), "--steps", "2", "--smoothing", "off",
-                 "--out", str(raw)]) == 0
-    smoothed = MotionSequence.load(out)
-    want = postprocess(MotionSequence.load(raw), False, DEFAULT_SMOOTHING)
-    assert DEFAULT_SMOOTHING == "light" and np.allclose(smoothed.poses, want.poses, atol=1e-5)
-    assert not np.allclose(smoothed.poses, MotionSequence.load(raw).poses, atol=1e-4)
+    raw, ungrounded = tmp_path / "raw.npz", tmp_path / "ungrounded.npz"
+    for path, extra in ((raw, ["--smoothing", "off", "--grounding", "off"]), (ungrounded, ["--grounding", "off"])):
+        assert main(["generate", str(wav), "--checkpoints", str(tiny_assets), "--steps", "2", *extra,
+                     "--out", str(path)]) == 0
+    raw = MotionSequence.load(raw)
+    default, want = MotionSequence.load(out), finish(raw, False, DEFAULT_SMOOTHING, True)[0]
+    assert DEFAULT_SMOOTHING == "light" and np.allclose(default.poses, want.poses, atol=1e-5)
+    np.testing.assert_allclose(default.trans, want.trans, atol=1e-5)
+    smoothed = postprocess(raw, False, DEFAULT_SMOOTHING)
+    np.testing.assert_allclose(MotionSequence.load(ungrounded).poses, smoothed.poses, atol=1e-5)
+    assert not np.allclose(smoothed.poses, raw.poses, atol=1e-4)
+    assert not np.allclose(default.trans, smoothed.trans, atol=1e-3)          # grounding moved the root
     (tmp_path / "broken.wav").write_bytes(b"RIFF....WAVEfmt garbage")
     assert main(["generate", str(tmp_path / "broken.wav"), "--checkpoints", str(tiny_assets), "--out",
                  str(tmp_path / "x.npz")]) == 2

@@ -40,3 +40,27 @@ def test_generate_refuses_a_bad_character_before_generating(tmp_path, capsys):
                  str(tmp_path / "me.vrm")]) == 2
     assert "me.vrm: not a glTF / VRM file" in capsys.readouterr().err
     assert not (tmp_path / "t.npz").exists()
+
+
+def test_generate_with_rig_follows_grounding(tiny_assets, tmp_path):
+    """--grounding off: the character's file carries its legs as retargeted from the ungrounded motion; on (the
+    default) grounded on its own legs (retarget_motion's default), and the two differ."""
+    from _standing import other_legs
+
+    sf.write(tmp_path / "s.wav", speech_like(3.0, seed=5), 16000)
+    skel, _ = build_rig(other_legs(resolve_body(None).rest_joints()), fingers=False)
+    write_gltf(skel, tmp_path / "me.glb")
+    roots = {}
+    for mode in ("on", "off"):
+        out = tmp_path / mode
+        assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                     "--no-transcribe", "--out", str(out / "take.npz"), "--rig", str(tmp_path / "me.glb"),
+                     "--grounding", mode]) == 0
+        motion = MotionSequence.load(out / "take.npz")
+        want = retarget_motion(motion, load_character(tmp_path / "me.glb"), grounding=mode == "on")
+        gltf, blob = read_glb(out / "take_me.glb")
+        anim = gltf["animations"][0]
+        ch = next(c for c in anim["channels"] if c["target"]["path"] == "translation")
+        roots[mode] = accessor_array(gltf, blob, anim["samplers"][ch["sampler"]]["output"])
+        np.testing.assert_allclose(roots[mode], want.root_translation, atol=1e-5)
+    assert np.abs(roots["on"] - roots["off"]).max() > 1e-3

@@ -101,6 +101,11 @@ class BodyModel:
         """(55, 3) rest-pose joints for betas (and one expression vector), metres."""
         return self._shaped(self._shape_coeffs(betas, expressions))[1][0].numpy()
 
+    @torch.no_grad()
+    def rest_vertices(self, betas=None) -> np.ndarray:
+        """(V, 3) the rest-pose mesh for betas, metres (its lowest vertex is the sole the rest pose stands on)."""
+        return self._shaped(self._shape_coeffs(betas))[0][0].numpy()
+
     def _full_pose(self, poses: torch.Tensor) -> torch.Tensor:
         return poses + self.module.pose_mean.to(poses)                          # adds the hand mean if any
 

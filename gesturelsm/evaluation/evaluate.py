@@ -1,5 +1,6 @@
 """Paper-style evaluation of generators on held-out clips: FGD, BC beside ground truth's BC, L1 diversity,
-face error, jitter, foot skating, wrist amplitude (metrics/amplitude.py) and generation time, for every (method, steps, CFG) of a plan.
+face error, jitter, feet and root (metrics/feet.py: foot skate, contact share, drift, range, bob, floor
+penetration, leg jerk), wrist amplitude (metrics/amplitude.py) and generation time, for every (method, steps, CFG) of a plan.
 
     clips, policy = heldout_clips("../shared/data/beat2")
     report = evaluate(GesturePipeline.from_pretrained(), clips, plan_grid(["gesturelsm"], [1, 2, 4, 8], [2.0]))
@@ -28,7 +29,8 @@ from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
 from ..metrics.face import expression_mse, face_vertex_mse
 from ..metrics.fgd import default_extractors, fgd
-from ..metrics.physics import foot_skating, jitter
+from ..metrics.feet import FeetStats, feet_stats
+from ..metrics.physics import jitter
 from .clips import EvalClip
 
 Log = Callable[[str], None]
@@ -46,6 +48,7 @@ class EvalPlanItem:
 
 
 AMPLITUDE_KEYS = ("raised_share", "height_p95", "wrist_speed", "hand_spread")   # means over clips x seeds
+FEET_KEYS = tuple(FeetStats.__dataclass_fields__)                                 # metrics/feet.py, the same
 
 
 def plan_grid(methods: list[str], steps: list[int], cfgs: list[float]) -> list[EvalPlanItem]:
@@ -58,7 +61,7 @@ class MotionStats:
     bc: float
     diversity: float
     jitter: float
-    foot_skate: float
+    feet: dict[str, float]                                        # metrics.feet.FeetStats fields
     features: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     expr_mse: float | None = None
     vertex_mse: float | None = None
@@ -71,7 +74,7 @@ def motion_stats(motion, body, beats: np.ndarray, mean_speed: np.ndarray, extrac
     world = body.joints(motion.poses, motion.trans)                             # (T, 55, 3)
     local = body.joints(motion.poses, zero)                                     # translation removed
     s = MotionStats(beat_consistency(world, beats=beats, mean_speed=mean_speed), l1_diversity(local),
-                    jitter(world), foot_skating(world).speed, amplitude=amplitude_stats(world).as_dict())
+                    jitter(world), feet_stats(world).as_dict(), amplitude=amplitude_stats(world).as_dict())
     for ex in extractors:
         if len(local) >= 32:
             s.features[ex.name] = ex(motion, local)
@@ -89,7 +92,7 @@ def _mean(vals) -> float | None:
 
 def summarise(stats: list[MotionStats], gt_stats: list[MotionStats] | None, extractors) -> dict:
     out = {"bc": _mean(s.bc for s in stats), "diversity": _mean(s.diversity for s in stats),
-           "jitter": _mean(s.jitter for s in stats), "foot_skate": _mean(s.foot_skate for s in stats),
+           "jitter": _mean(s.jitter for s in stats), **{k: _mean(s.feet.get(k) for s in stats) for k in FEET_KEYS},
            "expr_mse": _mean(s.expr_mse for s in stats), "vertex_mse": _mean(s.vertex_mse for s in stats),
            **{k: _mean(s.amplitude.get(k) for s in stats) for k in AMPLITUDE_KEYS}}
     if gt_stats:

@@ -6,7 +6,8 @@ show them: motion (+ speech) -> named numbers, each with what it measures and wh
 
 Definitions are `gesturelsm eval`'s (evaluation/evaluate.py `motion_stats`) where eval has them: beat
 consistency on world joints with the speech's librosa onsets, L1 diversity on joints with the translation
-removed, wrist amplitude and upper-body jerk from metrics/amplitude.py; the two speech-response gains are
+removed, wrist amplitude and upper-body jerk from metrics/amplitude.py, feet and root (foot skate, contact share,
+root drift and range, bob, floor penetration, leg jerk) from metrics/feet.py; the two speech-response gains are
 metrics/speech_response.py's. Joints come from forward kinematics on the shipped mannequin (what `gesturelsm eval`
 uses without `--smplx`), metres, 30 fps, y up. BC normalises joint speeds by the speaker's per-joint mean speed on
 the same body (`SpeakerReference.mean_speed`), so motions are compared on one scale.
@@ -28,6 +29,7 @@ from ..constants import ASSETS, SAMPLE_RATE
 from ..metrics.amplitude import RAISED_M, amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
+from ..metrics.feet import CONTACT_M, feet_stats
 from ..metrics.speech_response import beat_timing, energy_following
 
 SPEAKER_FILE = ASSETS / "speaker_stats.json"
@@ -65,6 +67,20 @@ STATISTICS: tuple[Statistic, ...] = (
               "Mean jerk (third derivative of position) of the upper-body joints."),
     Statistic("diversity", "L1 diversity", "m", CLOSER,
               "Mean L1 distance of the poses from their own mean pose, 55 joints x 3 axes (Div, as gesturelsm eval)."),
+    Statistic("foot_skate", "foot skate", "cm/s", "lower (the speaker's or below)",
+              f"Mean horizontal speed of the ankles and feet while within {100 * CONTACT_M:g} cm of the floor (the "
+              "floor: 5th percentile of the lowest of them over the take)."),
+    Statistic("contact_share", "feet on the floor", "0-1", "higher (standing: above 0.5)",
+              f"Share of frames x ankle and foot joints within {100 * CONTACT_M:g} cm of the floor."),
+    Statistic("drift_per_min", "root drift", "m/min", "lower (near 0: the body ends where it started)",
+              "Horizontal distance between where the body starts and where it ends, per minute of motion."),
+    Statistic("root_range", "root range", "m", "lower, within the speaker's",
+              "Largest horizontal extent of the pelvis path over the take (the standing area used)."),
+    Statistic("bob", "vertical bob", "cm", "lower, near the speaker's", "Standard deviation of the pelvis height."),
+    Statistic("penetration", "floor penetration", "cm", "lower (0: never below the floor)",
+              "99th percentile over frames of how far the lowest ankle or foot joint is below the floor."),
+    Statistic("leg_jerk", "leg jerk", "m/s^3", "lower, near the speaker's (high: jittery legs)",
+              "Mean jerk (third derivative of position) of the hips, knees, ankles and feet."),
 )
 SEED_SPREAD = Statistic("seed_spread", "spread across seeds", "m", "higher (seeds give different motion), "
                         "near the L1 diversity", "Mean L1 distance between the motions of two seeds, frame by frame, "
@@ -116,6 +132,7 @@ def statistics_of_joints(world: np.ndarray, local: np.ndarray, speech: SpeechCon
     out["beat_gain"] = _gain(beat_timing, world, speech.beats, mean_speed=speech.mean_speed)
     out["loudness_gain"] = _gain(energy_following, world, speech.audio, SAMPLE_RATE)
     out["diversity"] = l1_diversity(local)
+    out.update({k: v for k, v in feet_stats(world).as_dict().items() if k in out})
     return {s.key: float(out[s.key]) for s in STATISTICS}
 
 
@@ -172,7 +189,11 @@ def speaker_reference(path: str | Path = SPEAKER_FILE) -> SpeakerReference | Non
                             str(d.get("source", "")), float(d.get("seconds", 0.0)))
 
 
+ONE_DECIMAL = ("jerk", "foot_skate", "bob", "penetration", "leg_jerk")
+TWO_DECIMALS = ("diversity", "seed_spread", "contact_share", "drift_per_min", "root_range")
+
+
 def format_value(key: str, v: float) -> str:
     if v is None or not np.isfinite(v):
         return "-"
-    return f"{v:.1f}" if key == "jerk" else f"{v:.2f}" if key in ("diversity", "seed_spread") else f"{v:.3f}"
+    return f"{v:.1f}" if key in ONE_DECIMAL else f"{v:.2f}" if key in TWO_DECIMALS else f"{v:.3f}"

@@ -21,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import GestureError, InputError
+from ..pipeline import finish
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
 
@@ -118,6 +119,7 @@ class SweepResult:
     text_mode: str
     reference: SpeakerReference | None
     seconds: float = 0.0                 # the whole sweep, wall clock
+    grounding: bool = True               # the motions' feet were grounded (pipeline.finish)
 
     def cell_runs(self, cell: tuple[str, int, float]) -> list[SweepRun]:
         return [r for r in self.runs if (r.method, r.steps, r.cfg) == cell]
@@ -148,9 +150,10 @@ def _units(steps: int, cfg: float) -> float:
 
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
               progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
-              keep_motions: bool = True) -> SweepResult:
-    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion.
-    `cancelled()` is asked before every generation; True raises SweepCancelled. `progress(fraction, message)`
+              keep_motions: bool = True, grounding: bool = True) -> SweepResult:
+    """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
+    feet grounded (pipeline.finish, without smoothing: the sampler's own motion otherwise) unless `grounding` is
+    off. `cancelled()` is asked before every generation; True raises SweepCancelled. `progress(fraction, message)`
     carries the estimate of the time left."""
     reference = reference if reference is not None else speaker_reference()
     context = SpeechContext.of(speech.audio, None if reference is None else reference.mean_speed)
@@ -165,11 +168,11 @@ def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerRefere
             eta = f", about {left:.0f} s left" if left is not None else ""
             progress(done / total, f"{i + 1} of {len(jobs)}: {m} {s} steps CFG {c:g} seed {k}{eta}")
         res = pipe.generate(speech, steps=s, cfg=c, seed=k, method=m)
-        motion = res.motion.slice(0, speech.num_frames)
+        motion, _ = finish(res.motion.slice(0, speech.num_frames), grounding=grounding, body=body)
         world, local = joint_positions(motion, body)
         runs.append(SweepRun(m, s, c, k, res.generation_seconds, statistics_of_joints(world, local, context),
                              motion if keep_motions else None, local))
         done += _units(s, c)
     if progress:
         progress(1.0, f"{len(jobs)} motions in {time.perf_counter() - t0:.0f} s")
-    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0)
+    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, grounding)

@@ -1,7 +1,8 @@
 """`gesturelsm sweep`: methods x steps x CFG x seeds on one speech -> table (CSV, markdown, JSON) and plot.
 
     gesturelsm sweep speech.wav --methods gesturelsm rectified_flow ddim --steps 1 2 4 8 --cfg 1 2 3 --seeds 2 \
-        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] --out runs/sweep
+        [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] [--grounding off] \
+        --out runs/sweep
 """
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from pathlib import Path
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import checkpoint_sources
+from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
 from .sweep import SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
@@ -35,6 +37,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
+    add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
     p.add_argument("--max-work", type=float, default=LIMITS.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
@@ -56,7 +59,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     check_grid(pipe, grid, len(audio) / SAMPLE_RATE, limits)
     words = read_words(args.textgrid) if args.textgrid else None
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe)
-    result = run_sweep(pipe, speech, grid, keep_motions=False,
+    result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
                        progress=lambda f, m: print(f"[{100 * f:3.0f} %] {m}", file=sys.stderr, flush=True))
     files = write_sweep(result, Path(args.out), args.metric)
     print(markdown_text(result))

@@ -54,7 +54,7 @@ def markdown_text(result: SweepResult) -> str:
             f"{SEED_SPREAD.label} ({SEED_SPREAD.unit})"]
     lines = [f"Sweep on {result.speech_seconds:.1f} s of speech ({result.text_mode}); {g.seeds} seed(s) per setting, "
              f"mean ± standard deviation over seeds; generation time is sampling + decoding (features shared); "
-             f"whole sweep {result.seconds:.1f} s.", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+             f"feet on the ground {'on' if result.grounding else 'off'}; whole sweep {result.seconds:.1f} s.", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in result.rows():
         lines.append("| " + " | ".join([label(r["method"]), str(r["steps"]), f"{r['cfg']:g}", _cell(r, "time"),
                                         *(_cell(r, s.key) for s in STATISTICS),
@@ -118,6 +118,7 @@ def sweep_plot(result: SweepResult, out: str | Path, metric: str = "wrist_speed"
 def sweep_json(result: SweepResult) -> dict:
     g = result.grid
     return {"grid": {"methods": list(g.methods), "steps": list(g.steps), "cfg": list(g.cfgs), "seeds": g.seeds},
+            "grounding": result.grounding,
             "speech_seconds": result.speech_seconds, "text_mode": result.text_mode, "seconds": result.seconds,
             "rows": result.rows(),
             "runs": [{"method": r.method, "steps": r.steps, "cfg": r.cfg, "seed": r.seed, "time": r.seconds,

@@ -15,7 +15,7 @@ def eval_markdown(rep: dict) -> str:
     fgd_cols = {"fgd_k": "FGD_k ↓", "fgd_g": "FGD_g ↓", "fgd_emage": "FGD (EMAGE AE) ↓"}
     head = ["method", "steps", "CFG", *[fgd_cols.get(e, e) for e in ex], "BC → (GT)", "Div ↑ (GT)",
             "expr MSE ↓", *(["face vertex MSE ↓"] if rep.get("face_vertices") else []), "jitter m/s³ (GT)",
-            "foot skate m/s (GT)", "s / clip", "RTF", "paper: FGD / BC / Div / AITS"]
+            "foot skate cm/s (GT)", "s / clip", "RTF", "paper: FGD / BC / Div / AITS"]
     lines = [f"Held-out clips with ground truth ({sum(c['ground_truth'] for c in rep['clips'])}): "
              + ", ".join(f"{c['name']} ({c['seconds']} s)" for c in rep["clips"] if c["ground_truth"])
              + f"; {rep['seeds']} seed(s) each. {rep.get('policy', '')}. BC speeds normalised by "
@@ -24,7 +24,7 @@ def eval_markdown(rep: dict) -> str:
     if gt:
         cells = ["ground truth", "-", "-", *["-" for _ in ex], _f(gt["bc"]), _f(gt["diversity"], "{:.2f}"), "-",
                  *(["-"] if rep.get("face_vertices") else []), _f(gt["jitter"], "{:.1f}"),
-                 _f(gt["foot_skate"]), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
+                 _f(gt["foot_skate"], "{:.1f}"), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
         lines.append("| " + " | ".join(cells) + " |")
     for r in rep["rows"]:
         h = r.get("heldout")
@@ -38,19 +38,20 @@ def eval_markdown(rep: dict) -> str:
                  f"{_f(h['bc'])} ({_f(gt.get('bc'))})", f"{_f(h['diversity'], '{:.2f}')} ({_f(gt.get('diversity'), '{:.2f}')})",
                  _f(h["expr_mse"], "{:.3f}"), *([_f(h["vertex_mse"], "{:.3g}")] if rep.get("face_vertices") else []),
                  f"{_f(h['jitter'], '{:.1f}')} ({_f(gt.get('jitter'), '{:.1f}')})",
-                 f"{_f(h['foot_skate'])} ({_f(gt.get('foot_skate'))})",
+                 f"{_f(h['foot_skate'], '{:.1f}')} ({_f(gt.get('foot_skate'), '{:.1f}')})",
                  _f(r["seconds_per_clip"], "{:.2f}"), _f(r["real_time_factor"], "{:.1f}x"), ptxt]
         lines.append("| " + " | ".join(cells) + " |")
     ao = [r for r in rep["rows"] if r.get("audio_only")]
     if ao:
         names = [c["name"] for c in rep["clips"] if not c["ground_truth"]]
         lines += ["", f"Audio-only takes ({', '.join(names)}): no ground-truth motion, so BC and diversity only.", "",
-                  "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate m/s |", "|---|---|---|---|---|---|---|"]
+                  "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate cm/s |", "|---|---|---|---|---|---|---|"]
         for r in ao:
             a = r["audio_only"]
             lines.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
-                         f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'])} |")
+                         f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'], '{:.1f}')} |")
     lines += amplitude_lines(rep)
+    lines += feet_lines(rep)
     lines += ["", "FGD_k / FGD_g: Frechet distances of training-free kinetic / geometric joint features, z-scored by "
               "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is better. Div: metres, L1 over "
               "55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, AITS on an A100; * the paper's "
@@ -77,6 +78,36 @@ def amplitude_lines(rep: dict) -> list[str]:
     for r in rep["rows"]:
         out.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {cells(r.get('heldout'))} "
                    f"| {cells(r.get('audio_only'))} |")
+    return out
+
+
+FEET_COLUMNS = (("foot_skate", "foot skate cm/s", "{:.1f}"), ("contact_share", "contact", "{:.2f}"),
+                ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"),
+                ("bob", "bob cm", "{:.1f}"), ("penetration", "penetration cm", "{:.1f}"),
+                ("leg_jerk", "leg jerk m/s³", "{:.1f}"))
+
+
+def feet_lines(rep: dict) -> list[str]:
+    """Feet and root (metrics/feet.py), held-out clips with ground truth then audio-only takes, ground truth first."""
+    gt = rep.get("ground_truth") or {}
+    if "contact_share" not in gt and not any("contact_share" in (r.get("heldout") or r.get("audio_only") or {})
+                                             for r in rep["rows"]):
+        return []
+    head = ["method", "steps", "CFG", "clips", *(c[1] for c in FEET_COLUMNS)]
+    out = ["", "Feet and root (metrics/feet.py; foot skate: ankles and feet within 5 cm of the take's floor; drift: "
+           "start to end per minute; range: widest horizontal extent of the pelvis path; bob: spread of the pelvis "
+           "height; penetration: p99 below the floor; means over clips x seeds):", "",
+           "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+
+    def row(name: str, steps: str, cfg: str, clips: str, d: dict | None) -> None:
+        if d and d.get("contact_share") is not None:
+            out.append("| " + " | ".join([name, steps, cfg, clips, *(_f(d.get(k), f) for k, _, f in FEET_COLUMNS)])
+                       + " |")
+
+    row("ground truth", "-", "-", "held-out", gt)
+    for r in rep["rows"]:
+        for part, clips in (("heldout", "held-out"), ("audio_only", "audio-only")):
+            row(NAMES.get(r["method"], r["method"]), str(r["steps"]), f"{r['cfg']:g}", clips, r.get(part))
     return out
 
 

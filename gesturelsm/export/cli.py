@@ -38,6 +38,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    "(a VRM stays a VRM), --bvh its skeleton")
     p.add_argument("--bone-map", help="with --rig: bone names as 'mixamo', 'smplx' or a JSON file {SMPL-X joint: "
                    "bone} (default: the VRM humanoid map, else the preset that fits)")
+    p.add_argument("--grounding", choices=("on", "off"), default="on",
+                   help="with --rig: the character's feet planted on its own legs (the same leg IK on its skeleton; "
+                   "off: its legs as retargeted)")
     p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style` "
                    "(default | upper ...)")
     p.set_defaults(func=run)
@@ -87,7 +90,9 @@ def _run_rig(args: argparse.Namespace, seq: MotionSequence) -> int:
     character = load_character(args.rig, args.bone_map)
     if args.glb and character.document is None:
         raise UserError(f"--rig {character.name}: a BVH skeleton has no mesh to animate; use --bvh only")
-    result = retarget_motion(seq, character, args.model)
+    result = retarget_motion(seq, character, args.model, grounding=getattr(args, "grounding", "on") == "on")
+    if result.note:
+        print(result.note)
     if args.glb:
         print(f"wrote {export_rig_glb(seq, character, args.glb, result=result)}")
     if args.bvh:

@@ -1,6 +1,6 @@
 """Exports of a motion on the user's character: the character's own file with the motion added (GLB; a VRM
 stays a VRM: every extension is kept and the motion is a glTF animation on its bone nodes), or its skeleton
-as BVH.
+as BVH; either with the feet planted on the character's own legs (retarget/grounding.py) unless `grounding` is off.
 
     character = load_character("avatar.vrm")
     export_rig_glb(seq, character, "avatar_take.vrm")   # or .glb
@@ -48,10 +48,11 @@ def _face_channels(b: _Builder, gltf: dict, seq, a_time: int, body) -> list[tupl
 
 
 def export_rig_glb(seq, character: Character, path: str | Path, body=None,
-                   result: Retargeted | None = None, name: str = "gesturelsm") -> Path:
+                   result: Retargeted | None = None, name: str = "gesturelsm", grounding: bool = True) -> Path:
     """The character's file plus an animation `name`: rotations of its humanoid bones, the hips'
     translation and, for a VRM with viseme (`aa`, `ih`, `ou`, `ee`, `oh`) or `blink` expressions, their morph
-    targets' weights from the generated face (`retarget.face`). Returns the path."""
+    targets' weights from the generated face (`retarget.face`). `result`: the motion retargeted already, else
+    retargeted here with its feet planted on the character's legs unless `grounding` is off. Returns the path."""
     if character.document is None:
         raise CharacterError(f"{character.name}: a BVH skeleton has no mesh; export it with --bvh")
     doc = character.document
@@ -60,7 +61,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
     for img in doc.gltf.get("images", []):
         if "uri" in img and not str(img["uri"]).startswith("data:"):
             raise CharacterError(f"{character.name}: its textures are separate files; save it as .glb or .vrm")
-    r = result if result is not None else retarget_motion(seq, character, body)
+    r = result if result is not None else retarget_motion(seq, character, body, grounding=grounding)
     skel = r.skeleton
     gltf = copy.deepcopy(doc.gltf)
     b = _start_builder(gltf, doc.blob)
@@ -91,11 +92,11 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
 
 
 def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
-                   result: Retargeted | None = None) -> Path:
+                   result: Retargeted | None = None, grounding: bool = True) -> Path:
     """The character's skeleton below (and including) its hips as BVH, in the character's own axes and
     units: rest frames aligned with its world, so each joint's rotation is Δ_parent^-1 Δ_joint (ZXY Euler,
-    continuous); the root's position is the hips' world position."""
-    r = result if result is not None else retarget_motion(seq, character, body)
+    continuous); the root's position is the hips' world position. `result` and `grounding` as `export_rig_glb`."""
+    r = result if result is not None else retarget_motion(seq, character, body, grounding=grounding)
     skel = r.skeleton
     rest = skel.world()[:, :3, 3]
     root = r.root
@@ -137,9 +138,10 @@ def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
     return path
 
 
-def export_rig(seq, character: Character, beside: str | Path, body=None) -> Path:
+def export_rig(seq, character: Character, beside: str | Path, body=None, grounding: bool = True) -> Path:
     """The motion on the character next to `beside` (e.g. the motion's .npz): STEM_CHARACTER.vrm for a VRM,
-    .glb for a glTF, .bvh for a BVH skeleton. Returns the path written."""
+    .glb for a glTF, .bvh for a BVH skeleton, its feet planted on the character's legs unless `grounding` is off.
+    Returns the path written."""
     beside = Path(beside)
     if character.document is None:
         suffix = ".bvh"
@@ -147,5 +149,5 @@ def export_rig(seq, character: Character, beside: str | Path, body=None) -> Path
         suffix = ".vrm" if character.skeleton.kind.startswith("vrm") else ".glb"
     path = beside.with_name(f"{beside.stem}_{character.path.stem}{suffix}")
     if suffix == ".bvh":
-        return export_rig_bvh(seq, character, path, body)
-    return export_rig_glb(seq, character, path, body)
+        return export_rig_bvh(seq, character, path, body, grounding=grounding)
+    return export_rig_glb(seq, character, path, body, grounding=grounding)

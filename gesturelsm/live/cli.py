@@ -2,6 +2,7 @@
 
     gesturelsm live speech.wav --chunk-ms 200 --out motion.npz            # as fast as possible
     gesturelsm live speech.wav --realtime                                 # chunks arrive at the pace of speech
+    gesturelsm live speech.wav --grounding off                            # the decoder's legs, feet not planted
 """
 from __future__ import annotations
 
@@ -71,6 +72,8 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--commit", type=int, default=LiveConfig.commit, help="latents finalised per window (4 frames each)")
     p.add_argument("--lookahead", type=int, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--grounding", choices=("on", "off"), default="on",
+                   help="feet on the ground, causally, chunk by chunk (off: the decoder's legs and root as they come)")
     p.add_argument("--threads", type=int, default=1,
                    help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
@@ -80,7 +83,8 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.chunk_ms <= 0:
         raise ValueError("--chunk-ms must be positive")
-    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed)
+    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed,
+                     grounding=args.grounding == "on")
     audio = load_audio(args.audio)
     import torch
 
@@ -96,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
     res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {args.chunk_ms:.0f} ms "
-          f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s")
+          f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s; "
+          f"feet on the ground: {args.grounding}")
     print(f"latency median {np.median(res.latencies) * 1000:.0f} ms, p90 {np.percentile(res.latencies, 90) * 1000:.0f}"
           f" ms; real-time factor {res.real_time_factor:.2f}x; {sum(c.motion.num_frames for c in res.chunks)} frames")
     if args.out:

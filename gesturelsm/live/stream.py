@@ -36,6 +36,9 @@ frames into the new one: no jump at seams and no extra latency. The previous dec
 past the chunk; beyond them its last offset fades out (a fade over only those frames leaves seams rougher than the
 inside: `benchmarks/live_latency.py --skip-paced` prints the seam jerk). Root translation is integrated across chunks
 (motion/translation.py convention).
+Feet on the ground (`grounding`, on by default): each emitted chunk is grounded causally before it leaves, by one
+`MotionStreamGrounder` per stream (gesturelsm/grounding/stream.py: contacts, plants, drift filter and blends carried
+across chunks), so no frame waits for later speech and frames once emitted never change.
 Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
 offline frame count floor(N * 30 / 16000).
 """
@@ -58,6 +61,7 @@ from ..flows import make_method
 from ..flows.base import inpainting
 from ..generator.data import samples_for
 from ..generator.sampling import decode_latents
+from ..grounding.stream import MotionStreamGrounder
 from ..motion.regions import TRANS_OFFSET, join_regions
 from ..motion.sequence import MotionSequence
 
@@ -74,6 +78,7 @@ class LiveConfig:
     decode_context: int = 16       # final latents left of the emitted span given to the decoder
     decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
     blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
+    grounding: bool = True         # feet on the ground, causally, chunk by chunk (grounding/stream.py)
 
     def check(self, t: int, s: int) -> None:
         if not s <= self.commit <= t - s:
@@ -127,6 +132,7 @@ class StreamingGenerator:
         self.finished = False
         self.compute_s = 0.0
         self.tail = torch.zeros(0, 1)          # (<= blend_frames, 433) last decode of the frames after the emitted ones
+        self.grounder = MotionStreamGrounder() if config.grounding else None
 
     # ---- input -----------------------------------------------------------------------------------------------
     def feed(self, chunk: np.ndarray, arrival: float | None = None) -> list[MotionChunk]:
@@ -243,6 +249,8 @@ class StreamingGenerator:
         start_xz = (0.0, 0.0) if self.emitted == 0 else (self.xz[0] + dx, self.xz[1] + dz)
         motion = MotionSequence.from_features(feats, start_xz=start_xz)
         self.xz = (float(motion.trans[-1, 0]), float(motion.trans[-1, 2]))
+        if self.grounder is not None:            # the decoder's root path continues above; the frames out are grounded
+            motion = self.grounder.push(motion).motion
         now = time.perf_counter()
         chunk = MotionChunk(motion, self.emitted, now, audio_ahead_s=(self.n_in - samples_for(stop)) / SAMPLE_RATE)
         while self.arrivals and (self.arrivals[0][0] <= samples_for(stop) or T is not None):

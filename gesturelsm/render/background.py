@@ -85,11 +85,13 @@ def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, ou
                  labels: Sequence[str] | None = None, size: tuple[int, int] = (512, 512),
                  body_path: str | Path | None = None, gen_seconds: Sequence[float | None] | None = None,
                  progress: Progress | None = None, nice: int = 19, sr: int = 16000,
-                 cancelled: Callable[[], bool] | None = None, rig: str | Path | None = None) -> Path:
+                 cancelled: Callable[[], bool] | None = None, rig: str | Path | None = None,
+                 grounding: bool = True) -> Path:
     """What `render_video(motions, audio, out, ...)` renders (default style), rendered by a child process in its
     own session at niceness `nice` (see the module docstring). Waits for it; returns `out`. `cancelled()` is asked
     at every progress report (~1 % of the frames): True stops the process and raises RenderCancelled. rig: a
-    character file (.vrm / .glb / .gltf) whose own mesh is drawn instead of the body (`gesturelsm render --rig`)."""
+    character file (.vrm / .glb / .gltf) whose own mesh is drawn instead of the body (`gesturelsm render --rig`),
+    its feet planted on its own legs unless `grounding` is off."""
     import soundfile as sf
 
     out = Path(out)
@@ -108,7 +110,7 @@ def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, ou
         if body_path is not None:
             cmd += ["--model", str(body_path)]
         if rig is not None:
-            cmd += ["--rig", str(rig)]
+            cmd += ["--rig", str(rig)] + ([] if grounding else ["--grounding", "off"])
         _run(cmd, out, job / "stderr.txt", progress, cancelled)
     finally:
         shutil.rmtree(job, ignore_errors=True)

@@ -40,6 +40,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    "(retargeted), instead of the mannequin; a .bvh skeleton has no mesh and keeps the mannequin")
     p.add_argument("--bone-map", help="with --rig: bone names as 'mixamo', 'smplx' or a JSON file {SMPL-X joint: "
                    "bone name} (a VRM brings its own)")
+    p.add_argument("--grounding", choices=("on", "off"), default="on",
+                   help="with --rig: the character's feet planted on its own legs (off: its legs as retargeted)")
     p.add_argument("--frame", type=int, help="write only this frame as a PNG")
     p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
     p.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, whole lines otherwise)")
@@ -106,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
                 if out.suffix.lower() not in (".png", ".jpg", ".jpeg"):
                     raise UserError("--frame writes an image: give --out NAME.png")
                 frame = render_frames(args.motions, [args.frame], body=args.model, style=style, labels=labels,
-                                      gen_seconds=gen, character=character)[0]
+                                      gen_seconds=gen, character=character, grounding=args.grounding == "on")[0]
                 out.parent.mkdir(parents=True, exist_ok=True)
                 iio.imwrite(out, frame)
             else:
@@ -131,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
 
                 try:
                     render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,
-                                 gen_seconds=gen, progress=progress, crf=args.crf, character=character)
+                                 gen_seconds=gen, progress=progress, crf=args.crf, character=character,
+                                 grounding=args.grounding == "on")
                 finally:
                     if bar is not None:
                         bar.close()

@@ -5,8 +5,9 @@ figure facing +z, its left on +x).
     figure = make_figure(seqs, body=None, character=None)      # a retarget.Character with a mesh -> its mesh
     posed = figure.pose(0, frame_ids)                          # Posed: vertices (n, V, 3), normals, root_xz
 
-A character is retargeted (`retarget_motion`), its meshes skinned per frame in numpy (`retarget.skinning`),
-its VRM mouth and blink expressions set from the generated face (`retarget.face`), and its world turned into
+A character is retargeted (`retarget_motion`, its feet planted on its own legs unless `grounding` is off), its
+meshes skinned per frame in numpy (`retarget.skinning`), its VRM mouth and blink expressions set from the
+generated face (`retarget.face`), and its world turned into
 the renderer's with the retargeting's alignment (left, up, forward -> +x, +y, +z); glTF units are metres.
 A character without a mesh (a BVH skeleton, a glTF of bones only) is drawn as the mannequin, with a note.
 """
@@ -57,15 +58,16 @@ class BodyFigure:
 class CharacterFigure:
     """A character's own meshes (every triangle primitive, its materials and textures), skinned per frame."""
 
-    def __init__(self, character: Character, seqs: list[MotionSequence], body=None):
+    def __init__(self, character: Character, seqs: list[MotionSequence], body=None, grounding: bool = True):
         from ..body.model import resolve_body
 
         doc = character.document
         body = resolve_body(body)
         self.seqs = seqs
-        self.results = [retarget_motion(s, character, body) for s in seqs]
+        self.results = [retarget_motion(s, character, body, grounding=grounding) for s in seqs]
         self.mesh = character_mesh(doc, character.skeleton)
         self.notes = [f"{character.name}: {n}" for n in self.mesh.notes]
+        self.notes += sorted({r.note for r in self.results if r.note})
         self.align = self.results[0].align                            # the character's world -> +x left, +y up
         presets = driven_presets(doc.gltf)
         self.morph = [morph_weights(doc.gltf, {p: w for p, w in face_weights(body, s.poses, s.expressions,
@@ -105,13 +107,14 @@ class CharacterFigure:
         return self._frame(rest_world(self.results[0].skeleton), {})[0]
 
 
-def make_figure(seqs: list[MotionSequence], body=None, character: Character | None = None):
-    """CharacterFigure for a character with a mesh, else BodyFigure (the body model, mannequin by default; with
-    a note in `notes` when a character without a mesh was given)."""
+def make_figure(seqs: list[MotionSequence], body=None, character: Character | None = None, grounding: bool = True):
+    """CharacterFigure for a character with a mesh (its feet planted on its own legs unless `grounding` is off),
+    else BodyFigure (the body model, mannequin by default; with a note in `notes` when a character without a mesh
+    was given)."""
     from ..body.model import resolve_body
 
     if character is not None and has_mesh(character.document):
-        return CharacterFigure(character, seqs, body)
+        return CharacterFigure(character, seqs, body, grounding)
     figure = BodyFigure(resolve_body(body), seqs)
     if character is not None:
         figure.notes.append(f"{character.name}: a skeleton without a mesh; drawn as the mannequin")

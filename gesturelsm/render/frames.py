@@ -160,13 +160,13 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
                 size: tuple[int, int] | None = None, labels: Sequence[str] | None = None,
                 gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
                 frame_indices: Sequence[int] | None = None, chunk: int = 32,
-                character=None) -> Iterator[np.ndarray]:
+                character=None, grounding: bool = True) -> Iterator[np.ndarray]:
     """Yield (H, N * W, 3) uint8 frames, one per motion frame (or per index in `frame_indices`).
     character: a retarget.Character whose own mesh is drawn instead of the body (None: the body; a skeleton
-    without a mesh: the body, with a RenderWarning)."""
+    without a mesh: the body, with a RenderWarning), its feet planted on its own legs unless `grounding` is off."""
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
-    figure = make_figure(seqs, body, character)
+    figure = make_figure(seqs, body, character, grounding)
     for note in figure.notes:
         warnings.warn(note, RenderWarning, stacklevel=2)
     patches = _label_patches(len(seqs), labels, gen_seconds, style)
@@ -191,10 +191,10 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
 def render_frames(motions: Sequence[MotionLike] | MotionLike, frame_indices: Sequence[int] | None = None, *,
                   body=None, style: RenderStyle | None = None, size: tuple[int, int] | None = None,
                   labels: Sequence[str] | None = None, gen_seconds: Sequence[float | None] | None = None,
-                  camera: Camera | None = None, character=None) -> np.ndarray:
+                  camera: Camera | None = None, character=None, grounding: bool = True) -> np.ndarray:
     """(K, H, N * W, 3) uint8: the frames at `frame_indices` (all frames when None)."""
     frames = list(iter_frames(motions, body=body, style=style, size=size, labels=labels, gen_seconds=gen_seconds,
-                              camera=camera, frame_indices=frame_indices, character=character))
+                              camera=camera, frame_indices=frame_indices, character=character, grounding=grounding))
     if not frames:
         st = (style or RenderStyle()).with_size(size)
         return np.zeros((0, st.height, st.width, 3), np.uint8)

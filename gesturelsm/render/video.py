@@ -58,14 +58,14 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
                  labels: Sequence[str] | None = None, size: tuple[int, int] | None = None, body=None,
                  progress: Progress | None = None, *, style: RenderStyle | None = None, sr: int = SAMPLE_RATE,
                  gen_seconds: Sequence[float | None] | None = None, camera: Camera | None = None,
-                 crf: int = 20, preset: str = "veryfast", character=None) -> Path:
+                 crf: int = 20, preset: str = "veryfast", character=None, grounding: bool = True) -> Path:
     """Render motions (side by side when several) with the speech into `out` (.mp4); returns the path.
 
     audio: samples at `sr` (16 kHz), a file path, or None for a silent video. It is trimmed / padded to the
     motion (a RenderWarning when they differ by more than 0.5 s). labels / gen_seconds: one per motion,
     drawn in each tile's top-left corner. size: one tile's (width, height), default 512 x 512.
     progress(fraction, message) is called every few frames. character: a retarget.Character whose own mesh is
-    drawn instead of the body (see `iter_frames`).
+    drawn instead of the body, its feet on its own legs unless `grounding` is off (see `iter_frames`).
     """
     import imageio_ffmpeg
     import soundfile as sf
@@ -97,7 +97,8 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
             writer.send(None)
             step = max(1, T // 100)
             for i, frame in enumerate(iter_frames(seqs, body=body, style=style, labels=labels,
-                                                  gen_seconds=gen_seconds, camera=camera, character=character)):
+                                                  gen_seconds=gen_seconds, camera=camera, character=character,
+                                                  grounding=grounding)):
                 writer.send(frame)
                 if progress is not None and (i % step == 0 or i == T - 1):
                     el = time.perf_counter() - t0

@@ -1,5 +1,6 @@
 """One entry point for a character file: `load_character(path)` -> Character (skeleton, and for glTF / VRM
-the document the animated GLB is written into), `retarget_motion(seq, character)` -> Retargeted."""
+the document the animated GLB is written into), `retarget_motion(seq, character)` -> Retargeted, its feet planted
+on the character's own legs unless `grounding=False`."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -10,7 +11,8 @@ from .bvh_read import read_bvh_skeleton
 from .errors import CharacterError
 from .gltf import MAX_BYTES, GltfDocument, gltf_skeleton, read_gltf
 from .skeleton import Skeleton
-from .solve import Ground, Retargeted, SourceBody, retarget
+from .grounding import ground_retargeted
+from .solve import Ground, Retargeted, SourceBody, prepare, retarget
 
 SUFFIXES = (".vrm", ".glb", ".gltf", ".bvh")
 
@@ -39,8 +41,13 @@ def load_character(path: str | Path, bone_map: str | dict | None = None, limit: 
     return Character(path, gltf_skeleton(doc, bone_map), doc)
 
 
-def retarget_motion(seq, character: Character | Skeleton, body=None, ground: Ground | None = None) -> Retargeted:
+def retarget_motion(seq, character: Character | Skeleton, body=None, ground: Ground | None = None,
+                    grounding: bool = True) -> Retargeted:
     """`seq` (MotionSequence on `body`: None = $GESTURELSM_SMPLX_MODEL or the mannequin) on the character;
-    `ground`: the root motion's reference (solve.py `Ground`; None: the motion's own first frame and floor)."""
+    `ground`: the root motion's reference (solve.py `Ground`; None: the motion's own first frame and floor);
+    `grounding`: its feet planted on its own legs (grounding.py; `note` says why not when they cannot be)."""
     skel = character.skeleton if isinstance(character, Character) else character
-    return retarget(seq, skel, SourceBody.of(resolve_body(body), seq.betas), ground)
+    source = SourceBody.of(resolve_body(body), seq.betas)
+    setup = prepare(skel, source)
+    result = retarget(seq, skel, source, ground, setup)
+    return ground_retargeted(result, setup) if grounding else result

@@ -86,6 +86,7 @@ class Retargeted:
     align: np.ndarray              # (3, 3) the character's world -> SMPL-X's axes (left +x, up +y, forward +z)
     scale: float                   # character units per SMPL-X metre (leg-length ratio)
     ground: Ground | None = None   # the root motion's reference (pass it on to continue a stream)
+    note: str | None = None        # why its feet were not grounded on the character's legs (grounding.py), if asked
 
     @property
     def num_frames(self) -> int:
@@ -284,17 +285,10 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     when the caller keeps it."""
     if setup is None or setup.skel is not skel or setup.source is not source:
         setup = prepare(skel, source)
-    W, A, q, scale = setup.W, setup.A, setup.q, setup.scale
+    q, scale = setup.q, setup.scale
     P, G = _smplx_fk(seq, source)
     delta = _solve_deltas(skel, setup.plan, P, G)
-    T, N = delta.shape[:2]
-    # joint positions with the root at its rest place: each offset turns with its parent
-    pos = np.empty((T, N, 3))
-    roots = np.nonzero(skel.parents < 0)[0]
-    pos[:, roots] = q[roots]
-    for idx in setup.levels:                                          # one level of the tree at a time
-        par = skel.parents[idx]
-        pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
+    pos = rest_rooted(setup, delta)
     hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
     feet = [f for f in FEET if f in skel.bones]
@@ -306,16 +300,54 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     rest_low = q[[skel.bones[f] for f in feet], 1].min()
     disp[:, 1] = rest_low + scale * lift - pos[:, [skel.bones[f] for f in feet], 1].min(1)
     pos[:, setup.below] += disp[:, None]
-    # local rotations of the humanoid bones and the hips (the rest keep their rest rotation):
-    # L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the aligned rest rotations
-    V, Vbase = A @ W, setup.Vbase
-    moving = np.array(sorted(set(skel.bones.values()) | {hips}))
-    par = skel.parents[moving]
+    return assemble(setup, delta, pos, int(seq.fps), ground)
+
+
+def rest_rooted(setup: Setup, delta: np.ndarray) -> np.ndarray:
+    """(T, N, 3) joint positions (aligned frame) for the rotations `delta` (T, N, 3, 3) with the roots at their rest
+    place: each offset turns with its parent."""
+    skel, q = setup.skel, setup.q
+    pos = np.empty(delta.shape[:2] + (3,))
+    roots = np.nonzero(skel.parents < 0)[0]
+    pos[:, roots] = q[roots]
+    for idx in setup.levels:                                          # one level of the tree at a time
+        par = skel.parents[idx]
+        pos[:, idx] = pos[:, par] + np.einsum("tnxy,ny->tnx", delta[:, par], q[idx] - q[par])
+    return pos
+
+
+def assemble(setup: Setup, delta: np.ndarray, pos: np.ndarray, fps: int, ground: Ground | None) -> Retargeted:
+    """The Retargeted of aligned rotations relative to rest `delta` (T, N, 3, 3) and aligned joint positions `pos`
+    (T, N, 3): each humanoid bone's and the hips' local rotation in its file's convention, the hips' translation."""
+    skel, A = setup.skel, setup.A
+    T, N = delta.shape[:2]
+    hips = skel.bones["pelvis"]
+    local = np.empty((T, N, 3, 3))
+    local[:] = skel.rotation                     # joints that are no humanoid bone keep their rest rotation
+    moving = moving_joints(setup)
+    local[:, moving] = local_rotations(setup, delta, moving)
+    pos_w = pos @ A
+    return Retargeted(skel, fps, delta, pos_w, local, hips, root_translation(setup, pos_w), A, float(setup.scale),
+                      ground)
+
+
+def moving_joints(setup: Setup) -> np.ndarray:
+    """The joints whose local rotation moves: the humanoid bones and the hips."""
+    return np.array(sorted(set(setup.skel.bones.values()) | {setup.skel.bones["pelvis"]}))
+
+
+def local_rotations(setup: Setup, delta: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """(T, len(joints), 3, 3) local rotations of `joints` in their file's convention, from the aligned rotations
+    relative to rest `delta` (T, N, 3, 3): L_i = W_p^-1 Δw_p^-1 Δw_i W_i = V_p^T Δ_p^T Δ_i V_i with V = A W the
+    aligned rest rotations."""
+    V, Vbase = setup.A @ setup.W, setup.Vbase
+    par = setup.skel.parents[joints]
     Vp = np.where((par >= 0)[:, None, None], V[np.maximum(par, 0)], Vbase)
     dp = np.where((par >= 0)[None, :, None, None], delta[:, np.maximum(par, 0)], np.eye(3))
-    local = np.empty((T, N, 3, 3))
-    local[:] = skel.rotation
-    local[:, moving] = np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, moving]) @ V[moving]
-    pos_w = pos @ A
-    root_t = (setup.to_parent @ np.concatenate([pos_w[:, hips], np.ones((T, 1))], 1).T).T[:, :3]
-    return Retargeted(skel, int(seq.fps), delta, pos_w, local, hips, root_t, A, float(scale), ground)
+    return np.swapaxes(Vp, -1, -2) @ (np.swapaxes(dp, -1, -2) @ delta[:, joints]) @ V[joints]
+
+
+def root_translation(setup: Setup, pos_w: np.ndarray) -> np.ndarray:
+    """(T, 3) the hips' local translation for world joint positions `pos_w` (T, N, 3)."""
+    hips = pos_w[:, setup.skel.bones["pelvis"]]
+    return (setup.to_parent @ np.concatenate([hips, np.ones((len(hips), 1))], 1).T).T[:, :3]

@@ -49,6 +49,7 @@ def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices
     if size is not None:
         size = one_of(size, "Video size", sizes, p)
     in_place = switch(req.stand_in_place, "Stand in place", p)
+    grounding = switch(req.grounding, "Feet on the ground", p)
     exports = switch(req.exports, "Exports", p)
     transcribe = switch(req.transcribe, "Automatic transcription", p)
     text = "" if req.text is None else req.text
@@ -58,7 +59,7 @@ def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices
     if p:
         return req, p
     return replace(req, methods=chosen, steps=steps, cfg=cfg, seed=seed, smoothing=smoothing, size=size,
-                   stand_in_place=in_place, exports=exports, transcribe=transcribe, text=text), []
+                   stand_in_place=in_place, grounding=grounding, exports=exports, transcribe=transcribe, text=text), []
 
 
 def textgrid_words(path: str | Path, seconds: float) -> tuple[list | None, list[str], list[str]]:

@@ -1,8 +1,8 @@
 """An edit of one shown motion for the page, without UI: `GesturePipeline.edit` on the motion a result shows, from
-the speech prepared for it and with the settings it was made with (steps, CFG, smoothing, stand in place), as a new
-`Result` whose `previous` is the result edited (undo goes back to it, files and all). The new result has a folder
-of its own inside the request's (the previous result's files stay as they were); its video and downloads are made
-by `GestureService.render` and `.export` as a generated result's are.
+the speech prepared for it and with the settings it was made with (steps, CFG, smoothing, stand in place, grounding
+on the service's body), as a new `Result` whose `previous` is the result edited (undo goes back to it, files and
+all). The new result has a folder of its own inside the request's (the previous result's files stay as they were);
+its video and downloads are made by `GestureService.render` and `.export` as a generated result's are.
 """
 from __future__ import annotations
 
@@ -70,14 +70,15 @@ def _checked(pipeline, result: Result | None, method: str, start, end, regions, 
 
 
 def edit_result(pipeline, result: Result | None, method: str, start, end, regions: Sequence[str], seed,
-                progress: Progress | None = None) -> Result:
+                progress: Progress | None = None, body=None) -> Result:
     """`result` with `method`'s motion regenerated over [start, end] seconds in `regions` (module docstring)."""
     chosen, start, end, seed = _checked(pipeline, result, method, start, end, regions, seed)
     t0 = time.perf_counter()
     plan = result.plan
     res = pipeline.edit(result.motions[method], result.speech, {r: [(start, end)] for r in chosen},
                         method=method, steps=plan.steps_for(method), cfg=plan.cfg, seed=seed,
-                        stand_in_place=plan.stand_in_place, smoothing=plan.smoothing, progress=progress)
+                        stand_in_place=plan.stand_in_place, smoothing=plan.smoothing, grounding=plan.grounding,
+                        body=body, progress=progress)
     folder = root_folder(result) / f"edit-{len(result.edits) + 1}-{secrets.token_hex(4)}"
     folder.mkdir(parents=True)
     motions = {**result.motions, method: res.motion}

@@ -59,12 +59,13 @@ class Request:
     exports: bool = True
     transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
+    grounding: bool = True                   # feet on the ground (gesturelsm.grounding)
 
     def plan(self, beat2: str | None = None) -> Plan:
         steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
         return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
                     bool(self.stand_in_place), str(self.smoothing), beat2,
-                    Path(self.audio_path).name if self.audio_path else None)
+                    Path(self.audio_path).name if self.audio_path else None, bool(self.grounding))
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +79,7 @@ class RenderJob:
     speech_seconds: float                              # the speech's length (motion frames / 30)
     size: int                                          # pixels per body, square
     started: float                                     # time.perf_counter() at the request's start
+    grounding: bool = True                             # feet on the ground: a character's too, on its own legs
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,9 +7,9 @@ this.
     out.video, out.rows, out.downloads, out.glb, out.text_mode
 
 One request = load the upload -> prepare the speech once (features, word timings) -> generate per method ->
-post-process (stand in place, smoothing) -> render all methods side by side with the speech -> exports ->
-one timing row per method and stage. Generation and post-processing are the library's one request flow
-(`pipeline.generate_all`, `motion/postprocess.py`); this module adds the upload checks, rendering, exports and
+post-process (stand in place, smoothing, feet on the ground) -> render all methods side by side with the speech ->
+exports -> one timing row per method and stage. Generation and post-processing are the library's one request flow
+(`pipeline.generate_all`, `pipeline.finish`); this module adds the upload checks, rendering, exports and
 the timing table. A request run with `render=False` returns its `Result` at once; `render(result)` and
 `export(result)` then return new results with the video and the downloads (`serve/request.py`). Every problem a
 visitor can fix raises an `errors.GestureError` with a message meant for the page.
@@ -178,14 +178,14 @@ class GestureService:
         plan, speech, notes = self._speech(req, audio, prog)
         out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
         out.mkdir(parents=True)
-        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m))
+        gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m), body=self.body)
         if not gen.motions:
             raise InputError("Nothing to show: choose a generator method.")
         labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
         labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
         gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
         job = RenderJob(out, tuple(gen.motions.values()), tuple(labels), tuple(gen_s), speech.audio, speech.duration,
-                        int(req.size), t_start)
+                        int(req.size), t_start, plan.grounding)
         motion_s = time.perf_counter() - t_start
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows, timings = timing_rows(timings, gen.ground_truth is not None, speech.duration, 0.0, motion_s)
@@ -202,7 +202,7 @@ class GestureService:
     def edit(self, result: Result | None, method: str, start: float | None, end: float | None, regions, seed,
              progress: Progress | None = None) -> Result:
         """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
-        return edit_result(self.pipeline, result, method, start, end, regions, seed, progress)
+        return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
 
     def render(self, result: Result, progress: Progress | None = None,
                cancelled: Callable[[], bool] | None = None, character=None) -> Result:
@@ -225,7 +225,8 @@ class GestureService:
                          body_path=body_path, gen_seconds=list(job.gen_seconds),
                          progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
                          nice=self.settings.render_nice, cancelled=cancelled,
-                         rig=character.path if character is not None and character.document is not None else None)
+                         rig=character.path if character is not None and character.document is not None else None,
+                         grounding=job.grounding)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
         render_s = time.perf_counter() - t_r

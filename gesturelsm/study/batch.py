@@ -90,7 +90,8 @@ def _transcript(audio: Path):
 def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
                steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
                body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print, rig=None) -> StudyPlan:
+               design: Design = Design(), log: Callable[[str], None] = print, rig=None,
+               grounding: bool = True) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
     before anything is rendered (naming.check_unchanged). `steps`: per method (missing: the method's default).
@@ -107,7 +108,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         raise ValueError("--raters must be at least 1")
     audio_files = find_audio(audio_dir)
     out = Path(out)
-    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2)
+    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2, grounding=grounding)
     render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
                   character=file_label(rig.path) if rig is not None else None)
     settings = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
@@ -115,7 +116,7 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     check_unchanged(out, settings, asdict(design))
     plan = plan_study(audio_files, methods, out, settings)
     record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=cfg, seed=seed, size=size,
-                  stand_in_place=stand_in_place, smoothing=smoothing, design=asdict(design))
+                  stand_in_place=stand_in_place, smoothing=smoothing, grounding=grounding, design=asdict(design))
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
     done, skipped = _render_missing(pipeline, plan, audio_files, base, size, body, rig, log)
     _write_key(plan)
@@ -159,17 +160,17 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
         except ValueError as exc:  # InputError: too short, silent, too long
             raise ValueError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, replace(base, methods=[it.method], filename=a.name))
+            gen = pipeline.generate_all(speech, replace(base, methods=[it.method], filename=a.name), body=body)
             if it.method not in gen.motions:
                 log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
                 continue
             render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
-                         character=rig)
+                         character=rig, grounding=base.grounding)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 
                 export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body)
+                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.grounding)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
     return done, skipped

@@ -12,6 +12,7 @@ import argparse
 from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..errors import UserError
+from ..grounding.cli import add_grounding_flag, grounding_on
 from ..backends import FACTS, checkpoint_sources
 from ..presentation import steps_from_flags
 from ..motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
@@ -40,6 +41,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
                    help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
+    add_grounding_flag(p)
     p.add_argument("--design", default="pairwise", choices=MODES,
                    help="the study's design: pairwise preference between methods on the same speech, or each "
                    "video rated 1-5 on realness, synchrony and smoothness")
@@ -62,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
                steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
                body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing,
-               design=Design(args.design, args.attention, args.seed), rig=rig)
+               design=Design(args.design, args.attention, args.seed), rig=rig, grounding=grounding_on(args))
     return 0
 
 

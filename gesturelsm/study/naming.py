@@ -26,7 +26,7 @@ from ..pipeline import GROUND_TRUTH, Plan
 SETTINGS_FILE = "study.json"
 PER_VIDEO = ("methods", "steps", "filename", "beat2")      # Plan fields that do not describe how a video looks
 FLAGS = {"steps": "--steps / --ddim-steps", "cfg": "--cfg", "seed": "--seed", "smoothing": "--smoothing",
-         "stand_in_place": "--stand-in-place", "size": "--size", "body": "--model", "character": "--rig",
+         "stand_in_place": "--stand-in-place", "grounding": "--grounding", "size": "--size", "body": "--model", "character": "--rig",
          "weights": "--checkpoints", "mode": "--design", "attention": "--attention"}
 
 

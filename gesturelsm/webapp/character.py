@@ -35,6 +35,7 @@ from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_x
 from gesturelsm.export.rig import export_rig
 from gesturelsm.retarget import Character, load_character, retarget_motion
 from gesturelsm.retarget.face import channel_weights, face_weights, morph_channels, morph_weights
+from gesturelsm.retarget.grounding import leg_problem
 
 MAX_CHARACTER_BYTES = 32 * 1024 * 1024        # a page upload; the CLI takes up to 64 MB
 PAGE_SUFFIXES = (".vrm", ".glb", ".gltf")
@@ -70,7 +71,7 @@ def read_upload(path: str | Path | None) -> Character | None:
 def choose(path: str | Path | None) -> tuple[Character | None, dict]:
     """The upload's change event: (the page session's character, the upload's update: its label says what was
     loaded). A file that cannot be used gives a warning with its one-line reason, the mannequin (None) and an
-    emptied upload."""
+    emptied upload; a character whose legs cannot be grounded is used, with a warning saying so."""
     try:
         character = read_upload(path)
     except gr.Error as exc:
@@ -78,6 +79,9 @@ def choose(path: str | Path | None) -> tuple[Character | None, dict]:
         return None, gr.update(value=None, label=LABEL)
     if character is None:
         return None, gr.update(label=LABEL)
+    note = leg_problem(character.skeleton)
+    if note:
+        gr.Warning(note)
     return character, gr.update(label=f"Character: {character.name} ({len(character.skeleton.bones)} humanoid "
                                       f"bones); clear it for the mannequin")
 
@@ -103,9 +107,10 @@ def face_morph(character: Character, channels: list[tuple[int, int]], seq, body)
     return channel_weights(per_mesh, channels, seq.num_frames)
 
 
-def character_payload(character: Character, motions: dict, body=None) -> dict:
+def character_payload(character: Character, motions: dict, body=None, grounding: bool = True) -> dict:
     """Each method's motion on the character: {name, bones, nodes, fps, frames, methods: {method: {quats, root}}},
-    plus `morphs` and each method's `morph` for a character with face presets (module docstring)."""
+    plus `morphs` and each method's `morph` for a character with face presets (module docstring); its feet
+    planted on its own legs unless `grounding` is off."""
     skel = character.skeleton
     order = bone_order(skel)
     out = {"name": character.name, "bones": [skel.names[i] for i in order], "nodes": [skel.nodes[i] for i in order],
@@ -115,7 +120,7 @@ def character_payload(character: Character, motions: dict, body=None) -> dict:
         out["morphs"] = [list(c) for c in channels]
         face_body = resolve_body(body)
     for method, seq in motions.items():
-        r = retarget_motion(seq, character, body)
+        r = retarget_motion(seq, character, body, grounding=grounding)
         q = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation[:, order]))
         out["methods"][method] = {"quats": _b64(q), "root": _b64(r.root_translation)}
         if channels:
@@ -127,21 +132,23 @@ def character_payload(character: Character, motions: dict, body=None) -> dict:
     return out
 
 
-def page_character(character: Character, motions: dict, folder: Path, url, body=None) -> dict:
+def page_character(character: Character, motions: dict, folder: Path, url, body=None, grounding: bool = True) -> dict:
     """`character_payload` plus the file the player loads: copied into the request's folder (`url(path)` is its
     address) and `key`, a hash of its bytes, so the browser parses one character once whatever the request."""
     data = character.path.read_bytes()
     path = Path(folder) / f"character{character.path.suffix.lower()}"
     shutil.copyfile(character.path, path)
-    return {**character_payload(character, motions, body), "url": url(path),
+    return {**character_payload(character, motions, body, grounding), "url": url(path),
             "key": hashlib.sha1(data).hexdigest()}
 
 
-def rig_downloads(character: Character | None, motions: dict, folder: Path, body=None) -> list[Path]:
+def rig_downloads(character: Character | None, motions: dict, folder: Path, body=None,
+                  grounding: bool = True) -> list[Path]:
     """Each method's motion in the character's own file (`gesturelsm export --rig`): METHOD_NAME.vrm / .glb."""
     if character is None:
         return []
-    return [export_rig(seq, character, Path(folder) / f"{method}.npz", body) for method, seq in motions.items()]
+    return [export_rig(seq, character, Path(folder) / f"{method}.npz", body, grounding)
+            for method, seq in motions.items()]
 
 
 def decode(b64: str, shape: tuple[int, ...]) -> np.ndarray:

@@ -25,7 +25,9 @@ poses and trans). With the visitor's character (live_character.py: the socket's 
 each record also carries the frames on the character (the format's version 2 character section); without one the
 records are version 1. Over the socket a record is a binary message; Gradio's microphone puts it base64-encoded in the
 hidden textbox `live-motion` (`decode(base64.b64decode(text))`).
-The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
+The checkbox `live-grounding` (on by default) keeps the feet on the ground, causally, chunk by chunk (the stream's
+`LiveConfig.grounding`; over the socket the hello's `grounding`), from the next Record on; on a character, on its own
+legs. The element with id `live-latency` shows the median latency in milliseconds (just the number): from a microphone
 chunk's arrival at the server to the motion covering it being ready; `live-stats` shows the p90 and the real-time
 factor beside it. The player `live-player` (player/src/live_feed.js `LiveFeed`) plays the frames at 1x one steady
 delay behind the voice and measures that delay itself (its data-shown-median-ms / data-shown-p90-ms); on the visitor's
@@ -53,6 +55,7 @@ PATH = "/gesturelsm/live"    # where the page's live player opens the app's WebS
 STREAM_EVERY_S = 0.5     # s of microphone per upload: Gradio uploads each chunk as a file, and at 0.2 s the uploads
                          # fell 3-11 s behind the speech on the loaded 2-core machine (benchmarks/live_browser.py)
 TIME_LIMIT_S = 15 * 60
+GROUNDING_LABEL = "Feet on the ground"   # the Live tab's option (`live-grounding`): each stream from its start on
 
 
 def to_float(sr: int, data: np.ndarray) -> np.ndarray:
@@ -107,14 +110,14 @@ def _stats(st: dict) -> str:
     return f"p90 {st['p90_latency_ms']:.0f} ms · real-time factor {rtf:.1f}x · {st['frames']} frames"
 
 
-def on_chunk(manager: LiveManager, chunk, session: LiveSession | None):
-    """One microphone chunk: open a session on the first, feed it, return what is ready
-    (state, player JSON, #live-latency, #live-stats, status)."""
+def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, grounding: bool = True):
+    """One microphone chunk: open a session on the first (its feet on the ground unless `grounding` is off), feed
+    it, return what is ready (state, player JSON, #live-latency, #live-stats, status)."""
     if chunk is None:
         return session, gr.skip(), gr.skip(), gr.skip(), gr.skip()
     if session is None or not session.running:
         try:
-            session = manager.open()
+            session = manager.open(replace(manager.config, grounding=bool(grounding)))
         except LiveBusy as exc:
             return None, as_text(encode(MotionRecord(meta={"status": str(exc)}))), "", "", str(exc)
     try:
@@ -171,7 +174,8 @@ def live_player(body, cache: str | Path) -> gr.HTML | None:
             '<div class="live-bar">'
             '<button id="live-record" type="button" class="lg primary">Record</button>'
             '<button id="live-stop" type="button" class="lg secondary" disabled>Stop</button>'
-            '<span>median latency <b id="live-latency"></b> ms</span><span id="live-stats"></span>'
+            f'<label class="live-option"><input id="live-grounding" type="checkbox" checked> {GROUNDING_LABEL}'
+            '</label><span>median latency <b id="live-latency"></b> ms</span><span id="live-stats"></span>'
             '<span id="live-status"></span></div>')
     return gr.HTML("", html_template=html, js_on_load=js, elem_id="live-player-box", padding=False)
 
@@ -199,6 +203,7 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
             extra = {} if characters is None else {"characters": characters}
             return socket_routes(manager, body, **extra)   # the socket path: everything else is in the player's HTML
         state = gr.State(None, delete_callback=_delete)
+        grounding = gr.Checkbox(True, label=GROUNDING_LABEL, elem_id="live-grounding")
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
                        waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page
         with gr.Row():
@@ -208,7 +213,7 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
         motion = gr.Textbox(visible=False, elem_id="live-motion",
                             label="motion chunk (base64 motion record)")   # for API clients
         outs = [state, motion, latency, stats, status]
-        mic.stream(lambda microphone, s: on_chunk(manager, microphone, s), [mic, state], outs,
+        mic.stream(lambda microphone, s, g: on_chunk(manager, microphone, s, g), [mic, state, grounding], outs,
                    stream_every=STREAM_EVERY_S, time_limit=TIME_LIMIT_S, concurrency_limit=manager.max_sessions,
                    api_name="live_chunk", show_progress="hidden")
         mic.stop_recording(on_stop, [state], outs, api_name="live_stop")

@@ -18,7 +18,9 @@ when a stream starts after a sweep).
 
 Retargeting a stream chunk by chunk gives what retargeting the whole stream gives (gesturelsm.retarget): the
 rotations are per frame, the root motion keeps the first chunk's reference (`Ground`: where the pelvis started, where
-SMPL-X's floor is), and each bone's quaternion keeps the sign of its previous frame across chunk borders.
+SMPL-X's floor is), and each bone's quaternion keeps the sign of its previous frame across chunk borders. With
+`grounding` (on unless the stream's is off) its feet are planted on its own legs causally, chunk by chunk
+(gesturelsm/retarget/grounding.py `CharacterStreamGrounder`): what the same grounder gives the whole stream at once.
 A VRM with viseme / blink expressions also moves its face: `spec()["morphs"]` lists the morph-target channels
 (character.py `face_channels`, [[glTF mesh, target], ...]; [] for none) and each chunk's `morph` holds their weights
 for the chunk's frames (character.py `face_morph`: per frame, so per chunk is the whole motion's at those frames).
@@ -41,6 +43,7 @@ from gesturelsm.body.model import resolve_body
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
+from gesturelsm.retarget.grounding import CharacterStreamGrounder
 from gesturelsm.retarget.solve import prepare
 
 from .character import bone_order, face_channels, face_morph
@@ -142,7 +145,7 @@ class LiveCharacters:
 class CharacterStream:
     """One live stream's motion on a character, chunk by chunk (module docstring)."""
 
-    def __init__(self, character: Character, body=None):
+    def __init__(self, character: Character, body=None, grounding: bool = True):
         self.character = character
         self.skeleton = character.skeleton
         self.order = bone_order(self.skeleton)
@@ -153,6 +156,7 @@ class CharacterStream:
         self.align, self.scale = self.setup.A, self.setup.scale
         self.ground: Ground | None = None
         self.last: np.ndarray | None = None          # (B, 4) the last frame's quaternions sent
+        self.grounder = CharacterStreamGrounder(self.setup) if grounding else None   # its feet on its own legs
 
     def spec(self) -> dict:
         """What the page's player needs besides the frames (JSON): as character.py `character_payload`'s fields."""
@@ -169,6 +173,8 @@ class CharacterStream:
         F = len(spec()["morphs"]) (0 for a character without face presets), float32."""
         r = retarget(seq, self.skeleton, self.source, self.ground, self.setup)
         self.ground = r.ground
+        if self.grounder is not None:
+            r = self.grounder.push(r)
         q = matrix_to_quaternion_xyzw(r.local_rotation[:, self.order])
         prev = self.last if self.last is not None else q[0]
         q = continuous_quaternions(np.concatenate([prev[None], q]))[1:]     # signs continue the previous chunk's

@@ -8,6 +8,8 @@ chunk the moment the session's worker has it (no polling):
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate); with
                               {"sample_rate": 16000, "character": TOKEN}  the page session's character token
                                                                  (live_character.py), the stream is on that character
+                              {..., "grounding": false}          feet on the ground off for this stream (default
+                                                                 on: grounded causally, chunk by chunk)
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
     server -> client   binary a motion record, no frames        only when the hello named a character, first: meta
@@ -32,6 +34,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+from dataclasses import replace
 
 import numpy as np
 from starlette.routing import WebSocketRoute
@@ -70,6 +73,15 @@ def hello(text: str) -> tuple[int, str | None]:
     if token is not None and not isinstance(token, str):
         raise Refused("the character must be the token the page was given (a string)")
     return sr, token
+
+
+def grounding_of(text: str) -> bool:
+    """Whether the stream of this (checked) hello keeps its feet on the ground: its `grounding` (true / false),
+    true when absent."""
+    on = json.loads(text).get("grounding", True)
+    if not isinstance(on, bool):
+        raise Refused("grounding must be true or false")
+    return on
 
 
 def pcm(data: bytes, sr: int) -> np.ndarray:
@@ -125,16 +137,17 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
 
     try:
         try:
-            sr, token = hello(await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
+            sr, token = hello(first := await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
         except asyncio.TimeoutError:
             raise Refused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
         try:
-            session = manager.open(on_publish=lambda: loop.call_soon_threadsafe(ready.set))
+            session = manager.open(replace(manager.config, grounding=grounding_of(first)),
+                                   on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         except LiveBusy as exc:
             await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
             return
         if token is not None:                   # before any motion: the page shows the character from frame 0
-            character, meta = await asyncio.to_thread(stream_character, characters, token, body)
+            character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding_of(first))
             if not await say(ws, encode(MotionRecord(meta=meta))):
                 return
         pusher = asyncio.create_task(push())
@@ -161,15 +174,16 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
         await shut(ws)
 
 
-def stream_character(characters, token: str, body=None) -> tuple[CharacterStream | None, dict]:
+def stream_character(characters, token: str, body=None,
+                     grounding: bool = True) -> tuple[CharacterStream | None, dict]:
     """The stream's character for the hello's `token` and the meta of the message that tells the page: its spec,
-    or why the stream uses the mannequin."""
+    or why the stream uses the mannequin; `grounding`: its feet planted on its own legs (live_character.py)."""
     entry = characters.get(token) if characters is not None else None
     url = entry.serve() if entry is not None else None
     if url is None:
         return None, {"status": "streaming", "character_error": EXPIRED}
     try:
-        stream = CharacterStream(entry.character, body)
+        stream = CharacterStream(entry.character, body, grounding=grounding)
     except GestureError as exc:                 # a character the retargeting refuses (e.g. an absurd scale)
         return None, {"status": "streaming", "character_error": f"{exc}; the live stream uses the mannequin"}
     return stream, {"status": "streaming", "character": {**stream.spec(), "url": url, "key": entry.key}}

@@ -52,7 +52,9 @@ face) with **shortcut flow matching** (GestureLSM): a few steps are enough. *Rec
 baselines trained the same way with their usual objectives. Per-region RVQ-VAE decoders turn the latents into
 SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with your speech.
 *CFG* is classifier-free guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
-*Stand in place* removes horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
+*Feet on the ground* (on by default) plants each foot where it lands (leg IK), keeps the body from drifting away and
+puts it on the floor, for every method and ground truth, without touching the upper body; *stand in place* removes
+horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
 Timings: features, alignment and transcription are computed once and shared by all methods; the real-time factor is seconds of
 speech per second of generation (alignment, transcription and rendering excluded, as in the paper); the last row is the whole
 request, upload to video."""
@@ -104,11 +106,12 @@ class _Handlers:
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                auto_text=True, *, exports: bool, render: bool = True) -> Request:
+                auto_text=True, grounding=True, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
                        steps=steps_from_flags(steps, ddim_steps, FACTS), cfg=cfg, seed=seed,
-                       stand_in_place=in_place, smoothing=smoothing, size=size, exports=exports, transcribe=auto_text,
+                       stand_in_place=in_place, grounding=grounding, smoothing=smoothing, size=size, exports=exports,
+                       transcribe=auto_text,
                        render=render)
 
     @staticmethod
@@ -134,12 +137,13 @@ class _Handlers:
             self.service.prefetch(audio)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, character=None, request: gr.Request = None, progress=gr.Progress()):
+                    auto_text, grounding=True, character=None, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first (on the page session's `character` when one is loaded); the video (`show_video`) and the downloads
         (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes the request and
         progress only to positional parameters.)"""
-        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text)
+        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
+                grounding)
         out = self._run(self.request(*args, exports=False, render=False), progress)
         self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
@@ -174,14 +178,15 @@ class _Handlers:
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
         files, glb = self._files(out)
-        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body)]
+        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
+                                                out.job.grounding)]
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=True, progress=gr.Progress()):
+                 auto_text=True, grounding=True, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
-                                     size, auto_text, exports=True), progress)
+                                     size, auto_text, grounding, exports=True), progress)
         return (str(out.video), out.rows, out.summary, *self._files(out))
 
 
@@ -216,6 +221,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
                                             value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
         seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
     with gr.Accordion("Options", open=False):
+        grounding = pass_through(gr.Checkbox(value=True, elem_id="grounding",
+                                             label="Feet on the ground (planted feet, no drift, on the floor)"))
         in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
         smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULT_SMOOTHING, label="Smoothing"))
         size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
@@ -224,7 +231,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
     ex = _examples()
     if ex:
         gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
-    return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text], button,
+    return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
+             grounding], button,
             character)
 
 
@@ -298,7 +306,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
             token, spec = gr.State(None, delete_callback=characters.drop), gr.JSON(visible=False)
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
-        audio, auto_text = inputs[0], inputs[-1]
+        audio, auto_text = inputs[0], inputs[11]
         for uploaded in (audio.upload, audio.stop_recording):      # transcribe before the click (asr.source)
             uploaded(h.prefetch, [audio, text, auto_text], None, show_progress="hidden", api_visibility="private",
                      concurrency_limit=1, concurrency_id="prefetch")

@@ -16,7 +16,7 @@ from gesturelsm.errors import InputError
 from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, motion_statistics, speaker_reference
 from gesturelsm.evaluation.sweep import SweepCancelled, SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
 from gesturelsm.evaluation.sweep_report import write_sweep
-from gesturelsm.pipeline import GesturePipeline
+from gesturelsm.pipeline import GesturePipeline, finish
 
 
 @pytest.fixture(scope="module")
@@ -68,8 +68,8 @@ def test_a_sweep_cell_is_the_motion_that_setting_and_seed_generate_alone(cli_run
     audio = load_audio(wav)
     speech = pipe.prepare_speech(audio, 16000, transcribe=False)
     res = pipe.generate(speech, steps=2, cfg=2.0, seed=1, method="ddim")
-    want = motion_statistics(res.motion.slice(0, speech.num_frames), None,
-                             SpeechContext.of(speech.audio, speaker_reference().mean_speed))
+    motion, _ = finish(res.motion.slice(0, speech.num_frames), grounding=True)      # the sweep grounds the feet
+    want = motion_statistics(motion, None, SpeechContext.of(speech.audio, speaker_reference().mean_speed))
     got = next(r for r in json.loads((cli_run / "sweep.json").read_text())["runs"]
                if (r["method"], r["steps"], r["seed"]) == ("ddim", 2, 1))
     for s in STATISTICS:
@@ -132,3 +132,28 @@ def test_write_sweep_replaces_an_earlier_sweep_in_place(pipe, wav, tmp_path):
     write_sweep(res, tmp_path / "out", metric="jerk")
     assert [p.name for p in tmp_path.iterdir()] == ["out"]            # no temporary folder left
     assert (tmp_path / "out" / "sweep.csv").read_text().startswith("method,steps,cfg")
+
+
+def test_sweep_grounding_off_measures_the_samplers_own_motion(pipe, wav, tmp_path, eval_assets):
+    from gesturelsm.audio import load_audio
+
+    out = tmp_path / "off"
+    speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
+    grid = SweepGrid(("ddim",), (2,), (2.0,), 1)
+    ref = speaker_reference()
+    raw = pipe.generate(speech, steps=2, cfg=2.0, seed=0, method="ddim").motion.slice(0, speech.num_frames)
+    context = SpeechContext.of(speech.audio, ref.mean_speed)
+    for grounding in (False, True):
+        result = run_sweep(pipe, speech, grid, grounding=grounding, keep_motions=False)
+        want = motion_statistics(finish(raw, grounding=grounding)[0], None, context)
+        got = result.runs[0].statistics
+        assert got["foot_skate"] == pytest.approx(want["foot_skate"]) and got["bob"] == pytest.approx(want["bob"])
+        assert result.grounding is grounding
+        write_sweep(result, out / str(grounding))
+        assert f"feet on the ground {'on' if grounding else 'off'}" in (out / str(grounding) / "sweep.md").read_text()
+        assert json.loads((out / str(grounding) / "sweep.json").read_text())["grounding"] is grounding
+    assert main(["sweep", str(wav), "--checkpoints", str(eval_assets), "--methods", "ddim", "--steps", "2",
+                 "--seeds", "1", "--no-transcribe", "--grounding", "off", "--out", str(out / "cli")]) == 0
+    rep = json.loads((out / "cli" / "sweep.json").read_text())
+    assert rep["grounding"] is False and rep["runs"][0]["bob"] == pytest.approx(
+        motion_statistics(raw, None, context)["bob"])

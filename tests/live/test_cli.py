@@ -28,3 +28,27 @@ def test_live_cli_bad_input_is_one_clear_line(tmp_path, capsys):
     sf.write(wav, speech_like(1.0), 16000)
     assert main(["live", str(wav), "--chunk-ms", "0"]) == 2
     assert "--chunk-ms" in capsys.readouterr().err
+
+
+def test_live_cli_grounds_causally_by_default_and_off_keeps_the_decoders_legs(shipped_pipe, tmp_path, capsys):
+    """The same stream with --grounding on (the default) and off: the upper body and face are bit for bit the same,
+    only the legs and root differ, and the grounded stream is the ungrounded one grounded by the causal core in one
+    go (the generator's chunks do not matter: equal to float32)."""
+    from gesturelsm.grounding.stream import MotionStreamGrounder
+
+    from _standing import KEPT_COLUMNS
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(3.0, seed=9), 16000)
+    for mode in ("on", "off"):
+        args = ["live", str(wav), "--steps", "1", "--out", str(tmp_path / f"{mode}.npz")]
+        assert main(args + (["--grounding", "off"] if mode == "off" else [])) == 0
+        assert f"feet on the ground: {mode}" in capsys.readouterr().out
+    on, off = (MotionSequence.load(tmp_path / f"{m}.npz") for m in ("on", "off"))
+    assert np.array_equal(on.poses[:, KEPT_COLUMNS], off.poses[:, KEPT_COLUMNS])
+    assert np.array_equal(on.expressions, off.expressions)
+    assert not np.allclose(on.poses[:, 3:9], off.poses[:, 3:9])
+    whole = MotionStreamGrounder().push(off)
+    assert whole.note is None
+    np.testing.assert_allclose(on.poses, whole.motion.poses, atol=1e-5)
+    np.testing.assert_allclose(on.trans, whole.motion.trans, atol=1e-5)

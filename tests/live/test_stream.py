@@ -37,7 +37,8 @@ def test_equals_offline_when_lookahead_covers_the_window(shipped_pipe):
             ch[:, :src.shape[1]] = src
             return ch
 
-    cfg = LiveConfig(commit=28, lookahead=4, steps=2, cfg=2.0, seed=5, decode_lag=16, decode_context=16)
+    cfg = LiveConfig(commit=28, lookahead=4, steps=2, cfg=2.0, seed=5, decode_lag=16, decode_context=16,
+                     grounding=False)                         # the decoder's frames, as offline without grounding
     out, poses, trans = streamed(shipped_pipe, y, cfg, 3333, OfflineFeatures)
     ref = shipped_pipe.generate(sp, steps=2, cfg=2.0, seed=5).motion
     assert poses.shape == ref.poses.shape and len(out) >= 3

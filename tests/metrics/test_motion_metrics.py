@@ -3,7 +3,7 @@ import pytest
 
 from gesturelsm.metrics.diversity import l1_diversity
 from gesturelsm.metrics.face import expression_mse
-from gesturelsm.metrics.physics import foot_skating, jitter
+from gesturelsm.metrics.physics import jitter
 
 
 def test_diversity_of_a_static_pose_is_zero_and_matches_hand_computation():
@@ -28,23 +28,6 @@ def test_jitter_is_zero_for_constant_velocity_and_sees_noise():
     assert jitter(line) == pytest.approx(0.0, abs=1e-6)
     noisy = line + np.random.default_rng(0).normal(scale=1e-3, size=line.shape)
     assert jitter(noisy) > 1.0
-
-
-def test_foot_skating_planted_vs_sliding():
-    T = 120
-    j = np.zeros((T, 55, 3))
-    j[:, :, 1] = 1.0
-    j[:, [7, 8, 10, 11], 1] = 0.05                      # feet on the ground
-    planted = foot_skating(j)
-    assert planted.speed == pytest.approx(0.0) and planted.contact == pytest.approx(1.0)
-    slide = j.copy()
-    slide[:, [10, 11], 0] += np.arange(T)[:, None] * 0.01   # feet glide at 0.3 m/s while on the ground
-    s = foot_skating(slide)
-    assert s.speed == pytest.approx(0.15, rel=1e-6)      # half the foot joints slide at 0.3 m/s
-    assert s.ratio == pytest.approx(0.5)
-    lifted = j.copy()
-    lifted[:, [10, 11], 1] += 0.3 * (np.arange(T) % 2 == 0)[:, None]   # bouncing feet are not in contact
-    assert foot_skating(lifted).contact < 1.0
 
 
 def test_expression_mse():

@@ -155,3 +155,33 @@ def test_primitives_sharing_vertices_draw_one_vertex_range(boxes, body, arms_dow
     assert figure.num_vertices == V and [(s.start, s.count) for s in figure.surfaces] == [(0, V), (0, V)]
     assert figure.faces.max() == V - 1
     assert figure.pose(0, np.arange(2)).vertices.shape == (2, V, 3)
+
+
+def test_the_video_plants_the_characters_feet_on_its_own_legs(tmp_path, body):
+    """A box character with longer shins, shorter thighs and wider hips under a motion whose SMPL-X feet are planted:
+    what the video draws (the figure's skinned vertices) keeps its feet still while planted; `--grounding off` draws
+    them as retargeted, sliding, and the frame differs."""
+    from _standing import other_legs, segments, standing, swaying
+    from gesturelsm.grounding import ground_motion
+    from gesturelsm.render.figure import make_figure
+
+    skel, _ = build_rig(other_legs(body.rest_joints()), fingers=False)
+    write_skinned_glb(skel, tmp_path / "legs.vrm", vrm_body_bones(), half=0.04)
+    character = load_character(tmp_path / "legs.vrm")
+    g = ground_motion(swaying(standing(seconds=4.0, seed=1)))
+    assert g.note is None and g.contacts.all()
+    ids = np.arange(15, g.motion.num_frames - 15)
+    moved = {}
+    for on in (True, False):
+        V = make_figure([g.motion], body, character, grounding=on).pose(0, ids).vertices
+        feet = V[0, :, 1] <= np.percentile(V[0, :, 1], 3)                   # the soles' vertices
+        moved[on] = float(np.linalg.norm(V[:, feet] - V[:1, feet], axis=-1).max())
+    assert moved[True] <= 0.01 < 0.015 < moved[False], moved
+    g.motion.save(tmp_path / "m.npz")
+    args = ["render", str(tmp_path / "m.npz"), "--size", "96x96", "--quiet", "--frame", "60", "--rig",
+            str(tmp_path / "legs.vrm")]
+    assert main(args + ["--out", str(tmp_path / "on.png")]) == 0
+    assert main(args + ["--out", str(tmp_path / "off.png"), "--grounding", "off"]) == 0
+    on, off = iio.imread(tmp_path / "on.png"), iio.imread(tmp_path / "off.png")
+    assert np.abs(on.astype(int) - off).max() > 40
+    assert segments(g.contacts[:, 0]) == [(0, g.motion.num_frames)]

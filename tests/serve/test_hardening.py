@@ -61,6 +61,7 @@ def _req(path, **kw):
     ("size", "384x", "Video size must be a whole number"),
     ("smoothing", "extreme", "Smoothing must be one of"),
     ("stand_in_place", "yes", "Stand in place must be true or false"),
+    ("grounding", "on", "Feet on the ground must be true or false"),
     ("text", 42, "transcript must be text"),
 ])
 def test_every_field_is_checked_before_any_work(no_work, speech_wav, field, value, message):

@@ -112,6 +112,15 @@ def test_ground_truth_for_a_known_beat2_take(service, beat2_dir, tmp_path):
     out = service.run(Request(str(wav), methods=["gesturelsm", "ground_truth"], steps=1, exports=False,
                               render=False))
     assert out.ground_truth == "2_scott_0_9_9" and out.rows[1][0] == "Ground truth"
+    # ground truth gets the post-processing every method gets; this take's random legs never keep a foot still, so
+    # feet on the ground leaves it as it was and the page says why
+    from gesturelsm.data.lookup import take_motion
+    from gesturelsm.pipeline import finish
+
+    T = out.motions["gesturelsm"].num_frames
+    want, note = finish(fit_length(take_motion(str(beat2_dir), "2_scott_0_9_9"), T), False, "light", True, service.body)
+    np.testing.assert_array_equal(out.motions["ground_truth"].trans, want.trans)
+    assert note and f"Ground truth: {note}" in out.warnings
 
 
 def test_ground_truth_missing_is_said(service, speech_wav):
@@ -312,3 +321,23 @@ def test_the_render_process_gets_the_services_body(service, speech_wav, monkeypa
     svc = GestureService(service.pipeline, service.settings, body if given == "loaded" else str(body.path))
     svc.run(Request(str(speech_wav), steps=1, size=256, exports=False))
     assert Path(seen["body_path"]) == Path(body.path)
+
+
+def test_every_download_carries_the_grounded_motion(service, speech_wav, tmp_path):
+    """With feet on the ground (the default) the npz, BVH, GLB, keypoints and ARKit files are written from the
+    post-processed, grounded motions the page shows: each is byte for byte what exporting that motion writes, and
+    not what the same request without grounding writes."""
+    from gesturelsm.export import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
+
+    runs = {on: service.run(Request(str(speech_wav), steps=1, render=False, grounding=on)) for on in (True, False)}
+    seqs = {on: r.motions["gesturelsm"] for on, r in runs.items()}
+    assert not np.allclose(seqs[True].trans, seqs[False].trans)            # grounding moved the root
+    writers = {"gesturelsm.npz": export_npz, "gesturelsm.bvh": lambda s, p: export_bvh(s, p, body=service.body),
+               "gesturelsm.glb": lambda s, p: export_glb(s, p, body=service.body),
+               "gesturelsm_keypoints.json": lambda s, p: export_keypoints(s, p, body=service.body)}
+    got = {p.name: p.read_bytes() for p in runs[True].downloads}
+    for name, write in writers.items():
+        want = {on: write(seqs[on], tmp_path / f"{on}_{name}").read_bytes() for on in (True, False)}
+        assert got[name] == want[True] and want[True] != want[False], name
+    arkit = export_arkit(seqs[True], tmp_path / "face.csv", body=service.body)     # the face: not touched by grounding
+    assert got["gesturelsm_arkit.csv"] == arkit.read_bytes()

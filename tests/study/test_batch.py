@@ -120,7 +120,7 @@ def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
     render = dict(size=512, body="SMPLX_MANNEQUIN.npz mannequin-sha", character=None)
     base = Plan(["gesturelsm"], {"gesturelsm": 8}, 2.0, 0, False, "light")
     settings = video_settings(base, "gesturelsm", render, "weights-one")
-    changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, size=256,
+    changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, grounding=False, size=256,
                    body="SMPLX_NEUTRAL.npz mannequin-sha", character="me.vrm mannequin-sha", weights="weights-two")
     plan_fields = {f.name for f in fields(Plan)} - {"methods", "steps", "filename", "beat2"}
     assert plan_fields <= set(changed), "a setting of Plan is missing from this test"
@@ -133,7 +133,7 @@ def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
         names.add(other.items[0].video)
         assert other.items[0].video != name, key
     assert len(names) == len(changed) + 1
-    added = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": dict(settings, grounding="off")})
+    added = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": dict(settings, floor="tilted")})
     assert added.items[0].video != name                      # a setting added later renames too
     gt = video_settings(base, GROUND_TRUTH, render, None)
     assert "steps" not in gt and "weights" not in gt
@@ -143,7 +143,7 @@ def test_a_changed_setting_is_refused_by_name(tmp_path):
     from gesturelsm.errors import UserError
     from gesturelsm.study.naming import check_unchanged
 
-    videos = {"gesturelsm": dict(steps=8, cfg=2.0, smoothing="light"), "ddim": dict(steps=20, cfg=2.0)}
+    videos = {"gesturelsm": dict(steps=8, cfg=2.0, smoothing="light", grounding=True), "ddim": dict(steps=20, cfg=2.0)}
     design = dict(mode="pairwise", attention=0.15, seed=0)
     (tmp_path / "study.json").write_text(json.dumps(dict(videos=videos, design=design)))
     check_unchanged(tmp_path, videos, design)                                           # the same: fine
@@ -152,11 +152,48 @@ def test_a_changed_setting_is_refused_by_name(tmp_path):
         check_unchanged(tmp_path, {**videos, "gesturelsm": dict(videos["gesturelsm"], steps=4)}, design)
     with pytest.raises(UserError, match=r"--smoothing for gesturelsm was 'light', this run 'off'"):
         check_unchanged(tmp_path, {**videos, "gesturelsm": dict(videos["gesturelsm"], smoothing="off")}, design)
+    with pytest.raises(UserError, match=r"--grounding for gesturelsm was True, this run False"):
+        check_unchanged(tmp_path, {**videos, "gesturelsm": dict(videos["gesturelsm"], grounding=False)}, design)
     with pytest.raises(UserError, match=r"--design was 'pairwise', this run 'rating'"):
         check_unchanged(tmp_path, videos, dict(design, mode="rating"))
     (tmp_path / "study.json").write_text(json.dumps(dict(steps={"gesturelsm": 8}, cfg=2.0)))   # no record
     with pytest.raises(UserError, match="new --out folder"):
         check_unchanged(tmp_path, videos, design)
+
+
+@pytest.mark.parametrize("flag, want", [([], True), (["--grounding", "off"], False), (["--grounding", "on"], True)])
+def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, flag, want):
+    """`gesturelsm batch --grounding on|off` (default on) is the Plan every video is generated with."""
+    from gesturelsm.cli import main
+    from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.study import batch as batch_module
+
+    plans = []
+
+    class Stop(Exception):
+        """Raised once the plan is seen: the plan is all this test needs."""
+
+    class Pipe:
+        methods = ["gesturelsm"]
+        backends = {"gesturelsm": None}
+
+        def prepare_speech(self, *a, **k):
+            return None
+
+        def generate_all(self, speech, plan, progress=None, body=None):
+            plans.append(plan)
+            raise Stop
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: Pipe()))
+    monkeypatch.setattr(batch_module, "weights_digest", lambda backend: "w")
+    monkeypatch.setattr(batch_module, "load_audio", lambda path: np.zeros(16000, np.float32))
+    (tmp_path / "a").mkdir()
+    sf.write(tmp_path / "a" / "s.wav", np.zeros(16000, np.float32), 16000)
+    with pytest.raises(Stop):
+        main(["batch", "--audio-dir", str(tmp_path / "a"), "--methods", "gesturelsm", "--out", str(tmp_path / "o"),
+              "--raters", "1", *flag])
+    assert [p.grounding for p in plans] == [want]
+    assert json.loads((tmp_path / "o" / "study.json").read_text())["grounding"] is want
 
 
 @pytest.mark.slow                       # renders: the full tier

@@ -113,8 +113,8 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
 
 
 def _request(wav, methods) -> tuple:
-    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
-    return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False)
+    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
+    return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False, True)
 
 
 def test_a_broken_character_is_a_warning_and_the_mannequin_stays(service, speech_wav, tmp_path):
@@ -158,6 +158,42 @@ def test_a_chosen_character_gets_every_method_in_the_payload_and_the_downloads(s
     assert sorted(p.name for p in rigged) == sorted(f"{m}_me.glb" for m in methods)
     gltf, _ = read_glb(rigged[0])
     assert [a["name"] for a in gltf["animations"]] == ["gesturelsm"]
+
+
+def test_the_character_follows_the_pages_feet_on_the_ground_option(service, speech_wav, tmp_path):
+    """A character with longer shins and wider hips than SMPL-X: with *Feet on the ground* (the default) the page's
+    player and the character's download carry its feet planted on its own legs; with the option off, its legs as
+    retargeted (and the SMPL-X motion ungrounded too)."""
+    from _rigs import build_rig, write_gltf
+    from _standing import other_legs
+    from gesturelsm.body.model import resolve_body
+    from gesturelsm.export.glb import accessor_array, read_glb
+    from gesturelsm.webapp.character import choose
+    from gesturelsm.webapp.ui import _Handlers
+
+    skel, _ = build_rig(other_legs(resolve_body(service.body).rest_joints()), fingers=False)
+    write_gltf(skel, tmp_path / "legs.glb")
+    chosen, _ = choose(str(tmp_path / "legs.glb"))
+    h, roots = _Handlers(service), {}
+    for on in (True, False):
+        request = _request(speech_wav, ["gesturelsm"])[:-1] + (on,)
+        payload, _, _, out, _ = h.show_motion(*request, chosen, progress=quiet)
+        assert out.job.grounding is on
+        want = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=on)
+        other = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=not on)
+        c = payload["character"]
+        root = decode(c["methods"]["gesturelsm"]["root"], (want.num_frames, 3))
+        np.testing.assert_allclose(root, want.root_translation, atol=1e-5)
+        if on:                                  # its own legs' grounding made a difference (off: the SMPL-X motion
+            assert np.abs(root - other.root_translation).max() > 1e-3        # drifts, no foot of it stays put)
+        rigged = next(Path(f) for f in h.add_exports(out, chosen)[0] if Path(f).name.endswith("_legs.glb"))
+        gltf, blob = read_glb(rigged)
+        anim = gltf["animations"][0]
+        ch = next(c for c in anim["channels"] if c["target"]["path"] == "translation")
+        np.testing.assert_allclose(accessor_array(gltf, blob, anim["samplers"][ch["sampler"]]["output"]),
+                                   want.root_translation, atol=1e-5)
+        roots[on] = root
+    assert np.abs(roots[True] - roots[False]).max() > 1e-3
 
 
 PAGE_NODES_JS = """() => { const p = window.gesturelsmPlayer, c = p.payload.character;

@@ -11,9 +11,9 @@ from _support import quiet
 from gesturelsm.webapp.ui import _Handlers, build_demo
 
 
-def inputs(wav, seed: int) -> tuple:
-    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text
-    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False)
+def inputs(wav, seed: int, grounding: bool = True) -> tuple:
+    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
+    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding)
 
 
 def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
@@ -33,7 +33,7 @@ def test_gradio_hands_the_handlers_the_page_session():
     from gradio.helpers import special_args
 
     h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
-    for fn, n_inputs, progress in ((h.show_motion, 13, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
+    for fn, n_inputs, progress in ((h.show_motion, 14, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
         filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
         assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
 
@@ -66,3 +66,28 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     files, glb, summary, exported = h.add_exports(rendered, request=page)          # and then its downloads
     assert exported.video == rendered.video and glb == str(exported.glb) and "Video ready" in summary
     assert sorted(files) == sorted(map(str, exported.downloads)) and rendered.downloads == ()
+
+
+def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_wav):
+    """The page's option (elem_id `grounding`, ticked by default, an input of both generate endpoints) reaches the
+    request: unticked, the motion is the smoothed decoder output; ticked, that motion with its feet grounded
+    (pipeline.finish on the service's body), everything above the pelvis bit for bit the same."""
+    import numpy as np
+
+    from gesturelsm.grounding import CHANGED_JOINTS
+    from gesturelsm.pipeline import finish
+
+    cfg = build_demo(service).get_config_file()
+    box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "grounding")
+    assert box["props"]["value"] is True
+    deps = {d.get("api_name"): d for d in cfg["dependencies"]}
+    assert box["id"] in deps["generate_motion"]["inputs"] and box["id"] in deps["generate"]["inputs"]
+    h = _Handlers(service)
+    on = h.show_motion(*inputs(speech_wav, 0, True), progress=quiet)[3].motions["gesturelsm"]
+    off = h.show_motion(*inputs(speech_wav, 0, False), progress=quiet)[3].motions["gesturelsm"]
+    want, note = finish(off, grounding=True, body=service.body)
+    assert note is None
+    np.testing.assert_array_equal(on.poses, want.poses)
+    np.testing.assert_array_equal(on.trans, want.trans)
+    keep = [c for j in range(55) if j not in CHANGED_JOINTS for c in range(3 * j, 3 * j + 3)]
+    assert np.array_equal(on.poses[:, keep], off.poses[:, keep]) and not np.allclose(on.trans, off.trans)

@@ -35,8 +35,10 @@ def test_tab_builds_with_the_latency_element(shipped_pipe):
     with gr.Blocks() as demo:
         routes = live.add_live_tab(LiveManager(shipped_pipe, config=LiveConfig(steps=1)))
     ids = [getattr(b, "elem_id", None) for b in demo.blocks.values()]
-    assert "live-latency" in ids and "live-motion" in ids
+    assert "live-latency" in ids and "live-motion" in ids and "live-grounding" in ids
     assert routes == []                                 # no body: Gradio's microphone, no socket to serve
+    box = next(b for b in demo.blocks.values() if getattr(b, "elem_id", None) == "live-grounding")
+    assert box.value is True                            # feet on the ground by default
 
 
 def test_with_a_body_and_the_player_built_the_tab_serves_the_socket_route_it_is_given(shipped_pipe, tmp_path):
@@ -54,6 +56,7 @@ def test_with_a_body_and_the_player_built_the_tab_serves_the_socket_route_it_is_
     assert [r.path for r in routes] == [live.PATH]
     html = next(b for b in demo.blocks.values() if getattr(b, "elem_id", None) == "live-player-box")
     assert f'data-socket="{live.PATH.lstrip("/")}"' in html.html_template
+    assert '<input id="live-grounding" type="checkbox" checked>' in html.html_template   # the hello's grounding
     with gr.Blocks() as demo:
         assert live.add_live_tab(manager, body, tmp_path) == []
     assert "live-mic" in [getattr(b, "elem_id", None) for b in demo.blocks.values()]
@@ -143,3 +146,23 @@ def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
         demo.close()
     assert demo.live_manager.active == 0
     assert not session._thread.is_alive()
+
+
+def test_the_microphone_streams_grounded_unless_the_option_is_off(shipped_pipe):
+    """Gradio's microphone path: the live-grounding checkbox's value opens the stream grounded or not; the upper body
+    is the same either way, the legs are not."""
+    from _standing import KEPT_COLUMNS
+
+    mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
+    poses = {}
+    for on in (True, False):
+        state, parts = None, []
+        for ch in mic_chunks(2.0):
+            state, text, *_ = live.on_chunk(mgr, ch, state, on)
+            parts.append(record(text).rotations)
+        assert state.gen.cfg.grounding is on
+        state, text, *_ = live.on_stop(state)
+        parts.append(record(text).rotations)
+        poses[on] = np.concatenate(parts).reshape(-1, 165)
+    assert np.array_equal(poses[True][:, KEPT_COLUMNS], poses[False][:, KEPT_COLUMNS])
+    assert not np.allclose(poses[True][:, 3:9], poses[False][:, 3:9])

@@ -46,6 +46,13 @@ def live_url(tmp_path_factory):
         yield url
 
 
+HELLOS = """() => { window.__hellos = []; const send = WebSocket.prototype.send;
+  WebSocket.prototype.send = function (data) {
+    if (typeof data === 'string' && data.includes('sample_rate')) window.__hellos.push(JSON.parse(data));
+    return send.call(this, data);
+  }; }"""                                   # records each live stream's first message (the hello)
+
+
 def _value(page, elem_id: str) -> str:
     return page.text_content(f"#{elem_id}")
 
@@ -57,6 +64,7 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
     assert live_workers() == 0
     with player_page(live_url, PLAYER, args) as page:
         assert page.get_attribute(PLAYER, "data-frames") == "0"
+        page.evaluate(HELLOS)
         page.locator("#live-record").click()
         page.wait_for_function(f"() => Number(document.querySelector('{PLAYER}').dataset.frames) > 5",
                                timeout=30000)
@@ -83,3 +91,13 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
         while live_workers() and time.monotonic() < deadline:
             time.sleep(0.1)
         assert live_workers() == 0                                   # the stream ended on the server
+        # the Feet on the ground option goes with the hello; it is on by default and locked while streaming
+        assert page.evaluate("() => window.__hellos")[0]["grounding"] is True
+        page.locator("#live-grounding").uncheck()
+        page.locator("#live-record").click()
+        page.wait_for_function("() => (window.__hellos || []).length === 2", timeout=30000)
+        assert page.evaluate("() => window.__hellos")[1]["grounding"] is False
+        assert page.locator("#live-grounding").is_disabled()
+        page.locator("#live-stop").click()
+        page.wait_for_function(f"() => {live}.ws === null", timeout=30000)
+        assert page.locator("#live-grounding").is_enabled()

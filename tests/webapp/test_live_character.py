@@ -51,7 +51,8 @@ def motion() -> MotionSequence:
 
 
 def streamed(character, motion, body) -> tuple[CharacterStream, np.ndarray, np.ndarray]:
-    stream = CharacterStream(character, body)
+    """The stream on the character as retargeted (its feet grounded on its legs: test_live_character_grounding.py)."""
+    stream = CharacterStream(character, body, grounding=False)
     out, a = [], 0
     for n in CHUNKS:
         out.append(stream.chunk(motion.slice(a, a + n)))
@@ -61,7 +62,7 @@ def streamed(character, motion, body) -> tuple[CharacterStream, np.ndarray, np.n
 
 def test_streamed_chunks_equal_retargeting_the_whole_motion(character, motion, body):
     stream, q, root = streamed(character, motion, body)
-    whole = retarget_motion(motion, character, body)
+    whole = retarget_motion(motion, character, body, grounding=False)
     order = bone_order(character.skeleton)
     T, B = q.shape[:2]
     assert (T, B) == (motion.num_frames, len(character.skeleton.bones))
@@ -71,8 +72,8 @@ def test_streamed_chunks_equal_retargeting_the_whole_motion(character, motion, b
     np.testing.assert_allclose(q, continuous_quaternions(matrix_to_quaternion_xyzw(whole.local_rotation[:, order])),
                                atol=1e-5)
     # the root: the whole motion's, on the stream's reference (its first frame, its first chunk's floor) ...
-    np.testing.assert_allclose(root, retarget_motion(motion, character, body, ground=stream.ground).root_translation,
-                               atol=1e-3)                               # centimetres
+    np.testing.assert_allclose(root, retarget_motion(motion, character, body, ground=stream.ground,
+                                                     grounding=False).root_translation, atol=1e-3)   # centimetres
     # ... which differs from the whole motion's own by one constant offset (its floor is the whole take's lowest foot)
     offset = root - whole.root_translation
     assert np.ptp(offset, axis=0).max() < 1e-3
@@ -88,7 +89,7 @@ def test_no_jump_at_chunk_borders(character, motion, body):
     inside = np.delete(step, borders - 1)
     assert step[borders - 1].max() <= 1.5 * inside.max()
     # retargeting each chunk on its own (its own start and floor) would jump: this motion shows it
-    naive = np.concatenate([retarget_motion(motion.slice(a - n, a), character, body).root_translation
+    naive = np.concatenate([retarget_motion(motion.slice(a - n, a), character, body, grounding=False).root_translation
                             for a, n in zip(np.cumsum(CHUNKS), CHUNKS)])
     assert np.linalg.norm(np.diff(naive, axis=0), axis=1)[borders - 1].max() > 3 * inside.max()
 
@@ -211,7 +212,7 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
                 out.append(decode(ws.receive_bytes()))
         return out
 
-    first, *msgs = run({"sample_rate": 16000, "character": token})
+    first, *msgs = run({"sample_rate": 16000, "character": token, "grounding": False})   # as retargeted
     spec = first.meta["character"]
     assert first.frames == 0 and first.meta["status"] == "streaming"
     assert spec["name"] == "me.glb" and spec["nodes"] == [character.skeleton.nodes[i]
@@ -224,8 +225,8 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
     poses = Rotation.from_quat(rot.reshape(-1, 4)).as_rotvec().reshape(len(rot), -1)
     trans = np.concatenate([m.root for m in framed]) - body.rest_joints()[0]
     seq = MotionSequence(poses.astype(np.float32), trans.astype(np.float32), np.zeros((len(rot), 100), np.float32))
-    ground = retarget_motion(seq.slice(0, framed[0].frames), character, body).ground
-    want = retarget_motion(seq, character, body, ground=ground)
+    ground = retarget_motion(seq.slice(0, framed[0].frames), character, body, grounding=False).ground
+    want = retarget_motion(seq, character, body, ground=ground, grounding=False)
     q = np.concatenate([m.bone_rotations for m in framed])
     got = Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(len(q), -1, 3, 3)
     np.testing.assert_allclose(got, want.local_rotation[:, bone_order(character.skeleton)], atol=1e-4)

@@ -56,9 +56,9 @@ def receive(ws) -> MotionRecord:
     return decode(ws.receive_bytes(), "socket message")
 
 
-def stream(client, blocks, sr: int) -> list[MotionRecord]:
+def stream(client, blocks, sr: int, **hello) -> list[MotionRecord]:
     with client.websocket_connect(live_socket.PATH) as ws:
-        ws.send_text(json.dumps({"sample_rate": sr}))
+        ws.send_text(json.dumps({"sample_rate": sr, **hello}))
         for b in blocks:
             ws.send_bytes(b)
         ws.send_text(json.dumps({"end": True}))
@@ -129,6 +129,7 @@ def test_past_the_limit_the_visitor_reads_busy(client_for):
     (json.dumps({"sample_rate": 16000}), b"\x01\x02\x03", "16-bit PCM"),
     (json.dumps({"sample_rate": 16000}), "not json", "must be JSON"),
     (json.dumps({"sample_rate": 16000}), b"\x00\x00" * 16000 * 6, "at most 5 s"),
+    (json.dumps({"sample_rate": 16000, "grounding": "no"}), None, "grounding must be true or false"),
 ])
 def test_bad_messages_get_a_clear_message_and_end_the_stream(client_for, hello, then, says):
     mgr, client = client_for()
@@ -160,3 +161,21 @@ def test_a_socket_that_names_no_sample_rate_is_closed(client_for, monkeypatch):
     with client.websocket_connect(live_socket.PATH) as ws:
         assert "no sample rate" in receive(ws).meta["status"]
     assert mgr.active == 0
+
+
+def test_the_hello_turns_feet_on_the_ground_off_for_its_stream(client_for):
+    """The page's live-grounding checkbox goes with the hello: by default the stream is grounded (its legs and root
+    differ from the decoder's), with "grounding": false it is the decoder's; the upper body is the same either way."""
+    from _standing import KEPT_COLUMNS
+
+    mgr, client = client_for()
+    got = {}
+    for key, hello in (("default", {}), ("off", {"grounding": False}), ("on", {"grounding": True})):
+        msgs = stream(client, pcm_blocks(2.0, 16000), 16000, **hello)
+        got[key] = (np.concatenate([m.rotations for m in msgs]).reshape(-1, 165),
+                    np.concatenate([m.root for m in msgs]))
+        wait_idle(mgr)
+    (p_on, r_on), (p_off, r_off) = got["default"], got["off"]
+    np.testing.assert_array_equal(got["on"][0], p_on)
+    assert np.array_equal(p_on[:, KEPT_COLUMNS], p_off[:, KEPT_COLUMNS])
+    assert not np.allclose(p_on[:, 3:9], p_off[:, 3:9]) and not np.allclose(r_on, r_off)

@@ -79,5 +79,5 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
         p["compare"] = {"index": i, "method": edited, "motion": file_url(path)}
         motions[f"{edited}:before"] = before
     if character is not None:
-        p["character"] = page_character(character, motions, folder, file_url, service.body)
+        p["character"] = page_character(character, motions, folder, file_url, service.body, out.job.grounding)
     return p

@@ -12,6 +12,8 @@
 // weights when its VRM binds visemes or blink (meta.character.morphs); the element carries data-character (the file
 // name) while it is shown. A character the server no longer holds, or the browser cannot load, leaves the mannequin
 // with the reason in data-character-error.
+// The checkbox #live-grounding (feet on the ground, on by default) goes with the hello: the server grounds the stream
+// causally, chunk by chunk, or not; it cannot change during a stream.
 // The meter: #live-latency = the server's median (ms) from a block's arrival to its motion being ready,
 // #live-stats = p90 and real-time factor, #live-status. It also measures the latency the visitor sees: for every
 // newly drawn frame f, now - (capture of the first block - SEND_S + f / fps), i.e. from the moment the speech of
@@ -30,7 +32,7 @@ export class LiveFeed {
     this.element = element; this.bodyUrl = bodyUrl; this.label = label;
     element.classList.add('mp-streaming');             // player.css: no play button or seek bar
     this.caption = el('span', { class: 'mp-live' }, element.querySelector('.mp-bar'));
-    this.ui = Object.fromEntries(['record', 'stop', 'latency', 'stats', 'status'].map((k) => [k, box.querySelector(`#live-${k}`)]));
+    this.ui = Object.fromEntries(['record', 'stop', 'latency', 'stats', 'status', 'grounding'].map((k) => [k, box.querySelector(`#live-${k}`)]));
     if (this.ui.record) this.ui.record.addEventListener('click', () => this.start());
     if (this.ui.stop) this.ui.stop.addEventListener('click', () => this.stop());
     this.ready = this.player.setBodies([{ label, body: bodyUrl }]).then(() => {   // the body at rest until a stream
@@ -73,6 +75,7 @@ export class LiveFeed {
 
   _buttons(live) {
     if (this.ui.record) this.ui.record.disabled = live;
+    if (this.ui.grounding) this.ui.grounding.disabled = live;    // a stream keeps the choice it started with
     if (this.ui.stop) this.ui.stop.disabled = !live;
   }
 
@@ -103,7 +106,9 @@ export class LiveFeed {
     const chosen = this.chosen;
     delete this.element.dataset.characterError;
     ws.onopen = async () => {
-      ws.send(JSON.stringify(chosen ? { sample_rate: mic.rate, character: chosen.token } : { sample_rate: mic.rate }));
+      const grounding = this.ui.grounding ? this.ui.grounding.checked : true;   // #live-grounding: feet on the ground
+      ws.send(JSON.stringify(chosen ? { sample_rate: mic.rate, character: chosen.token, grounding }
+        : { sample_rate: mic.rate, grounding }));
       // with a character: the server's first message says which bones it streams (or why it cannot)
       const spec = chosen ? await new Promise((resolve) => {
         this.answer = resolve;

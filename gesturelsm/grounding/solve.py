@@ -1,0 +1,216 @@
+"""The offline driver: a whole take's legs and root grounded at once (`ground_legs`), on any `LegRig`.
+
+1. The root's horizontal path loses its slow drift (drift.py).
+2. Each foot's lowest point (ankle or toe, as high above the floor as a level foot's would be) is measured
+   against the lower foot, the one the body stands on, and contacts are found from that height and the foot's
+   horizontal speed (contacts.py).
+3. The root's height follows the lowest planted foot so that it touches the floor (smoothed; lowered where a
+   planted leg could not reach).
+4. Each foot's target (targets.py): planted where it landed, level, on the floor; in between, its own path with
+   a smoothly varying correction, never below the floor.
+5. Two-bone IK per leg (ik.py): hip and knee rotations reach the ankle target, the ankle's rotation turns the foot
+   to its target orientation. Nothing else changes: the root's rotation, the spine, arms, head and toes keep
+   their local rotations exactly.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..constants import FPS
+from .contacts import ContactParams, detect_contacts
+from .drift import DriftParams, remove_drift, smooth
+from .ik import REACH, two_bone
+from .rig import LegRig, Posed, forward
+from .rotations import slerp
+from .steps import StepParams, plan_steps
+from .targets import FootPlan, TargetParams, correction, plan_foot
+
+
+@dataclass(frozen=True)
+class GroundingSettings:
+    floor: float = 0.0                                        # m, the floor's height (y)
+    contacts: ContactParams = field(default_factory=ContactParams)
+    drift: DriftParams | None = field(default_factory=DriftParams)   # None: the horizontal path is kept
+    targets: TargetParams = field(default_factory=TargetParams)
+    steps: StepParams = field(default_factory=StepParams)
+    level: float = 1.0                                        # how much of a planted foot's tilt goes (1: flat)
+    height_seconds: float = 0.3                               # smoothing of the root's height correction
+    bob: float = 0.6                # the root's rises above its median height are scaled by this (1: as the legs have them)
+    reach: float = REACH                                      # a planted leg is stretched at most this much
+    knee_seconds: float = 0.1                                # smoothing of each leg's hip-to-ankle distance
+    min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
+
+
+@dataclass
+class Grounded:
+    local: np.ndarray               # (T, J, 3, 3) local rotations, the legs' hips, knees and ankles replaced
+    root: np.ndarray                # (T, 3) root joint world positions
+    contacts: np.ndarray            # (T, 2) bool, left and right foot planted
+    note: str | None = None         # why the motion was left as it was (local and root are then the input)
+
+    @property
+    def changed(self) -> bool:
+        return self.note is None
+
+
+@dataclass
+class Feet:
+    """Per frame and foot (left, right): ankle and toe positions (T, 2, 3), the foot's lowest point above the floor
+    (T, 2), its horizontal speed (T, 2) and how far its ankle is above a planted ankle's height (T, 2)."""
+    ankle: np.ndarray
+    toe: np.ndarray
+    sole: np.ndarray
+    speed: np.ndarray
+    excess: np.ndarray
+
+
+def measure_feet(rig: LegRig, pose: Posed, floor: float, fps: int = FPS) -> Feet:
+    ankle = pose.p[:, [leg.ankle for leg in rig.legs]]
+    toe = pose.p[:, [leg.toe for leg in rig.legs]]
+    excess = ankle[..., 1] - (floor + rig.ankle_height)
+    sole = np.minimum(excess, toe[..., 1] - (floor + rig.toe_height))
+    mid = (ankle + toe)[..., [0, 2]] / 2
+    speed = np.zeros(sole.shape)
+    if len(mid) > 1:
+        speed = np.linalg.norm(np.gradient(mid, axis=0), axis=-1) * fps
+    return Feet(ankle, toe, sole, speed, excess)
+
+
+def stance_problem(rig: LegRig, pose: Posed, settings: GroundingSettings) -> str | None:
+    """Why the pose does not stand on its feet, or None."""
+    hips = pose.p[:, [leg.hip for leg in rig.legs], 1].mean(1)
+    ankles = pose.p[:, [leg.ankle for leg in rig.legs], 1].min(1)
+    leg = np.mean([sum(rig.lengths(leg)) for leg in rig.legs])
+    share = np.median((hips - ankles) / leg)
+    if share < settings.min_stance:
+        return (f"the body does not stand on its feet (its hips are {100 * share:.0f} % of the leg's length above "
+                "its ankles, e.g. sitting or kneeling)")
+    return None
+
+
+SOFT_MIN = 0.005                    # m: how soft the minimum over the planted feet is
+SOFT_CAP = 0.003                    # m: how softly the smoothed height is kept under the reachable one
+
+
+def leg_lengths(rig: LegRig, pose: Posed, settings: GroundingSettings, fps: int = FPS) -> np.ndarray:
+    """(T, 2) how far each leg reaches from hip to ankle: its own stretch over time, smoothed over `height_seconds`
+    (the knee noise of a nearly straight leg would otherwise shake the pelvis), never beyond its length."""
+    out = np.empty((len(pose.p), len(rig.legs)))
+    for f, leg in enumerate(rig.legs):
+        d = np.linalg.norm(pose.p[:, leg.ankle] - pose.p[:, leg.hip], axis=-1)
+        out[:, f] = np.minimum(smooth(d, settings.height_seconds, fps), sum(rig.lengths(leg)) * (1 - 1e-6))
+    return out
+
+
+def reachable(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray) -> np.ndarray:
+    """(T,) the most the root's height may rise while every planted leg still reaches its plant with at most
+    `lengths` (T, 2) from hip to ankle: a soft minimum over the feet, a foot easing into or out of a plant holding
+    the height by as much as it is planted (landing and lifting change it smoothly); interpolated where no foot is
+    planted."""
+    T = len(lengths)
+    w = np.stack([plan.weight for plan in plans], 1)                       # (T, 2)
+    s = np.empty((T, len(plans)))
+    for f, (leg, plan) in enumerate(zip(rig.legs, plans)):
+        hip, plant = pose.p[:, leg.hip], plan.plant
+        dh = np.linalg.norm((plant - hip)[:, [0, 2]], axis=-1)
+        s[:, f] = plant[:, 1] - hip[:, 1] + np.sqrt(np.maximum(lengths[:, f] ** 2 - dh ** 2, 0.0))
+    s = w * s + (1 - w) * s.max(1, keepdims=True)          # a foot lifting lets go of the height gradually
+    m = s.min(1)
+    dy = m - SOFT_MIN * np.log(np.exp(-(s - m[:, None]) / SOFT_MIN).sum(1))
+    ok = w.max(1) > 1e-3
+    return np.interp(np.arange(T), np.flatnonzero(ok), dy[ok])
+
+
+def height_shift(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray, settings: GroundingSettings,
+                 fps: int = FPS) -> np.ndarray:
+    """(T,) what to add to the root's height: where the planted legs, as they were (`leg_lengths`), put it (so the
+    highest planted foot lands with its leg as it was and a lower one bends its knee), smoothed over
+    `height_seconds`, its rises above their median scaled by `bob` (the knees bend a little more there: the body
+    bobs less; never higher than the legs put it), and kept softly under where they reach."""
+    root = pose.p[:, rig.parents.index(-1), 1]
+    reach = reachable(rig, pose, plans, lengths)
+    natural = root + smooth(reach, settings.height_seconds, fps)
+    rise = natural - float(np.median(natural))
+    soft = SOFT_CAP * np.logaddexp(0.0, rise / SOFT_CAP)                 # ~max(rise, 0), smooth
+    return soft_min(natural - (1 - settings.bob) * soft - root, reach, SOFT_CAP)
+
+
+def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
+    """A smooth minimum of two curves: never above either, at most soft * log(2) below the lower."""
+    m = np.minimum(a, b)
+    return m - soft * np.log(np.exp(-(a - m) / soft) + np.exp(-(b - m) / soft))
+
+
+def leg_targets(rig: LegRig, feet: Feet, plans: list[FootPlan], settings: GroundingSettings, R_ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ankle positions (T, 2, 3) and ankle world rotations (T, 2, 3, 3) the feet go to (targets.py): held by the
+    plants, else their own path corrected (easing out of and into the plants, the height rising as the foot's own
+    does, lifted at least by the plan's arc when it travels); never so low that the ankle or the toe joint is below
+    where a level foot on the floor has them."""
+    pos, rot = np.empty_like(feet.ankle), np.empty(feet.ankle.shape + (3,))
+    floor = settings.floor
+    for f, (leg, plan) in enumerate(zip(rig.legs, plans)):
+        orig = feet.ankle[:, f]
+        free = orig + correction(orig, plan.contact, plan.plant, settings.targets)
+        w = plan.weight[:, None]
+        target = free.copy()                                  # height: its own lift, carried by the correction,
+        target[:, 1] = np.maximum(target[:, 1], plan.plant[:, 1] + plan.lift)    # at least clearing the floor
+        target[:, [0, 2]] = (w * plan.plant + (1 - w) * free)[:, [0, 2]]   # eased out of and into the plants
+        R = slerp(R_ankle[:, f], plan.heading, plan.weight)
+        toe_y = (R @ rig.toe_offset(leg))[:, 1]
+        target[:, 1] = np.maximum(target[:, 1], floor + np.maximum(rig.ankle_height, rig.toe_height - toe_y))
+        pos[:, f], rot[:, f] = target, R
+    return pos, rot
+
+
+def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: GroundingSettings = GroundingSettings(),
+                fps: int = FPS) -> Grounded:
+    """Ground one take: local rotations (T, J, 3, 3) in the rig's convention, root joint world positions (T, 3)."""
+    local = np.asarray(local, np.float64)
+    root = np.asarray(root, np.float64)
+    T = len(root)
+    idle = Grounded(local, root, np.zeros((T, 2), bool))
+    if T < 2:
+        idle.note = f"the motion has {T} frame{'s' if T != 1 else ''}: nothing to ground"
+        return idle
+    if not (np.isfinite(local).all() and np.isfinite(root).all()):
+        idle.note = "the motion contains NaN or infinite values"
+        return idle
+    root = root.copy()
+    if settings.drift is not None:
+        root[:, [0, 2]] = remove_drift(root[:, [0, 2]], settings.drift, fps)
+    pose = forward(rig, local, root)
+    idle.note = stance_problem(rig, pose, settings)
+    if idle.note:
+        return idle
+    feet = measure_feet(rig, pose, settings.floor, fps)
+    relative = feet.sole - feet.sole.min(1, keepdims=True)              # above the foot the body stands on
+    contacts = detect_contacts(relative, feet.speed, settings.contacts)
+    hips = pose.p[:, [leg.hip for leg in rig.legs]][..., [0, 2]]
+    contacts = plan_steps(feet.ankle[..., [0, 2]], hips, contacts, settings.steps)
+    if not contacts.any():
+        idle.note = "no foot stays on the ground long enough to plant it"
+        return idle
+    R_ankle = pose.R[:, [leg.ankle for leg in rig.legs]]
+    heights = (rig.ankle_height, rig.toe_height)
+    plans = [plan_foot(feet.ankle[:, f], R_ankle[:, f], contacts[:, f], rig.foot_forward(leg), rig.toe_offset(leg),
+                       heights, settings.floor, settings.level, settings.targets) for f, leg in enumerate(rig.legs)]
+    lengths = leg_lengths(rig, pose, settings, fps)
+    dy = height_shift(rig, pose, plans, lengths, settings, fps)
+    root[:, 1] += dy
+    pose.p[:, list(rig.chain), 1] += dy[:, None]
+    feet = measure_feet(rig, pose, settings.floor, fps)
+    pos, rot = leg_targets(rig, feet, plans, settings, R_ankle)
+    out = local.copy()
+    for f, leg in enumerate(rig.legs):
+        sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],
+                       pose.R[:, leg.knee], pos[:, f], np.asarray(rig.knee_axis), settings.reach, lengths[:, f])
+        parent = pose.R[:, rig.parents[leg.hip]]
+        out[:, leg.hip] = np.swapaxes(parent, -1, -2) @ sol.R_hip
+        out[:, leg.knee] = np.swapaxes(sol.R_hip, -1, -2) @ sol.R_knee
+        out[:, leg.ankle] = np.swapaxes(sol.R_knee, -1, -2) @ rot[:, f]
+    return Grounded(out, root, np.stack([plan.contact for plan in plans], 1))
+
+
+__all__ = ["Feet", "Grounded", "GroundingSettings", "ground_legs", "measure_feet"]
