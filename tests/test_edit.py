@@ -124,3 +124,15 @@ def test_bad_edits_are_one_clear_message(tiny_pipeline, take, kwargs, message):
     with pytest.raises(InputError) as err:
         tiny_pipeline.edit(motion, speech, **kwargs)
     assert message in str(err.value)
+
+
+def test_a_regenerated_lower_body_is_grounded_as_a_generation_is(tiny_pipeline, take):
+    """pipeline.finish runs on the regenerated motion (feet on the ground when the lower body is regenerated); what
+    is kept stays the input's either way."""
+    speech, motion = take
+    on = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3, grounding=True).motion
+    off = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3, grounding=False).motion
+    for out in (on, off):
+        assert np.array_equal(out.trans[:60], motion.trans[:60]) and np.array_equal(out.trans[180:], motion.trans[180:])
+        assert np.array_equal(_joints(out, "upper"), _joints(motion, "upper"))
+    assert not np.array_equal(_joints(on, "lower")[60:180], _joints(off, "lower")[60:180])
