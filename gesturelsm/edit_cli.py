@@ -1,5 +1,5 @@
 """`gesturelsm edit`: regenerate body regions of a motion over time ranges, keep the rest, pin key poses
-(GesturePipeline.edit), one floor above the pipeline.
+(GesturePipeline.edit; docs/EDITING.md).
 
     gesturelsm edit take.npz speech.wav --regenerate upper,hands@3.0-6.0 --seed 2 --out take_v2.npz
     gesturelsm edit take.npz speech.wav --regenerate upper@3-6 --regenerate face@10-12 \\
