@@ -29,7 +29,9 @@ from .motion.sequence import MotionSequence
 from .pipeline import GesturePipeline
 from .retarget import load_character
 
-_RANGE = re.compile(r"^\s*([a-z_, ]+)@\s*([0-9.]+)\s*-\s*([0-9.]+)\s*$")
+# REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
+# gets its own message (outside the speech, unknown region) rather than this syntax's
+_RANGE = re.compile(r"^\s*([^@]+)@\s*(-?[0-9.]+)\s*-\s*(-?[0-9.]+)\s*$")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -77,7 +79,11 @@ def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
             rng = (float(m.group(2)), float(m.group(3)))
         except ValueError:
             raise UserError(f"--regenerate {item!r}: {m.group(2)}-{m.group(3)} is not a range of seconds") from None
-        for region in (r.strip() for r in m.group(1).split(",") if r.strip()):
+        regions = [r.strip().lower() for r in m.group(1).split(",") if r.strip()]
+        if not regions:
+            raise UserError(f"--regenerate {item!r}: name the regions before @ ({', '.join(GENERATED_REGIONS)}), "
+                            "e.g. upper,hands@3.0-6.0")
+        for region in regions:
             out.setdefault(region, []).append(rng)
     if not out:
         raise UserError("nothing to regenerate: give --regenerate REGIONS@START-END, e.g. upper,hands@3.0-6.0")

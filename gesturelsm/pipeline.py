@@ -330,6 +330,9 @@ class GesturePipeline:
             able = [m for m in self.methods if self.facts(m).inpaints]
             raise EditError(f"{method} cannot edit a motion: its sampler cannot hold known latents; methods that "
                             f"can: {', '.join(able) or 'none is loaded'}")
+        if motion.fps != FPS:
+            raise EditError(f"the motion is at {motion.fps} fps; an edit needs a {FPS} fps motion (as generate "
+                            "writes and BEAT2 has)")
         steps = facts.default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
         check_smoothing(smoothing)

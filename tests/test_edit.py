@@ -3,6 +3,8 @@ on the seed only, keyframes are reached, edits chain, the sampler holds the know
 windows an edit touches, and bad input is one clear message."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -105,6 +107,8 @@ def test_the_speech_may_differ_from_the_motion_by_a_second_at_most(tiny_pipeline
     with pytest.raises(EditError, match=r"the motion is 8.00 s long but the speech 6.00 s: give the speech the motion "
                                         r"was made from \(they may differ by up to 1 s\)"):
         tiny_pipeline.edit(motion, y[:16000 * 6], {"upper": [(1.0, 2.0)]}, transcribe=False)
+    with pytest.raises(EditError, match="the motion is at 60 fps; an edit needs a 30 fps motion"):
+        tiny_pipeline.edit(replace(motion, fps=60), speech, {"upper": [(1.0, 2.0)]})
     other = tiny_pipeline.prepare_speech(speech_like(5.0), 16000, transcribe=False)
     with pytest.raises(EditError, match="the motion is 8.00 s long but the speech 5.00 s"):
         tiny_pipeline.edit(motion, other, {"upper": [(1.0, 2.0)]})

@@ -27,8 +27,11 @@ def files(tiny_assets, tmp_path_factory):
 def test_regions_and_ranges_parse_as_written():
     assert parse_regenerate(["upper,hands@3.0-6.0", "face@10-12", "upper@7-8"]) == {
         "upper": [(3.0, 6.0), (7.0, 8.0)], "hands": [(3.0, 6.0)], "face": [(10.0, 12.0)]}
-    for bad in ("upper@3", "upper 3-6", "@3-6", "upper@a-b", "upper@1.2.3-4"):
-        with pytest.raises(UserError, match="REGIONS@START-END|not a range of seconds"):
+    # the regions' case and the numbers' sign are left to the edit's checks (unknown region, outside the speech)
+    assert parse_regenerate(["Upper, HANDS@-1-3", "lower@2--1"]) == {
+        "upper": [(-1.0, 3.0)], "hands": [(-1.0, 3.0)], "lower": [(2.0, -1.0)]}
+    for bad in ("upper@3", "upper 3-6", "@3-6", "upper@a-b", "upper@1.2.3-4", " , @1-2"):
+        with pytest.raises(UserError, match="REGIONS@START-END|not a range of seconds|name the regions before @"):
             parse_regenerate([bad])
 
 
@@ -54,6 +57,9 @@ def test_edit_writes_the_motion_with_the_rest_kept(files, tiny_assets, tmp_path,
     (["--regenerate", "upper@5-9"], "the range 5-9 s of upper lies outside the speech (0-6.00 s)"),
     (["--regenerate", "elbows@1-2"], "unknown region 'elbows'"),
     (["--regenerate", "upper@4-2"], "the range 4-2 s of upper is reversed"),
+    (["--regenerate", "upper@-1-2"], "the range -1-2 s of upper lies outside the speech (0-6.00 s)"),
+    (["--regenerate", "upper@2-2"], "the range 2-2 s of upper is empty"),
+    (["--regenerate", "Elbows@1-2"], "unknown region 'elbows'; the regions are upper, hands, lower, face"),
     (["--regenerate", "upper@1-3", "--keyframe", "nope.npz:3@2"], "keyframe pose: nope.npz: file not found"),
     (["--regenerate", "upper@1-3", "--keyframe", "pose@2"], "FILE.npz:FRAME"),
     (["--regenerate", "upper@1-3", "--keyframe", "12"], "write POSE.npz:FRAME@TIME"),
@@ -73,7 +79,7 @@ def test_a_motion_that_is_not_the_speechs_length_or_not_a_motion(files, tiny_ass
     short.save(tmp_path / "short.npz")
     (tmp_path / "text.npz").write_text("hello")
     for motion, message in ((tmp_path / "short.npz", "the motion is 3.00 s long but the speech 6.00 s"),
-                            (tmp_path / "text.npz", "not a readable .npz motion file")):
+                            (tmp_path / "text.npz", "text.npz: not a .npz motion file (a BEAT2-layout .npz")):
         code = main(["edit", str(motion), str(files / "speech.wav"), "--regenerate", "upper@1-2", "--checkpoints",
                      str(tiny_assets), "--no-transcribe", "--out", str(tmp_path / "x.npz")])
         err = capsys.readouterr().err

@@ -93,11 +93,13 @@ def test_keyframe_sources_that_are_not_poses_are_one_clear_message(tmp_path):
     motion = synthetic_motion(40)
     path = motion.save(tmp_path / "pose.npz")
     (tmp_path / "notes.npz").write_text("not a motion")
+    np.save(tmp_path / "array.npy", np.zeros(165))
     cases = [
         (f"{path}:40", "pose.npz has frames 0-39; frame 40 is not one of them"),
         (f"{path}:-1", "frame -1 is not one of them"),
         (str(path), "give a motion file and a frame number as FILE.npz:FRAME"),
-        (f"{tmp_path / 'notes.npz'}:0", "keyframe pose:"),
+        (f"{tmp_path / 'notes.npz'}:0", "keyframe pose: " + str(tmp_path / "notes.npz") + ": not a .npz motion file"),
+        (f"{tmp_path / 'array.npy'}:0", "array.npy: one array, not a .npz motion file"),
         (f"{tmp_path / 'missing.npz'}:0", "file not found"),
         (np.zeros(10), "55 joints x 3 axis-angle values"),
         ((motion, 99), "frame 99 is not one of them"),
