@@ -1,44 +1,45 @@
 """The `gesturelsm` command line. Each subcommand lives next to the code it drives and registers here.
 
-A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`.
-User errors (`errors.GestureError`: bad files, bad settings) are printed as one clear line and exit with status 2.
+A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`. Every one is
+imported when this module is, so a subcommand whose import breaks fails `import gesturelsm.cli` (and every test of the
+command line) instead of quietly leaving the command out.
+A problem the person can fix (`errors.GestureError`: bad files, bad settings) is printed as one line and exits with
+status 2; anything else is a bug: "internal error" with its traceback on stderr, exit status 1.
 """
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
+import traceback
 
+from . import edit_cli, pipeline_cli
+from .align import cli as align_cli
+from .asr import cli as asr_cli
+from .body import cli as body_cli
+from .data import cli as data_cli
 from .errors import GestureError
+from .evaluation import cli as evaluation_cli
+from .evaluation import sweep_cli
+from .export import cli as export_cli
+from .generator import cli as generator_cli
+from .live import cli as live_cli
+from .reference import cli as reference_cli
+from .render import cli as render_cli
+from .study import cli as batch_cli
+from .study import study_cli
+from .tokenizer import cli as tokenizer_cli
+from .webapp import cli as webapp_cli
 
-# module paths of subcommands; each has add_parser(subparsers)
-SUBCOMMANDS: tuple[str, ...] = (
-    "gesturelsm.body.cli",
-    "gesturelsm.data.cli",
-    "gesturelsm.align.cli",
-    "gesturelsm.asr.cli",
-    "gesturelsm.tokenizer.cli",
-    "gesturelsm.generator.cli", "gesturelsm.pipeline_cli", "gesturelsm.edit_cli",
-    "gesturelsm.render.cli", "gesturelsm.export.cli",
-    "gesturelsm.study.cli", "gesturelsm.study.study_cli",
-    "gesturelsm.evaluation.cli",
-    "gesturelsm.evaluation.sweep_cli",
-    "gesturelsm.live.cli",
-    "gesturelsm.reference.cli",
-    "gesturelsm.webapp.cli",
-)
+# in the order `gesturelsm --help` lists them
+SUBCOMMANDS = (body_cli, data_cli, align_cli, asr_cli, tokenizer_cli, generator_cli, pipeline_cli, edit_cli,
+               render_cli, export_cli, batch_cli, study_cli, evaluation_cli, sweep_cli, live_cli, reference_cli,
+               webapp_cli)
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="gesturelsm", description="Speech-to-gesture generation (GestureLSM).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for mod in SUBCOMMANDS:
-        try:
-            module = importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name and mod.startswith(exc.name):  # that subcommand is not part of this build
-                continue
-            raise
+    for module in SUBCOMMANDS:
         module.add_parser(sub)
     return parser
 
@@ -51,12 +52,17 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     try:
         result = args.func(args)
-    except (GestureError, FileNotFoundError, ValueError) as exc:   # ValueError: argument checks of library code
+    except GestureError as exc:
         print(f"gesturelsm {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except Exception:                                   # a bug: say so, and keep everything needed to fix it
+        print(f"gesturelsm {args.command}: internal error, please report it with the traceback below",
+              file=sys.stderr)
+        traceback.print_exc()
+        return 1
     return int(result or 0)
 
 

@@ -1,7 +1,8 @@
-"""The package's one error family: every problem a person can fix (bad input, bad settings, a file that cannot
-be used, rendering that cannot run here) is a `GestureError` whose message is meant for that person: what is
-wrong and what to do. The app turns `GestureError` into a message on the page, the CLI into one line on stderr
-(exit status 2); anything else is a bug and keeps its traceback.
+"""The package's one error family: every problem a person can fix or must be told about (bad input, bad settings, a
+file that cannot be used, something this machine or server cannot do) is a `GestureError` whose message is meant for
+that person: what is wrong and what to do. The edges (the command line, the page's handlers, the live socket, the
+study server) turn a `GestureError` into one line for that person (the CLI: on stderr, exit status 2) and report
+anything else as a bug, with its traceback in the log (the CLI: "internal error", exit status 1).
 
     GestureError
     ├── InputError            input or settings a person must change (pipeline settings, speech length ...)
@@ -11,9 +12,12 @@ wrong and what to do. The app turns `GestureError` into a message on the page, t
     │   ├── DatasetError      a dataset folder or file that cannot be used
     │   ├── BodyModelError    a body model file that cannot be used
     │   └── CheckpointError   a model file that cannot be used
-    ├── RenderError           rendering cannot run here (no OpenGL backend, context creation failed)
+    ├── Unavailable           what this machine or server cannot do: a missing tool or model, no free stream
+    │   └── RenderError       rendering cannot run here (no OpenGL backend, context creation failed)
+    ├── Cancelled             work stopped because its result is not wanted
     └── UserError             any other problem with a command's arguments
-All are ValueErrors (RenderError is also a RuntimeError), as they were before the family existed.
+Modules add their own subclasses beside the code that raises them (e.g. `retarget.CharacterError`, an InputError).
+Every GestureError is also a ValueError, and Unavailable a RuntimeError, so code that catches those keeps working.
 """
 from __future__ import annotations
 
@@ -50,8 +54,17 @@ class CheckpointError(InputError):
     """A model file that cannot be used; the message names the file and the problem."""
 
 
-class RenderError(GestureError, RuntimeError):
+class Unavailable(GestureError, RuntimeError):
+    """What this machine or server cannot do (a missing tool or model, all live streams in use); the message says
+    what is missing or when to try again."""
+
+
+class RenderError(Unavailable):
     """Rendering cannot run here (no OpenGL backend, context creation failed); the message says why."""
+
+
+class Cancelled(GestureError):
+    """Work stopped because whoever asked for it does not want its result (e.g. a page that shows newer motion)."""
 
 
 class UserError(GestureError):
@@ -59,4 +72,4 @@ class UserError(GestureError):
 
 
 __all__ = ["GestureError", "InputError", "AudioError", "TextGridError", "MotionFileError", "DatasetError",
-           "BodyModelError", "CheckpointError", "RenderError", "UserError"]
+           "BodyModelError", "CheckpointError", "Unavailable", "RenderError", "Cancelled", "UserError"]

@@ -12,7 +12,7 @@ from .backends import FACTS, checkpoint_sources
 from .export.rig import export_rig
 from .grounding.cli import add_grounding_flag, grounding_on
 from .pipeline import GesturePipeline, finish
-from .retarget import load_character
+from .retarget import check_usable, load_character
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -42,6 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     rig = load_character(args.rig) if getattr(args, "rig", None) else None     # a bad file stops before the work
+    if rig is not None:
+        check_usable(rig, draw=False)
     audio = load_audio(args.audio)
     words = None
     if args.textgrid:

@@ -29,6 +29,8 @@ from typing import IO, Any, Mapping
 
 import numpy as np
 
+from .errors import InputError
+
 ALLOWED_GLOBALS = {
     ("numpy.core.multiarray", "_reconstruct"), ("numpy._core.multiarray", "_reconstruct"),
     ("numpy.core.multiarray", "scalar"), ("numpy._core.multiarray", "scalar"),
@@ -39,7 +41,7 @@ ALLOWED_GLOBALS = {
 }
 
 
-class UnsafePickleError(ValueError):
+class UnsafePickleError(InputError):
     """A pickle that would need more than plain data to be read."""
 
 
@@ -81,7 +83,7 @@ def load_tensors(path: str | Path, map_location: Any = "cpu") -> Any:
     except pickle.UnpicklingError as exc:
         found = re.search(r"GLOBAL ([\w.]+)", str(exc))
         what = f" ({found.group(1)})" if found else ""
-        raise ValueError(f"{path}: refused to load: it holds Python objects other than tensors and plain "
+        raise UnsafePickleError(f"{path}: refused to load: it holds Python objects other than tensors and plain "
                          f"data{what}, and unpickling them could run code.") from None
 
 
@@ -109,7 +111,7 @@ def _object_member(path: Path, key: str) -> np.ndarray:
     size = int.from_bytes(f.read(2 if major == 1 else 4), "little")
     header = ast.literal_eval(f.read(size).decode("latin-1" if major < 3 else "utf-8"))
     if not (isinstance(header, dict) and np.dtype(header.get("descr", "f8")).hasobject):
-        raise ValueError(f"{path}: member {key!r} could not be read")
+        raise InputError(f"{path}: member {key!r} could not be read")
     try:
         arr = PlainDataUnpickler(f).load()
     except UnsafePickleError as exc:

@@ -1,4 +1,5 @@
-"""Hostile upload files for the hardening tests, made in milliseconds without an encoder.
+"""Hostile upload files for the hardening tests, made in milliseconds without an encoder (hostile character files:
+`_hostile_characters.py`).
 
 `silent_flac(path, seconds)` writes a valid FLAC stream of digital silence: every frame is one CONSTANT
 subframe (a 16-bit zero) of 65,535 samples, so 10 hours at 16 kHz are ~8,800 frames of 11 bytes (~100 KB),
@@ -68,3 +69,4 @@ def playlist_naming(path: Path, target: Path) -> Path:
     """An HLS playlist (.m3u8) whose only segment is a file on the server."""
     path.write_text(f"#EXTM3U\n#EXT-X-TARGETDURATION:600\n#EXTINF:600,\nfile://{target}\n#EXT-X-ENDLIST\n")
     return path
+

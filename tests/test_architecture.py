@@ -14,8 +14,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "safe_load", "presentation"},      # conventions, the error family, safe loading,
-                                                               # methods' labels and colours
+    {"constants", "errors"},                                   # conventions, the error family
+    {"safe_load", "presentation"},                             # safe loading, methods' labels and colours
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
                                                                # it), files, the methods, fast CPU kernels
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
@@ -217,6 +217,28 @@ def test_a_long_function_is_caught(tmp_path):
     body = "".join(f"    x{i} = {i}\n" for i in range(MAX_FUNCTION_LINES))
     pkg = package(tmp_path, {"motion/x.py": f"def long():\n{body}\n\ndef short():\n    return 1\n"})
     assert _too_long(pkg) == [f"motion/x.py:1: long, {MAX_FUNCTION_LINES + 1} lines"]
+
+
+def private_imports(root: Path = PACKAGE) -> list[str]:
+    """`from <a module of the package> import _name`: a name its module keeps to itself, taken by another module."""
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root.parent)
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("gesturelsm")):
+                found += [f"{rel}:{node.lineno}: {'.' * node.level}{node.module or ''} import {a.name}"
+                          for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+    return found
+
+
+def test_no_module_takes_another_modules_private_names():
+    assert private_imports() == []
+
+
+def test_a_private_import_is_caught(tmp_path):
+    pkg = package(tmp_path, {"export/glb.py": "class _Builder: ...\n", "export/rig.py": "from .glb import _Builder\n",
+                             "export/npz.py": "from .glb import __doc__\n"})
+    assert private_imports(pkg) == ["gesturelsm/export/rig.py:1: .glb import _Builder"]
 
 
 def test_imports_only_go_down():

@@ -1,9 +1,12 @@
 """Code, comments and docstrings say what the code does and why, not its history: no release numbers, issue numbers,
 dates, commit hashes, or files outside the repository (history belongs in CHANGELOG.md, measurements in the
 benchmarks' output and docs/BENCHMARKS.md). The one commit-like name allowed is the version of the authors' code that
-gesturelsm/reference reproduces (docs/AUTHORS-CODE.md)."""
+gesturelsm/reference reproduces (docs/AUTHORS-CODE.md). Docstrings do not compare the code with an earlier version
+of itself either ("now", "no longer", "previously", "used to", "than before", "after this change"): a sentence that
+uses such a word about time itself (the moment something runs, a state that has ended) is listed in ABOUT_TIME."""
 from __future__ import annotations
 
+import ast
 import re
 from pathlib import Path
 
@@ -20,6 +23,38 @@ PATTERNS = {
     "a commit hash": re.compile(r"(?<![\w#/.-])(?=[0-9a-f]*[a-f])(?=[0-9a-f]*\d)[0-9a-f]{7,40}(?![\w-])"),
     "a file outside the repository": re.compile("METHOD" + r"-FACTS"),
 }
+
+
+HISTORY = re.compile(r"\b(now|no longer|previously|used to|formerly|any ?more|until recently|(than|as) (before|earlier)"
+                     r"|(before|after) (this|that|the) (change|fix|rewrite|refactor|release|version))\b", re.I)
+# file -> pieces of the docstring sentences that use a word of HISTORY about time itself, not about the code's past
+ABOUT_TIME: dict[str, tuple[str, ...]] = {
+    "gesturelsm/kernels/ops.py": ("may take a fast path now",),
+    "gesturelsm/live/session.py": ("Stop now",),
+    "gesturelsm/live/stream.py": ("motion chunks available now", "now)"),
+    "gesturelsm/pipeline.py": ("compile librosa's onset kernels now", "Transcribe now what"),
+    "gesturelsm/render/background.py": ("what the process now has",),
+    "gesturelsm/study/db.py": ("holds the study now", "on the rater's screen now", "made just now"),
+    "gesturelsm/study/server.py": ("cannot take an answer just now",),
+    "gesturelsm/study/store.py": ("another one than before",),
+    "gesturelsm/study/design.py": ("their trial lists are fixed now",),
+    "benchmarks/transcribe_accuracy.py": ("resident now",),
+}
+
+
+def _sentences(text: str) -> list[str]:
+    return [" ".join(s.split()) for s in re.split(r"(?<=[.;:!?])\s+|\n\s*\n", text)]
+
+
+def history_in_docstrings(path: Path) -> list[tuple[int, str]]:
+    """(line, sentence) for every docstring sentence of `path` with a word of HISTORY."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)):
+            doc = ast.get_docstring(node, clean=False)
+            line = node.body[0].lineno if node.body else 0
+            found += [(line, sentence) for sentence in _sentences(doc or "") if HISTORY.search(sentence)]
+    return found
 
 
 def _files() -> list[Path]:
@@ -46,3 +81,26 @@ def test_no_history_or_outside_files_in_the_tree():
                     if m.group(0) != UPSTREAM_VERSION:
                         found.append(f"{path.relative_to(REPO)}:{n}: {name}: {line.strip()[:100]}")
     assert found == []
+
+
+def test_the_history_words_are_caught_in_docstrings_and_time_itself_is_not(tmp_path):
+    code = tmp_path / "m.py"
+    code.write_text('"""Reads the file. It now uses the cache; the old reader no longer runs."""\n\n\n'
+                    'def f():\n    """Was slower than before; after this change it is checked before any work."""\n\n\n'
+                    'def g():\n    """Refused before it is decoded, after the first frame."""\n')
+    assert [s for _, s in history_in_docstrings(code)] == [
+        "It now uses the cache;", "the old reader no longer runs.", "Was slower than before;",
+        "after this change it is checked before any work."]
+
+
+def test_no_docstring_narrates_the_codes_history():
+    found, used = [], set()
+    for path in (p for p in _files() if p.suffix == ".py"):
+        rel = path.relative_to(REPO).as_posix()
+        for line, sentence in history_in_docstrings(path):
+            pieces = {piece for piece in ABOUT_TIME.get(rel, ()) if piece in sentence}
+            used |= {(rel, piece) for piece in pieces}
+            if not pieces:
+                found.append(f"{rel}:{line}: {sentence[:120]}")
+    assert found == []
+    assert used == {(f, piece) for f, pieces in ABOUT_TIME.items() for piece in pieces}, "an allowance not needed"

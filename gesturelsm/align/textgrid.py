@@ -232,7 +232,7 @@ def write_textgrid(path: str | Path, words: list[Word], duration: float | None =
     from praatio import textgrid as ptg
 
     if fmt not in ("long", "short"):
-        raise ValueError(f"TextGrid format must be 'long' or 'short', not {fmt!r}")
+        raise TextGridError(f"TextGrid format must be 'long' or 'short', not {fmt!r}")
     entries = _clean_intervals(words)
     end = max([e for _, e, _ in entries] + [duration or 0.0])
     if end <= 0:

@@ -15,11 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import Unavailable
+
 DEFAULT_VOICE = "en-us"
 _WORKER = Path(__file__).with_name("_espeak_worker.py")
 
 
-class TTSUnavailable(RuntimeError):
+class TTSUnavailable(Unavailable):
     """eSpeak NG is not installed or a voice is missing; the message says what to do."""
 
 

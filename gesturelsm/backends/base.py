@@ -9,14 +9,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Protocol
+from typing import Protocol
 
 import numpy as np
 import torch
 
+from ..constants import Progress
 from ..motion.sequence import FPS, MotionSequence
 
-Progress = Callable[[float, str], None]
 MAX_CFG = 10.0                      # the largest classifier-free guidance scale any backend accepts
 
 

@@ -50,8 +50,8 @@ class BodyModel:
 
     `forward` evaluates SMPL-X's function itself (blend shapes, pose correctives, forward kinematics,
     linear blend skinning) on the smplx module's buffers; it equals `forward_smplx` (the smplx module's own
-    forward, kept as the reference) to float precision but avoids smplx's per-call overhead (~50 ms for a
-    single frame on 2 cores, mostly tiny batched matmuls).
+    forward, kept as the reference) to float precision but avoids smplx's per-call overhead (mostly tiny
+    batched matmuls; its size: docs/BENCHMARKS.md, "Why the code is built this way").
     """
 
     def __init__(self, module: torch.nn.Module, path: Path, flat_hand_mean: bool):

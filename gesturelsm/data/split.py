@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import torch
 
+from ..errors import DatasetError
 from .beat2 import Beat2Dataset
 from ..motion.sequence import mirror_features
 
@@ -26,7 +27,7 @@ class Split:
 def split_features(root, train_fraction: float = 0.8, speakers=None, cache_dir=None) -> Split:
     ds = Beat2Dataset(root, speakers=speakers, cache_dir=cache_dir)
     if not ds.names:
-        raise ValueError(f"{root}: no motion takes (smplxflame_30/*.npz) found")
+        raise DatasetError(f"{root}: no motion takes (smplxflame_30/*.npz) found")
     if ds.splits:
         train = [n for n in ds.names if ds.splits.get(n) == "train"]
         held = [n for n in ds.names if ds.splits.get(n) in ("val", "test")]
@@ -48,7 +49,7 @@ class WindowSampler:
     def __init__(self, seqs: list[torch.Tensor], length: int, mirror: bool = True, seed: int = 0):
         self.seqs = [s for s in seqs if s.shape[0] >= length]
         if not self.seqs:
-            raise ValueError(f"no training sequence is at least {length} frames long")
+            raise DatasetError(f"no training sequence is at least {length} frames long")
         self.length, self.mirror = length, mirror
         self.g = torch.Generator().manual_seed(seed)
         lens = torch.tensor([s.shape[0] - length + 1 for s in self.seqs], dtype=torch.float)

@@ -16,6 +16,7 @@ from pathlib import Path
 from ..backends import checkpoint_sources
 from ..body import load_body_model
 from ..data.beat2 import Beat2Dataset
+from ..errors import CheckpointError
 from ..metrics.fgd import default_extractors
 from ..pipeline import GesturePipeline
 from .bench import run_bench
@@ -92,7 +93,7 @@ def run_eval(args: argparse.Namespace) -> int:
     methods = args.methods or pipe.methods
     missing = [m for m in methods if m not in pipe.methods]
     if missing:
-        raise ValueError(f"no checkpoint for {', '.join(missing)}; available: {', '.join(pipe.methods)}")
+        raise CheckpointError(f"no checkpoint for {', '.join(missing)}; available: {', '.join(pipe.methods)}")
     for m in methods:
         for s in args.steps:
             for c in args.cfg:

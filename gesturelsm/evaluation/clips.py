@@ -14,6 +14,7 @@ import numpy as np
 from ..align.words import Word
 from ..audio import SAMPLE_RATE
 from ..data.beat2 import Beat2Dataset
+from ..errors import DatasetError
 from ..motion.sequence import FPS, MotionSequence
 
 
@@ -71,5 +72,5 @@ def heldout_clips(root, train_fraction: float = 0.8, speakers=None, audio_only: 
     if max_clips:
         clips = clips[:max_clips]
     if not clips:
-        raise ValueError(f"{root}: no held-out clips with speech found")
+        raise DatasetError(f"{root}: no held-out clips with speech found")
     return clips, policy

@@ -20,12 +20,11 @@ from typing import Callable
 
 import numpy as np
 
+from ..constants import Progress
 from ..errors import GestureError, InputError
 from ..pipeline import finish
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
-
-Progress = Callable[[float, str], None]
 
 
 class SweepCancelled(GestureError):

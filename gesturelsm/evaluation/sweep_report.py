@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from .motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from .plot import COLORS
 from .tables import NAMES
@@ -79,7 +80,7 @@ def sweep_plot(result: SweepResult, out: str | Path, metric: str = "wrist_speed"
     from matplotlib.ticker import FormatStrFormatter, NullFormatter
 
     if metric not in BY_KEY:
-        raise ValueError(f"unknown statistic {metric!r}; choose one of {', '.join(PLOT_METRICS)}")
+        raise InputError(f"unknown statistic {metric!r}; choose one of {', '.join(PLOT_METRICS)}")
     stat = BY_KEY[metric]
     rows = result.rows()
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)

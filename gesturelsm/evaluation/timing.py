@@ -14,6 +14,8 @@ from typing import Callable, TypeVar
 
 import torch
 
+from ..errors import UserError
+
 T = TypeVar("T")
 Sync = Callable[[torch.device], None]
 
@@ -23,16 +25,16 @@ def check_device(name: str) -> torch.device:
     try:
         dev = torch.device(name)
     except RuntimeError:
-        raise ValueError(f"--device {name}: not a device (use cpu, cuda or cuda:N)") from None
+        raise UserError(f"--device {name}: not a device (use cpu, cuda or cuda:N)") from None
     if dev.type == "cuda":
         count = torch.cuda.device_count() if torch.cuda.is_available() else 0
         if count == 0:
-            raise ValueError(f"--device {name}: no CUDA GPU is visible (CUDA build of torch installed? "
+            raise UserError(f"--device {name}: no CUDA GPU is visible (CUDA build of torch installed? "
                              "CUDA_VISIBLE_DEVICES?)")
         if dev.index is not None and dev.index >= count:
-            raise ValueError(f"--device {name}: {count} visible CUDA GPU(s) (cuda:0 .. cuda:{count - 1})")
+            raise UserError(f"--device {name}: {count} visible CUDA GPU(s) (cuda:0 .. cuda:{count - 1})")
     elif dev.type != "cpu":
-        raise ValueError(f"--device {name}: timings are supported on cpu and cuda")
+        raise UserError(f"--device {name}: timings are supported on cpu and cuda")
     return dev
 
 

@@ -57,6 +57,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..body.model import resolve_body
+from ..errors import BodyModelError
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, PARENTS
 from ..retarget.face import (BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, WIDE_OPEN, face_landmarks,
@@ -219,7 +220,7 @@ def arkit_face(seq: MotionSequence, body=None) -> ArkitFace:
     BodyModel, a model path, or None for $GESTURELSM_SMPLX_MODEL / the built-in mannequin."""
     body = resolve_body(body)
     if len(body.module.lmk_faces_idx) != 51:
-        raise ValueError(f"the body model {body.path.name} has no 51 facial landmarks to measure the face on")
+        raise BodyModelError(f"the body model {body.path.name} has no 51 facial landmarks to measure the face on")
     poses = np.asarray(seq.poses, np.float64)
     T = len(poses)
     eyes = eye_rotations(poses) if T else np.zeros((0, 6))

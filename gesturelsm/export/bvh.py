@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from ..body.model import resolve_body
+from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
@@ -91,7 +92,7 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
                names: str = "animator") -> Path:
     """Write `seq` as BVH (see the module docstring); returns the path. body: BodyModel / path / None."""
     if units not in UNITS:
-        raise ValueError(f"units={units!r}: use 'cm' or 'm'")
+        raise InputError(f"units={units!r}: use 'cm' or 'm'")
     label = joint_names(names)
     body = resolve_body(body)
     scale = UNITS[units]

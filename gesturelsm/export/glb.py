@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from ..body.model import resolve_body
+from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
@@ -65,13 +66,23 @@ def top_k_weights(W: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray]:
     return idx.astype(np.uint8 if W.shape[1] < 256 else np.uint16), w.astype(np.float32)
 
 
-class _Builder:
-    """Accumulates binary buffer views and accessors."""
+class GltfBuffer:
+    """A glTF binary buffer being written: its bytes, and the buffer views and accessors that describe them. `after`
+    continues an existing file's (its own data first, so its indices stay valid)."""
 
     def __init__(self) -> None:
         self.blob = bytearray()
         self.views: list[dict] = []
         self.accessors: list[dict] = []
+
+    @classmethod
+    def after(cls, gltf: dict, blob: bytes) -> "GltfBuffer":
+        """A buffer that starts with a file's own binary data, views and accessors (`gltf`'s lists, appended to)."""
+        b = cls()
+        b.blob = bytearray(blob)
+        b.views = gltf.setdefault("bufferViews", [])
+        b.accessors = gltf.setdefault("accessors", [])
+        return b
 
     def add(self, data: np.ndarray, ctype: int, atype: str, target: int | None = None,
             minmax: bool = False, normalized: bool = False) -> int:
@@ -105,7 +116,7 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return n
 
 
-def _add_mesh(b: _Builder, V: np.ndarray, F: np.ndarray, W: np.ndarray) -> dict:
+def _add_mesh(b: GltfBuffer, V: np.ndarray, F: np.ndarray, W: np.ndarray) -> dict:
     """The rest mesh's buffers: (V, 3) vertices, (F, 3) faces, (V, 55) skinning weights -> a glTF primitive."""
     jidx, jw = top_k_weights(W, 4)
     a_pos = b.add(V, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)
@@ -119,7 +130,7 @@ def _add_mesh(b: _Builder, V: np.ndarray, F: np.ndarray, W: np.ndarray) -> dict:
             "indices": a_idx, "material": 0, "mode": 4}
 
 
-def _add_morph_targets(b: _Builder, body, seq: MotionSequence, num_vertices: int,
+def _add_morph_targets(b: GltfBuffer, body, seq: MotionSequence, num_vertices: int,
                        max_expressions: int) -> tuple[list[int], list[dict]]:
     """Expression directions the body actually uses (of the first max_expressions): (their indices, targets)."""
     E = min(int(body.num_expressions), int(max_expressions), seq.expressions.shape[1])
@@ -130,7 +141,7 @@ def _add_morph_targets(b: _Builder, body, seq: MotionSequence, num_vertices: int
     return used, targets
 
 
-def _add_animation(b: _Builder, seq: MotionSequence, body, J: np.ndarray,
+def _add_animation(b: GltfBuffer, seq: MotionSequence, body, J: np.ndarray,
                    used: list[int]) -> tuple[list[dict], list[dict]]:
     """Samplers and channels at seq.fps: a rotation per joint, the pelvis translation (rest pelvis J[0] + trans)
     and the used expressions' morph weights."""
@@ -170,7 +181,7 @@ def _nodes(J: np.ndarray, label: list[str]) -> list[dict]:
     return nodes
 
 
-def _write_glb(path: Path, gltf: dict, blob: bytearray) -> None:
+def write_glb(path: Path, gltf: dict, blob: bytearray) -> None:
     """The GLB container: 12-byte header, then the JSON and BIN chunks, each padded to 4 bytes."""
     js = json.dumps(gltf, separators=(",", ":")).encode()
     js += b" " * (-len(js) % 4)
@@ -195,7 +206,7 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
     F = body.faces.astype(np.uint32)
     W = body.module.lbs_weights.detach().cpu().numpy()                                # (V, 55)
 
-    b = _Builder()
+    b = GltfBuffer()
     prim = _add_mesh(b, V, F, W)
     used, targets = _add_morph_targets(b, body, seq, len(V), max_expressions)
     ibm = np.tile(np.eye(4), (NUM_JOINTS, 1, 1))
@@ -225,7 +236,7 @@ def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "a
         "buffers": [{"byteLength": len(b.blob)}],
         "extras": {"fps": seq.fps, "frames": seq.num_frames, "units": "metres, y up, body faces +z"},
     }
-    _write_glb(path, gltf, b.blob)
+    write_glb(path, gltf, b.blob)
     return path
 
 
@@ -234,10 +245,10 @@ def read_glb(path: str | Path) -> tuple[dict, bytes]:
     data = Path(path).read_bytes()
     magic, version, total = struct.unpack_from("<4sII", data, 0)
     if magic != b"glTF" or version != 2 or total != len(data):
-        raise ValueError(f"{path}: not a GLB 2.0 file")
+        raise InputError(f"{path}: not a GLB 2.0 file")
     n, kind = struct.unpack_from("<I4s", data, 12)
     if kind != b"JSON":
-        raise ValueError(f"{path}: first chunk is not JSON")
+        raise InputError(f"{path}: first chunk is not JSON")
     gltf = json.loads(data[20:20 + n])
     off = 20 + n
     blob = b""

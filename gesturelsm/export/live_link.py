@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UserError
+from ..errors import InputError, UserError
 from ..motion.sequence import MotionSequence
 from .arkit import ARKIT_NAMES, EYE_NAMES, HEAD_NAMES, ArkitFace, arkit_face
 
@@ -45,7 +45,7 @@ def timecode_frame(code: str, fps: int) -> float:
     """`HH:MM:SS:FF[.sss]` -> the frame number at `fps` (the fraction after the dot is a sub-frame)."""
     m = _TIMECODE.match(code.strip())
     if not m:
-        raise ValueError(f"{code!r} is not a Live Link Face timecode (HH:MM:SS:FF.sss)")
+        raise InputError(f"{code!r} is not a Live Link Face timecode (HH:MM:SS:FF.sss)")
     hh, mm, ss, ff = (int(g) for g in m.groups()[:4])
     sub = float(f"0.{m.group(5)}") if m.group(5) else 0.0
     return (hh * 3600 + mm * 60 + ss) * fps + ff + sub
@@ -58,7 +58,7 @@ def write_live_link_csv(face: ArkitFace, path: str | Path) -> Path:
         raise UserError(f"{path}: use a .csv file name for the Live Link Face CSV")
     values = np.concatenate([face.weights, face.head, face.eyes], 1)
     if not np.isfinite(values).all():
-        raise ValueError("the face has NaN or infinite values")
+        raise InputError("the face has NaN or infinite values")
     lines = [",".join(HEADER)]
     for t, row in enumerate(values):
         lines.append(f"{timecode(t, face.fps)},{BLEND_SHAPE_COUNT}," + ",".join(f"{x + 0.0:.6f}" for x in row))

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
 
 
@@ -19,12 +20,12 @@ def export_npz(seq: MotionSequence, path: str | Path) -> Path:
     """Write `seq` as a BEAT2-layout npz after checking it; returns the path."""
     path = Path(path)
     if path.suffix.lower() != ".npz":
-        raise ValueError(f"{path}: use a .npz file name")
+        raise InputError(f"{path}: use a .npz file name")
     if seq.num_frames == 0:
-        raise ValueError("the motion has no frames")
+        raise InputError("the motion has no frames")
     if seq.fps != FPS:
-        raise ValueError(f"the motion is at {seq.fps} fps; BEAT2 files are {FPS} fps")
+        raise InputError(f"the motion is at {seq.fps} fps; BEAT2 files are {FPS} fps")
     for name in ("poses", "trans", "expressions", "betas"):
         if not np.isfinite(getattr(seq, name)).all():
-            raise ValueError(f"the motion's {name} contain NaN or infinite values")
+            raise InputError(f"the motion's {name} contain NaN or infinite values")
     return seq.save(path)

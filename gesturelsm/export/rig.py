@@ -17,19 +17,10 @@ from ..retarget import Character, CharacterError, Retargeted, retarget_motion
 from ..body.model import resolve_body
 from ..retarget.face import driven_presets, face_weights, morph_weights
 from .bvh import continuous_euler, matrix_to_euler_zxy
-from .glb import FLOAT, _Builder, _write_glb, continuous_quaternions, matrix_to_quaternion_xyzw
+from .glb import FLOAT, GltfBuffer, continuous_quaternions, matrix_to_quaternion_xyzw, write_glb
 
 
-def _start_builder(gltf: dict, blob: bytes) -> _Builder:
-    """A builder whose buffer starts with the character's own binary data, views and accessors."""
-    b = _Builder()
-    b.blob = bytearray(blob)
-    b.views = gltf.setdefault("bufferViews", [])
-    b.accessors = gltf.setdefault("accessors", [])
-    return b
-
-
-def _face_channels(b: _Builder, gltf: dict, seq, a_time: int, body) -> list[tuple[dict, dict]]:
+def _face_channels(b: GltfBuffer, gltf: dict, seq, a_time: int, body) -> list[tuple[dict, dict]]:
     """Morph-weight channels for the VRM presets the character defines (visemes and blink, `retarget.face`), one
     per mesh node that a driven preset binds; no channel when the character defines none of them."""
     presets = driven_presets(gltf)
@@ -64,7 +55,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
     r = result if result is not None else retarget_motion(seq, character, body, grounding=grounding)
     skel = r.skeleton
     gltf = copy.deepcopy(doc.gltf)
-    b = _start_builder(gltf, doc.blob)
+    b = GltfBuffer.after(gltf, doc.blob)   # the character's own data first
     T = r.num_frames
     a_time = b.add((np.arange(T) / r.fps).astype(np.float32), FLOAT, "SCALAR", minmax=True)
     quats = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation)).astype(np.float32)
@@ -87,7 +78,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
     buffer["byteLength"] = len(b.blob)
     gltf["buffers"] = [buffer] + list(gltf.get("buffers", [])[1:])
     path = Path(path)
-    _write_glb(path, gltf, b.blob)
+    write_glb(path, gltf, b.blob)
     return path
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InputError
 from ..motion.skeleton import JOINT_NAMES, NUM_JOINTS, PARENTS
 
 _BODY = {
@@ -56,7 +57,7 @@ def full_poses(seq, body) -> np.ndarray:
 
 def joint_names(names: str) -> tuple[str, ...]:
     if names not in NAME_SETS:
-        raise ValueError(f"names={names!r}: use 'animator' (Hips, LeftArm, ...) or 'smplx'")
+        raise InputError(f"names={names!r}: use 'animator' (Hips, LeftArm, ...) or 'smplx'")
     return NAME_SETS[names]
 
 

@@ -18,12 +18,13 @@ import numpy as np
 import torch
 
 from ..constants import FPS
+from ..errors import Unavailable
 
 TEXT_DIM = 384
 
 
-class TextModelUnavailable(RuntimeError):
-    pass
+class TextModelUnavailable(Unavailable):
+    """The MiniLM text encoder cannot be loaded here; the message says why."""
 
 
 @dataclass

@@ -6,6 +6,7 @@ steps, what it predicts, whether it takes a step size) are its class's `facts`. 
 this folder + one line below; the backend registry (`gesturelsm.backends`) serves every method listed here.
 `windows.py` is the long-audio window loop every backend's sampling runs in.
 """
+from ..errors import InputError
 from .base import LossResult, Method, MethodFacts, ModelFn, euler_sample, guided
 from .ddim import DDIM
 from .rectified import RectifiedFlow
@@ -23,7 +24,7 @@ MAX_STEPS = {k: f.max_steps for k, f in FACTS.items()}
 
 def method_facts(name: str) -> MethodFacts:
     if name not in FACTS:
-        raise ValueError(f"unknown method {name!r}; choose from {', '.join(FACTS)}")
+        raise InputError(f"unknown method {name!r}; choose from {', '.join(FACTS)}")
     return FACTS[name]
 
 

@@ -20,9 +20,8 @@ from typing import Callable
 
 import torch
 
+from ..constants import Progress
 from .base import hold
-
-Progress = Callable[[float, str], None]
 # sample(window index, first latent, seed latents, noise generator) -> (B, t, ...) latents, time on dim 1
 WindowSampler = Callable[[int, int, torch.Tensor, torch.Generator], torch.Tensor]
 

@@ -12,6 +12,7 @@ import numpy as np
 import torch
 
 from ..audio import SAMPLE_RATE
+from ..errors import DatasetError
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM, TextEmbedder
 from ..motion.regions import REGIONS
@@ -83,7 +84,7 @@ class LatentWindowSampler:
                  seed_noise: float = 0.0):
         self.takes = [tk for tk in takes if tk.latents.shape[1] >= window]
         if not self.takes:
-            raise ValueError(f"no take has {window * 4} frames (one generator window)")
+            raise DatasetError(f"no take has {window * 4} frames (one generator window)")
         self.window, self.seed_len = window, seed_len
         self.std = latent_std.reshape(-1, 1, 1)
         self.neutral = neutral_seed

@@ -17,10 +17,12 @@ from typing import Callable, Mapping
 
 import torch
 
+from ..errors import UserError
 
-class LaunchError(ValueError):
-    """The processes cannot train as started (e.g. more processes than GPUs); the message says what to change.
-    A ValueError, so the command line prints it as one line and exits with status 2."""
+
+class LaunchError(UserError):
+    """The processes cannot train as started (e.g. more processes than GPUs); the message says what to change
+    (the command line prints it as one line and exits with status 2)."""
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ import torch
 import torch.distributed as dist
 from tqdm import tqdm
 
+from ..errors import InputError
 from ..flows import training_method
 from ..motion.regions import REGIONS
 from ..safe_load import load_tensors
@@ -124,7 +125,7 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
     rank, world, device = setup_processes(tc.device)   # process group (gloo/nccl from tc.device), one GPU each
     torch.manual_seed(tc.seed)
     if tc.prediction not in ("data", "velocity"):
-        raise ValueError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
+        raise InputError(f"prediction must be 'data' or 'velocity' (got {tc.prediction!r})")
     method = training_method(tc.method, tc.prediction, tc.time_sampler)
     cfg, model, std, neutral = _build_model(takes, tokenizers, tc, method, config)
     model.to(device)

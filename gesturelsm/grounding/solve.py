@@ -37,7 +37,7 @@ class GroundingSettings:
     steps: StepParams = field(default_factory=StepParams)
     level: float = 1.0                                        # how much of a planted foot's tilt goes (1: flat)
     height_seconds: float = 0.3                               # smoothing of the root's height correction
-    bob: float = 0.6                # the root's rises above its median height are scaled by this (1: as the legs have them)
+    bob: float = 0.6                # the root height's ups and downs are scaled by this (1: as the legs have them)
     reach: float = REACH                                      # a planted leg is stretched at most this much
     knee_seconds: float = 0.1                                # smoothing of each leg's hip-to-ankle distance
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
@@ -127,14 +127,15 @@ def height_shift(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.nd
                  fps: int = FPS) -> np.ndarray:
     """(T,) what to add to the root's height: where the planted legs, as they were (`leg_lengths`), put it (so the
     highest planted foot lands with its leg as it was and a lower one bends its knee), smoothed over
-    `height_seconds`, its rises above their median scaled by `bob` (the knees bend a little more there: the body
-    bobs less; never higher than the legs put it), and kept softly under where they reach."""
+    `height_seconds`, its ups and downs around their median scaled by `bob` (the body bobs less: the knees bend a
+    little more at the tops and straighten a little at the bottoms), kept softly under where the planted legs reach
+    when stretched to `reach`."""
     root = pose.p[:, rig.parents.index(-1), 1]
-    reach = reachable(rig, pose, plans, lengths)
-    natural = root + smooth(reach, settings.height_seconds, fps)
-    rise = natural - float(np.median(natural))
-    soft = SOFT_CAP * np.logaddexp(0.0, rise / SOFT_CAP)                 # ~max(rise, 0), smooth
-    return soft_min(natural - (1 - settings.bob) * soft - root, reach, SOFT_CAP)
+    natural = root + smooth(reachable(rig, pose, plans, lengths), settings.height_seconds, fps)
+    middle = float(np.median(natural))
+    target = middle + settings.bob * (natural - middle) - root
+    full = np.array([settings.reach * sum(rig.lengths(leg)) for leg in rig.legs])
+    return soft_min(target, reachable(rig, pose, plans, np.broadcast_to(full, lengths.shape)), SOFT_CAP)
 
 
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:

@@ -15,6 +15,7 @@ import numpy as np
 from ..audio import load_audio
 from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
+from ..errors import UserError
 from ..features.audio import audio_channels
 from ..motion.sequence import MotionSequence
 from ..pipeline import GesturePipeline
@@ -82,7 +83,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.chunk_ms <= 0:
-        raise ValueError("--chunk-ms must be positive")
+        raise UserError("--chunk-ms must be positive")
     cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed,
                      grounding=args.grounding == "on")
     audio = load_audio(args.audio)
@@ -96,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
     audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
     b = pipe.bounds(cfg.method)
     if not b.min_steps <= cfg.steps <= b.max_steps:
-        raise ValueError(f"--steps must be from {b.min_steps} to {b.max_steps} (got {cfg.steps})")
+        raise UserError(f"--steps must be from {b.min_steps} to {b.max_steps} (got {cfg.steps})")
     res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {args.chunk_ms:.0f} ms "

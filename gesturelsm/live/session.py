@@ -13,6 +13,7 @@ wait to be read (older ones are dropped and counted), latencies are kept for the
 """
 from __future__ import annotations
 
+import logging
 import queue
 import threading
 import time
@@ -22,18 +23,24 @@ import numpy as np
 import torch
 
 from ..constants import SAMPLE_RATE
+from ..errors import GestureError, Unavailable
 from .stream import LiveConfig, MotionChunk, StreamingGenerator
 
+log = logging.getLogger(__name__)
 LATENCY_KEEP = 20_000
 _END = object()
 
 
-class LiveBusy(RuntimeError):
+class LiveBusy(Unavailable):
     """No free live stream; the message is for the visitor."""
 
 
-class LiveOverloaded(RuntimeError):
+class LiveOverloaded(Unavailable):
     """Audio arrives faster than motion can be generated on this machine."""
+
+
+class LiveEnded(Unavailable):
+    """Audio fed to a stream that has ended (stopped, idle too long, or its generation failed); the message says why."""
 
 
 class LiveSession:
@@ -63,7 +70,7 @@ class LiveSession:
 
     def feed(self, chunk: np.ndarray) -> None:
         if not self.running:
-            raise RuntimeError(self.error or "this live stream has ended")
+            raise LiveEnded(self.error or "this live stream has ended")
         try:
             self.inbox.put_nowait((np.asarray(chunk, np.float32).reshape(-1), time.perf_counter()))
         except queue.Full:
@@ -126,8 +133,11 @@ class LiveSession:
                     self._publish(self.gen.finish())
                     break
                 self._publish(self.gen.feed(chunk, arrival))
-        except Exception as exc:  # noqa: BLE001 (reported to the visitor through stats()/feed())
+        except GestureError as exc:             # e.g. audio the generator cannot use: the visitor reads why
             self.error = f"live generation failed: {exc}"
+        except Exception:                       # a bug: its traceback goes to the log, the visitor reads one line
+            log.exception("live generation failed")
+            self.error = "live generation failed (an internal error; the server's log has the details)"
         finally:
             self._stop.set()
             self._close()

@@ -56,7 +56,7 @@ from ..constants import FPS, SAMPLE_RATE
 from ..features.audio import audio_channels
 from ..features.text import TEXT_DIM
 from ..backends import FlowBackend
-from ..errors import InputError
+from ..errors import AudioError, InputError
 from ..flows import make_method
 from ..flows.base import inpainting
 from ..generator.data import samples_for
@@ -82,9 +82,9 @@ class LiveConfig:
 
     def check(self, t: int, s: int) -> None:
         if not s <= self.commit <= t - s:
-            raise ValueError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
+            raise InputError(f"commit must be between {s} and {t - s} latents (got {self.commit})")
         if min(self.lookahead, self.decode_lag, self.decode_context, self.blend_frames) < 0:
-            raise ValueError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
+            raise InputError("lookahead, decode_lag, decode_context and blend_frames must be >= 0")
 
 
 @dataclass
@@ -141,7 +141,7 @@ class StreamingGenerator:
             raise RuntimeError("this stream has finished; start a new one")
         y = np.asarray(chunk, np.float32).reshape(-1)
         if not np.isfinite(y).all():
-            raise ValueError("the audio chunk contains invalid samples (NaN or infinity)")
+            raise AudioError("the audio chunk contains invalid samples (NaN or infinity)")
         self.audio = np.concatenate([self.audio, y])
         self.n_in += len(y)
         self.arrivals.append((self.n_in, time.perf_counter() if arrival is None else arrival))

@@ -26,6 +26,7 @@ import numpy as np
 import torch
 
 from ..constants import FPS
+from ..errors import InputError
 from ..motion.regions import REGIONS
 
 PELVIS, LEFT_WRIST, RIGHT_WRIST = 0, 20, 21
@@ -71,7 +72,7 @@ def pooled_stats(motions: list[np.ndarray], fps: int = FPS) -> AmplitudeStats:
     """Statistics of several motions, each weighted by its length (frames pooled; speeds and jerk per motion,
     averaged with weights T)."""
     if not motions:
-        raise ValueError("no motions to pool")
+        raise InputError("no motions to pool")
     per = [amplitude_stats(m, fps) for m in motions]
     w = np.array([len(m) for m in motions], np.float64)
     h = np.concatenate([wrist_heights(m).max(axis=1) for m in motions])
@@ -88,7 +89,7 @@ def upper_windows(joints: np.ndarray, window: int = FPS, stride: int = 1, every:
     rel = j[:, list(REGIONS["upper"].joints)] - j[:, [PELVIS]]                # (T, 13, 3)
     starts = range(0, len(j) - window + 1, stride)
     if len(starts) == 0:
-        raise ValueError(f"motion of {len(j)} frames is shorter than one {window}-frame window")
+        raise InputError(f"motion of {len(j)} frames is shorter than one {window}-frame window")
     return torch.from_numpy(np.stack([rel[s:s + window:every].reshape(-1) for s in starts]))
 
 

@@ -34,6 +34,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from ..errors import CheckpointError, InputError
 from ..motion.skeleton import PARENTS
 from ..safe_load import load_tensors
 
@@ -199,11 +200,11 @@ def load_emage_weights(model: SkeletonConvEncoder, path_or_state: str | Path | d
         if k.startswith("encoder."):
             enc[k[len("encoder."):]] = v
     if not enc:
-        raise ValueError("no 'encoder.*' weights found: not an EMAGE skeleton-conv autoencoder checkpoint")
+        raise CheckpointError("no 'encoder.*' weights found: not an EMAGE skeleton-conv autoencoder checkpoint")
     try:
         model.load_state_dict(enc, strict=True)
     except RuntimeError as exc:
-        raise ValueError(f"the checkpoint does not match the skeleton-conv encoder architecture: {exc}") from None
+        raise CheckpointError(f"the checkpoint does not match the skeleton-conv encoder architecture: {exc}") from None
     return model.eval()
 
 
@@ -213,5 +214,5 @@ def emage_features(model: SkeletonConvEncoder, rot6d: np.ndarray | torch.Tensor)
     x = torch.as_tensor(np.asarray(rot6d, np.float32))
     T = x.shape[0] // model.stride * model.stride
     if T == 0:
-        raise ValueError(f"a sequence needs at least {model.stride} frames for EMAGE features")
+        raise InputError(f"a sequence needs at least {model.stride} frames for EMAGE features")
     return model(x[None, :T])[0].numpy().astype(np.float64)

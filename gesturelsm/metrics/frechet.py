@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import InputError
+
 
 @dataclass(frozen=True)
 class GaussianStats:
@@ -26,7 +28,7 @@ def gaussian_stats(features: np.ndarray) -> GaussianStats:
     set repeated (e.g. identical motions from several seeds) are the same Gaussian, at distance 0."""
     f = np.asarray(features, np.float64)
     if f.ndim != 2 or len(f) < 2:
-        raise ValueError(f"need at least 2 feature vectors of shape (N, D); got {f.shape}")
+        raise InputError(f"need at least 2 feature vectors of shape (N, D); got {f.shape}")
     return GaussianStats(f.mean(0), np.cov(f, rowvar=False, bias=True).reshape(f.shape[1], f.shape[1]), len(f))
 
 

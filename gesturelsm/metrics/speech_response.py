@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import FPS, SAMPLE_RATE
+from ..errors import InputError
 from .beat import IGNORE_FRAMES, joint_beats, joint_speed, score_beats
 from ..motion.regions import REGIONS
 
@@ -50,7 +51,7 @@ def beat_timing(joints: np.ndarray, beats: np.ndarray, fps: int = FPS, mean_spee
     a = a[(a >= lo) & (a < hi)]
     shifts = np.arange(min_shift, span - min_shift + 1e-9, step)
     if len(a) == 0 or len(shifts) == 0:
-        raise ValueError(f"{T / fps:.1f} s of motion (with {len(a)} beats) is too short to shift beats by "
+        raise InputError(f"{T / fps:.1f} s of motion (with {len(a)} beats) is too short to shift beats by "
                          f">= {min_shift} s inside the scored span")
     m = joint_beats(joints, fps, mean_speed, joint_ids)
     null = np.array([score_beats(lo + (a - lo + s) % span, m) for s in shifts])
@@ -84,7 +85,7 @@ def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = SAMPLE_RAT
     n = len(speed)
     shifts = np.arange(round(min_shift * fps), n - round(min_shift * fps) + 1, max(1, round(step * fps)))
     if len(shifts) == 0:
-        raise ValueError(f"{n / fps:.1f} s of motion is too short to shift the speech by >= {min_shift} s")
+        raise InputError(f"{n / fps:.1f} s of motion is too short to shift the speech by >= {min_shift} s")
     w = max(1, round(smooth_s * fps))
     m, e = _smooth(speed, w), _smooth(loudness(audio, n, sr, fps), w)
     null = np.array([_corr(m, np.roll(e, int(s))) for s in shifts])

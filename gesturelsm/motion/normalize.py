@@ -6,6 +6,8 @@ from typing import Sequence
 
 import torch
 
+from ..errors import CheckpointError
+
 STD_EPS = 1e-3  # dims with std below this (constant eye/jaw 6D entries) are only centred, not scaled
 
 
@@ -46,7 +48,7 @@ class Normalizer:
         try:
             mean, std = sd[prefix + "mean"].float(), sd[prefix + "std"].float()
         except KeyError as exc:
-            raise KeyError(f"normalisation statistics {exc} missing from the model file") from None
+            raise CheckpointError(f"normalisation statistics {exc} missing from the model file") from None
         if (std <= 0).any():
-            raise ValueError("normalisation std must be positive")
+            raise CheckpointError("normalisation std must be positive")
         return cls(mean, std)

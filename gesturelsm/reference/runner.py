@@ -9,11 +9,11 @@ Face: the released configs generate none, so jaw and expressions stay neutral (i
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import torch
 
+from ..constants import Progress
 from ..flows import Held, sample_windows, window_layout
 from ..motion.regions import REGIONS as MOTION_REGIONS
 from ..motion.regions import join_regions
@@ -26,7 +26,6 @@ from .speech import speech_features, word_tokens
 # joint lists of the reference's region masks (utils/joints.py), also our regions.py order
 REGION_JOINTS = {"upper": (3, 6, 9, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21), "hands": tuple(range(25, 55)),
                  "lower": (0, 1, 2, 4, 5, 7, 8, 10, 11)}
-Progress = Callable[[float, str], None]
 FACE_NOTE = "face neutral: the authors' released models generate no face"
 
 

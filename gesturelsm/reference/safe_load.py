@@ -16,10 +16,11 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from ..errors import CheckpointError
 from ..safe_load import PlainDataUnpickler, load_tensors
 
 
-class ReferenceFileError(ValueError):
+class ReferenceFileError(CheckpointError):
     """A released file that cannot be read safely or is not what it should be; the message says which."""
 
 

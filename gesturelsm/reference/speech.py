@@ -19,6 +19,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from ..errors import AudioError
 from ..features.audio import envelope
 from ..kernels import WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, onednn_enabled, taken
 from .config import GeneratorConfig
@@ -35,7 +36,7 @@ def speech_features(y: np.ndarray, sr: int = 16000) -> np.ndarray:
     y = np.ascontiguousarray(y, dtype=np.float32)
     n = y.shape[0]
     if n < ENVELOPE_WINDOW:
-        raise ValueError(f"speech shorter than {ENVELOPE_WINDOW} samples ({n / sr:.3f} s)")
+        raise AudioError(f"speech shorter than {ENVELOPE_WINDOW} samples ({n / sr:.3f} s)")
     env = envelope(y, ENVELOPE_WINDOW)                      # exact forward-window maxima (doubling passes)
     env[n - ENVELOPE_WINDOW + 1:] = env[n - ENVELOPE_WINDOW]  # the reference repeats the last full window
     onset = np.zeros(n, dtype=np.float64)
@@ -130,8 +131,8 @@ class ReferenceSpeechEncoder(nn.Module):
     def _wav(self, audio: torch.Tensor) -> torch.Tensor:
         """(B, S, 2) -> (B, A, T'). In eval mode, where measured faster on this machine (the `conv` path, timed on
         the first PROBE_SAMPLES samples of one clip), the BatchNorms are folded into the convolutions (kept until
-        a weight changes) and the convolutions run channels-last (kernels): ~25 ms per window instead of ~40 on
-        an AMD EPYC with AVX-512 (benchmarks/reference_profile.py)."""
+        a weight changes) and the convolutions run channels-last (kernels), which makes a window's encoding faster
+        there (docs/BENCHMARKS.md, "Why the code is built this way")."""
         a = audio.transpose(1, 2)
         if self.training or torch.is_grad_enabled() or not onednn_enabled():
             return self.wav(a)

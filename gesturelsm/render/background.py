@@ -3,11 +3,9 @@ machine come first.
 
 Why a process, not a niced thread: Linux's autogroup scheduling (on by default: /proc/sys/kernel/sched_autogroup_enabled)
 first shares the CPU fairly between sessions (a terminal, a desktop app, a browser launched detached) and applies a
-thread's niceness only inside its session. A browser playing the page on the same 2-core machine is a session of its
-own, so a render thread niced 19 inside the server still took half the CPU: the player drew 15-17 fps with three
-bodies, as with two plain busy loops at niceness 19 or SCHED_IDLE, against 28-29 with the same loops in a session
-of their own at autogroup niceness 19 (benchmarks/player_latency.py measures the page).
-So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
+thread's niceness only inside its session. A browser playing the page on the same machine is a session of its own,
+so a render thread niced inside the server would still take the server's whole share of the CPU from it
+(docs/WEBAPP.md has the frame rates). So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
 in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before it renders; its
 GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the
 process is still niced.
@@ -38,7 +36,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..constants import Progress
-from ..errors import RenderError
+from ..errors import Cancelled, RenderError
 from ..motion.sequence import MotionSequence
 from .frames import RenderWarning
 
@@ -48,7 +46,7 @@ _running: set[subprocess.Popen] = set()
 _lock = threading.Lock()
 
 
-class RenderCancelled(Exception):
+class RenderCancelled(Cancelled):
     """render_apart's `cancelled()` said yes: the render process was stopped and its partial file removed."""
 
 
@@ -195,7 +193,7 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(args)
     try:
         return int(ns.func(ns) or 0)
-    except (GestureError, FileNotFoundError, ValueError) as exc:
+    except GestureError as exc:                 # anything else is a bug: its traceback goes to stderr, exit 1
         print(f"gesturelsm render: error: {exc}", file=sys.stderr)
         return 2
 

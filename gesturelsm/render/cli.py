@@ -61,7 +61,7 @@ def _gen_times(values: list[str] | None) -> list[float | None] | None:
         try:
             out.append(float(v.rstrip("s")))
         except ValueError:
-            raise ValueError(f"--gen-times: {v!r} is not a number of seconds (use '-' for none)") from None
+            raise UserError(f"--gen-times: {v!r} is not a number of seconds (use '-' for none)") from None
     return out
 
 

@@ -9,20 +9,23 @@ A character is retargeted (`retarget_motion`, its feet planted on its own legs u
 meshes skinned per frame in numpy (`retarget.skinning`), its VRM mouth and blink expressions set from the
 generated face (`retarget.face`), and its world turned into
 the renderer's with the retargeting's alignment (left, up, forward -> +x, +y, +z); glTF units are metres.
-A character without a mesh (a BVH skeleton, a glTF of bones only) is drawn as the mannequin, with a note.
+A character without a mesh (a BVH skeleton, a glTF of bones only) is drawn as the mannequin, with a note. The camera
+is fitted to `frame_points`: every vertex, or for a character of over FRAMING_VERTICES an even subset of them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..motion.sequence import MotionSequence
 from ..retarget import Character, retarget_motion
 from ..retarget.face import driven_presets, face_weights, morph_weights
-from ..retarget.mesh import character_mesh, has_mesh
+from ..retarget.mesh import CharacterMesh, character_mesh, has_mesh
 from ..retarget.skinning import joint_world, pose_mesh, rest_world
 from .surfaces import Surface
+
+FRAMING_VERTICES = 100_000    # a character with more is framed from an even subset of this many (memory, time)
 
 
 @dataclass
@@ -38,7 +41,7 @@ class BodyFigure:
     def __init__(self, body, seqs: list[MotionSequence]):
         self.body, self.seqs = body, seqs
         self.faces = np.asarray(body.faces, np.int64)
-        self.num_vertices = int(body.num_vertices)
+        self.num_vertices = self.framing_vertices = int(body.num_vertices)
         self.surfaces: list[Surface] | None = None
         self.notes: list[str] = []
 
@@ -46,6 +49,10 @@ class BodyFigure:
         q = self.seqs[k]
         out = self.body.forward(q.poses[ids], q.trans[ids], q.expressions[ids], q.betas)
         return Posed(out.vertices, None, out.joints[:, 0, [0, 2]])
+
+    def frame_points(self, k: int, ids: np.ndarray) -> np.ndarray:
+        """(n, V, 3) the vertices the camera is fitted to (all of them)."""
+        return self.pose(k, ids).vertices
 
     def hips_y(self, k: int) -> float:
         s = self.seqs[k]
@@ -82,6 +89,8 @@ class CharacterFigure:
         self.surfaces = [Surface(int(s), len(p.positions), p.faces, p.color, p.texture, p.uv, p.wrap, p.alpha_mode,
                                  p.alpha_cutoff, p.double_sided, roughness=0.6) for p, s in zip(parts, start)]
         self._normals = all(p.normals is not None for p in parts)
+        self._framing = _thinned(self.mesh, -(-self.num_vertices // FRAMING_VERTICES))
+        self.framing_vertices = self.num_vertices if self._framing is None else self._framing.num_vertices
 
     def _frame(self, world: np.ndarray, morph: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray | None]:
         verts, normals = pose_mesh(self.mesh, world, morph)
@@ -93,11 +102,27 @@ class CharacterFigure:
         ids = np.asarray(ids, np.int64)
         r = self.results[k]
         W = joint_world(r, ids)
-        frames = [self._frame(W[j], {m: w[f] for m, w in self.morph[k].items()}) for j, f in enumerate(ids)]
-        V = np.stack([v for v, _ in frames]).astype(np.float32)
-        N = np.stack([n for _, n in frames]).astype(np.float32) if self._normals else None
+        V = np.empty((len(ids), self.num_vertices, 3), np.float32)
+        N = np.empty_like(V) if self._normals else None
+        for j, f in enumerate(ids):                                   # frame by frame into the float32 arrays
+            V[j], n = self._frame(W[j], {m: w[f] for m, w in self.morph[k].items()})
+            if N is not None:
+                N[j] = n
         root = r.positions[ids, r.root] @ self.align.T
         return Posed(V, N, root[:, [0, 2]])
+
+    def frame_points(self, k: int, ids: np.ndarray) -> np.ndarray:
+        """(n, framing_vertices, 3) float32: the vertices the camera is fitted to at frames `ids` (all of them, or
+        an even subset of a character with over FRAMING_VERTICES)."""
+        if self._framing is None:
+            return self.pose(k, ids).vertices
+        ids = np.asarray(ids, np.int64)
+        W = joint_world(self.results[k], ids)
+        out = np.empty((len(ids), self.framing_vertices, 3), np.float32)
+        for j, f in enumerate(ids):
+            verts, _ = pose_mesh(self._framing, W[j], {m: w[f] for m, w in self.morph[k].items()})
+            out[j] = np.concatenate(verts) @ self.align.T
+        return out
 
     def hips_y(self, k: int) -> float:
         r = self.results[k]
@@ -105,6 +130,19 @@ class CharacterFigure:
 
     def rest_vertices(self) -> np.ndarray:
         return self._frame(rest_world(self.results[0].skeleton), {})[0]
+
+
+def _thinned(mesh: CharacterMesh, step: int) -> CharacterMesh | None:
+    """Every `step`-th vertex of each skinned part (no triangles, normals or textures: points to frame the camera
+    on); None for step 1."""
+    if step <= 1:
+        return None
+    parts = [replace(p, positions=p.positions[::step], normals=None, faces=np.zeros((0, 3), np.int64), uv=None,
+                     texture=None, target_normals=None,
+                     joints=None if p.joints is None else p.joints[::step],
+                     weights=None if p.weights is None else p.weights[::step],
+                     targets=None if p.targets is None else p.targets[:, ::step]) for p in mesh.parts if p.shares < 0]
+    return CharacterMesh(parts)
 
 
 def make_figure(seqs: list[MotionSequence], body=None, character: Character | None = None, grounding: bool = True):

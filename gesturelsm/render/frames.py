@@ -15,6 +15,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ..body.model import resolve_body
+from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera
 from .figure import make_figure
@@ -24,6 +25,8 @@ from .style import RenderStyle
 
 MotionLike = MotionSequence | str | Path
 SAMPLE_FRAMES = 120          # frames sampled to frame the camera (evenly over the clip)
+SAMPLE_BYTES = 256 * 2 ** 20  # sampled vertices (float32) held to frame the camera; beyond, they are posed twice
+POSE_POINTS = 2_000_000       # vertex-frames posed at once (about 70 bytes each while posing and framing)
 MAX_BODIES = 8
 
 
@@ -37,14 +40,14 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
         motions = [motions]
     seqs = [m if isinstance(m, MotionSequence) else MotionSequence.load(m) for m in motions]
     if not seqs:
-        raise ValueError("nothing to render: no motions given")
+        raise InputError("nothing to render: no motions given")
     if len(seqs) > MAX_BODIES:
-        raise ValueError(f"{len(seqs)} motions: at most {MAX_BODIES} can be shown side by side")
+        raise InputError(f"{len(seqs)} motions: at most {MAX_BODIES} can be shown side by side")
     for i, s in enumerate(seqs):
         if s.num_frames == 0:
-            raise ValueError(f"motion {i + 1} has no frames")
+            raise InputError(f"motion {i + 1} has no frames")
         if s.fps != FPS:
-            raise ValueError(f"motion {i + 1} is at {s.fps} fps; rendering expects {FPS} fps (BEAT2)")
+            raise InputError(f"motion {i + 1} is at {s.fps} fps; rendering expects {FPS} fps (BEAT2)")
     T = max(s.num_frames for s in seqs)
     out = []
     for i, s in enumerate(seqs):
@@ -59,13 +62,31 @@ def prepare_motions(motions: Sequence[MotionLike] | MotionLike) -> list[MotionSe
     return out
 
 
-def _sample_vertices(figure, max_frames: int = SAMPLE_FRAMES) -> list[np.ndarray]:
-    """Per motion: (k, V, 3) vertices at k <= max_frames evenly spaced frames (first and last included)."""
-    out = []
-    for k, s in enumerate(figure.seqs):
-        idx = np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
-        out.append(figure.pose(k, idx).vertices)
-    return out
+def _sample_chunks(figure, max_frames: int = SAMPLE_FRAMES) -> list:
+    """Per motion: its framing vertices (`figure.frame_points`) at k <= max_frames evenly spaced frames (first and
+    last included), as chunks of frames (k_i, V, 3) of at most POSE_POINTS vertex-frames each (one chunk for a
+    mesh of a few thousand vertices). Held as arrays while they take at most SAMPLE_BYTES; beyond, each chunk is
+    posed when it is read (`_Posing`), so a large mesh is framed within that memory."""
+    ids = [np.unique(np.linspace(0, s.num_frames - 1, min(s.num_frames, max_frames)).round().astype(int))
+           for s in figure.seqs]
+    per = max(1, POSE_POINTS // figure.framing_vertices)
+    chunks = [[i[a:a + per] for a in range(0, len(i), per)] for i in ids]
+    if sum(len(i) for i in ids) * figure.framing_vertices * 12 <= SAMPLE_BYTES:
+        return [[figure.frame_points(k, c) for c in cs] for k, cs in enumerate(chunks)]
+    return [_Posing(figure, k, cs) for k, cs in enumerate(chunks)]
+
+
+class _Posing:
+    """A motion's sampled frames posed chunk by chunk, each time the list is iterated (nothing is kept)."""
+
+    def __init__(self, figure, k: int, chunks: list[np.ndarray]):
+        self.figure, self.k, self.chunks = figure, k, chunks
+
+    def __len__(self) -> int:
+        return len(self.chunks)
+
+    def __iter__(self):
+        return (self.figure.frame_points(self.k, ids) for ids in self.chunks)
 
 
 def clip_layout(motions: Sequence[MotionLike] | MotionLike, body=None, style: RenderStyle | None = None,
@@ -105,34 +126,40 @@ def _hull(points: np.ndarray) -> np.ndarray:
 
 def _layout(figure, style: RenderStyle, reserve_top: float = 0.0) -> tuple[Camera, float]:
     """The camera framing every motion's figure over the clip, and the floor height (figure.py's figures)."""
-    samples = _sample_vertices(figure)                             # per motion (k, V, 3)
-    floor_y = min(float(v[..., 1].min()) for v in samples)
+    samples = _sample_chunks(figure)                               # per motion: chunks of (k, V, 3)
+    floor_y = min(float(v[..., 1].min()) for chunks in samples for v in chunks)
     pts = []
-    for k, v in enumerate(samples):
-        p = v.reshape(-1, 3).astype(np.float64)
-        if style.framing == "upper":
-            p = p[p[:, 1] > figure.hips_y(k) - 0.12]
-        elif style.shadow and style.floor != "none":   # keep each frame's contact shadow around the feet in view
-            feet = v[:, :, [0, 2]] + np.where(v[:, :, 1:2] < floor_y + 0.05, 0.0, np.nan)
-            with warnings.catch_warnings():                         # frames with no foot down: all NaN
-                warnings.simplefilter("ignore", RuntimeWarning)
-                lo, hi = np.nanmin(feet, 1) - 0.12, np.nanmax(feet, 1) + 0.12  # (k, 2)
-            corners = [np.stack([a[:, 0], np.full(len(a), floor_y), b[:, 1]], 1)
-                       for a in (lo, hi) for b in (lo, hi)]
-            p = np.concatenate([p] + [c[np.isfinite(c).all(1)] for c in corners])
-        pts.append(_hull(p))
+    for k, chunks in enumerate(samples):
+        hulls = [_framed(figure, k, v, style, floor_y) for v in chunks]
+        pts.append(hulls[0] if len(hulls) == 1 else _hull(np.concatenate(hulls)))
     W, H = style.size
     cam = Camera.fit(np.concatenate(pts), W, H, style.yfov_deg, style.elevation_deg, style.margin,
                      reserve_top=reserve_top)
     return cam, floor_y
 
 
+def _framed(figure, k: int, v: np.ndarray, style: RenderStyle, floor_y: float) -> np.ndarray:
+    """The convex hull of what must stay in view of motion k's sampled vertices v (k, V, 3)."""
+    p = v.reshape(-1, 3).astype(np.float64)
+    if style.framing == "upper":
+        p = p[p[:, 1] > figure.hips_y(k) - 0.12]
+    elif style.shadow and style.floor != "none":   # keep each frame's contact shadow around the feet in view
+        feet = v[:, :, [0, 2]] + np.where(v[:, :, 1:2] < floor_y + 0.05, 0.0, np.nan)
+        with warnings.catch_warnings():                         # frames with no foot down: all NaN
+            warnings.simplefilter("ignore", RuntimeWarning)
+            lo, hi = np.nanmin(feet, 1) - 0.12, np.nanmax(feet, 1) + 0.12  # (k, 2)
+        corners = [np.stack([a[:, 0], np.full(len(a), floor_y), b[:, 1]], 1)
+                   for a in (lo, hi) for b in (lo, hi)]
+        p = np.concatenate([p] + [c[np.isfinite(c).all(1)] for c in corners])
+    return _hull(p)
+
+
 def _label_patches(n: int, labels: Sequence[str] | None, gen_seconds: Sequence[float | None] | None,
                    style: RenderStyle) -> list[LabelPatch | None]:
     if labels is not None and len(labels) != n:
-        raise ValueError(f"{len(labels)} labels for {n} motions: give one label per motion")
+        raise InputError(f"{len(labels)} labels for {n} motions: give one label per motion")
     if gen_seconds is not None and len(gen_seconds) != n:
-        raise ValueError(f"{len(gen_seconds)} generation times for {n} motions: give one per motion")
+        raise InputError(f"{len(gen_seconds)} generation times for {n} motions: give one per motion")
     if labels is None and gen_seconds is None:
         return [None] * n
     px = style.label_px or max(10, round(style.height / 30))
@@ -176,9 +203,10 @@ def iter_frames(motions: Sequence[MotionLike] | MotionLike, *, body=None, style:
     T = seqs[0].num_frames
     idx = np.arange(T) if frame_indices is None else np.asarray(frame_indices, np.int64).reshape(-1)
     if idx.size and (idx.min() < 0 or idx.max() >= T):
-        raise ValueError(f"frame indices must be in 0..{T - 1}")
+        raise InputError(f"frame indices must be in 0..{T - 1}")
     with SceneRenderer(figure.faces, figure.num_vertices, len(seqs), cam, style, floor_y, figure.rest_vertices(),
                        figure.surfaces) as renderer:
+        chunk = max(1, min(chunk, POSE_POINTS // (figure.num_vertices * len(seqs))))    # a large mesh: fewer frames
         for s in range(0, len(idx), chunk):
             ids = idx[s:s + chunk]
             outs = [figure.pose(k, ids) for k in range(len(seqs))]

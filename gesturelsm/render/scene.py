@@ -8,8 +8,8 @@ Speed notes (Mesa llvmpipe on 2 cores; pyrender 0.1.45 is pinned, so its interna
   so is the shader-program cache (pyrender's recompiled every program on every draw with OSMesa).
 * Side by side = *tiles*: the N bodies are N meshes of one scene, each at its own place; for tile i only
   mesh i and its shadow are visible, and each tile is one pass of width x height through the same camera.
-  Measured against one wide scene (bodies moved 1.2 m apart, one pass of N*width x height): 43 ms vs 43 ms
-  CPU per 3-body 512 x 512 frame: llvmpipe's cost is shaded pixels and triangles, equal either way. Tiles
+  They cost what one wide scene (bodies apart, one pass of N*width x height) costs, since llvmpipe's cost is
+  shaded pixels and triangles, equal either way (docs/BENCHMARKS.md, "Why the code is built this way"). Tiles
   win on what they show: every method is seen from the identical viewpoint (in one wide perspective view
   the outer bodies are seen from the side), the framing does not depend on how far apart bodies are put,
   and shadows of neighbours cannot overlap.

@@ -1,8 +1,7 @@
 """Our replacement for pyrender's `mesh.vert` / `mesh.frag`: Lambert + Blinn-Phong instead of PBR.
 
 Why: on Mesa's llvmpipe, pyrender's PBR fragment shader (GGX specular, Fresnel, shadow-map branches per
-light) is ~80 % of the cost of a 512 x 512 body frame (measured: 21.7 ms -> 4.6 ms per pass with a trivial
-shader). This shader keeps what the look needs: diffuse from each directional light (base / pi * radiance,
+light) is most of the cost of a body frame (docs/BENCHMARKS.md, "Why the code is built this way"). This shader keeps what the look needs: diffuse from each directional light (base / pi * radiance,
 as pyrender's PBR diffuse, so light intensities mean the same), a soft Blinn-Phong highlight that fades
 with roughness, ambient, and two texture uses:
 * `emissiveTexture` is added *after* gamma encoding, i.e. shown exactly as stored (sRGB): the unlit floor;
@@ -142,8 +141,8 @@ def program_cache():
     """A pyrender ShaderProgramCache over our shaders, keyed on shaders + defines only.
 
     pyrender's own key includes `OpenGL.contextdata.getContext()`, which with PyOpenGL 3.1.10's OSMesa is a
-    new pointer object on every call: every draw recompiled its program (~7 ms each) and the cache grew
-    without bound. One renderer has one context, so the context is left out of the key.
+    new pointer object on every call: with that key every draw would recompile its program and the cache would
+    grow without bound. One renderer has one context, so the context is left out of the key.
     """
     from pyrender.shader_program import ShaderProgramCache
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from ..errors import InputError
+
 Color = tuple[float, float, float]
 
 
@@ -21,15 +23,15 @@ def parse_color(value: str | Color | list[float]) -> Color:
         except ValueError:
             parts = []
         if len(parts) != 3:
-            raise ValueError(f"colour {value!r}: use '#rrggbb' or 'r,g,b'")
+            raise InputError(f"colour {value!r}: use '#rrggbb' or 'r,g,b'")
         value = parts
     c = [float(x) for x in value]
     if len(c) != 3:
-        raise ValueError(f"colour {value!r} must have 3 components")
+        raise InputError(f"colour {value!r} must have 3 components")
     if max(c) > 1.0:
         c = [x / 255.0 for x in c]
     if min(c) < 0.0 or max(c) > 1.0:
-        raise ValueError(f"colour {value!r} out of range")
+        raise InputError(f"colour {value!r} out of range")
     return (c[0], c[1], c[2])
 
 
@@ -58,19 +60,19 @@ class RenderStyle:
     def __post_init__(self) -> None:
         w, h = (int(v) for v in self.size)
         if w < 32 or h < 32 or w % 2 or h % 2 or w > 4096 or h > 4096:
-            raise ValueError(f"render size {w}x{h}: width and height must be even, 32..4096 "
+            raise InputError(f"render size {w}x{h}: width and height must be even, 32..4096 "
                              "(multiples of 16 play everywhere)")
         object.__setattr__(self, "size", (w, h))
         for name in ("background", "floor_color", "grid_color", "body_color"):
             object.__setattr__(self, name, parse_color(getattr(self, name)))
         if self.floor not in ("grid", "plain", "none"):
-            raise ValueError(f"floor {self.floor!r}: use 'grid', 'plain' or 'none'")
+            raise InputError(f"floor {self.floor!r}: use 'grid', 'plain' or 'none'")
         if self.framing not in ("full", "upper"):
-            raise ValueError(f"framing {self.framing!r}: use 'full' or 'upper'")
+            raise InputError(f"framing {self.framing!r}: use 'full' or 'upper'")
         if self.supersample not in (1, 2, 3):
-            raise ValueError(f"supersample {self.supersample}: use 1, 2 or 3")
+            raise InputError(f"supersample {self.supersample}: use 1, 2 or 3")
         if not 5.0 <= self.yfov_deg <= 90.0:
-            raise ValueError(f"yfov_deg {self.yfov_deg} out of 5..90")
+            raise InputError(f"yfov_deg {self.yfov_deg} out of 5..90")
 
     @property
     def width(self) -> int:
@@ -99,9 +101,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         nums = [int(p) for p in parts]
     except ValueError:
-        raise ValueError(f"size {text!r}: use WIDTHxHEIGHT, e.g. 512x512") from None
+        raise InputError(f"size {text!r}: use WIDTHxHEIGHT, e.g. 512x512") from None
     if len(nums) == 1:
         nums = nums * 2
     if len(nums) != 2:
-        raise ValueError(f"size {text!r}: use WIDTHxHEIGHT, e.g. 512x512")
+        raise InputError(f"size {text!r}: use WIDTHxHEIGHT, e.g. 512x512")
     return nums[0], nums[1]

@@ -8,6 +8,7 @@ The file is written next to `out` under a temporary name and renamed when comple
 """
 from __future__ import annotations
 
+import itertools
 import os
 import tempfile
 import time
@@ -19,6 +20,7 @@ import numpy as np
 
 from ..audio import SAMPLE_RATE, AudioError, load_audio, to_mono
 from ..constants import FPS, Progress
+from ..errors import InputError
 from .camera import Camera
 from .frames import MotionLike, RenderWarning, iter_frames, prepare_motions
 from .style import RenderStyle
@@ -72,7 +74,7 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
 
     out = Path(out)
     if out.suffix.lower() != ".mp4":
-        raise ValueError(f"{out}: the output must be an .mp4 file")
+        raise InputError(f"{out}: the output must be an .mp4 file")
     style = (style or RenderStyle()).with_size(size)
     seqs = prepare_motions(motions)
     T = seqs[0].num_frames
@@ -80,33 +82,37 @@ def render_video(motions: Sequence[MotionLike] | MotionLike, audio: AudioLike, o
     out.parent.mkdir(parents=True, exist_ok=True)
     W, H = style.width * len(seqs), style.height
     t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="gesturelsm-render-") as tmp:
-        wav = None
-        if y is not None:
-            wav = os.path.join(tmp, "speech.wav")
-            sf.write(wav, y, sr, subtype="PCM_16")
-        part = out.with_name(f".{out.stem}.part{os.getpid()}.mp4")
-        params = ["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"]
-        if wav is not None:
-            params += ["-b:a", "128k"]
-        writer = imageio_ffmpeg.write_frames(str(part), (W, H), fps=FPS, codec="libx264", pix_fmt_out="yuv420p",
-                                             quality=None, macro_block_size=2, ffmpeg_log_level="error",
-                                             output_params=params, audio_path=wav,
-                                             audio_codec="aac" if wav else None)
-        try:
-            writer.send(None)
-            step = max(1, T // 100)
-            for i, frame in enumerate(iter_frames(seqs, body=body, style=style, labels=labels,
-                                                  gen_seconds=gen_seconds, camera=camera, character=character,
-                                                  grounding=grounding)):
-                writer.send(frame)
-                if progress is not None and (i % step == 0 or i == T - 1):
-                    el = time.perf_counter() - t0
-                    progress((i + 1) / T, f"frame {i + 1}/{T} ({(i + 1) / max(el, 1e-9):.1f} fps)")
-            writer.close()
-        except BaseException:
-            writer.close()
-            part.unlink(missing_ok=True)
-            raise
-        os.replace(part, out)
+    frames = iter_frames(seqs, body=body, style=style, labels=labels, gen_seconds=gen_seconds, camera=camera,
+                         character=character, grounding=grounding)
+    try:
+        first = next(frames)          # a figure that cannot be drawn stops here, before the encoder starts
+        with tempfile.TemporaryDirectory(prefix="gesturelsm-render-") as tmp:
+            wav = None
+            if y is not None:
+                wav = os.path.join(tmp, "speech.wav")
+                sf.write(wav, y, sr, subtype="PCM_16")
+            part = out.with_name(f".{out.stem}.part{os.getpid()}.mp4")
+            params = ["-preset", preset, "-crf", str(int(crf)), "-movflags", "+faststart"]
+            if wav is not None:
+                params += ["-b:a", "128k"]
+            writer = imageio_ffmpeg.write_frames(str(part), (W, H), fps=FPS, codec="libx264", pix_fmt_out="yuv420p",
+                                                 quality=None, macro_block_size=2, ffmpeg_log_level="error",
+                                                 output_params=params, audio_path=wav,
+                                                 audio_codec="aac" if wav else None)
+            try:
+                writer.send(None)
+                step = max(1, T // 100)
+                for i, frame in enumerate(itertools.chain([first], frames)):
+                    writer.send(frame)
+                    if progress is not None and (i % step == 0 or i == T - 1):
+                        el = time.perf_counter() - t0
+                        progress((i + 1) / T, f"frame {i + 1}/{T} ({(i + 1) / max(el, 1e-9):.1f} fps)")
+                writer.close()
+            except BaseException:
+                writer.close()
+                part.unlink(missing_ok=True)
+                raise
+            os.replace(part, out)
+    finally:
+        frames.close()
     return out

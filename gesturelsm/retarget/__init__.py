@@ -6,10 +6,10 @@
 
 No Blender: numpy and torch only. See `solve.py` for the method and docs/CHARACTERS.md for its use.
 """
-from .character import Character, load_character, retarget_motion
+from .character import Character, check_usable, load_character, retarget_motion
 from .errors import CharacterError
 from .skeleton import Skeleton
 from .solve import Ground, Retargeted, SourceBody, retarget
 
-__all__ = ["Character", "CharacterError", "Ground", "Retargeted", "Skeleton", "SourceBody", "load_character",
-           "retarget", "retarget_motion"]
+__all__ = ["Character", "CharacterError", "Ground", "Retargeted", "Skeleton", "SourceBody", "check_usable",
+           "load_character", "retarget", "retarget_motion"]

@@ -9,9 +9,11 @@ from pathlib import Path
 from ..body.model import resolve_body
 from .bvh_read import read_bvh_skeleton
 from .errors import CharacterError
-from .gltf import MAX_BYTES, GltfDocument, gltf_skeleton, read_gltf
-from .skeleton import Skeleton
+from .gltf import GltfDocument, gltf_skeleton, read_gltf
+from .limits import MAX_BYTES
+from .mesh import character_mesh, has_mesh
 from .grounding import ground_retargeted
+from .skeleton import Skeleton
 from .solve import Ground, Retargeted, SourceBody, prepare, retarget
 
 SUFFIXES = (".vrm", ".glb", ".gltf", ".bvh")
@@ -39,6 +41,17 @@ def load_character(path: str | Path, bone_map: str | dict | None = None, limit: 
         return Character(path, read_bvh_skeleton(path, bone_map, limit=limit))
     doc = read_gltf(path, limit)
     return Character(path, gltf_skeleton(doc, bone_map), doc)
+
+
+def check_usable(character: Character, body=None, draw: bool = True) -> None:
+    """CharacterError at once for what would otherwise fail later, on every use of the character: its rest pose
+    cannot be retargeted (an absurd scale, hips and head in one place), or (draw=True: it will be drawn) the meshes
+    a video draws break the limits or hold NaN (their geometry is decoded and dropped; textures are not decoded, a
+    bad one only becomes a note when drawn). The page runs it once per upload, `batch --rig` and `generate --rig`
+    before their work."""
+    prepare(character.skeleton, SourceBody.of(resolve_body(body)))
+    if draw and has_mesh(character.document):
+        character_mesh(character.document, character.skeleton, textures=False)
 
 
 def retarget_motion(seq, character: Character | Skeleton, body=None, ground: Ground | None = None,

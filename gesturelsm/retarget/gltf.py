@@ -15,11 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CharacterError
+from .gltf_check import check_document, read_json
+from .limits import MAX_BYTES
 from .names import VRM0_THUMB, VRM1_THUMB, guess_map, load_json_map, preset_map, vrm_map
 from .skeleton import Skeleton, quat_xyzw_to_matrix, topological
-
-MAX_BYTES = 64 * 1024 * 1024          # a character file larger than this is refused before it is read
-
 
 @dataclass
 class GltfDocument:
@@ -46,47 +45,63 @@ def _check_size(path: Path, limit: int) -> None:
                              "for a character file")
 
 
+def _glb_chunks(data: bytes, source: str) -> tuple[bytes, bytes]:
+    """(JSON chunk, binary chunk or b"") of a GLB container; CharacterError when a length in its headers does
+    not fit the file (a truncated or damaged file)."""
+    if len(data) < 20:
+        raise CharacterError(f"{source}: truncated GLB file ({len(data)} bytes)")
+    _, version, total = struct.unpack_from("<4sII", data, 0)
+    if version != 2:
+        raise CharacterError(f"{source}: glTF version {version}; only glTF 2.0 is supported")
+    if total > len(data):
+        raise CharacterError(f"{source}: truncated GLB file: its header says {total:,} bytes, the file has "
+                             f"{len(data):,}")
+    n, kind = struct.unpack_from("<I4s", data, 12)
+    if kind != b"JSON":
+        raise CharacterError(f"{source}: damaged GLB file (its first chunk is not JSON)")
+    if 20 + n > total:
+        raise CharacterError(f"{source}: truncated or damaged GLB file: its JSON chunk says {n:,} bytes, the "
+                             f"file has {total - 20:,} after the headers")
+    off = 20 + n + (-n % 4)
+    blob = b""
+    if off + 8 <= total:
+        m, kind = struct.unpack_from("<I4s", data, off)
+        if kind == b"BIN\0":
+            if off + 8 + m > total:
+                raise CharacterError(f"{source}: truncated or damaged GLB file: its binary chunk says {m:,} "
+                                     f"bytes, the file has {total - off - 8:,} after its header")
+            blob = data[off + 8:off + 8 + m]
+    return data[20:20 + n], blob
+
+
 def parse_glb(data: bytes, source: str) -> GltfDocument:
-    """A GLB container (or a .gltf JSON text with embedded data: buffers) -> GltfDocument."""
-    if data[:4] == b"glTF":
-        if len(data) < 20:
-            raise CharacterError(f"{source}: truncated GLB file")
-        _, version, total = struct.unpack_from("<4sII", data, 0)
-        if version != 2:
-            raise CharacterError(f"{source}: glTF version {version}; only glTF 2.0 is supported")
-        n, kind = struct.unpack_from("<I4s", data, 12)
-        if kind != b"JSON" or 20 + n > len(data):
-            raise CharacterError(f"{source}: damaged GLB file (no JSON chunk)")
+    """A GLB container (or a .gltf JSON text with embedded data: buffers) -> GltfDocument, its structure checked
+    (`gltf_check.check_document`): a truncated, damaged or oversized file raises CharacterError."""
+    glb = data[:4] == b"glTF"
+    if glb:
+        text, blob = _glb_chunks(data, source)
         try:
-            gltf = json.loads(data[20:20 + n])
+            gltf = read_json(text, source, "its JSON chunk")
         except (UnicodeDecodeError, json.JSONDecodeError):
             raise CharacterError(f"{source}: damaged GLB file (its JSON chunk does not parse)") from None
-        off = 20 + n + (-n % 4)
-        blob = b""
-        if off + 8 <= len(data):
-            m, kind = struct.unpack_from("<I4s", data, off)
-            if kind == b"BIN\0":
-                blob = data[off + 8:off + 8 + m]
-        doc = GltfDocument(gltf, blob, source)
     else:
         try:
-            gltf = json.loads(data)
+            gltf = read_json(data, source)
         except (UnicodeDecodeError, json.JSONDecodeError):
             raise CharacterError(f"{source}: not a glTF / VRM file (neither a GLB container nor glTF JSON)") \
                 from None
         if not isinstance(gltf, dict) or "asset" not in gltf:
             raise CharacterError(f"{source}: not a glTF / VRM file (JSON without a glTF 'asset')")
-        doc = GltfDocument(gltf, _embedded_buffer(gltf, source), source)
-    if not isinstance(doc.gltf, dict) or not isinstance(doc.gltf.get("nodes", []), list):
-        raise CharacterError(f"{source}: damaged glTF (no node list)")
-    return doc
+        blob = _embedded_buffer(gltf, source)
+    check_document(gltf, blob, source, glb)
+    return GltfDocument(gltf, blob, source)
 
 
 def _embedded_buffer(gltf: dict, source: str) -> bytes:
     """Buffer 0 of a .gltf when it is a data: URI (a .gltf with external files is read for its skeleton only)."""
     bufs = gltf.get("buffers") or []
-    uri = bufs[0].get("uri", "") if bufs else ""
-    if uri.startswith("data:"):
+    uri = bufs[0].get("uri", "") if isinstance(bufs, list) and bufs and isinstance(bufs[0], dict) else ""
+    if isinstance(uri, str) and uri.startswith("data:"):
         try:
             return base64.b64decode(uri.split(",", 1)[1])
         except (ValueError, IndexError):
@@ -120,7 +135,7 @@ def node_trs(node: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         t = M[:3, 3].copy()
         s = np.linalg.norm(M[:3, :3], axis=0)
         if np.any(s < 1e-12):
-            raise CharacterError("a node matrix has a zero scale")
+            raise CharacterError(f"a node matrix has a zero scale: {node.get('name', 'unnamed')}")
         return t, M[:3, :3] / s, s
     t = np.asarray(node.get("translation", [0, 0, 0]), np.float64)
     R = quat_xyzw_to_matrix(node.get("rotation", [0, 0, 0, 1]))
@@ -146,6 +161,7 @@ def gltf_skeleton(doc: GltfDocument, bone_map: str | dict[str, str] | None = Non
             if c in parents_of and parents_of[c] != i:
                 raise CharacterError(f"{src}: node {c} has two parents ({parents_of[c]} and {i})")
             parents_of[c] = i
+    topological(parents_of, list(range(len(nodes))), src)          # a cycle anywhere in the hierarchy
     joints = sorted({int(j) for s in g["skins"] for j in s.get("joints", [])})
     if not joints or any(not 0 <= j < len(nodes) for j in joints):
         raise CharacterError(f"{src}: the skin's joint list is empty or names nodes that do not exist")

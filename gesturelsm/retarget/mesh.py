@@ -7,27 +7,26 @@ the material's base colour factor and base colour texture).
     mesh.parts[0].positions, .joints, .weights, .inverse_bind, .faces, .color, .texture, .uv
 
 Primitives of one mesh that share their vertex attributes (one primitive per material over a common vertex
-buffer, as VRM exporters write them) are skinned once (`MeshPart.shares`). A mesh node without a skin moves rigidly with its nearest ancestor among the skeleton's joints (an accessory
-parented to a bone); with none, it stays at its rest place. A texture that cannot be decoded, or that lives in
-a separate file, leaves the material's colour factor and a note (nothing fails). VRM 0.x materials whose glTF
-entry has no texture take MToon's `_MainTex` / `_Color` from the VRM extension.
+buffer, as VRM exporters write them) are skinned once (`MeshPart.shares`). A mesh node without a skin moves
+rigidly with its nearest ancestor among the skeleton's joints (an accessory parented to a bone); with none, it
+stays at its rest place. Materials and textures: `textures.py` (a texture that cannot be decoded leaves the
+material's colour and a note). Before anything is decoded, the scene's primitives, vertices, triangles and
+morph targets are counted from the JSON against `limits.py` (`drawn_primitives`).
 """
 from __future__ import annotations
 
-import base64
-import io
 import json
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .accessors import accessor
 from .errors import CharacterError
 from .gltf import GltfDocument, node_trs
+from .limits import MAX_MORPH_VALUES, MAX_PRIMITIVES, MAX_TRIANGLES, MAX_VERTICES, count
 from .skeleton import Skeleton, trs_matrix
+from .textures import Textures
 
-DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
-WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
-MAX_TEXELS = 1024                     # textures are shrunk to at most this many texels a side for drawing
 TRIANGLES = 4
 
 
@@ -45,8 +44,8 @@ class MeshPart:
     skin_joints: np.ndarray | None = None       # (J,) skeleton joint index of each skin joint
     rigid_joint: int = -1                       # unskinned: the skeleton joint it follows (-1: none)
     rigid_offset: np.ndarray = field(default_factory=lambda: np.eye(4))   # joint's rest world^-1 @ node's
-    targets: np.ndarray | None = None           # (K, V, 3) morph target position deltas
-    target_normals: np.ndarray | None = None    # (K, V, 3) morph target normal deltas
+    targets: np.ndarray | None = None           # (K, V, 3) float32 morph target position deltas
+    target_normals: np.ndarray | None = None    # (K, V, 3) float32 morph target normal deltas
     color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)    # linear base colour factor
     texture: np.ndarray | None = None           # (H, W, 4) uint8 base colour texture (sRGB)
     uv: np.ndarray | None = None                # (V, 2) TEXCOORD_0, glTF convention (v down)
@@ -66,51 +65,6 @@ class CharacterMesh:
     def num_vertices(self) -> int:
         """Vertices to skin per frame (parts that share another's vertices add none)."""
         return sum(len(p.positions) for p in self.parts if p.shares < 0)
-
-
-def accessor(doc: GltfDocument, index: int) -> np.ndarray:
-    """(count, width) array of a glTF accessor (byteStride, sparse and normalised integers handled)."""
-    g, src = doc.gltf, doc.source
-    try:
-        a = g["accessors"][int(index)]
-        dtype, n, count = np.dtype(DTYPES[a["componentType"]]), WIDTH[a["type"]], int(a["count"])
-    except (KeyError, IndexError, TypeError, ValueError):
-        raise CharacterError(f"{src}: accessor {index} is damaged or missing") from None
-    out = _view(doc, a.get("bufferView"), a.get("byteOffset", 0), dtype, n, count, f"accessor {index}") \
-        if "bufferView" in a else np.zeros((count, n), dtype)
-    sp = a.get("sparse")
-    if sp:
-        k = int(sp["count"])
-        idx = _view(doc, sp["indices"]["bufferView"], sp["indices"].get("byteOffset", 0),
-                    np.dtype(DTYPES[sp["indices"]["componentType"]]), 1, k, f"accessor {index}")[:, 0]
-        vals = _view(doc, sp["values"]["bufferView"], sp["values"].get("byteOffset", 0), dtype, n, k,
-                     f"accessor {index}")
-        if idx.size and int(idx.max()) >= count:
-            raise CharacterError(f"{src}: accessor {index}'s sparse indices exceed its count")
-        out = out.copy()
-        out[idx.astype(np.int64)] = vals
-    if a.get("normalized") and dtype.kind in "iu":
-        top = float(np.iinfo(dtype).max)
-        return np.maximum(out.astype(np.float32) / top, -1.0)
-    return out
-
-
-def _view(doc: GltfDocument, view: int, offset: int, dtype: np.dtype, n: int, count: int, what: str) -> np.ndarray:
-    try:
-        v = doc.gltf["bufferViews"][int(view)]
-        start = int(v.get("byteOffset", 0)) + int(offset)
-        stride = int(v.get("byteStride") or dtype.itemsize * n)
-        buffer = int(v.get("buffer", 0))
-    except (KeyError, IndexError, TypeError, ValueError):
-        raise CharacterError(f"{doc.source}: {what} names a damaged buffer view") from None
-    if buffer != 0 or not doc.blob:
-        raise CharacterError(f"{doc.source}: {what} is in a separate buffer file; use a self-contained .glb / .vrm")
-    end = start + (stride * (count - 1) + dtype.itemsize * n if count else 0)
-    if start < 0 or end > len(doc.blob):
-        raise CharacterError(f"{doc.source}: {what} reaches past the end of the binary buffer (truncated file)")
-    if count == 0:
-        return np.zeros((0, n), dtype)
-    return np.ndarray((count, n), dtype, buffer=doc.blob, offset=start, strides=(stride, dtype.itemsize)).copy()
 
 
 def _scene_nodes(g: dict) -> list[tuple[int, np.ndarray]]:
@@ -149,56 +103,118 @@ def has_mesh(doc: GltfDocument | None) -> bool:
     return False
 
 
-def character_mesh(doc: GltfDocument, skel: Skeleton) -> CharacterMesh:
-    """Every drawable triangle primitive of the document's scene (module docstring); CharacterError when the
-    file has none."""
+@dataclass
+class _Drawn:
+    """One triangle primitive of one mesh node, as the scene draws it."""
+    node: int
+    world: np.ndarray              # the node's rest world matrix
+    mesh: int
+    index: int                     # the primitive's index in its mesh
+    prim: dict
+    key: tuple                     # primitives with equal keys share their vertices
+
+
+VERTEX_TYPES = {"POSITION": "VEC3", "NORMAL": "VEC3", "TEXCOORD_0": "VEC2", "JOINTS_0": "VEC4", "WEIGHTS_0": "VEC4"}
+
+
+def drawn_primitives(doc: GltfDocument) -> list[_Drawn]:
+    """Every triangle primitive the document's scene draws, after checking from the JSON alone (before anything is
+    decoded) that the vertex attributes agree (types, counts) and that the whole stays within the limits
+    (`limits.py`: primitives, vertices, triangles, morph-target values); CharacterError otherwise."""
     g, src = doc.gltf, doc.source
-    joint_of = {node: i for i, node in enumerate(skel.nodes)}
-    parents_of = {int(c): i for i, nd in enumerate(g.get("nodes") or []) for c in nd.get("children", []) or []}
-    rest = skel.world()
-    textures = _Textures(doc)
-    parts: list[MeshPart] = []
-    first: dict[tuple, int] = {}            # primitives sharing vertex attributes are skinned once
+    acc = g.get("accessors") or []
+    out: list[_Drawn] = []
+    shared: set[tuple] = set()
+    vertices = triangles = morphs = 0
     for n, world in _scene_nodes(g):
         node = g["nodes"][n]
         if "mesh" not in node:
             continue
-        m = int(node["mesh"])
-        skin = node.get("skin")
-        rigid, offset = -1, world
-        if skin is None:
-            a = parents_of.get(n)
-            while a is not None and a not in joint_of:
-                a = parents_of.get(a)
-            if a is not None:
-                rigid = joint_of[a]
-                offset = np.linalg.inv(rest[rigid]) @ world
+        if not np.isfinite(world).all():
+            raise CharacterError(f"{src}: node {n}'s place in the scene is not finite (its ancestors' transforms "
+                                 "multiply past the range of numbers)")
+        m, skin = int(node["mesh"]), node.get("skin")
         for k, prim in enumerate(g["meshes"][m].get("primitives", [])):
             if int(prim.get("mode", TRIANGLES)) != TRIANGLES or "POSITION" not in prim.get("attributes", {}):
                 continue
-            name = f"{g['meshes'][m].get('name', f'mesh{m}')}[{k}]"
             key = (m, skin if skin is not None else -1 - n, tuple(sorted(prim["attributes"].items())),
                    json.dumps(prim.get("targets") or [], sort_keys=True))
-            if key in first:                    # the same vertices as an earlier primitive, other triangles
-                owner = parts[first[key]]
-                part = replace(owner, name=name, faces=_faces(doc, prim, name, len(owner.positions)),
-                               shares=first[key])
-                textures.material(part, prim.get("material"))
-                parts.append(part)
+            V = int(acc[prim["attributes"]["POSITION"]]["count"])
+            if key not in shared:
+                shared.add(key)
+                _check_attributes(doc, prim, f"mesh {m} primitive {k}", V)
+                vertices += V
+                morphs += V * len(prim.get("targets") or [])
+            triangles += (int(acc[prim["indices"]]["count"]) if "indices" in prim else V) // 3
+            out.append(_Drawn(n, world, m, k, prim, key))
+    for what, have, limit in (("triangle primitives", len(out), MAX_PRIMITIVES), ("vertices", vertices, MAX_VERTICES),
+                              ("triangles", triangles, MAX_TRIANGLES),
+                              ("morph-target values (targets x vertices)", morphs, MAX_MORPH_VALUES)):
+        if have > limit:
+            raise CharacterError(f"{src}: its scene draws {count(have)} {what}; a character may have at most "
+                                 f"{count(limit)}")
+    return out
+
+
+def _check_attributes(doc: GltfDocument, prim: dict, what: str, V: int) -> None:
+    """The vertex attributes and morph targets read for drawing have the glTF type of their kind and V elements."""
+    acc = doc.gltf.get("accessors") or []
+    for group in [prim["attributes"]] + list(prim.get("targets") or []):
+        for name, want in VERTEX_TYPES.items():
+            if name not in group:
                 continue
-            part = _part(doc, prim, name, m, textures)
-            if skin is not None:
-                _attach_skin(doc, part, prim, g["skins"][int(skin)], joint_of)
-            else:
-                part.rigid_joint, part.rigid_offset = rigid, offset
-            first[key] = len(parts)
+            a = acc[group[name]]
+            if a["type"] != want or int(a["count"]) != V:
+                raise CharacterError(f"{doc.source}: {what}'s {name} is {count(int(a['count']))} {a['type']} "
+                                     f"elements; {count(V)} {want} (one per vertex) are needed")
+
+
+def character_mesh(doc: GltfDocument, skel: Skeleton, textures: bool = True) -> CharacterMesh:
+    """Every drawable triangle primitive of the document's scene (module docstring), within the limits
+    (`drawn_primitives`); CharacterError when the file has none. textures=False: no image is decoded (the
+    geometry and material colours only)."""
+    g, src = doc.gltf, doc.source
+    joint_of = {node: i for i, node in enumerate(skel.nodes)}
+    parents_of = {int(c): i for i, nd in enumerate(g.get("nodes") or []) for c in nd.get("children", []) or []}
+    rest = skel.world()
+    materials = Textures(doc, decode=textures)
+    parts: list[MeshPart] = []
+    first: dict[tuple, int] = {}            # primitives sharing vertex attributes are skinned once
+    for d in drawn_primitives(doc):
+        skin, prim, m = g["nodes"][d.node].get("skin"), d.prim, d.mesh
+        name = f"{g['meshes'][m].get('name', f'mesh{m}')}[{d.index}]"
+        if d.key in first:                      # the same vertices as an earlier primitive, other triangles
+            owner = parts[first[d.key]]
+            part = replace(owner, name=name, faces=_faces(doc, prim, name, len(owner.positions)),
+                           shares=first[d.key])
+            materials.material(part, prim.get("material"))
             parts.append(part)
+            continue
+        part = _part(doc, prim, name, m, materials)
+        if skin is not None:
+            _attach_skin(doc, part, prim, g["skins"][int(skin)], joint_of)
+        else:
+            part.rigid_joint, part.rigid_offset = _rigid(d, parents_of, joint_of, rest)
+        first[d.key] = len(parts)
+        parts.append(part)
     if not parts:
         raise CharacterError(f"{src}: the file has no triangle mesh to draw")
-    return CharacterMesh(parts, textures.notes)
+    return CharacterMesh(parts, materials.notes)
 
 
-def _part(doc: GltfDocument, prim: dict, name: str, mesh: int, textures: "_Textures") -> MeshPart:
+def _rigid(d: _Drawn, parents_of: dict[int, int], joint_of: dict[int, int], rest: np.ndarray
+           ) -> tuple[int, np.ndarray]:
+    """(the skeleton joint an unskinned mesh node follows, its offset from that joint's rest); (-1, its rest
+    world matrix) when no ancestor is a joint."""
+    a = parents_of.get(d.node)
+    while a is not None and a not in joint_of:
+        a = parents_of.get(a)
+    if a is None:
+        return -1, d.world
+    return joint_of[a], np.linalg.inv(rest[joint_of[a]]) @ d.world
+
+
+def _part(doc: GltfDocument, prim: dict, name: str, mesh: int, textures: "Textures") -> MeshPart:
     at = prim["attributes"]
     pos = accessor(doc, at["POSITION"]).astype(np.float64)
     V = len(pos)
@@ -208,11 +224,11 @@ def _part(doc: GltfDocument, prim: dict, name: str, mesh: int, textures: "_Textu
         part.uv = accessor(doc, at["TEXCOORD_0"]).astype(np.float32)
     targets = prim.get("targets") or []
     if targets:
-        part.targets = np.stack([accessor(doc, t["POSITION"]).astype(np.float64) if "POSITION" in t
-                                 else np.zeros((V, 3)) for t in targets])
+        part.targets = np.stack([accessor(doc, t["POSITION"]).astype(np.float32) if "POSITION" in t
+                                 else np.zeros((V, 3), np.float32) for t in targets])
         if part.normals is not None and any("NORMAL" in t for t in targets):
-            part.target_normals = np.stack([accessor(doc, t["NORMAL"]).astype(np.float64) if "NORMAL" in t
-                                            else np.zeros((V, 3)) for t in targets])
+            part.target_normals = np.stack([accessor(doc, t["NORMAL"]).astype(np.float32) if "NORMAL" in t
+                                            else np.zeros((V, 3), np.float32) for t in targets])
     textures.material(part, prim.get("material"))
     return part
 
@@ -237,6 +253,8 @@ def _attach_skin(doc: GltfDocument, part: MeshPart, prim: dict, skin: dict, join
     part.skin_joints = np.array([joint_of[j] for j in nodes], np.int64)
     if "inverseBindMatrices" in skin:
         ibm = accessor(doc, skin["inverseBindMatrices"]).astype(np.float64)
+        if ibm.shape[1] != 16:
+            raise CharacterError(f"{doc.source}: a skin's inverseBindMatrices are not MAT4")
         part.inverse_bind = ibm.reshape(-1, 4, 4).transpose(0, 2, 1)           # column-major in glTF
     else:
         part.inverse_bind = np.tile(np.eye(4), (len(nodes), 1, 1))
@@ -250,77 +268,3 @@ def _attach_skin(doc: GltfDocument, part: MeshPart, prim: dict, skin: dict, join
     total = W.sum(1, keepdims=True)
     W = np.where(total > 1e-9, W / np.maximum(total, 1e-9), np.array([1.0, 0, 0, 0]))
     part.joints, part.weights = J, W
-
-
-class _Textures:
-    """Materials' base colour factors and decoded base colour textures (each image decoded once)."""
-
-    def __init__(self, doc: GltfDocument):
-        self.doc, self.notes = doc, []
-        self._images: dict[int, np.ndarray | None] = {}
-        g = doc.gltf
-        props = ((g.get("extensions") or {}).get("VRM") or {}).get("materialProperties") or []
-        self._mtoon = {str(p.get("name")): p for p in props if isinstance(p, dict)}
-
-    def material(self, part: MeshPart, index: int | None) -> None:
-        g = self.doc.gltf
-        part.color, part.texture, part.alpha_mode, part.double_sided = (1.0, 1.0, 1.0, 1.0), None, "OPAQUE", False
-        if index is None:                       # glTF's default material
-            return
-        try:
-            mat = g["materials"][int(index)]
-        except (KeyError, IndexError, TypeError, ValueError):
-            raise CharacterError(f"{self.doc.source}: mesh {part.name} names a material that does not exist") \
-                from None
-        pbr = mat.get("pbrMetallicRoughness") or {}
-        color = [float(c) for c in pbr.get("baseColorFactor", [1.0, 1.0, 1.0, 1.0])]
-        tex = (pbr.get("baseColorTexture") or {}).get("index")
-        mtoon = self._mtoon.get(str(mat.get("name")))
-        if tex is None and mtoon is not None:
-            tex = (mtoon.get("textureProperties") or {}).get("_MainTex")
-            if "_Color" in (mtoon.get("vectorProperties") or {}):
-                color = [float(c) for c in mtoon["vectorProperties"]["_Color"][:4]]
-                color[:3] = [c ** 2.2 for c in color[:3]]                    # MToon's colour is sRGB
-        part.color = tuple((color + [1.0] * 4)[:4])                         # type: ignore[assignment]
-        part.alpha_mode = str(mat.get("alphaMode", "OPAQUE"))
-        part.alpha_cutoff = float(mat.get("alphaCutoff", 0.5))
-        part.double_sided = bool(mat.get("doubleSided", False))
-        if tex is not None and part.uv is not None:
-            part.texture, part.wrap = self._texture(int(tex), part.name)
-
-    def _texture(self, index: int, name: str) -> tuple[np.ndarray | None, tuple[int, int]]:
-        g = self.doc.gltf
-        try:
-            t = g["textures"][index]
-            sampler = g.get("samplers", [])[int(t["sampler"])] if "sampler" in t else {}
-            source = int(t["source"])
-        except (KeyError, IndexError, TypeError, ValueError):
-            self.notes.append(f"mesh {name}: texture {index} is damaged; drawn in its material's colour")
-            return None, (10497, 10497)
-        if source not in self._images:
-            self._images[source] = self._decode(source)
-        return self._images[source], (int(sampler.get("wrapS", 10497)), int(sampler.get("wrapT", 10497)))
-
-    def _decode(self, source: int) -> np.ndarray | None:
-        from PIL import Image
-
-        g = self.doc.gltf
-        try:
-            im = g["images"][source]
-            if "bufferView" in im:
-                data = _view(self.doc, im["bufferView"], 0, np.dtype(np.uint8), 1,
-                             int(g["bufferViews"][int(im["bufferView"])]["byteLength"]), f"image {source}").tobytes()
-            elif str(im.get("uri", "")).startswith("data:"):
-                data = base64.b64decode(im["uri"].split(",", 1)[1])
-            else:
-                self.notes.append(f"image {source} is a separate file; drawn in its material's colour")
-                return None
-            with Image.open(io.BytesIO(data)) as pic:
-                pic = pic.convert("RGBA")
-                if max(pic.size) > MAX_TEXELS:
-                    pic.thumbnail((MAX_TEXELS, MAX_TEXELS))
-                return np.asarray(pic, np.uint8).copy()
-        except (CharacterError, KeyError, IndexError, TypeError, ValueError, OSError) as exc:
-            self.notes.append(f"image {source} could not be decoded ({type(exc).__name__}); drawn in its "
-                              "material's colour")
-            return None

@@ -113,7 +113,7 @@ def load_json_map(path: str | Path) -> dict[str, str]:
     """A JSON object {SMPL-X joint name: rig bone name}, e.g. {"pelvis": "root_hips", "left_wrist": "hand.L"}."""
     try:
         data = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise CharacterError(f"bone map {path}: not a readable JSON file ({exc})") from None
     if not isinstance(data, dict) or not all(isinstance(k, str) and isinstance(v, str) for k, v in data.items()):
         raise CharacterError(f"bone map {path}: expected a JSON object {{SMPL-X joint: bone name}}")

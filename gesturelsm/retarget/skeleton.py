@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import CharacterError
+from .limits import MAX_SKELETON_DEPTH
 from .names import REQUIRED
 
 
@@ -60,6 +61,25 @@ class Skeleton:
         if missing:
             raise CharacterError(f"{self.source or 'character'}: no recognisable humanoid: the bones for "
                                  f"{', '.join(missing)} (SMPL-X names) are missing")
+        self._check_rest()
+
+    def _check_rest(self) -> None:
+        """CharacterError for a joint chain deeper than MAX_SKELETON_DEPTH, or a joint whose rest transform is
+        not finite or cannot be inverted (a zero scale): nothing could pose it."""
+        depth = np.zeros(len(self.parents), np.int64)
+        for i, p in enumerate(self.parents):
+            depth[i] = 0 if p < 0 else depth[p] + 1
+        if len(depth) and depth.max() > MAX_SKELETON_DEPTH:
+            raise CharacterError(f"{self.source or 'character'}: a joint has {int(depth.max())} joints above it; "
+                                 f"at most {MAX_SKELETON_DEPTH} are read")
+        M = self.world()
+        finite = np.isfinite(M).all(axis=(1, 2))
+        det = np.linalg.det(np.where(finite[:, None, None], M[:, :3, :3], 0.0))
+        bad = np.nonzero(np.abs(det) <= 1e-30)[0]
+        if bad.size:
+            i = int(bad[0])
+            raise CharacterError(f"{self.source or 'character'}: joint {self.names[i]!r} has a rest transform "
+                                 "that is not finite or has a zero scale; it cannot be posed")
 
     def __len__(self) -> int:
         return len(self.names)

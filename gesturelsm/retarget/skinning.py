@@ -21,6 +21,8 @@ from .mesh import CharacterMesh, MeshPart
 from .skeleton import Skeleton
 from .solve import Retargeted, joint_depths
 
+VERTEX_CHUNK = 65_536                 # vertices blended at once (about 25 MB of matrices)
+
 
 def local_matrices(skel: Skeleton, rotation: np.ndarray, root: int | None = None,
                    root_translation: np.ndarray | None = None) -> np.ndarray:
@@ -86,9 +88,14 @@ def pose_part(part: MeshPart, world: np.ndarray,
         n = None if nrm is None else nrm @ M[:3, :3].T
     else:
         S = world[part.skin_joints] @ part.inverse_bind                         # (J, 4, 4) skinning matrices
-        B = np.einsum("vk,vkab->vab", part.weights, S[part.joints][:, :, :3, :])  # (V, 3, 4) blended
-        v = np.einsum("vab,vb->va", B[..., :3], pos) + B[..., 3]
-        n = None if nrm is None else np.einsum("vab,vb->va", B[..., :3], nrm)
+        v = np.empty((len(pos), 3))
+        n = None if nrm is None else np.empty((len(nrm), 3))
+        for a in range(0, len(pos), VERTEX_CHUNK):                             # bounded memory per call
+            c = slice(a, a + VERTEX_CHUNK)
+            B = np.einsum("vk,vkab->vab", part.weights[c], S[part.joints[c]][:, :, :3, :])  # (V, 3, 4) blended
+            v[c] = np.einsum("vab,vb->va", B[..., :3], pos[c]) + B[..., 3]
+            if n is not None:
+                n[c] = np.einsum("vab,vb->va", B[..., :3], nrm[c])
     if n is not None:
         n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
     return v, n

@@ -10,7 +10,7 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -19,14 +19,35 @@ import numpy as np
 from ..flows import DEFAULT_STEPS
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..motion.sequence import MotionSequence
-from ..pipeline import FACTS, GROUND_TRUTH, Plan, SpeechInput
+from ..pipeline import FACTS, GROUND_TRUTH, Plan, SpeechInput, generation_seconds
 from ..presentation import LABELS
 
 METHOD_LABELS = dict(LABELS)                            # every method, then ground truth: the page's order
 VIDEO_SIZES = (256, 384, 512, 640)
-TIMING_COLUMNS = ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering", "generation",
-                  "real-time factor"]                   # seconds, except the real-time factor
-STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")
+STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")      # seconds each
+
+
+@dataclass(frozen=True)
+class TimingRow:
+    """One row of the page's timing table: a method, the ground truth or the whole request (`method` is the label
+    shown); seconds per stage, the generation time and the real-time factor (speech seconds per generation second).
+    None: a cell left empty."""
+    method: str
+    features: float | None
+    alignment: float | None
+    transcription: float | None
+    sampling: float | None
+    decoding: float | None
+    rendering: float | None
+    generation: float | None
+    real_time_factor: float | None = field(metadata={"column": "real-time factor"})
+
+    def cells(self) -> list:
+        """The row as the table shows it, in TIMING_COLUMNS order."""
+        return [getattr(self, f.name) for f in fields(self)]
+
+
+TIMING_COLUMNS = [f.metadata.get("column", f.name) for f in fields(TimingRow)]
 
 
 @dataclass(frozen=True)
@@ -86,7 +107,7 @@ class RenderJob:
 class Result:
     """What one request shows the visitor; `video` is None until rendered, `downloads` empty until exported."""
     video: Path | None
-    rows: list[list]                         # TIMING_COLUMNS per method, then a total row
+    rows: tuple[TimingRow, ...]              # per method, then the ground truth (if shown), then the whole request
     downloads: tuple[Path, ...]
     glb: Path | None
     text_mode: str
@@ -104,6 +125,11 @@ class Result:
     edits: tuple[str, ...] = ()              # the edits made since Generate, oldest first, as the summary says them
 
     @property
+    def table(self) -> list[list]:
+        """The timing rows as the page's table (and the API) shows them: one list of TIMING_COLUMNS cells each."""
+        return [r.cells() for r in self.rows]
+
+    @property
     def summary(self) -> str:
         lines = [f"**Transcript:** {self.text_mode}", f"**Motion ready in {self.motion_seconds:.1f} s.** " +
                  (f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")]
@@ -115,18 +141,18 @@ class Result:
 
 
 def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float, render_s: float,
-                ready: float) -> tuple[list[list], dict[str, dict[str, float]]]:
-    """(TIMING_COLUMNS per generator, ground truth, then the whole request; each generator's timings with its share
+                ready: float) -> tuple[tuple[TimingRow, ...], dict[str, dict[str, float]]]:
+    """(A row per generator, the ground truth's, then the whole request's; each generator's timings with its share
     of the rendering, which is split evenly over the shown motions)."""
     n = len(timings) + int(ground_truth)
     rows, shared = [], {}
     for m, t in timings.items():
         shared[m] = {**t, "rendering": render_s / n}
-        g = sum(v for k, v in t.items() if k not in ("alignment", "transcription", "rendering"))
-        rows.append([METHOD_LABELS[m], *(round(shared[m].get(k, 0.0), 3) for k in STAGES),
-                     round(g, 3), round(duration / max(g, 1e-9), 1)])
+        g = generation_seconds(t)
+        rows.append(TimingRow(METHOD_LABELS[m], *(round(shared[m].get(k, 0.0), 3) for k in STAGES), round(g, 3),
+                              round(duration / max(g, 1e-9), 1)))
     if ground_truth:
-        rows.append(["Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None])
-    rows.append([f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
-                 round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)])
-    return rows, shared
+        rows.append(TimingRow("Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None))
+    rows.append(TimingRow(f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
+                          round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)))
+    return tuple(rows), shared

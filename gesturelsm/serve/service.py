@@ -75,8 +75,8 @@ class GestureService:
     # ---- housekeeping ----------------------------------------------------------------------------------
     def warmup(self) -> float:
         """Load the text encoder and the speech recogniser and run each generator and the recogniser once on 1 s
-        of a tone, so the first visitor does not wait for them (without it the first request for 10 s of speech took
-        2.02 s on the server against 1.41-1.61 s for later ones); returns the seconds it took."""
+        of a tone, so the first visitor does not wait for their one-off start-up costs (docs/WEBAPP.md); returns the
+        seconds it took."""
         t0 = time.perf_counter()
         y = (0.3 * np.sin(np.arange(SAMPLE_RATE) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)
         speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())

@@ -26,6 +26,7 @@ from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import FACTS
 from ..body.model import resolve_model_path
+from ..errors import AudioError, InputError, UserError
 from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
@@ -52,10 +53,10 @@ class StudyPlan:
 def find_audio(audio_dir: str | Path) -> list[Path]:
     d = Path(audio_dir)
     if not d.is_dir():
-        raise FileNotFoundError(f"audio folder not found: {d}")
+        raise InputError(f"audio folder not found: {d}")
     files = sorted(p for p in d.iterdir() if p.suffix.lower() in AUDIO_EXTENSIONS and p.is_file())
     if not files:
-        raise ValueError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
+        raise InputError(f"{d} has no audio files ({', '.join(AUDIO_EXTENSIONS)})")
     return files
 
 
@@ -74,7 +75,7 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path,
     settings = {m: dict((settings or {}).get(m, {})) for m in methods}
     items = [StudyItem(blinded_name(salt, a.name, m, settings[m]), a.name, m) for a in audio_files for m in methods]
     if len({i.video for i in items}) != len(items):
-        raise ValueError("two speech files share a name; rename them")
+        raise InputError("two speech files share a name; rename them")
     return StudyPlan(out, salt, items, settings)
 
 
@@ -101,11 +102,11 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
     steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
-            raise ValueError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
+            raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
     if GROUND_TRUTH in methods and not beat2:
-        raise ValueError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+        raise UserError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
-        raise ValueError("--raters must be at least 1")
+        raise UserError("--raters must be at least 1")
     audio_files = find_audio(audio_dir)
     out = Path(out)
     base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2, grounding=grounding)
@@ -158,7 +159,7 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
         try:
             speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
         except ValueError as exc:  # InputError: too short, silent, too long
-            raise ValueError(f"{a.name}: {exc}") from None
+            raise AudioError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
             gen = pipeline.generate_all(speech, replace(base, methods=[it.method], filename=a.name), body=body)
             if it.method not in gen.motions:

@@ -72,9 +72,10 @@ def _character(path: str | None):
     """--rig, loaded before any work so a bad file stops the batch at once."""
     if not path:
         return None
-    from ..retarget import load_character
+    from ..retarget import check_usable, load_character
 
     rig = load_character(path)
     if rig.document is None:
         raise UserError(f"--rig {rig.name}: a BVH skeleton has no mesh; give a .vrm, .glb or .gltf")
+    check_usable(rig)                       # its rest pose retargets and its meshes can be drawn
     return rig

@@ -29,7 +29,7 @@ from sqlalchemy import (JSON, Boolean, Column, Float, ForeignKey, Integer, MetaD
 from sqlalchemy.engine import Engine, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, NoSuchModuleError
 
-from ..errors import UserError
+from ..errors import InputError, UserError
 
 metadata = MetaData()
 raters = Table(
@@ -62,8 +62,8 @@ identity = Table(
 )
 
 
-class Refused(Exception):
-    """A request the study refuses; `status` is the HTTP status, the message is shown on the rater's page."""
+class RequestRefused(InputError):
+    """A rater's request the study refuses; `status` is the HTTP status, the message is shown on the rater's page."""
 
     def __init__(self, status: int, message: str):
         super().__init__(message)
@@ -226,9 +226,9 @@ def show(engine: Engine, rater: int, session: str, trial: int) -> None:
 def _check_session(conn, rater: int, session: str) -> RaterState:
     st = _state(conn, rater)
     if st is None:
-        raise Refused(409, "this study has not been opened yet; load the page first")
+        raise RequestRefused(409, "this study has not been opened yet; load the page first")
     if st.session != session:
-        raise Refused(409, "this study is open in another tab or window; continue there, or reload this page "
+        raise RequestRefused(409, "this study is open in another tab or window; continue there, or reload this page "
                            "to continue here")
     return st
 
@@ -242,16 +242,16 @@ def record(engine: Engine, rater: int, session: str, trial: int, *, choice: str 
     with writing(engine).begin() as conn:
         st = _check_session(conn, rater, session)
         if st.code is not None:
-            raise Refused(409, "this study is already complete; thank you")
+            raise RequestRefused(409, "this study is already complete; thank you")
         if trial != st.shown_trial:
-            raise Refused(409, f"trial {trial} is not the one on your screen (trial {st.shown_trial}); "
+            raise RequestRefused(409, f"trial {trial} is not the one on your screen (trial {st.shown_trial}); "
                                "reload the page to continue")
         try:
             conn.execute(insert(answers).values(
                 rater=rater, trial=trial, choice=choice, ratings=json.loads(json.dumps(ratings)) if ratings
                 else None, seconds=max(0.0, now - st.shown_at), played=bool(played), created_at=now))
         except IntegrityError:                   # the whole transaction rolls back: nothing is written
-            raise Refused(409, f"trial {trial} was already answered; it counts once") from None
+            raise RequestRefused(409, f"trial {trial} was already answered; it counts once") from None
         values: dict = dict(shown_trial=next_trial if next_trial is not None else n_trials, shown_at=now)
         if next_trial is None:
             values.update(code=secrets.token_hex(4).upper(), completed_at=now)
@@ -274,5 +274,5 @@ def all_answers(engine: Engine) -> list[dict]:
         return [dict(r) for r in conn.execute(select(answers).order_by(answers.c.rater, answers.c.trial)).mappings()]
 
 
-__all__ = ["Refused", "RaterState", "all_answers", "answered_trials", "claim_identity", "default_url", "has_tables",
-           "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting", "writing"]
+__all__ = ["RequestRefused", "RaterState", "all_answers", "answered_trials", "claim_identity", "default_url",
+           "has_tables", "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting", "writing"]

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError, UserError
+
 SCALES = ("realness", "synchrony", "smoothness")
 SCALE_QUESTIONS = {
     "realness": "How human-like and natural do the gestures look? (1 = not at all, 5 = completely)",
@@ -47,9 +49,9 @@ class Design:
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
-            raise ValueError(f"unknown study design {self.mode!r}; use one of {', '.join(MODES)}")
+            raise InputError(f"unknown study design {self.mode!r}; use one of {', '.join(MODES)}")
         if not 0 <= self.attention <= 1:
-            raise ValueError("--attention must be a fraction from 0 to 1")
+            raise UserError("--attention must be a fraction from 0 to 1")
 
 
 @dataclass
@@ -94,7 +96,7 @@ def read_conditions(study: str | Path) -> Conditions:
     study = Path(study)
     path = study / "key" / "conditions.csv"
     if not path.exists():
-        raise FileNotFoundError(f"{study} is not a study folder made by `gesturelsm batch` (no key/conditions.csv)")
+        raise InputError(f"{study} is not a study folder made by `gesturelsm batch` (no key/conditions.csv)")
     have = lambda v: (study / "videos" / v).exists()   # noqa: E731
     genuine = {r["video"]: (r["audio"], r["method"]) for r in _read_csv(path) if have(r["video"])}
     mm = study / "key" / "mismatch.csv"
@@ -117,7 +119,7 @@ def real_trials(cond: Conditions, design: Design) -> list[Trial]:
         present = [m for m in methods if m in vids]
         out += [Trial(0, kind, vids[x], vids[y]) for x, y in combinations(present, 2)]
     if not out:
-        raise ValueError("a pairwise study needs at least two methods rendered for the same speech")
+        raise InputError("a pairwise study needs at least two methods rendered for the same speech")
     return out
 
 
@@ -165,7 +167,7 @@ def rater_trials(cond: Conditions, design: Design, rater: int) -> list[Trial]:
 def read_design(study: str | Path) -> Design:
     path = Path(study) / "key" / "design.json"
     if not path.exists():
-        raise FileNotFoundError(f"{study} has no study design (key/design.json); run `gesturelsm batch` first")
+        raise InputError(f"{study} has no study design (key/design.json); run `gesturelsm batch` first")
     return Design(**json.loads(path.read_text()))
 
 
@@ -192,7 +194,7 @@ def invite(study: str | Path, n: int) -> list[Rater]:
     """Add n raters with fresh unguessable tokens; their trial lists are fixed now (the key's videos may still
     grow). Returns the new raters; key/raters.json and key/links.csv are rewritten atomically."""
     if n < 1:
-        raise ValueError("the number of raters to invite must be at least 1")
+        raise UserError("the number of raters to invite must be at least 1")
     study = Path(study)
     design, cond = read_design(study), read_conditions(study)
     raters = read_raters(study)

@@ -120,7 +120,7 @@ def analyse(study: str | Path, url: str | None = None, rule: Rule = Rule(), refe
     kept = [c.rater for c in checks if c.kept]
     methods = cond.methods
     if reference is not None and reference not in methods:
-        raise ValueError(f"--reference {reference!r} is not a method of this study ({', '.join(methods)})")
+        raise UserError(f"--reference {reference!r} is not a method of this study ({', '.join(methods)})")
     res = Results(design.mode, methods, checks)
     if design.mode == "pairwise":
         _pairwise(res, [(raters[r], by_rater[r]) for r in kept], cond.genuine,

@@ -26,6 +26,7 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from starlette.routing import Route
 
+from ..errors import GestureError
 from . import db
 from .design import SCALE_QUESTIONS, SCALES, Rater, read_design, read_raters
 from .page import PAGE
@@ -68,7 +69,7 @@ class Study:
         if token not in self._raters:
             self._reload()
         if token not in self._raters:
-            raise db.Refused(404, "this study link is not valid; check that you copied all of it")
+            raise db.RequestRefused(404, "this study link is not valid; check that you copied all of it")
         return self._raters[token]
 
     def state(self, rater: Rater, st: db.RaterState) -> dict:
@@ -88,8 +89,8 @@ def _api(handler):
     async def route(request: Request) -> Response:
         try:
             return await handler(request)
-        except db.Refused as exc:
-            return JSONResponse({"error": str(exc)}, status_code=exc.status)
+        except GestureError as exc:                    # a refusal: its status (400 when it names none)
+            return JSONResponse({"error": str(exc)}, status_code=getattr(exc, "status", 400))
         except Exception:                              # noqa: BLE001 (a bug: the page still gets a message)
             traceback.print_exc(file=sys.stderr)
             return JSONResponse({"error": "the study server failed on this request; please try again, or tell "
@@ -131,29 +132,29 @@ def _depth(raw: bytes) -> int:
 
 async def _json_body(request: Request) -> dict:
     if int(request.headers.get("content-length") or 0) > MAX_BODY:
-        raise db.Refused(413, "the request is too large")
+        raise db.RequestRefused(413, "the request is too large")
     raw = b""
     async for chunk in request.stream():
         raw += chunk
         if len(raw) > MAX_BODY:
-            raise db.Refused(413, "the request is too large")
+            raise db.RequestRefused(413, "the request is too large")
     if _depth(raw) > MAX_DEPTH:
-        raise db.Refused(400, f"the request is nested too deeply (more than {MAX_DEPTH} levels)")
+        raise db.RequestRefused(400, f"the request is nested too deeply (more than {MAX_DEPTH} levels)")
     try:
         body = json.loads(raw, parse_int=_int)
     except _TooLong:
-        raise db.Refused(400, f"a number in the request is too long (more than {MAX_DIGITS} digits)") from None
+        raise db.RequestRefused(400, f"a number in the request is too long (more than {MAX_DIGITS} digits)") from None
     except (ValueError, UnicodeDecodeError, RecursionError):
-        raise db.Refused(400, "the request is not valid JSON") from None
+        raise db.RequestRefused(400, "the request is not valid JSON") from None
     if not isinstance(body, dict):
-        raise db.Refused(400, "the request must be a JSON object")
+        raise db.RequestRefused(400, "the request must be a JSON object")
     return body
 
 
 def _field(body: dict, name: str, kind: type):
     value = body.get(name)
     if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
-        raise db.Refused(400, f"the request needs '{name}' ({kind.__name__})")
+        raise db.RequestRefused(400, f"the request needs '{name}' ({kind.__name__})")
     return value
 
 
@@ -161,12 +162,13 @@ def _answer_fields(body: dict, kind: str) -> tuple[str | None, dict | None]:
     if kind == "pair":
         choice = _field(body, "choice", str)
         if choice not in CHOICES:
-            raise db.Refused(400, f"'choice' must be one of {', '.join(CHOICES)}")
+            raise db.RequestRefused(400, f"'choice' must be one of {', '.join(CHOICES)}")
         return choice, None
     ratings = _field(body, "ratings", dict)
     if set(ratings) != set(SCALES) or not all(isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 5
                                               for v in ratings.values()):
-        raise db.Refused(400, f"'ratings' must give every scale ({', '.join(SCALES)}) a whole number from 1 to 5")
+        raise db.RequestRefused(400, f"'ratings' must give every scale ({', '.join(SCALES)}) a whole number from 1 "
+                                     "to 5")
     return None, {s: ratings[s] for s in SCALES}
 
 
@@ -203,8 +205,9 @@ def build_app(study: Study) -> Starlette:
     async def page(request: Request) -> Response:
         try:
             study.rater(request.path_params["token"])
-        except db.Refused as exc:
-            return HTMLResponse(f"<!doctype html><title>Study</title><p>{exc}</p>", status_code=exc.status)
+        except GestureError as exc:
+            return HTMLResponse(f"<!doctype html><title>Study</title><p>{exc}</p>",
+                                status_code=getattr(exc, "status", 400))
         return HTMLResponse(PAGE, headers={"Cache-Control": "no-store", "Referrer-Policy": "no-referrer"})
 
     @_api
@@ -219,10 +222,10 @@ def build_app(study: Study) -> Starlette:
         body = await _json_body(request)
         session, trial = _field(body, "session", str), _field(body, "trial", int)
         if not 0 <= trial < len(rater.trials):
-            raise db.Refused(400, f"there is no trial {trial} in this study")
+            raise db.RequestRefused(400, f"there is no trial {trial} in this study")
         played = body.get("played", False)
         if not isinstance(played, bool):
-            raise db.Refused(400, "'played' must be true or false")
+            raise db.RequestRefused(400, "'played' must be true or false")
         choice, ratings = _answer_fields(body, rater.trials[trial].kind)
         st = await store.write(_record, store, rater, session, trial, choice=choice, ratings=ratings, played=played)
         return JSONResponse(study.state(rater, st))
@@ -232,14 +235,14 @@ def build_app(study: Study) -> Starlette:
         rater = study.rater(request.path_params["token"])
         text, side = request.path_params["trial"], request.path_params["side"]
         if side not in ("left", "right") or not TRIAL.fullmatch(text) or int(text) >= len(rater.trials):
-            raise db.Refused(404, "no such video for this rater")
+            raise db.RequestRefused(404, "no such video for this rater")
         trial = int(text)
         if trial > await store.read(db.shown_trial, rater.id):   # videos need no session: <video> sends no body
-            raise db.Refused(404, "no such video for this rater")
+            raise db.RequestRefused(404, "no such video for this rater")
         t = rater.trials[trial]
         name = t.left if side == "left" else t.right
         if not name:
-            raise db.Refused(404, "this trial has one video")
+            raise db.RequestRefused(404, "this trial has one video")
         return VideoResponse(study.folder / "videos" / name, media_type="video/mp4",
                              headers={"Cache-Control": "private, max-age=3600"})
 

@@ -12,7 +12,7 @@ study keeps it, and database work never runs on the server's event loop.
   stops all writes until the server is restarted; a read-only one refuses writes while it stays read-only.
 - Off the event loop. Writes run one at a time on their own thread, reads on a small pool, each with a deadline;
   SQLite waits `busy_timeout` seconds for a write lock another program holds, then the answer is refused with a
-  message the page shows (`Refused`, HTTP 503) and the rater can send it again.
+  message the page shows (`RequestRefused`, HTTP 503) and the rater can send it again.
 
 FAILURES holds what a rater is told for each failure (`message`); docs/STUDY.md says what happens to the answers
 in each.
@@ -33,7 +33,7 @@ from sqlalchemy.exc import DBAPIError, SQLAlchemyError
 
 from ..errors import UserError
 from . import db
-from .db import Refused
+from .db import RequestRefused
 
 BUSY_TIMEOUT = 0.5           # s waited for a write lock held by another program before an answer is refused
 MIN_WAIT = 0.05             # s any write waits for a lock at least
@@ -54,7 +54,7 @@ MARKER = Path("key") / "database.json"
 SIDE_FILES = ("-wal", "-shm")
 
 
-class Unstored(Refused):
+class Unstored(RequestRefused):
     """A write the database did not take (or may not have taken): `kind` is a key of FAILURES."""
 
     def __init__(self, kind: str):
@@ -238,25 +238,25 @@ class Store:
         return out
 
     async def write(self, fn: Callable, *args, action: str = "answer", **kw):
-        """`fn(engine, *args, **kw)` on the writer thread, between identity checks; a failure is a Refused (503)
+        """`fn(engine, *args, **kw)` on the writer thread, between identity checks; a failure is a RequestRefused (503)
         that tells the rater what it means for their `action` ("answer" | "open")."""
         try:
             return await self._run(self._writer, Unstored("late"), self._guarded, fn, time.monotonic(), *args, **kw)
         except Unstored as exc:
-            raise Refused(503, message(exc.kind, action)) from None
+            raise RequestRefused(503, message(exc.kind, action)) from None
 
     async def read(self, fn: Callable, *args, **kw):
         """`fn(engine, *args, **kw)` on a reader thread, with the same deadline."""
-        return await self._run(self._readers, Refused(503, UNREADABLE), self._read, fn, *args, **kw)
+        return await self._run(self._readers, RequestRefused(503, UNREADABLE), self._read, fn, *args, **kw)
 
     def _read(self, fn: Callable, *args, **kw):
         try:
             return fn(self.engine, *args, **kw)
         except SQLAlchemyError as exc:
             self.log(f"read failed: {exc}")
-            raise Refused(503, UNREADABLE) from None
+            raise RequestRefused(503, UNREADABLE) from None
 
-    async def _run(self, pool: ThreadPoolExecutor, late: Refused, fn: Callable, *args, **kw):
+    async def _run(self, pool: ThreadPoolExecutor, late: RequestRefused, fn: Callable, *args, **kw):
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(pool, lambda: fn(*args, **kw))
         try:

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from ..errors import InputError
+
 
 @dataclass(frozen=True)
 class TokenizerConfig:
@@ -47,5 +49,5 @@ PRESETS: dict[str, TokenizerConfig] = {
 
 def preset(name: str, in_dim: int) -> TokenizerConfig:
     if name not in PRESETS:
-        raise ValueError(f"unknown tokenizer preset {name!r}; choose from {', '.join(PRESETS)}")
+        raise InputError(f"unknown tokenizer preset {name!r}; choose from {', '.join(PRESETS)}")
     return replace(PRESETS[name], in_dim=in_dim)

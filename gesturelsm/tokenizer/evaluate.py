@@ -6,6 +6,7 @@ import torch
 from ..body import load_body_model
 from ..body.fk import forward_kinematics
 from ..data.split import split_features
+from ..errors import CheckpointError
 from ..motion.regions import REGIONS, TRANS_OFFSET
 from ..motion.rotations import geodesic_angle, rot6d_to_matrix
 from ..motion.skeleton import PARENTS
@@ -117,7 +118,7 @@ def evaluate_folder(data_root, ckpt_dir, train_fraction: float = 0.8, body_model
         if model.region in REGIONS:
             out["regions"][model.region] = evaluate_region(model, split.heldout, rest)
     if not out["regions"]:
-        raise ValueError(f"no tokenizer checkpoints (<region>.safetensors) in {ckpt_dir}")
+        raise CheckpointError(f"no tokenizer checkpoints (<region>.safetensors) in {ckpt_dir}")
     return out
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import logging
 import shutil
 from pathlib import Path
 
@@ -33,10 +34,11 @@ from gesturelsm.body.model import resolve_body
 from gesturelsm.errors import GestureError
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.export.rig import export_rig
-from gesturelsm.retarget import Character, load_character, retarget_motion
+from gesturelsm.retarget import Character, check_usable, load_character, retarget_motion
 from gesturelsm.retarget.face import channel_weights, face_weights, morph_channels, morph_weights
 from gesturelsm.retarget.grounding import leg_problem
 
+log = logging.getLogger(__name__)
 MAX_CHARACTER_BYTES = 32 * 1024 * 1024        # a page upload; the CLI takes up to 64 MB
 PAGE_SUFFIXES = (".vrm", ".glb", ".gltf")
 
@@ -58,13 +60,14 @@ def read_upload(path: str | Path | None) -> Character | None:
         raise gr.Error(f"{path.name}: a character must be a .vrm, .glb or .gltf file", print_exception=False)
     try:
         character = load_character(path, limit=MAX_CHARACTER_BYTES)
+        gltf = character.document.gltf if character.document is not None else {}
+        if character.document is None or (gltf.get("buffers") and not character.document.blob) or any(
+                "uri" in im and not str(im["uri"]).startswith("data:") for im in gltf.get("images", [])):
+            raise gr.Error(f"{path.name}: its buffers or textures are separate files; upload a .glb or .vrm",
+                           print_exception=False)
+        check_usable(character)               # what a later Generate would refuse is refused here, once
     except GestureError as exc:
         raise gr.Error(str(exc), print_exception=False) from None
-    gltf = character.document.gltf if character.document is not None else {}
-    if character.document is None or (gltf.get("buffers") and not character.document.blob) or any(
-            "uri" in im and not str(im["uri"]).startswith("data:") for im in gltf.get("images", [])):
-        raise gr.Error(f"{path.name}: its buffers or textures are separate files; upload a .glb or .vrm",
-                       print_exception=False)
     return character
 
 
@@ -76,6 +79,11 @@ def choose(path: str | Path | None) -> tuple[Character | None, dict]:
         character = read_upload(path)
     except gr.Error as exc:
         gr.Warning(exc.message)
+        return None, gr.update(value=None, label=LABEL)
+    except Exception:                       # a bug: logged with its traceback; the visitor still gets a line
+        log.exception("reading an uploaded character failed")
+        gr.Warning(f"{Path(path).name}: this file could not be read (an unexpected error, logged on the server); "
+                   "the mannequin stays")
         return None, gr.update(value=None, label=LABEL)
     if character is None:
         return None, gr.update(label=LABEL)

@@ -80,6 +80,7 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
     # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
     # answer without them
+    from gesturelsm.errors import GestureError
     from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
@@ -88,18 +89,18 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency))
     try:
         service = GestureService.from_settings(settings)
-    except (FileNotFoundError, ValueError) as exc:
+    except GestureError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     if not args.no_warmup:
         service.warmup()
-    from .ui import build_demo, launch
+    from .ui import build_demo
 
     signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
     signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
     try:
-        launch(build_demo(service, max(1, args.queue_size)), service, host=args.host, port=args.port)
+        build_demo(service, max(1, args.queue_size)).launch(host=args.host, port=args.port)
     except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
         pass
     return 0

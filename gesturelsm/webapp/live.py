@@ -44,10 +44,11 @@ import gradio as gr
 import numpy as np
 
 from gesturelsm.audio import resample, to_mono
+from gesturelsm.constants import SAMPLE_RATE
+from gesturelsm.errors import GestureError
 from gesturelsm.export.motion_codec import AXIS_ANGLE, QUATERNION, MotionRecord, encode
 from gesturelsm.export.player_payload import motion_record
-from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded, LiveSession
-from gesturelsm.constants import SAMPLE_RATE
+from gesturelsm.live.session import LiveBusy, LiveManager, LiveSession
 from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.motion.skeleton import NUM_JOINTS
 
@@ -123,7 +124,7 @@ def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, grounding
     try:
         session.feed(to_float(*chunk))
         status = "streaming"
-    except (LiveOverloaded, RuntimeError) as exc:
+    except GestureError as exc:                 # too slow, audio it cannot use, or the stream has ended
         status = str(exc)
         session.stop()
     record, latency, stats = payload(session, status)

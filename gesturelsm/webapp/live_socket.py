@@ -1,7 +1,8 @@
 """The Live tab's microphone transport: raw PCM over a WebSocket of the app's own server, motion pushed back.
 
-Gradio's streaming microphone uploads every chunk as a file through its queue; on the 2-core machine that put the
-speech 1-2.6 s behind the voice before any generation (README, live mode). Here the page captures the microphone
+Gradio's streaming microphone uploads every chunk as a file through its queue, which puts the speech seconds behind
+the voice before any generation (docs/BENCHMARKS.md, "Why the code is built this way"). Here the page captures the
+microphone
 with an AudioWorklet (player/src/microphone.js `LiveMic`) and sends it as it comes, and the server sends each motion
 chunk the moment the session's worker has it (no polling):
 
@@ -41,9 +42,9 @@ from starlette.routing import WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from gesturelsm.audio import MAX_SAMPLE_RATE
-from gesturelsm.errors import GestureError
+from gesturelsm.errors import GestureError, InputError
 from gesturelsm.export.motion_codec import MotionRecord, encode
-from gesturelsm.live.session import LiveBusy, LiveManager, LiveOverloaded
+from gesturelsm.live.session import LiveManager
 
 from .live import PATH, payload, to_float
 from .live_character import EXPIRED, CharacterStream
@@ -55,7 +56,7 @@ HELLO_TIMEOUT_S = 10.0          # a socket that names no sample rate by then is 
 WATCH_S = 0.5                   # how often the sender checks that the session is still running
 
 
-class Refused(ValueError):
+class MessageRefused(InputError):
     """A message the visitor's page should not have sent; the text says what was wrong."""
 
 
@@ -66,12 +67,12 @@ def hello(text: str) -> tuple[int, str | None]:
         d = json.loads(text)
         sr = int(d["sample_rate"])
     except (ValueError, TypeError, KeyError):
-        raise Refused('the first message must be {"sample_rate": <Hz>}') from None
+        raise MessageRefused('the first message must be {"sample_rate": <Hz>}') from None
     if not RATES[0] <= sr <= RATES[1]:
-        raise Refused(f"sample rate {sr} Hz is not supported (use {RATES[0]}-{RATES[1]} Hz)")
+        raise MessageRefused(f"sample rate {sr} Hz is not supported (use {RATES[0]}-{RATES[1]} Hz)")
     token = d.get("character")
     if token is not None and not isinstance(token, str):
-        raise Refused("the character must be the token the page was given (a string)")
+        raise MessageRefused("the character must be the token the page was given (a string)")
     return sr, token
 
 
@@ -80,16 +81,16 @@ def grounding_of(text: str) -> bool:
     true when absent."""
     on = json.loads(text).get("grounding", True)
     if not isinstance(on, bool):
-        raise Refused("grounding must be true or false")
+        raise MessageRefused("grounding must be true or false")
     return on
 
 
 def pcm(data: bytes, sr: int) -> np.ndarray:
     """int16 little-endian mono PCM at `sr` -> (n,) float32 at 16 kHz."""
     if len(data) % 2:
-        raise Refused("audio messages must be 16-bit PCM (an even number of bytes)")
+        raise MessageRefused("audio messages must be 16-bit PCM (an even number of bytes)")
     if len(data) / 2 > MAX_MESSAGE_S * sr:
-        raise Refused(f"an audio message may hold at most {MAX_MESSAGE_S:g} s")
+        raise MessageRefused(f"an audio message may hold at most {MAX_MESSAGE_S:g} s")
     return to_float(sr, np.frombuffer(data, "<i2"))
 
 
@@ -137,34 +138,30 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
 
     try:
         try:
-            sr, token = hello(first := await asyncio.wait_for(ws.receive_text(), HELLO_TIMEOUT_S))
+            first = await receive(ws, HELLO_TIMEOUT_S)
         except asyncio.TimeoutError:
-            raise Refused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
-        try:
-            session = manager.open(replace(manager.config, grounding=grounding_of(first)),
-                                   on_publish=lambda: loop.call_soon_threadsafe(ready.set))
-        except LiveBusy as exc:
-            await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
-            return
+            raise MessageRefused(f"no sample rate within {HELLO_TIMEOUT_S:g} s of connecting") from None
+        text = first.get("text") or ""
+        sr, token = hello(text)
+        session = manager.open(replace(manager.config, grounding=grounding_of(text)),      # LiveBusy: said below
+                               on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         if token is not None:                   # before any motion: the page shows the character from frame 0
             character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding_of(first))
             if not await say(ws, encode(MotionRecord(meta=meta))):
                 return
         pusher = asyncio.create_task(push())
         while True:
-            msg = await ws.receive()
-            if msg["type"] == "websocket.disconnect":
-                return
+            msg = await receive(ws)
             try:
                 if msg.get("bytes") is not None:
                     session.feed(pcm(msg["bytes"], sr))
                 elif control(msg.get("text")).get("end"):
                     return await finish("stopped", end=True)
-            except (Refused, LiveOverloaded, RuntimeError) as exc:   # bad input, too slow, or the session ended
+            except GestureError as exc:           # bad input, too slow, or the stream has ended
                 return await finish(str(exc), end=False)
-    except Refused as exc:
+    except GestureError as exc:                   # a bad first message, or no free stream
         await say(ws, encode(MotionRecord(meta={"status": str(exc)})))
-    except (WebSocketDisconnect, RuntimeError):   # the tab closed or the network dropped mid-receive
+    except WebSocketDisconnect:                   # the tab closed or the network dropped mid-receive
         log.debug("live socket: the client left")
     finally:
         if pusher is not None and not pusher.done():
@@ -189,9 +186,21 @@ def stream_character(characters, token: str, body=None,
     return stream, {"status": "streaming", "character": {**stream.spec(), "url": url, "key": entry.key}}
 
 
+async def receive(ws: WebSocket, timeout: float | None = None) -> dict:
+    """The client's next message; WebSocketDisconnect when the client has gone, whether it said so or Starlette
+    found the socket closed (RuntimeError). asyncio.TimeoutError after `timeout` seconds."""
+    try:
+        msg = await asyncio.wait_for(ws.receive(), timeout)
+    except RuntimeError:
+        raise WebSocketDisconnect() from None
+    if msg["type"] == "websocket.disconnect":
+        raise WebSocketDisconnect(msg.get("code", 1000))
+    return msg
+
+
 async def say(ws: WebSocket, message: str | bytes) -> bool:
-    """Send `message` (text or a binary motion record); False when the client has gone (a visitor who leaves at any moment is a normal event, not a
-    server error, so it is never raised into the ASGI server's log)."""
+    """Send `message` (text or a binary motion record); False when the client has gone (a visitor who leaves at any
+    moment is a normal event, not a server error, so it is never raised into the ASGI server's log)."""
     try:
         await (ws.send_bytes(message) if isinstance(message, bytes) else ws.send_text(message))
         return True
@@ -213,9 +222,9 @@ def control(text: str | None) -> dict:
     try:
         d = json.loads(text or "")
     except ValueError:
-        raise Refused('text messages must be JSON, e.g. {"end": true}') from None
+        raise MessageRefused('text messages must be JSON, e.g. {"end": true}') from None
     if not isinstance(d, dict):
-        raise Refused('text messages must be a JSON object, e.g. {"end": true}')
+        raise MessageRefused('text messages must be a JSON object, e.g. {"end": true}')
     return d
 
 

@@ -1,7 +1,9 @@
 """The page: Gradio Blocks over `gesturelsm.serve.service.GestureService` (no logic of its own).
 
-`build_demo(service)` builds everything inside the function, so tests can build and drive it. The main
-action is exposed to `gradio_client` as `api_name="/generate"` (see README, "Web app").
+`build_demo(service)` builds everything inside the function, so tests can build and drive it, and returns a
+`demo.Demo`: the Blocks with the live streams and socket routes that run beside it (`Demo.launch` serves them,
+`Demo.close` stops them). The main action is exposed to `gradio_client` as `api_name="/generate"` (see README,
+"Web app").
 """
 from __future__ import annotations
 
@@ -20,12 +22,13 @@ from gesturelsm.errors import GestureError
 from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from gesturelsm.presentation import steps_from_flags
 from gesturelsm.render.background import RenderCancelled
-from gesturelsm.serve.lifetime import Sweeper, gradio_delete_cache, sweep_seconds
+from gesturelsm.serve.lifetime import gradio_delete_cache
 from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 
 from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
+from .demo import Demo
 from .live_character import LiveCharacters
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
@@ -147,7 +150,7 @@ class _Handlers:
         out = self._run(self.request(*args, exports=False, render=False), progress)
         self._mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
-        return motion_player.payload(self.service, out, character), out.rows, out.summary, out, recognised
+        return motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised
 
     def _kept(self, request: gr.Request | None, out: Result):
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
@@ -170,7 +173,7 @@ class _Handlers:
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self._refuse(exc)
-        return str(out.video), out.rows, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
+        return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
         """The downloads; with a character, each method's motion in the character's own file too."""
@@ -187,7 +190,7 @@ class _Handlers:
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, exports=True), progress)
-        return (str(out.video), out.rows, out.summary, *self._files(out))
+        return (str(out.video), out.table, out.summary, *self._files(out))
 
 
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
@@ -272,7 +275,7 @@ VIEWER_MOUNTED_JS = """async (...args) => {
     return args; }"""
 
 
-def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Blocks:
+def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
@@ -332,51 +335,17 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> gr.Bloc
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
-    demo.live_manager = manager                        # launch(): closing the app stops its live streams
-    demo.live_routes = routes                          # launch() serves them beside the page
-    return demo
+    return Demo(demo, service, live=manager, routes=routes)
 
 
-def launch(demo: gr.Blocks, service: GestureService, host: str = "127.0.0.1", port: int = 7860, **kw):
-    """Launch with the upload limit and the output folder allowed, and sweep expired outputs on a timer
-    (gesturelsm.serve.lifetime); `demo.close()` (or the end of a blocking launch, or interpreter exit) stops the sweeper
-    and the live streams and deletes all outputs. Returns what `Blocks.launch` returns."""
-    keep = service.settings.keep_minutes
-    sweeper = Sweeper(service.cleanup, sweep_seconds(keep), final=lambda: service.cleanup(max_age_s=0)).start()
-    close = demo.close
-
-    def stop() -> None:
-        if getattr(demo, "live_manager", None) is not None:
-            demo.live_manager.stop_all()                # no live worker outlives the server
-        sweeper.stop()
-
-    def close_and_clean(*args, **kwargs):
-        try:
-            return close(*args, **kwargs)
-        finally:
-            stop()
-
-    demo.close = close_and_clean
-    app_kwargs = dict(kw.pop("app_kwargs", None) or {})
-    app_kwargs["routes"] = [*app_kwargs.get("routes", []), *getattr(demo, "live_routes", [])]
-    try:
-        return demo.launch(server_name=host, server_port=port,
-                           max_file_size=f"{int(service.settings.max_upload_mb)}mb",
-                           allowed_paths=[str(service.workdir), *motion_player.served_paths()],
-                           footer_links=["api"], app_kwargs=app_kwargs, **kw)
-    finally:
-        if not kw.get("prevent_thread_lock"):
-            stop()
-
-
-def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[gr.Blocks, str]:
+def serve_locally(service: GestureService, queue_size: int = QUEUE_SIZE) -> tuple[Demo, str]:
     """Build and serve the app in this process on a free port of 127.0.0.1 (tests and dev tools);
-    returns the Blocks (close it when done) and the URL."""
+    returns the Demo (close it when done) and the URL."""
     import socket
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     demo = build_demo(service, queue_size)
-    launch(demo, service, port=port, prevent_thread_lock=True, quiet=True)
+    demo.launch(port=port, prevent_thread_lock=True, quiet=True)
     return demo, f"http://127.0.0.1:{port}"

@@ -136,7 +136,7 @@ def test_results_are_reproducible(clip):
 
 
 def test_real_held_out_take_meets_the_accuracy_goal(beat2, espeak):
-    """Take 2_scott_0_1_1 was not used to choose any setting (those came from 2_2 and 3_3)."""
+    """Take 2_scott_0_1_1 chose no setting (the settings came from 2_2 and 3_3)."""
     ref = read_words(beat2 / "textgrid" / "2_scott_0_1_1.TextGrid")
     audio = load_audio(beat2 / "wave16k" / "2_scott_0_1_1.wav")
     result = align_words(audio, " ".join(w.text for w in ref))

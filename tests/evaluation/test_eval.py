@@ -74,6 +74,12 @@ def test_eval_cli_on_tiny_checkpoints(eval_assets, tiny_beat2, tmp_path):
     assert "face vertex MSE" in md and "| ground truth |" in md and "| GestureLSM | 1 | 2 |" in md and "Audio-only takes" in md
     assert "Wrist amplitude" in md and "| GestureLSM | 2 | 2 | " in md
     assert "4.988" in md                                            # the paper's 2-step FGD beside ours
+    # feet and root (metrics/feet.py) for ground truth and every row, the ground truth's from its own joints
+    from gesturelsm.metrics.feet import FeetStats
+
+    assert "Feet and root" in md and "| ground truth | - | - | held-out |" in md
+    for part in [rep["ground_truth"]] + [r["heldout"] for r in rep["rows"]] + [r["audio_only"] for r in rep["rows"]]:
+        assert set(FeetStats.__dataclass_fields__) <= set(part) and part["contact_share"] is not None
 
 
 def test_eval_cli_rejects_bad_settings(eval_assets, tiny_beat2, tmp_path, capsys):

@@ -23,7 +23,8 @@ LEGS = (1, 2, 4, 5, 7, 8)
 
 
 def standing(seconds: float = 12.0, seed: int = 0) -> MotionSequence:
-    """The mannequin standing on y = 0, its arms, head and face moving (slow random sines)."""
+    """The mannequin standing on y = 0 with its knees a little bent (9 degrees, as people stand), its arms, head
+    and face moving (slow random sines)."""
     body = stats_body()
     T = int(seconds * FPS)
     t = np.arange(T)[:, None] / FPS
@@ -32,16 +33,20 @@ def standing(seconds: float = 12.0, seed: int = 0) -> MotionSequence:
     upper = [j for j in range(55) if j not in (0, 1, 2, 4, 5, 7, 8, 10, 11)]
     cols = [3 * j + k for j in upper for k in range(3)]
     poses[:, cols] = 0.3 * np.sin(2 * np.pi * rng.uniform(0.2, 1.0, len(cols)) * t + rng.uniform(0, 6, len(cols)))
+    poses[:, [3 * 1, 3 * 2]] = -0.075                         # thighs a little forward,
+    poses[:, [3 * 4, 3 * 5]] = 0.15                           # knees bent,
+    poses[:, [3 * 7, 3 * 8]] = -0.075                         # feet level
     trans = np.tile([0.0, -float(body.rest_vertices()[:, 1].min()), 0.0], (T, 1))
     expr = 0.5 * np.sin(t * rng.uniform(0.5, 2, (1, 100)))
     return MotionSequence(poses, trans, expr)
 
 
-def sliding_left_foot(seq: MotionSequence) -> MotionSequence:
-    """The left leg swings sideways about the hip, so the left foot slides over the floor (+-10 cm, 16 cm/s at most)."""
+def sliding_left_foot(seq: MotionSequence, swing: float = 0.12) -> MotionSequence:
+    """The left leg swings sideways about the hip by +-`swing` radians, so the left foot slides over the floor
+    (0.12: +-10 cm, 16 cm/s at most)."""
     t = np.arange(seq.num_frames) / FPS
     poses = seq.poses.copy()
-    poses[:, 3 * 1 + 2] = 0.12 * np.sin(2 * np.pi * 0.25 * t)
+    poses[:, 3 * 1 + 2] = swing * np.sin(2 * np.pi * 0.25 * t)
     return replace(seq, poses=poses)
 
 
@@ -53,9 +58,9 @@ def stepping(seq: MotionSequence, side: str = "right", every: float = 2.0, lengt
     phase = ((t - offset) % every) / length
     bump = np.where((phase < 1) & (t >= offset), np.sin(np.pi * np.clip(phase, 0, 1)) ** 2, 0.0)
     poses = seq.poses.copy()
-    poses[:, 3 * hip] = -0.5 * bump                           # the thigh swings forward
-    poses[:, 3 * knee] = 1.0 * bump                           # the knee bends
-    poses[:, 3 * ankle] = -0.5 * bump                         # the foot stays level: up 10 cm at the top
+    poses[:, 3 * hip] += -0.5 * bump                          # the thigh swings forward
+    poses[:, 3 * knee] += 1.0 * bump                          # the knee bends
+    poses[:, 3 * ankle] += -0.5 * bump                        # the foot stays level: up 10 cm at the top
     return replace(seq, poses=poses)
 
 
@@ -118,9 +123,9 @@ def transition_speeds(seq: MotionSequence, blend_frames: int = 8) -> tuple[np.nd
 
 
 def slide_and_step(seconds: float = 18.0) -> MotionSequence:
-    """The left foot slides over the floor between its steps (so each lift leaves a plant behind it) and the right
-    foot steps in between."""
-    seq = sliding_left_foot(standing(seconds=seconds, seed=5))
+    """The left foot slides over the floor between its steps (+-5 cm, so each lift leaves a plant behind it) and the
+    right foot steps in between."""
+    seq = sliding_left_foot(standing(seconds=seconds, seed=5), swing=0.06)
     seq = stepping(seq, "left", every=3.0, length=1.2, offset=1.0)
     return stepping(seq, "right", every=3.0, length=1.2, offset=2.5)
 

@@ -30,7 +30,7 @@ def app_url(service):
 def test_page_offers_the_authors_methods_with_their_labels(service):
     from gesturelsm.webapp.ui import build_demo
 
-    cfg = build_demo(service).get_config_file()
+    cfg = build_demo(service).blocks.get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     choices = dict((v, label) for label, v in box["props"]["choices"])
     assert choices["gesturelsm_authors"] == LABELS["gesturelsm_authors"]

@@ -84,8 +84,8 @@ def test_whole_floats_are_accepted_as_numbers(service, speech_wav):
 
 
 def test_transcript_is_bounded_by_the_speech(no_work, speech_wav):
-    """50k words for 2 s of speech took 81 s of the only worker; now refused before alignment (no_work fails
-    the test if features or alignment start)."""
+    """A transcript far longer than the speech could say (50k words for 2 s would hold the only worker for a
+    minute or more) is refused before alignment (no_work fails the test if features or alignment start)."""
     with pytest.raises(GestureError, match="transcript has 50000 words"):
         no_work.run(_req(speech_wav, text="word " * 50_000))
     with pytest.raises(GestureError, match=r"for 2\.0 s of speech at most 36 words"):
@@ -164,7 +164,7 @@ def test_gradio_cache_lifetime_follows_keep_minutes(service):
     from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(GestureService(service.pipeline, replace(service.settings, keep_minutes=1), service.body))
-    assert demo.delete_cache == (15, 60) == gradio_delete_cache(1)
+    assert demo.blocks.delete_cache == (15, 60) == gradio_delete_cache(1)
     assert sweep_seconds(60) == 60 and sweep_seconds(0.1) == 5
 
 

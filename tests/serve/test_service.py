@@ -34,11 +34,13 @@ def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     reader.close()
     assert (w, h) == (512, 256)                              # two 256 x 256 tiles side by side
     assert out.text_mode.startswith("audio-only")
-    assert len(out.rows) == 3 and all(len(r) == len(TIMING_COLUMNS) for r in out.rows)
-    assert out.rows[0][0] == "GestureLSM" and out.rows[1][0] == "DDIM"
+    assert len(out.rows) == 3 and [len(r) for r in out.table] == [len(TIMING_COLUMNS)] * 3
+    assert out.rows[0].method == "GestureLSM" and out.rows[1].method == "DDIM"
     for r in out.rows[:2]:
-        assert r[4] > 0 and r[5] > 0 and r[6] > 0 and r[8] > 0   # sampling, decoding, rendering, RTF
-    assert out.rows[-1][7] == pytest.approx(out.seconds, abs=1e-3)
+        assert r.sampling > 0 and r.decoding > 0 and r.rendering > 0 and r.real_time_factor > 0
+        assert r.cells() == [r.method, r.features, r.alignment, r.transcription, r.sampling, r.decoding, r.rendering,
+                             r.generation, r.real_time_factor]          # the table's columns, in TIMING_COLUMNS order
+    assert out.rows[-1].generation == pytest.approx(out.seconds, abs=1e-3)
     names = sorted(p.name for p in out.downloads)
     assert names == ["ddim.bvh", "ddim.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm.npz",
                      "gesturelsm_arkit.csv", "gesturelsm_keypoints.json"]
@@ -51,7 +53,7 @@ def test_same_seed_same_motion_and_transcript_mode(service, speech_wav):
     a = service.run(Request(str(speech_wav), text="hello there friends", steps=1, exports=False, render=False))
     b = service.run(Request(str(speech_wav), text="hello there friends", steps=1, exports=False, render=False))
     assert "aligned automatically" in a.text_mode
-    assert a.rows[0][2] > 0                                 # alignment time shown
+    assert a.rows[0].alignment > 0                          # alignment time shown
     np.testing.assert_array_equal(a.motions["gesturelsm"].poses, b.motions["gesturelsm"].poses)
     assert a.downloads == () and service.export(a).downloads
 
@@ -73,13 +75,13 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     monkeypatch.setattr(service_module, "render_apart", render_apart)
     a = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps=1, size=256, exports=False,
                             render=False))
-    col = TIMING_COLUMNS.index("rendering")
-    assert a.video is None and a.downloads == () and [r[col] for r in a.rows] == [0.0] * 3
+    assert a.video is None and a.downloads == () and [r.rendering for r in a.rows] == [0.0] * 3
     r = service.render(a)
-    assert a.video is None and [row[col] for row in a.rows] == [0.0] * 3 and a.seconds == a.motion_seconds
+    assert a.video is None and [row.rendering for row in a.rows] == [0.0] * 3 and a.seconds == a.motion_seconds
     assert r.video == a.job.folder / "gestures.mp4" and r.video.read_bytes() == b"mp4"
     assert r.timings["gesturelsm"]["rendering"] > 0 and a.timings["gesturelsm"]["rendering"] == 0.0
-    assert r.seconds > a.seconds and r.rows[-1][7] == round(r.seconds, 3) and a.rows[-1][7] == round(a.seconds, 3)
+    assert r.seconds > a.seconds and r.rows[-1].generation == round(r.seconds, 3)
+    assert a.rows[-1].generation == round(a.seconds, 3)
     assert drawn == [(2, list(a.job.labels), (256, 256), len(a.job.audio))]
     assert service.render(r) is r and len(drawn) == 1                      # rendered once
     e = service.export(r)
@@ -111,7 +113,7 @@ def test_ground_truth_for_a_known_beat2_take(service, beat2_dir, tmp_path):
     assert find_beat2_take(beat2_dir, speech_like(2.0), "other.wav") is None
     out = service.run(Request(str(wav), methods=["gesturelsm", "ground_truth"], steps=1, exports=False,
                               render=False))
-    assert out.ground_truth == "2_scott_0_9_9" and out.rows[1][0] == "Ground truth"
+    assert out.ground_truth == "2_scott_0_9_9" and out.rows[1].method == "Ground truth"
     # ground truth gets the post-processing every method gets; this take's random legs never keep a foot still, so
     # feet on the ground leaves it as it was and the page says why
     from gesturelsm.data.lookup import take_motion
@@ -249,10 +251,10 @@ def test_automatic_transcript_is_used_and_returned_unless_turned_off(service):
     req = Request(str(EXAMPLES / "hello.wav"), steps=1, exports=False, render=False)   # motions only: no video
     auto = service.run(req)
     assert auto.text_mode.startswith("automatic transcript") and "everyone" in auto.transcript.lower()
-    assert auto.rows[0][TIMING_COLUMNS.index("transcription")] > 0
+    assert auto.rows[0].transcription > 0
     off = service.run(replace(req, transcribe=False))
     assert off.text_mode.startswith("audio-only") and off.transcript is None
-    assert off.rows[0][TIMING_COLUMNS.index("transcription")] == 0
+    assert off.rows[0].transcription == 0
     typed = service.run(replace(req, text="hello there"))
     assert "aligned automatically" in typed.text_mode and typed.transcript is None
 
@@ -284,11 +286,10 @@ def test_prefetch_transcribes_an_upload_before_the_request(service, tmp_path):
     req = Request(str(EXAMPLES / "hello.wav"), steps=1, size=256, exports=False, render=False)
     assert service.prefetch(req.audio_path) and len(RECENT) == 1
     out = service.run(req)
-    col = TIMING_COLUMNS.index("transcription")
-    assert out.text_mode.startswith("automatic transcript") and out.rows[0][col] < 0.05
+    assert out.text_mode.startswith("automatic transcript") and out.rows[0].transcription < 0.05
     RECENT.clear()
     fresh = service.run(req)
-    assert fresh.transcript == out.transcript and fresh.rows[0][col] > out.rows[0][col]
+    assert fresh.transcript == out.transcript and fresh.rows[0].transcription > out.rows[0].transcription
     broken = tmp_path / "broken.wav"
     broken.write_bytes(b"RIFF not really a wav")
     assert service.prefetch(str(broken)) is False and service.prefetch(None) is False

@@ -170,8 +170,9 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
 
     plans = []
 
-    class Stop(Exception):
-        """Raised once the plan is seen: the plan is all this test needs."""
+    class Stop(BaseException):
+        """Raised once the plan is seen: the plan is all this test needs (a BaseException: the CLI reports an
+        Exception as an internal error and exits)."""
 
     class Pipe:
         methods = ["gesturelsm"]

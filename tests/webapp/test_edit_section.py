@@ -22,10 +22,10 @@ def _inputs(wav) -> tuple:
 
 
 def test_the_section_is_wired_with_its_element_ids(service):
-    demo = build_demo(service)
-    ids = {c.elem_id for c in demo.blocks.values() if getattr(c, "elem_id", None)}
+    page = build_demo(service).blocks
+    ids = {c.elem_id for c in page.blocks.values() if getattr(c, "elem_id", None)}
     assert {"edit-start", "edit-end", "edit-regions", "edit-run", "edit-undo", "edit-method", "edit-seed"} <= ids
-    names = {f.api_name for f in (demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)}
+    names = {f.api_name for f in (page.fns.values() if isinstance(page.fns, dict) else page.fns)}
     assert "edit_motion" in names
 
 

@@ -18,7 +18,8 @@ def inputs(wav, seed: int, grounding: bool = True) -> tuple:
 
 def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
     demo = build_demo(service)
-    fns = list(demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)
+    fns = demo.blocks.fns
+    fns = list(fns.values() if isinstance(fns, dict) else fns)
     pools = {f.api_name: f.concurrency_id for f in fns}
     assert pools["generate_motion"] == "generation"
     assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]

@@ -139,12 +139,12 @@ def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
     service = GestureService(shipped_pipe, ServiceSettings(workdir=str(tmp_path)))
     demo, _ = serve_locally(service)
     try:
-        session = demo.live_manager.open(LiveConfig(steps=1))
+        session = demo.live.open(LiveConfig(steps=1))
         session.feed(speech_like(1.0, seed=3))
-        assert demo.live_manager.active == 1 and session._thread.is_alive()
+        assert demo.live.active == 1 and session._thread.is_alive()
     finally:
         demo.close()
-    assert demo.live_manager.active == 0
+    assert demo.live.active == 0
     assert not session._thread.is_alive()
 
 

@@ -240,11 +240,11 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
 
 
 def test_the_hello_names_a_token_or_nothing():
-    from gesturelsm.webapp.live_socket import Refused, hello
+    from gesturelsm.webapp.live_socket import MessageRefused, hello
 
     assert hello('{"sample_rate": 48000}') == (48000, None)
     assert hello('{"sample_rate": 16000, "character": "abc"}') == (16000, "abc")
-    with pytest.raises(Refused, match="the token the page was given"):
+    with pytest.raises(MessageRefused, match="the token the page was given"):
         hello('{"sample_rate": 16000, "character": {"path": "/etc/passwd"}}')
 
 

@@ -28,7 +28,9 @@ def test_a_small_sweep_runs_from_the_page_and_one_motion_opens_in_the_player(ser
         methods = page.eval_on_selector_all("#motion-stats tr[data-method]", "rs => rs.map(r => r.dataset.method)")
         assert methods[-1] == "speaker" and "gesturelsm" in methods
         tips = page.eval_on_selector_all("#motion-stats th[data-key]", "hs => hs.map(h => h.title)")
-        assert len(tips) == 9 and all("Better:" in t for t in tips)
+        from gesturelsm.evaluation.motion_stats import STATISTICS
+
+        assert tips == [s.tooltip for s in STATISTICS] and all("Better:" in t for t in tips)
 
         page.get_by_role("tab", name="Sweep").click()
         page.locator("#sweep-speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))

@@ -130,10 +130,11 @@ def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service)
     from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(service)
-    deps = {d.get("api_name"): d for d in demo.get_config_file()["dependencies"]}
+    deps = {d.get("api_name"): d for d in demo.blocks.get_config_file()["dependencies"]}
     gen = deps["generate_motion"]["id"]
     assert deps["motion_stats"]["trigger_after"] == gen                  # right after the motions exist ...
     player = [d for d in deps.values() if d["trigger_after"] == gen and d.get("js") and "gesturelsmPlayer" in d["js"]]
     assert len(player) == 1                                              # ... beside the player's step, not before it
-    pools = {f.api_name: f.concurrency_id for f in (demo.fns.values() if isinstance(demo.fns, dict) else demo.fns)}
+    fns = demo.blocks.fns
+    pools = {f.api_name: f.concurrency_id for f in (fns.values() if isinstance(fns, dict) else fns)}
     assert pools["motion_stats"] == "stats" and pools["sweep"] == "generation"

@@ -36,7 +36,7 @@ def test_build_demo_has_the_controls(service):
     from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(service)
-    cfg = demo.get_config_file()
+    cfg = demo.blocks.get_config_file()
     labels = {c["props"].get("label") for c in cfg["components"]}
     for want in ("CFG scale", "Seed", "DDIM steps", "Smoothing", "Methods shown side by side"):
         assert want in labels
@@ -74,6 +74,7 @@ def _walk(node):
 
 
 def test_app_entry_flags_and_env(monkeypatch):
+    from gesturelsm.errors import CheckpointError
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.cli import build_parser, run_demo
 
@@ -85,7 +86,7 @@ def test_app_entry_flags_and_env(monkeypatch):
     monkeypatch.delenv("GRADIO_ANALYTICS_ENABLED", raising=False)
     monkeypatch.delenv("HF_HUB_DISABLE_TELEMETRY", raising=False)
     monkeypatch.setattr(GestureService, "from_settings", classmethod(lambda cls, s: (_ for _ in ()).throw(
-        ValueError("stopped by the test"))))
+        CheckpointError("stopped by the test"))))
     assert run_demo(args, "python -m app") == 2
     assert os.environ["GRADIO_ANALYTICS_ENABLED"] == "False" and os.environ["HF_HUB_DISABLE_TELEMETRY"] == "1"
 
