@@ -93,7 +93,7 @@ class EditHandlers:
         except GestureError as exc:
             self.h._refuse(exc)
         self.h._mark_newest(request, new)
-        return _resumed(motion_player.payload(self.h.service, new, character)), new.rows, new.summary, new, \
+        return _resumed(motion_player.payload(self.h.service, new, character)), new.table, new.summary, new, \
             gr.update(interactive=True)
 
     def undo(self, out, character=None, request: gr.Request = None):
@@ -103,7 +103,7 @@ class EditHandlers:
         prev = out.previous
         self.h._mark_newest(request, prev)
         files, glb = self.h._files(prev)
-        return (_resumed(motion_player.payload(self.h.service, prev, character)), prev.rows, prev.summary, prev,
+        return (_resumed(motion_player.payload(self.h.service, prev, character)), prev.table, prev.summary, prev,
                 str(prev.video) if prev.video else None, files or None, gr.update(interactive=prev.previous is not None))
 
 

@@ -40,6 +40,7 @@ def test_edit_downloads_and_undo_through_the_page_handlers(service, speech_wav):
     payload, rows, summary, new, undo = e.run(first, "ddim", 0.5, 1.5, ["upper", "face"], 4, request=page,
                                               progress=quiet)
     assert payload["resume"] and payload["compare"]["method"] == "ddim" and undo["interactive"]
+    assert rows == new.table and all(isinstance(r, list) for r in rows)      # the cells the page's table shows
     assert "**Edited:** DDIM: upper, face 0.50-1.50 s, seed 4" in summary and new.previous is first
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4    # the edit replaced it
     video, _, _, new = h.show_video(new, request=page, progress=quiet)
@@ -50,6 +51,7 @@ def test_edit_downloads_and_undo_through_the_page_handlers(service, speech_wav):
     assert not np.array_equal(new.motions["ddim"].expressions, first.motions["ddim"].expressions)
     back = e.undo(new, request=page)
     assert back[3] is first and "compare" not in back[0] and not back[-1]["interactive"]
+    assert back[1] == first.table
     assert back[4] is None and back[5] is None               # the first result was replaced before its video
     with pytest.raises(gr.Error, match="Nothing to undo"):
         e.undo(first, request=page)
