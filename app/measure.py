@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     from gradio_client import Client, handle_file
 
     # lazy: the service loads torch and the checkpoints, .ui imports gradio; only once the arguments are read
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
     from gesturelsm.webapp.ui import serve_locally

@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     # lazy: the service loads torch, .ui imports gradio; only once the arguments are read
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
     from gesturelsm.webapp.ui import EXAMPLES, serve_locally

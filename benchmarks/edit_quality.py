@@ -66,7 +66,7 @@ def key_figures(pipe, speech, motion, take, method: str, seed: int) -> list[tupl
     for src in KEY_FRAMES:
         key = keyframe(9.5, (take, src))
         spec = edit_spec({"upper": [(8.0, 11.0)], "hands": [(8.0, 11.0)]}, motion.num_frames, [key])
-        raw = pipe.backends[method].edit(speech, motion, spec, pipe.facts(method).default_steps, 2.0, seed)
+        raw = pipe.backends[method].edit(speech, motion, spec, pipe.spec(method).default_steps, 2.0, seed)
         held = merge_edit(motion, postprocess(splice(motion, raw.motion, raw.start, spec.regions), False, "light"),
                           spec)
         final = pipe.edit(motion, speech, {"upper": [(8.0, 11.0)], "hands": [(8.0, 11.0)]},

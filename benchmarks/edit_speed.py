@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/edit_speed.py [--checkpoints DIR ...] [--threads 2] [--rounds 5] [--seconds 60]
     .venv/bin/python benchmarks/edit_speed.py --page [--rounds 5]        # the page, in headless Chromium
 
-For every loaded method whose sampler can hold known latents (`facts.inpaints`), on one prepared speech (speech
+For every loaded method whose sampler can hold known latents (its spec's `inpainting`), on one prepared speech (speech
 features are computed once and counted in neither): `generate` of the whole take at the method's default steps,
 against `edit` of the upper body and hands over 2 s in its middle (encoding the take, sampling the windows that
 range touches, decoding around it, merging). Rounds alternate generate and edit, so load from other processes hits
@@ -67,7 +67,7 @@ def measure(pipe, speech, method: str, rounds: int) -> dict:
     from gesturelsm.flows import sampled_windows, window_layout
     from gesturelsm.motion.editing import edit_spec
 
-    steps = pipe.facts(method).default_steps
+    steps = pipe.spec(method).default_steps
     motion = pipe.generate(speech, steps=steps, method=method).motion
     mid = speech.duration / 2
     ask = {"upper": [(mid - EDIT_SECONDS / 2, mid + EDIT_SECONDS / 2)], "hands": [(mid - EDIT_SECONDS / 2,
@@ -149,7 +149,7 @@ def main() -> None:
     audio, source = load_speech(args.seconds)
     speech = pipe.prepare_speech(audio, 16000, transcribe=False)
     rows = []
-    for method in (m for m in pipe.methods if pipe.facts(m).inpaints):
+    for method in (m for m in pipe.methods if pipe.spec(m).inpainting):
         r = measure(pipe, speech, method, args.rounds)
         rows.append(f"| {method} | {r['steps']} | {r['generate']:.2f} | {r['edit']:.2f} | "
                     f"{r['generate'] / r['edit']:.1f}x | {r['windows'][0]} of {r['windows'][1]} |")

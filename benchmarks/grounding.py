@@ -161,7 +161,7 @@ def cpu_name() -> str:
 
 def generate(pipe, methods: list[str], seed: int) -> list[dict]:
     """Per recording and method: the light-smoothed motion before grounding and after."""
-    from gesturelsm.backends import FACTS
+    from gesturelsm.backends import SPECS
     from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING
 
     runs = []
@@ -169,7 +169,7 @@ def generate(pipe, methods: list[str], seed: int) -> list[dict]:
         speech = pipe.prepare_speech(audio, 16000, words=words)
         for m in methods:
             t0 = time.perf_counter()
-            res = pipe.generate(speech, steps=FACTS[m].default_steps, cfg=2.0, seed=seed, method=m)
+            res = pipe.generate(speech, steps=SPECS[m].default_steps, cfg=2.0, seed=seed, method=m)
             raw = res.motion.slice(0, speech.num_frames)
             before, _ = finish(raw, False, DEFAULT_SMOOTHING, False)
             after, note = finish(raw, False, DEFAULT_SMOOTHING, True)

@@ -101,7 +101,7 @@ def run(args) -> dict:
 
     from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.webapp.ui import serve_locally
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
     torch.set_num_threads(1)

@@ -185,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     from app.measure import speech
     from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.webapp.ui import serve_locally
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.asr.source import RECENT
 

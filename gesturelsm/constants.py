@@ -1,11 +1,17 @@
 """Conventions shared by the whole package, defined once: speech is 16 kHz mono, motion is 30 frames per second,
-progress is reported as (fraction, message); and where the shipped checkpoints and body model live."""
+progress is reported as (fraction, message), the longest speech accepted; and where the shipped checkpoints and body
+model live."""
 from pathlib import Path
 from typing import Callable
 
 SAMPLE_RATE = 16_000        # Hz: every audio array inside the package
 FPS = 30                    # motion frames per second (BEAT2's rate)
 Progress = Callable[[float, str], None]     # progress callbacks: (fraction done 0-1, what is being done)
+# Longest speech accepted by every entry point unless configured (the server's --max-seconds, the pipeline's
+# max_seconds, the commands' --max-seconds). The work of one request grows with its length (transcription, each
+# method's sampling, a video of every frame): 5 minutes bounds what one visitor holds on a shared server and still
+# covers a long answer or monologue; the commands and Python take the same limit and raise it when asked.
+MAX_SECONDS = 300.0
 
 
 def _shipped_assets() -> Path:

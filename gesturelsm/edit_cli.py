@@ -12,22 +12,25 @@ from __future__ import annotations
 import argparse
 import re
 import time
+from dataclasses import dataclass
+from pathlib import Path
 
 from .align.textgrid import read_words
 from .audio import load_audio
-from .backends import FACTS, checkpoint_sources
+from .backends import SPECS, checkpoint_sources
 from .body.model import resolve_body
 from .constants import SAMPLE_RATE
 from .errors import UserError
 from .export import export_bvh, export_glb
 from .export.rig import export_rig
-from .grounding.cli import add_grounding_flag, grounding_on
-from .motion.editing import keyframe
-from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
+from .motion.editing import edit_spec, fit_speech, keyframe
 from .motion.regions import GENERATED_REGIONS
 from .motion.sequence import MotionSequence
 from .pipeline import GesturePipeline
-from .retarget import load_character
+from .retarget import check_usable, load_character
+from .settings import DEFAULT_METHOD, Settings
+from .settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, output_file, refuse,
+                                 say)
 
 # REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
 # gets its own message (outside the speech, unknown region) rather than this syntax's
@@ -49,23 +52,50 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
-    g.add_argument("--method", default="gesturelsm", choices=list(FACTS),
+    g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="a method whose sampler can hold known latents: "
-                   + ", ".join(k for k, f in FACTS.items() if f.inpaints))
-    g.add_argument("--steps", type=int, help="sampling steps (default: the method's)")
-    g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
-    g.add_argument("--seed", type=int, default=0)
+                   + ", ".join(k for k, s in SPECS.items() if s.inpainting) + f" (default: {DEFAULT_METHOD})")
+    add_settings_flags(g, steps="one")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
-    g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
-                   help=f"post-processing of the regenerated motion (default {DEFAULT_SMOOTHING})")
-    g.add_argument("--stand-in-place", action="store_true", help="no horizontal root movement where regenerated")
-    add_grounding_flag(g)
-    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
+    add_post_flags(g)                  # applied to the regenerated motion; the kept motion is the input's
+    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible; .npz is added to a name without it)")
     g.add_argument("--bvh", help="also write the edited motion as BVH")
     g.add_argument("--glb", help="also write the edited motion as an animated GLB")
     g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
                    "character's suffix, the edited motion on it (docs/CHARACTERS.md)")
     g.set_defaults(func=run_edit)
+
+
+@dataclass(frozen=True)
+class Checked:
+    """The command's arguments after the checks."""
+    settings: Settings
+    regenerate: dict[str, list[tuple[float, float]]]
+    motion: Path
+    audio: Path
+    textgrid: Path | None
+    rig: Path | None
+    out: Path
+    bvh: Path | None
+    glb: Path | None
+
+
+def check_arguments(args: argparse.Namespace) -> Checked:
+    """Every argument, all problems at once (InputError), before anything is loaded."""
+    p: list[str] = []
+    settings = cli_settings(args, [args.method], p)
+    try:
+        regenerate = parse_regenerate(args.regenerate)
+    except UserError as exc:
+        p.append(str(exc))
+        regenerate = {}
+    files = [input_file(args.motion, "MOTION", p), input_file(args.audio, "AUDIO", p),
+             input_file(args.textgrid, "--textgrid", p) if args.textgrid else None,
+             input_file(args.rig, "--rig", p) if args.rig else None, output_file(args.out, "--out", ".npz", p),
+             output_file(args.bvh, "--bvh", ".bvh", p) if args.bvh else None,
+             output_file(args.glb, "--glb", ".glb", p) if args.glb else None]
+    refuse(p)
+    return Checked(settings, regenerate, *files)
 
 
 def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
@@ -108,25 +138,31 @@ def parse_keyframes(items: list[str], motion: MotionSequence) -> list:
 
 def run_edit(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    regenerate = parse_regenerate(args.regenerate)
-    rig = load_character(args.rig) if args.rig else None            # a bad file stops before the work
-    motion = MotionSequence.load(args.motion)
+    a = check_arguments(args)
+    rig = load_character(a.rig) if a.rig else None                  # a bad character stops before the work
+    if rig is not None:
+        check_usable(rig, draw=False)
+    motion = MotionSequence.load(a.motion)
     keys = parse_keyframes(args.keyframe, motion)
-    audio = load_audio(args.audio)
-    words = read_words(args.textgrid) if args.textgrid else None
+    edit_spec(a.regenerate, motion.num_frames, keys, SPECS[args.method].regions, args.method)   # before the models
+    audio = load_audio(a.audio)
+    fit_speech(audio, motion.num_frames)                             # the speech is the motion's (or nearly)
+    words = read_words(a.textgrid) if a.textgrid else None
+    say(0.0, f"loading the models ({args.method})")
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
-    res = pipe.edit(motion, audio, regenerate, keys, method=args.method, steps=args.steps, cfg=args.cfg,
-                    seed=args.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
-                    stand_in_place=args.stand_in_place, smoothing=args.smoothing, grounding=grounding_on(args))
-    path = res.motion.save(args.out)
-    done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=grounding_on(args)),
-                        args.bvh and export_bvh(res.motion, args.bvh, body=resolve_body(None)),
-                        args.glb and export_glb(res.motion, args.glb, body=resolve_body(None))) if p]
+    st = a.settings
+    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
+                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
+                    post=st.post, progress=say)
+    path = res.motion.save(a.out)
+    done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=st.post.grounding),
+                        a.bvh and export_bvh(res.motion, a.bvh, body=resolve_body(None)),
+                        a.glb and export_glb(res.motion, a.glb, body=resolve_body(None))) if p]
     for p in done:
         print(f"wrote {p}")
     for w in res.warnings:
         print(f"warning: {w}")
-    asked = "; ".join(f"{r} {', '.join(f'{a:g}-{b:g} s' for a, b in rr)}" for r, rr in regenerate.items())
+    asked = "; ".join(f"{r} {', '.join(f'{x:g}-{y:g} s' for x, y in rr)}" for r, rr in a.regenerate.items())
     print(f"{path}: {asked} regenerated with {args.method}, {res.steps} steps, CFG {res.cfg:g}, seed {res.seed}"
           f"{f', {len(keys)} keyframe(s)' if keys else ''}; {res.text_mode}")
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())

@@ -7,13 +7,12 @@ benchmarks and the tests all call this.
     ed = pipe.edit(res.motion, audio, {"upper": [(3.0, 6.0)]}, seed=1)   # regenerate the upper body over 3-6 s
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
-against the method's registered bounds and calls the backend's `generate`.
+against the method's spec with the one validator (`gesturelsm.settings`) and calls the backend's `generate`.
 """
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -23,32 +22,27 @@ import torch
 from .align import align_words
 from .asr.source import automatic_words
 from .audio import SAMPLE_RATE, resample, to_mono
-from .backends import (FACTS, MAX_CFG, Backend, BackendFacts, Bounds, FlowBackend, SpeechInput, backend_facts,
-                       flow_backends, load_backends)
+from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
+                       load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
-from .grounding import ground_motion
-from .motion.editing import KEY_SPACING, EditError, Keyframe, edit_spec, keyframe
-from .motion.merge import merge_edit, pin_pose, splice
-from .motion.postprocess import DEFAULT_SMOOTHING, check_smoothing, fit_length, postprocess
-from .motion.regions import REGIONS
+from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
+from .motion.merge import apply_edit, splice
+from .motion.postprocess import check_smoothing, fit_length
 from .motion.sequence import FPS, MotionSequence
-from .presentation import label
+from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, PostProcess, Settings, check_method_settings
 from .tokenizer.model import RVQVAE
 
-MIN_SECONDS = 0.5
-EDIT_LENGTH_SLACK = 1.0                # seconds the speech of an edit may differ from the motion (cut or padded)
-GROUND_TRUTH = "ground_truth"          # a "method" of a plan: the BEAT2 take's own motion
-NOT_GENERATION = ("alignment", "transcription", "rendering")   # stages a generation time leaves out
+NOT_GENERATION = ("alignment", "transcription", "rendering")    # stages outside generation time (the paper's AITS)
 
 
 def generation_seconds(timings: Mapping[str, float]) -> float:
-    """Inference time from per-stage seconds, without transcript alignment or recognition (the paper's AITS
-    convention) and without rendering."""
+    """Generation time from per-stage seconds: features, sampling and decoding, without transcript alignment or
+    recognition (the paper's AITS convention) and without rendering."""
     return sum(v for k, v in timings.items() if k not in NOT_GENERATION)
 
 
@@ -65,33 +59,43 @@ class GenerationResult:
 
     @property
     def generation_seconds(self) -> float:
-        """Inference time (`generation_seconds` of the timings)."""
+        """Inference time without transcript alignment or recognition (the paper's AITS convention)."""
         return generation_seconds(self.timings)
 
     @property
+    def speech_seconds(self) -> float:
+        """Every stage this speech needed: generation plus alignment or recognition of the words."""
+        return sum(self.timings.values())
+
+    @property
     def real_time_factor(self) -> float:
+        """Seconds of speech per second of generation (the paper's convention)."""
         return self.motion.duration / max(self.generation_seconds, 1e-9)
 
+    @property
+    def end_to_end_real_time_factor(self) -> float:
+        """Seconds of speech per second of everything done for it, transcription included."""
+        return self.motion.duration / max(self.speech_seconds, 1e-9)
 
-@dataclass
+
+@dataclass(frozen=True)
 class Plan:
-    """What to make from one prepared speech: which methods, with which settings, post-processed how."""
-    methods: Sequence[str]                     # generator keys and/or GROUND_TRUTH, in the order shown
-    steps: Mapping[str, int] = field(default_factory=dict)   # per method; missing: the method's default_steps
-    cfg: float = 2.0
-    seed: int = 0
-    stand_in_place: bool = False
-    smoothing: str = DEFAULT_SMOOTHING         # motion.postprocess.SMOOTHING_WINDOWS
+    """What to make from one prepared speech: the settings (methods, steps, CFG, seed, post-processing) and where
+    the ground truth of a known take is looked up."""
+    settings: Settings = DEFAULTS
     beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
     filename: str | None = None                # the speech file's name (a take is recognised by it first)
-    grounding: bool = True                     # feet on the ground (gesturelsm.grounding), after smoothing
 
-    def steps_for(self, method: str) -> int:
-        return int(self.steps.get(method, backend_facts(method).default_steps))
+    @property
+    def methods(self) -> tuple[str, ...]:
+        return self.settings.methods
 
     @property
     def generators(self) -> list[str]:
-        return [m for m in dict.fromkeys(self.methods) if m != GROUND_TRUTH]
+        return self.settings.generators
+
+    def steps_for(self, method: str) -> int:
+        return self.settings.steps_for(method)
 
 
 @dataclass
@@ -105,26 +109,21 @@ class Generated:
 
 def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
            body=None) -> tuple[MotionSequence, str | None]:
-    """The post-processing every method and ground truth get: stand in place, then smoothing (motion/postprocess.py),
-    then feet on the ground (gesturelsm.grounding, on `body`). With stand in place and grounding both on, the root
-    stays on the spot horizontally and the legs plant the feet under it. Returns the motion and, when grounding had
-    to leave it as it was, why (one sentence)."""
-    seq = postprocess(seq, stand_in_place, smoothing)
-    if not grounding:
-        return seq, None
-    res = ground_motion(seq, body)
-    return res.motion, res.warning
+    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
+    ground on `body`), and why grounding had to leave it as it was, when it had to."""
+    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 class GesturePipeline:
-    def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu", max_seconds: float = 600.0):
+    def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu",
+                 max_seconds: float = MAX_SECONDS):
         self.backends = dict(backends)          # method -> backend (gesturelsm.backends), in registry order
         self.device = torch.device(device)
         self.max_seconds = max_seconds
 
     @classmethod
     def from_pretrained(cls, path: str | Path | None = None, device: str = "cpu", methods: list[str] | None = None,
-                        max_seconds: float = 600.0, warm_up: bool = True,
+                        max_seconds: float = MAX_SECONDS, warm_up: bool = True,
                         checkpoints: list[str | Path] | None = None) -> "GesturePipeline":
         """Every method with a checkpoint in `path`, a folder with tokenizer/<region>.safetensors and
         generator/<method>.safetensors and/or the authors' reference_*.safetensors (default: the shipped assets/),
@@ -141,7 +140,7 @@ class GesturePipeline:
 
     @classmethod
     def from_models(cls, tokenizers: dict[str, RVQVAE], generators: dict[str, GestureGenerator],
-                    device: str | torch.device = "cpu", max_seconds: float = 600.0) -> "GesturePipeline":
+                    device: str | torch.device = "cpu", max_seconds: float = MAX_SECONDS) -> "GesturePipeline":
         """A pipeline of our methods from models in memory ({method: generator} sharing `tokenizers`)."""
         return cls(flow_backends(tokenizers, generators), device, max_seconds)
 
@@ -155,12 +154,16 @@ class GesturePipeline:
     def methods(self) -> list[str]:
         return list(self.backends)
 
-    def facts(self, method: str) -> BackendFacts:
-        return self._backend(method).facts
+    def spec(self, method: str) -> MethodSpec:
+        return self._backend(method).spec
 
     def bounds(self, method: str) -> Bounds:
-        """The steps and CFG scales `method` accepts (its registered facts)."""
-        return self.facts(method).bounds
+        """The steps and CFG scales `method` accepts (its spec)."""
+        return self.spec(method).bounds
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(self.max_seconds)
 
     @property
     def generators(self) -> dict[str, GestureGenerator]:
@@ -190,8 +193,8 @@ class GesturePipeline:
         if dur < MIN_SECONDS:
             raise InputError(f"the audio is {dur:.2f} s long; at least {MIN_SECONDS} s of speech is needed")
         if dur > self.max_seconds:
-            raise InputError(f"the audio is {dur / 60:.1f} minutes long; the limit is {self.max_seconds / 60:.0f} "
-                             "minutes (a setting: max_seconds)")
+            raise InputError(f"the audio is {dur:.0f} s long; the limit is {self.max_seconds:g} s (a setting: "
+                             "max_seconds)")
         if np.abs(y).max() < 1e-4:
             raise InputError("the audio is silent: there is no speech to gesture to")
         T = int(len(y) * FPS // SAMPLE_RATE)
@@ -218,6 +221,8 @@ class GesturePipeline:
             progress(0.1, "audio features")
         mode, transcript = "audio-only (no transcript given)", None
         if text and text.strip():
+            if progress:
+                progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()
             res = align_words(y, text)
             timings["alignment"] = time.perf_counter() - t1
@@ -230,6 +235,8 @@ class GesturePipeline:
         elif words is not None:
             mode = "transcript with given word timings"
         elif transcribe:
+            if progress:
+                progress(0.1, "recognising the words (automatic transcription)")
             t1 = time.perf_counter()
             auto = automatic_words(y)
             timings["transcription"] = time.perf_counter() - t1
@@ -254,20 +261,14 @@ class GesturePipeline:
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
-        """The one place settings are checked: the method is loaded, steps and CFG scale within the method's
-        registered bounds (`bounds`)."""
-        b = self.bounds(method)
-        if not isinstance(steps, (int, np.integer)) or not b.min_steps <= steps <= b.max_steps:
-            raise InputError(f"The number of steps must be a whole number from {b.min_steps} to {b.max_steps} for "
-                             f"{method} (got {steps})")
-        if not np.isfinite(cfg) or not b.min_cfg <= cfg <= b.max_cfg:
-            raise InputError(f"CFG scale must be between {b.min_cfg:g} and {b.max_cfg:g} (got {cfg})")
+        """The method is loaded, its steps and CFG scale within its spec's bounds (the settings' validator)."""
+        check_method_settings(self.spec(method), steps, cfg)
 
     def check_plan(self, plan: Plan) -> None:
         """All of a plan's settings, before any work is done."""
         for m in plan.generators:
-            self.check_settings(m, plan.steps_for(m), plan.cfg)
-        check_smoothing(plan.smoothing)
+            self.check_settings(m, plan.steps_for(m), plan.settings.cfg)
+        check_smoothing(plan.settings.post.smoothing)
 
     def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
                      body=None) -> Generated:
@@ -283,8 +284,8 @@ class GesturePipeline:
         for i, m in enumerate(gens):
             lo, hi = i / max(1, len(gens)), (i + 1) / max(1, len(gens))
             prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
-            res = self.generate(speech, steps=plan.steps_for(m), cfg=float(plan.cfg), seed=int(plan.seed), method=m,
-                                progress=prog)
+            res = self.generate(speech, steps=plan.steps_for(m), cfg=plan.settings.cfg, seed=plan.settings.seed,
+                                method=m, progress=prog)
             results[m], motions[m] = res, res.motion
             warnings += [w for w in res.warnings if w not in warnings]   # e.g. the authors' models: face neutral
         gt_name = None
@@ -296,16 +297,19 @@ class GesturePipeline:
             else:
                 motions[GROUND_TRUTH] = fit_length(take_motion(plan.beat2, gt_name), T)
         for k, v in motions.items():
-            motions[k], note = finish(v.slice(0, T), plan.stand_in_place, plan.smoothing, plan.grounding, body)
+            motions[k], note = plan.settings.post.apply(v.slice(0, T), body)
             if note:
                 warnings.append(f"{label(k)}: {note}")
         return Generated(motions, results, gt_name, warnings)
 
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
-                 text: str | None = None, steps: int = 8, cfg: float = 2.0, seed: int = 0,
-                 method: str = "gesturelsm", progress: Progress | None = None,
-                 transcribe: bool = True) -> GenerationResult:
+                 text: str | None = None, steps: int | None = None, cfg: float = DEFAULTS.cfg,
+                 seed: int = DEFAULTS.seed, method: str = DEFAULTS.methods[0], progress: Progress | None = None,
+                 transcribe: bool = DEFAULTS.transcribe) -> GenerationResult:
+        """One method's motion for the speech (audio, or speech prepared once by `prepare_speech`); `steps` None:
+        the method's spec default."""
+        steps = self.spec(method).default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe)
@@ -319,74 +323,58 @@ class GesturePipeline:
     # ---- editing -----------------------------------------------------------------------------------------
     @torch.no_grad()
     def edit(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, regenerate: Mapping[str, Sequence],
-             keyframes: Sequence = (), method: str = "gesturelsm", steps: int | None = None, cfg: float = 2.0,
-             seed: int = 0, sr: int = SAMPLE_RATE, words: list | None = None, text: str | None = None,
-             transcribe: bool = True, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-             grounding: bool = True, body=None, progress: Progress | None = None) -> GenerationResult:
+             keyframes: Sequence = (), method: str = DEFAULTS.methods[0], steps: int | None = None,
+             cfg: float = DEFAULTS.cfg, seed: int = DEFAULTS.seed, sr: int = SAMPLE_RATE, words: list | None = None,
+             text: str | None = None, transcribe: bool = DEFAULTS.transcribe, post: PostProcess = DEFAULTS.post,
+             body=None, progress: Progress | None = None) -> GenerationResult:
         """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
         speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
         motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
         for bit wherever nothing is regenerated; inside a range an edited region crosses over from the input's
-        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed as a
-        generation is (`finish`: stand in place, smoothing, feet on the ground on `body`; grounding only when the
-        lower body is regenerated, the only region it changes) before it is merged: the input is a finished motion
-        and is not processed again. Only methods whose sampler can hold known latents (`facts(method).inpaints`)
-        can edit."""
-        facts = self._backend(method).facts
-        if not facts.inpaints:
-            able = [m for m in self.methods if self.facts(m).inpaints]
+        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed by `post` as
+        a generation is (stand in place, smoothing, feet on the ground on `body`; grounding only when the lower body
+        is regenerated, the only region it changes) before it is merged: the input is a finished motion and is not
+        processed again. Only methods whose spec says `inpainting` can edit."""
+        spec = self.spec(method)
+        if not spec.inpainting:
+            able = [m for m in self.methods if self.spec(m).inpainting]
             raise EditError(f"{method} cannot edit a motion: its sampler cannot hold known latents; methods that "
                             f"can: {', '.join(able) or 'none is loaded'}")
         if motion.fps != FPS:
             raise EditError(f"the motion is at {motion.fps} fps; an edit needs a {FPS} fps motion (as generate "
                             "writes and BEAT2 has)")
-        steps = facts.default_steps if steps is None else steps
+        steps = spec.default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
-        check_smoothing(smoothing)
+        check_smoothing(post.smoothing)
         keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
-        spec = edit_spec(regenerate, motion.num_frames, keys, facts.regions, method)
+        ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
         speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        out = self.backends[method].edit(speech, motion, spec, steps, cfg, seed, prog)
+        out = self.backends[method].edit(speech, motion, ask, steps, cfg, seed, prog)
         t0 = time.perf_counter()
-        gen, note = finish(splice(motion, out.motion, out.start, spec.regions), stand_in_place, smoothing,
-                           grounding and "lower" in spec.regions, body)
-        merged = merge_edit(motion, gen, spec)
-        for k in spec.keyframes:
-            joints = tuple(j for r in spec.pinned(k) for j in REGIONS[r].joints)
-            merged = pin_pose(merged, k.frame, k.pose, joints, KEY_SPACING)
-        timings = {**speech.timings, **out.timings, "merging": time.perf_counter() - t0}
+        gen, note = replace(post, grounding=post.grounding and "lower" in ask.regions).apply(
+            splice(motion, out.motion, out.start, ask.regions), body)
+        merged = apply_edit(motion, gen, ask)
         if progress:
-            progress(1.0, f"{method}: edited {spec.describe()}")
-        return GenerationResult(merged, method, int(steps), float(cfg), int(seed), timings, speech.text_mode,
-                                warnings + out.warnings + ([note] if note else []))
+            progress(1.0, f"{method}: edited {ask.describe()}")
+        return GenerationResult(merged, method, int(steps), float(cfg), int(seed),
+                                {**speech.timings, **out.timings, "merging": time.perf_counter() - t0},
+                                speech.text_mode, warnings + out.warnings + ([note] if note else []))
 
     def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
                      text: str | None, transcribe: bool, progress: Progress | None) -> tuple[SpeechInput, list[str]]:
         """The speech of an edit, exactly as long as the motion: given prepared, it must be; given as samples, it
-        is cut or padded with silence when it differs by up to EDIT_LENGTH_SLACK seconds (said in a warning)."""
-        T = motion.num_frames
-        mismatch = ("the motion is {:.2f} s long but the speech {:.2f} s: give the speech the motion was made from "
-                    f"(they may differ by up to {EDIT_LENGTH_SLACK:g} s)")
+        is cut or padded with silence when it differs by a little (motion.editing.fit_speech)."""
         if isinstance(speech, SpeechInput):
-            if speech.num_frames != T:
-                raise EditError(mismatch.format(T / FPS, speech.duration))
+            if speech.num_frames != motion.num_frames:
+                raise EditError(length_mismatch(motion.num_frames, speech.duration))
             return speech, list(speech.warnings)
         if sr <= 0:
             raise InputError(f"invalid sample rate {sr}")
-        y = resample(to_mono(speech), int(sr), SAMPLE_RATE)
-        n = math.ceil(T * SAMPLE_RATE / FPS)                       # samples of exactly T frames
-        gap = (len(y) - n) / SAMPLE_RATE
-        if abs(gap) > EDIT_LENGTH_SLACK:
-            raise EditError(mismatch.format(T / FPS, len(y) / SAMPLE_RATE))
-        warnings = []
-        if abs(gap) >= 1 / FPS:
-            warnings.append(f"the speech is {abs(gap):.2f} s {'longer' if gap > 0 else 'shorter'} than the motion: "
-                            f"{'its end is left out' if gap > 0 else 'silence is added at its end'}")
-        y = np.pad(y[:n], (0, max(0, n - len(y))))
+        y, warnings = fit_speech(resample(to_mono(speech), int(sr), SAMPLE_RATE), motion.num_frames)
         prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe)
         return prepared, warnings + prepared.warnings
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "FACTS", "GROUND_TRUTH", "MAX_CFG", "finish", "generation_seconds"]
+           "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

@@ -1,18 +1,26 @@
-"""`gesturelsm generate` (speech -> motion npz): the command line of the pipeline (pipeline.py), one floor above it."""
+"""`gesturelsm generate` (speech -> motion npz): the command line of the pipeline (pipeline.py), one floor above it.
+
+Every argument is checked before any work (the settings' validator, `gesturelsm.settings`); while it works it says
+what it does on stderr (reading, transcribing, each window), shows the words it recognised, and reports the time
+both ways: generation only (the paper's AITS convention) and end to end.
+"""
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import dataclass
+from pathlib import Path
 
 from .align.textgrid import read_words
 from .audio import load_audio
+from .backends import SPECS, checkpoint_sources
 from .constants import SAMPLE_RATE
-from .motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
-from .backends import FACTS, checkpoint_sources
 from .export.rig import export_rig
-from .grounding.cli import add_grounding_flag, grounding_on
-from .pipeline import GesturePipeline, finish
+from .pipeline import GenerationResult, GesturePipeline
 from .retarget import check_usable, load_character
+from .settings import DEFAULT_METHOD, Settings
+from .settings.arguments import (add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
+                                 output_file, positive, refuse, say)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -23,43 +31,81 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true",
                      help="audio-only: do not transcribe the speech when neither --text nor --textgrid is given")
-    g.add_argument("--steps", type=int, help="sampling steps (default 8; DDIM 20)")
-    g.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
-    g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--method", default="gesturelsm", choices=list(FACTS),
+    add_settings_flags(g, steps="one")
+    g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
-    g.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
-                   help=f"post-processing (motion/postprocess.py); 'off' writes the raw model output (default {DEFAULT_SMOOTHING})")
-    g.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
-    add_grounding_flag(g)
-    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible)")
+    add_post_flags(g)
+    add_max_seconds_flag(g)
+    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible; .npz is added to a name without it)")
     g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
                    "character's suffix, the motion on it (docs/CHARACTERS.md)")
     g.set_defaults(func=run_generate)
 
 
+@dataclass(frozen=True)
+class Checked:
+    """The command's arguments after the checks."""
+    settings: Settings
+    audio: Path
+    textgrid: Path | None
+    rig: Path | None
+    out: Path
+    max_seconds: float
+
+
+def check_arguments(args: argparse.Namespace) -> Checked:
+    """Every argument, all problems at once (InputError), before anything is loaded."""
+    p: list[str] = []
+    settings = cli_settings(args, [args.method], p)
+    max_seconds = positive(args.max_seconds, "--max-seconds", p)
+    audio = input_file(args.audio, "AUDIO", p)
+    textgrid = input_file(args.textgrid, "--textgrid", p) if args.textgrid else None
+    rig = input_file(args.rig, "--rig", p) if args.rig else None
+    out = output_file(args.out, "--out", ".npz", p)
+    refuse(p)
+    return Checked(settings, audio, textgrid, rig, out, max_seconds)
+
+
 def run_generate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    rig = load_character(args.rig) if getattr(args, "rig", None) else None     # a bad file stops before the work
+    a = check_arguments(args)
+    rig = load_character(a.rig) if a.rig else None               # a bad character stops before the work
     if rig is not None:
         check_usable(rig, draw=False)
-    audio = load_audio(args.audio)
-    words = None
-    if args.textgrid:
-        words = read_words(args.textgrid)
-    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
-    steps = args.steps or FACTS[args.method].default_steps
-    res = pipe.generate(audio, SAMPLE_RATE, words=words, text=args.text, steps=steps, cfg=args.cfg, seed=args.seed,
-                        method=args.method, transcribe=not args.no_transcribe)
-    motion, note = finish(res.motion, args.stand_in_place, args.smoothing, grounding_on(args))
-    path = motion.save(args.out)
+    words = read_words(a.textgrid) if a.textgrid else None
+    say(0.0, f"loading the models ({args.method})")
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
+                                           max_seconds=a.max_seconds)
+    t1 = time.perf_counter()
+    audio = load_audio(a.audio, max_seconds=a.max_seconds)
+    say(0.05, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
+    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, progress=say,
+                                 transcribe=a.settings.transcribe)
+    if speech.transcript:
+        print(f'recognised: "{speech.transcript}"', flush=True)
+    res = pipe.generate(speech, steps=a.settings.steps_for(args.method), cfg=a.settings.cfg, seed=a.settings.seed,
+                        method=args.method, progress=say)
+    motion, note = a.settings.post.apply(res.motion)
+    path = motion.save(a.out)
+    end_to_end = time.perf_counter() - t1
     if rig is not None:
-        print(f"wrote {export_rig(motion, rig, path, grounding=grounding_on(args))}")
+        print(f"wrote {export_rig(motion, rig, path, grounding=a.settings.post.grounding)}")
     for w in res.warnings + ([note] if note else []):
         print(f"warning: {w}")
-    stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
-    print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {args.method}, {steps} steps, "
-          f"CFG {args.cfg}, seed {args.seed}, smoothing {args.smoothing}, grounding {args.grounding}; {res.text_mode}")
-    print(f"timings: {stages}; real-time factor {res.real_time_factor:.1f}x; total {time.perf_counter() - t0:.1f}s")
+    report(res, a.settings, path, end_to_end, t1 - t0, time.perf_counter() - t0)
     return 0
+
+
+def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: float, loading: float,
+           total: float) -> None:
+    post = settings.post
+    print(f"{path}: {res.motion.num_frames} frames ({res.motion.duration:.1f} s) with {res.method}, {res.steps} steps, "
+          f"CFG {res.cfg:g}, seed {res.seed}, smoothing {post.smoothing}"
+          f"{', standing in place' if post.stand_in_place else ''}, grounding {'on' if post.grounding else 'off'}; "
+          f"{res.text_mode}")
+    print("timings: " + ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items()))
+    print(f"real-time factor {res.real_time_factor:.1f}x for generation (features, sampling, decoding: the paper's "
+          f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.2f} s: "
+          f"reading the speech, its words, generation, post-processing, writing); loading the models {loading:.1f} s; "
+          f"total {total:.1f} s")

@@ -124,7 +124,7 @@ def shipped_service(workdir):
     import pytest
 
     from gesturelsm.constants import ASSETS
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.player.component import BUNDLE
 

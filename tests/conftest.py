@@ -167,7 +167,7 @@ def beat2_dir(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def service(tiny_assets, beat2_dir, tmp_path_factory):
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
     settings = ServiceSettings(checkpoints=str(tiny_assets), beat2=str(beat2_dir), max_seconds=20,

@@ -15,7 +15,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors"},                                   # conventions, the error family
-    {"safe_load", "presentation"},                             # safe loading, methods' labels and colours
+    {"safe_load"},                                             # safe loading
     {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
                                                                # it), files, the methods, fast CPU kernels
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
@@ -26,11 +26,13 @@ FLOORS: list[set[str]] = [
     {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)
     {"generator", "export", "reference"},                      # the denoisers (ours; the authors', reference/);
                                                                # BVH / GLB / keypoints (render's camera)
-    {"backends"},                                              # every method (ours, the authors') behind one call
+    {"backends"},                                              # every method (ours, the authors') behind one call,
+                                                               # each described once (its spec)
+    {"settings"},                                              # one generation's settings, defaults, validator
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"serve", "study", "evaluation", "pipeline_cli", "edit_cli",  # what uses the pipeline (serve: one web request,
-     "live"},                                                  # its checks and files; live: streaming; the generate
-                                                               # and edit commands)
+    {"study", "evaluation", "pipeline_cli", "edit_cli", "live"},  # what uses the pipeline (live: streaming; the
+                                                               # generate and edit commands)
+    {"serve"},                                                 # one web request: checks, files, its sweep, edits
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

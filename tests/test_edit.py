@@ -12,6 +12,7 @@ from gesturelsm.errors import InputError
 from gesturelsm.motion.editing import EditError
 from gesturelsm.motion.merge import joint_angles
 from gesturelsm.motion.regions import REGIONS
+from gesturelsm.settings import PostProcess
 from _support import speech_like
 
 SECONDS = 8.0
@@ -117,11 +118,11 @@ def test_the_speech_may_differ_from_the_motion_by_a_second_at_most(tiny_pipeline
 @pytest.mark.parametrize("kwargs, message", [
     (dict(regenerate={"upper": [(7.0, 9.0)]}), "lies outside the speech (0-8.00 s)"),
     (dict(regenerate={"torso": [(1.0, 2.0)]}), "unknown region 'torso'"),
-    (dict(regenerate={"upper": [(1.0, 2.0)]}, steps=0), "The number of steps must be a whole number"),
+    (dict(regenerate={"upper": [(1.0, 2.0)]}, steps=0), "Steps for GestureLSM must be from 1 to 128 (got 0)"),
     (dict(regenerate={"upper": [(1.0, 2.0)]}, method="nope"), "unknown method 'nope'"),
     (dict(regenerate={"upper": [(1.0, 2.0)]}, keyframes=[(1.8, np.zeros(165))]), "needs the upper body"),
     (dict(regenerate={"upper": [(1.0, 3.0)]}, keyframes=[(2.0, "missing.npz:3")]), "missing.npz: file not found"),
-    (dict(regenerate={"upper": [(1.0, 2.0)]}, smoothing="lots"), "Smoothing must be one of"),
+    (dict(regenerate={"upper": [(1.0, 2.0)]}, post=PostProcess(smoothing="lots")), "Smoothing must be one of"),
 ])
 def test_bad_edits_are_one_clear_message(tiny_pipeline, take, kwargs, message):
     speech, motion = take
@@ -131,11 +132,13 @@ def test_bad_edits_are_one_clear_message(tiny_pipeline, take, kwargs, message):
 
 
 def test_a_regenerated_lower_body_is_grounded_as_a_generation_is(tiny_pipeline, take):
-    """pipeline.finish runs on the regenerated motion (feet on the ground when the lower body is regenerated); what
+    """The post-processing runs on the regenerated motion (feet on the ground when the lower body is regenerated); what
     is kept stays the input's either way."""
     speech, motion = take
-    on = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3, grounding=True).motion
-    off = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3, grounding=False).motion
+    on = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3,
+                            post=PostProcess(grounding=True)).motion
+    off = tiny_pipeline.edit(motion, speech, {"lower": [(2.0, 6.0)]}, steps=2, seed=3,
+                             post=PostProcess(grounding=False)).motion
     for out in (on, off):
         assert np.array_equal(out.trans[:60], motion.trans[:60]) and np.array_equal(out.trans[180:], motion.trans[180:])
         assert np.array_equal(_joints(out, "upper"), _joints(motion, "upper"))

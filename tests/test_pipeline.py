@@ -79,7 +79,8 @@ def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
 
 
 @pytest.mark.parametrize("kwargs,msg", [
-    (dict(steps=0), "steps must be"), (dict(steps=500), "steps must be"), (dict(cfg=-1.0), "CFG scale"),
+    (dict(steps=0), "Steps for GestureLSM must be"), (dict(steps=500), "Steps for GestureLSM must be"),
+    (dict(cfg=-1.0), "CFG scale"),
     (dict(cfg=float("nan")), "CFG scale"), (dict(method="magic"), "unknown method"),
 ])
 def test_absurd_settings_are_refused_with_a_message(tiny_pipeline, kwargs, msg):

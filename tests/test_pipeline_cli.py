@@ -3,6 +3,7 @@ character file stops the command with one line before any generation."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import soundfile as sf
 from scipy.spatial.transform import Rotation
 
@@ -40,6 +41,73 @@ def test_generate_refuses_a_bad_character_before_generating(tmp_path, capsys):
                  str(tmp_path / "me.vrm")]) == 2
     assert "me.vrm: not a glTF / VRM file" in capsys.readouterr().err
     assert not (tmp_path / "t.npz").exists()
+
+
+@pytest.fixture
+def hears_hello(monkeypatch):
+    """Automatic transcription that hears "hello there" in any speech."""
+    from types import SimpleNamespace
+
+    import gesturelsm.pipeline as pipeline
+    from gesturelsm.align import Word
+    from gesturelsm.asr.source import AutomaticWords
+
+    def hear(audio, remember=True):
+        return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
+                              "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
+    monkeypatch.setattr(pipeline, "automatic_words", hear)
+
+
+def test_generate_says_what_it_does_and_shows_the_recognised_words(tiny_assets, tmp_path, capsys, hears_hello):
+    sf.write(tmp_path / "s.wav", speech_like(2.0, seed=2), 16000)
+    assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                 "--out", str(tmp_path / "take.npz")]) == 0
+    out, err = capsys.readouterr()
+    assert 'recognised: "hello there"' in out
+    said = [line.split("] ", 1)[1] for line in err.splitlines() if line.startswith("[")]
+    assert said.index("recognising the words (automatic transcription)") < said.index("speech transcribed")
+    assert any(s.startswith("gesturelsm: window 1/") for s in said) and said[-1] == "gesturelsm: done"
+
+
+def test_generate_reports_the_real_time_factor_with_and_without_transcription(tiny_assets, tmp_path, capsys,
+                                                                              hears_hello):
+    """The paper's convention (generation only) and end to end (the words recognised, reading, writing), both."""
+    import re
+
+    sf.write(tmp_path / "s.wav", speech_like(3.0, seed=2), 16000)
+    assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                 "--out", str(tmp_path / "take.npz")]) == 0
+    out = capsys.readouterr().out
+    stages = {k: float(v) for k, v in re.findall(r"(\w+) (\d+\.\d+)s", out.split("\ntimings: ")[1].splitlines()[0])}
+    assert set(stages) == {"features", "transcription", "sampling", "decoding"}
+    m = re.search(r"real-time factor ([\d.]+)x for generation \(.*?\), ([\d.]+)x end to end \(([\d.]+) s", out)
+    gen, whole, seconds = map(float, m.groups())
+    assert gen == pytest.approx(3.0 / (stages["features"] + stages["sampling"] + stages["decoding"]), rel=0.1, abs=0.1)
+    assert seconds >= sum(stages.values()) - 0.05                             # transcription counted end to end
+    assert whole == pytest.approx(3.0 / seconds, rel=0.1, abs=0.1)
+
+
+def test_generate_out_without_npz_reports_the_file_it_wrote(tiny_assets, tmp_path, capsys):
+    sf.write(tmp_path / "s.wav", speech_like(1.0, seed=2), 16000)
+    assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                 "--no-transcribe", "--out", str(tmp_path / "take")]) == 0
+    out = capsys.readouterr().out
+    assert f"{tmp_path / 'take.npz'}: 30 frames" in out and (tmp_path / "take.npz").is_file()
+    assert not (tmp_path / "take").exists()
+
+
+def test_a_transcript_far_too_short_for_the_speech_is_warned_about(tiny_assets, tmp_path, capsys):
+    from _asr_support import ENGLISH, speak
+    from gesturelsm.align import tts
+
+    if not tts.available():
+        pytest.skip("eSpeak NG is not installed")
+    sf.write(tmp_path / "s.wav", speak(ENGLISH, "en-us"), 16000)
+    for text, warned in ((" ".join(ENGLISH.split()[:2]), True), (ENGLISH, False)):
+        assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",
+                     "--text", text, "--out", str(tmp_path / "take.npz")]) == 0
+        out = capsys.readouterr().out
+        assert ("warning: The transcript looks far too short for the speech: its 2 words" in out) is warned, out
 
 
 def test_generate_with_rig_follows_grounding(tiny_assets, tmp_path):

@@ -44,6 +44,9 @@ class AlignConfig:
     min_confidence: float = 0.2
     max_speed: float = 3.5         # fall back when the transcript would need this x eSpeak's tempo
     warn_speed: float = 2.0        # warn (but align) above this
+    warn_short: float = 0.3        # warn (but align) below this: the words fill under 30 % of the voiced speech at a
+                                   # normal tempo (the BEAT2 takes' own transcripts measure 0.68-1.06, half of them
+                                   # 0.34-0.52)
     min_word_s: float = 0.02       # onsets are at least this far apart where the audio allows
 
     @classmethod
@@ -88,12 +91,15 @@ def align_words(audio: np.ndarray, text: str, config: AlignConfig = DEFAULT) -> 
     except ValueError as exc:  # no warping path (only without skip_cost); say so rather than fail
         return _even(tokens, act, duration, f"Alignment failed ({exc}): words spread over the speech by length.")
     if conf < config.min_confidence:
-        return _even(tokens, act, duration, f"Low alignment confidence ({conf:.2f}): does the transcript match "
-                     "the audio? Words spread over the speech by length instead.", conf)
+        why = short_transcript_warning(len(tokens), speed) + " " if speed < config.warn_short else \
+            f"Low alignment confidence ({conf:.2f}): does the transcript match the audio? "
+        return _even(tokens, act, duration, why + "Words spread over the speech by length instead.", conf)
     warning = None
     if speed > config.warn_speed:
         warning = (f"The transcript looks longer than the speech ({speed:.1f}x a normal tempo): words that are "
                    "not spoken get squeezed between their neighbours.")
+    elif speed < config.warn_short:
+        warning = short_transcript_warning(len(tokens), speed)
     return AlignmentResult(_intervals(tokens, onsets, act, duration, config.min_word_s), conf, "dtw", warning,
                            {"speed": speed, "voices": [s.voice for s in syntheses]})
 
@@ -202,6 +208,12 @@ def _speech_end_after(starts: np.ndarray, act: Activity, min_pause_s: float = EN
     voiced = flip_short_runs(act.voiced, False, round(min_pause_s * FRAME_RATE))
     ends = frame_time(np.array([e for _, e in Activity(voiced, act.floor_db, act.speech_db).segments()]))
     return ends[np.clip(np.searchsorted(ends, starts, side="right"), 0, len(ends) - 1)]
+
+
+def short_transcript_warning(words: int, speed: float) -> str:
+    return (f"The transcript looks far too short for the speech: its {words} words would fill about {speed:.0%} of "
+            "it at a normal tempo, so the speech they do not name gets no words. Give the whole transcript, or leave "
+            "it empty to have the speech transcribed.")
 
 
 def _even(tokens: list[Token], act: Activity | None, duration: float, warning: str,

@@ -1,42 +1,81 @@
 """Every method the pipeline can run, ours and the authors', as a backend in one registry.
 
-`BACKENDS` maps each method's key to its registry line: the method's facts (`base.BackendFacts`: default and
-maximum steps, CFG bound, what it predicts, whether it takes a step size, which regions it generates, whether it
-can hold known latents to edit a motion) and how
-its checkpoint is found and loaded. `load_backends` builds the backends found in a list of checkpoint files
-and folders. A new method = a backend module in this folder (or, for one of ours, a method in `flows/`)
-and one line below.
+`BACKENDS` maps each method's key to its registry line: the method's spec (`spec.MethodSpec`: label, colour, default
+and maximum steps, which step setting drives it, CFG bound, regions, whether it can inpaint) and how its checkpoint
+is found and loaded. `SPECS` reads the specs from it (a live view: a line added to `BACKENDS` is seen everywhere),
+`load_backends` builds the backends found in a list of checkpoint files and folders. A new method = a backend
+module in this folder (or, for one of ours, a sampler in `flows/`) and one line below.
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Iterable, Iterator, Mapping, Sequence
 
 import torch
 
 from ..constants import ASSETS
 from ..errors import CheckpointError, InputError
-from ..flows import METHODS
+from ..flows import DDIM, RectifiedFlow, Shortcut
+from ..reference.config import REGIONS as AUTHORS_REGIONS
 from .authors import RVQ_FILE, Authors
-from .base import MAX_CFG, Backend, BackendFacts, BackendKind, BackendOutput, Bounds, Progress, SpeechInput
+from .base import Backend, BackendKind, BackendOutput, Progress, SpeechInput
 from .ours import FlowBackend, Ours
+from .spec import GROUND_TRUTH, GROUND_TRUTH_LABEL, MAX_CFG, STEPS_SETTINGS, Bounds, MethodSpec
 
-BACKENDS: dict[str, BackendKind] = {b.facts.key: b for b in (
-    *(Ours.of(key) for key in METHODS),                  # ours: every method of the flows registry
-    Authors.of("gesturelsm_authors", "shortcut", default_steps=2, max_steps=128, predicts="velocity",
-               uses_step_size=True, inpaints=True),
-    Authors.of("meanflow_authors", "meanflow", default_steps=1, max_steps=128, predicts="velocity",
-               uses_step_size=True),
-    Authors.of("diffusion_authors", "diffusion", default_steps=20, max_steps=1000, predicts="data",
-               uses_step_size=False, inpaints=True),
+# Inpainting (holding known latents while sampling the rest): every sampler that visits intermediate times of a
+# known forward process can. Ours: flows.base.inpainting (the live mode holds its seed with it). The authors'
+# shortcut and diffusion samplers walk the same straight path / DDIM schedule. MeanFlow's default is one step from
+# pure noise, where the known part carries no information.
+BACKENDS: dict[str, BackendKind] = {b.spec.key: b for b in (
+    Ours(MethodSpec("gesturelsm", "GestureLSM", "#d62728", 8, Shortcut.facts.max_steps, inpainting=True)),
+    Ours(MethodSpec("rectified_flow", "Rectified flow", "#1f77b4", 8, RectifiedFlow.facts.max_steps, inpainting=True)),
+    Ours(MethodSpec("ddim", "DDIM", "#2ca02c", 20, DDIM.facts.max_steps, "ddim_steps", inpainting=True)),
+    Authors(MethodSpec("gesturelsm_authors", "GestureLSM (authors' weights)", "#9467bd", 2, 128,
+                       regions=AUTHORS_REGIONS, imported=True, inpainting=True), "shortcut"),
+    Authors(MethodSpec("meanflow_authors", "MeanFlow (authors' weights)", "#8c564b", 1, 128,
+                       regions=AUTHORS_REGIONS, imported=True), "meanflow"),
+    Authors(MethodSpec("diffusion_authors", "Diffusion (authors' weights)", "#e377c2", 20, 1000, "ddim_steps",
+                       regions=AUTHORS_REGIONS, imported=True, inpainting=True), "diffusion"),
 )}
-FACTS: dict[str, BackendFacts] = {k: b.facts for k, b in BACKENDS.items()}
 
 
-def backend_facts(key: str) -> BackendFacts:
-    if key not in FACTS:
-        raise InputError(f"unknown method {key!r}; the methods are: {', '.join(FACTS)}")
-    return FACTS[key]
+class _Specs(Mapping[str, MethodSpec]):
+    """{method key: spec} in registry order, read from BACKENDS at each use."""
+
+    def __getitem__(self, key: str) -> MethodSpec:
+        return BACKENDS[key].spec
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(BACKENDS))
+
+    def __len__(self) -> int:
+        return len(BACKENDS)
+
+
+SPECS: Mapping[str, MethodSpec] = _Specs()
+
+
+def method_spec(key: str) -> MethodSpec:
+    if key not in BACKENDS:
+        raise InputError(f"unknown method {key!r}; the methods are: {', '.join(BACKENDS)}")
+    return BACKENDS[key].spec
+
+
+def label(key: str) -> str:
+    """A method's label for people (ground truth's too); a key that is no method is shown as it is."""
+    if key == GROUND_TRUTH:
+        return GROUND_TRUTH_LABEL
+    return BACKENDS[key].spec.label if key in BACKENDS else key
+
+
+def color(key: str, fallback: str | None = None) -> str | None:
+    """A method's plot colour (`fallback` for a key that is no method)."""
+    return BACKENDS[key].spec.color if key in BACKENDS else fallback
+
+
+def ours_default() -> list[str]:
+    """The methods shown when none are chosen: every method trained here (not imported), in registry order."""
+    return [k for k, b in BACKENDS.items() if not b.spec.imported]
 
 
 def _found_in(source: Path) -> list[tuple[BackendKind, Path]]:
@@ -47,7 +86,7 @@ def _found_in(source: Path) -> list[tuple[BackendKind, Path]]:
         if b.checkpoint(b.root_of(source)) == source:
             return [(b, source)]
     raise CheckpointError(f"{source}: not a checkpoint of any method (expected generator/<method>.safetensors "
-                          f"or reference_<sampler>.safetensors; methods: {', '.join(FACTS)})")
+                          f"or reference_<sampler>.safetensors; methods: {', '.join(BACKENDS)})")
 
 
 def load_backends(checkpoints: Sequence[str | Path], methods: Iterable[str] | None = None,
@@ -65,7 +104,7 @@ def load_backends(checkpoints: Sequence[str | Path], methods: Iterable[str] | No
                                   f".safetensors, or {RVQ_FILE} and reference_<sampler>.safetensors written by "
                                   "`gesturelsm import-reference`)")
         for b, file in here:
-            key = b.facts.key
+            key = b.spec.key
             if key in found:
                 raise CheckpointError(f"method {key} has two checkpoints: {found[key][1]} and {file}; give one")
             found[key] = (b, file)
@@ -84,16 +123,16 @@ def checkpoint_sources(path: str | Path | None) -> list[Path]:
     if path is None or str(path) == "":
         return [ASSETS]
     p = Path(path)
-    if p.is_dir() and (p / RVQ_FILE).is_file() and not any(Ours.of(k).checkpoint(p).is_file() for k in METHODS):
+    if p.is_dir() and (p / RVQ_FILE).is_file() and not any(b.checkpoint(p).is_file() for b in BACKENDS.values() if isinstance(b, Ours)):
         return [ASSETS, p]
     return [p]
 
 
 def flow_backends(tokenizers: dict, generators: dict) -> dict[str, Backend]:
     """Our backends from models already in memory ({method: GestureGenerator} on shared tokenizers)."""
-    return {k: FlowBackend(backend_facts(k), g, tokenizers) for k, g in generators.items()}
+    return {k: FlowBackend(method_spec(k), g, tokenizers) for k, g in generators.items()}
 
 
-__all__ = ["BACKENDS", "FACTS", "MAX_CFG", "Backend", "BackendFacts", "BackendKind", "BackendOutput", "Bounds",
-           "FlowBackend", "Progress", "SpeechInput", "backend_facts", "checkpoint_sources", "flow_backends",
-           "load_backends"]
+__all__ = ["BACKENDS", "GROUND_TRUTH", "GROUND_TRUTH_LABEL", "MAX_CFG", "SPECS", "STEPS_SETTINGS", "Backend",
+           "BackendKind", "BackendOutput", "Bounds", "FlowBackend", "MethodSpec", "Progress", "SpeechInput",
+           "checkpoint_sources", "color", "flow_backends", "label", "load_backends", "method_spec", "ours_default"]

@@ -22,8 +22,9 @@ from ..reference.config import LATENT_SCALE, REGIONS
 from ..reference.convert import load_generator, load_rvqs
 from ..reference.model import ReferenceGenerator
 from ..reference.runner import FACE_NOTE, LONG_AUDIO_NOTE, ReferenceBundle, generate_reference
-from .base import BackendFacts, BackendOutput, Progress, SpeechInput
+from .base import BackendOutput, Progress, SpeechInput
 from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
+from .spec import MethodSpec
 
 RVQ_FILE = "reference_rvq.safetensors"
 
@@ -31,8 +32,8 @@ RVQ_FILE = "reference_rvq.safetensors"
 class AuthorsBackend:
     """One of the authors' generators with the shared RVQ-VAEs and its word vocabulary (CPU)."""
 
-    def __init__(self, facts: BackendFacts, bundle: ReferenceBundle, model: ReferenceGenerator, vocab: dict[str, int]):
-        self.facts, self.bundle, self.model, self.vocab = facts, bundle, model, vocab
+    def __init__(self, spec: MethodSpec, bundle: ReferenceBundle, model: ReferenceGenerator, vocab: dict[str, int]):
+        self.spec, self.bundle, self.model, self.vocab = spec, bundle, model, vocab
 
     def generate(self, speech: SpeechInput, steps: int, cfg: float, seed: int,
                  progress: Progress | None = None) -> BackendOutput:
@@ -45,8 +46,8 @@ class AuthorsBackend:
     def edit(self, speech: SpeechInput, motion: MotionSequence, spec: EditSpec, steps: int, cfg: float, seed: int,
              progress: Progress | None = None) -> EditOutput:
         """`spec` regenerated with the input's latents (their RVQ encoders) held (backends/editing.py)."""
-        if not self.facts.inpaints:
-            raise InputError(f"{self.facts.key}'s sampler cannot hold known latents, so it cannot edit a motion")
+        if not self.spec.inpainting:
+            raise InputError(f"{self.spec.key}'s sampler cannot hold known latents, so it cannot edit a motion")
         t0 = time.perf_counter()
         known = self.bundle.encode(motion.to_features())[0]                        # (L, R * d)
         L, R = known.shape[0], len(REGIONS)
@@ -71,15 +72,9 @@ class AuthorsBackend:
 
 @dataclass(frozen=True)
 class Authors:
-    """Registry line of one of the authors' methods: its facts (their released settings) and its sampler's file."""
-    facts: BackendFacts
+    """Registry line of one of the authors' methods: its spec (their released settings) and its sampler's file."""
+    spec: MethodSpec
     sampler: str                     # "shortcut" | "meanflow" | "diffusion": reference_<sampler>.safetensors
-
-    @classmethod
-    def of(cls, key: str, sampler: str, default_steps: int, max_steps: int, predicts: str,
-           uses_step_size: bool, inpaints: bool = False) -> "Authors":
-        return cls(BackendFacts(key, default_steps, max_steps, predicts, uses_step_size, REGIONS, imported=True,
-                                inpaints=inpaints), sampler)
 
     def checkpoint(self, root: Path) -> Path:
         return root / f"reference_{self.sampler}.safetensors"
@@ -94,7 +89,7 @@ class Authors:
                 raise CheckpointError(f"{file}: {RVQ_FILE} is missing beside it (write both with "
                                       "`gesturelsm import-reference`)")
             shared["reference", root] = ReferenceBundle(*load_rvqs(root / RVQ_FILE))
-        return AuthorsBackend(self.facts, shared["reference", root], *load_generator(file))
+        return AuthorsBackend(self.spec, shared["reference", root], *load_generator(file))
 
 
 __all__ = ["Authors", "AuthorsBackend", "RVQ_FILE"]

@@ -1,4 +1,4 @@
-"""What every backend is: its facts, the prepared speech it generates from, and one `generate` call.
+"""What every backend is: its spec, the prepared speech it generates from, and one `generate` call.
 
 A backend is one method with its loaded weights: ours (a flow/diffusion generator on our tokenizers,
 `ours.py`) or the authors' (their converted networks and RVQ-VAEs, `authors.py`). The pipeline knows
@@ -16,36 +16,7 @@ import torch
 
 from ..constants import Progress
 from ..motion.sequence import FPS, MotionSequence
-
-MAX_CFG = 10.0                      # the largest classifier-free guidance scale any backend accepts
-
-
-@dataclass(frozen=True)
-class Bounds:
-    """The settings a backend accepts: steps in [min_steps, max_steps], CFG scale in [min_cfg, max_cfg]."""
-    min_steps: int
-    max_steps: int
-    min_cfg: float
-    max_cfg: float
-
-
-@dataclass(frozen=True)
-class BackendFacts:
-    """What the rest of the package needs to know about a method, written once, in its registry line."""
-    key: str                        # the name in the CLI, the API and the page, e.g. "gesturelsm"
-    default_steps: int              # sampling steps when none are given
-    max_steps: int                  # the largest step count accepted
-    predicts: str                   # what its network returns to the sampler: "velocity" | "data"
-    uses_step_size: bool            # whether the network takes the step size as an input
-    regions: tuple[str, ...]        # the body regions it generates; the others stay neutral (e.g. no "face")
-    guidance: bool = True           # whether the CFG scale changes its output
-    max_cfg: float = MAX_CFG        # the largest CFG scale accepted
-    imported: bool = False          # True: the authors' released weights (`gesturelsm import-reference`)
-    inpaints: bool = False          # whether its sampler can hold known latents, so it can edit a motion
-
-    @property
-    def bounds(self) -> Bounds:
-        return Bounds(1, self.max_steps, 0.0, self.max_cfg)
+from .spec import MethodSpec
 
 
 @dataclass
@@ -76,22 +47,22 @@ class BackendOutput:
 
 class Backend(Protocol):
     """One method with its weights, ready to generate."""
-    facts: BackendFacts
+    spec: MethodSpec
 
     def generate(self, speech: SpeechInput, steps: int, cfg: float, seed: int,
                  progress: Progress | None = None) -> BackendOutput:
-        """Motion for the prepared speech; settings are already checked against `facts`. `progress(f, msg)`
+        """Motion for the prepared speech; settings are already checked against `spec`. `progress(f, msg)`
         with f in [0, 1]."""
 
     def edit(self, speech: SpeechInput, motion: MotionSequence, spec, steps: int, cfg: float, seed: int,
              progress: Progress | None = None):
-        """Where `facts.inpaints`: `motion` (as long as the speech) with `spec` (motion.editing.EditSpec) regenerated
+        """Where `spec.inpainting`: `motion` (as long as the speech) with `spec` (motion.editing.EditSpec) regenerated
         in latent space, as a backends.editing.EditOutput (the decoded span around the regenerated latents)."""
 
 
 class BackendKind(Protocol):
-    """A registry line: a method's facts and how its checkpoint is found and loaded."""
-    facts: BackendFacts
+    """A registry line: a method's spec and how its checkpoint is found and loaded."""
+    spec: MethodSpec
 
     def checkpoint(self, root: Path) -> Path:
         """The file this method's weights have in a checkpoint folder."""
@@ -103,4 +74,4 @@ class BackendKind(Protocol):
         """The backend from its checkpoint; `shared` caches what backends of one folder share (tokenizers)."""
 
 
-__all__ = ["Backend", "BackendFacts", "BackendKind", "BackendOutput", "Bounds", "MAX_CFG", "Progress", "SpeechInput"]
+__all__ = ["Backend", "BackendKind", "BackendOutput", "Progress", "SpeechInput"]

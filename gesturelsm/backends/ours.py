@@ -13,7 +13,6 @@ from pathlib import Path
 import torch
 
 from ..errors import CheckpointError
-from ..flows import FACTS as FLOW_FACTS
 from ..generator.model import GestureGenerator
 from ..generator.data import encode_regions
 from ..generator.sampling import decode_latents, generate_latents
@@ -21,8 +20,9 @@ from ..motion.editing import EditSpec, Keyframe
 from ..motion.regions import GENERATED_REGIONS, REGIONS, join_regions
 from ..motion.sequence import MotionSequence
 from ..tokenizer.model import RVQVAE
-from .base import BackendFacts, BackendOutput, Progress, SpeechInput
+from .base import BackendOutput, Progress, SpeechInput
 from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
+from .spec import MethodSpec
 
 
 def load_tokenizers(folder: Path, device: str | torch.device = "cpu") -> dict[str, RVQVAE]:
@@ -35,10 +35,10 @@ def load_tokenizers(folder: Path, device: str | torch.device = "cpu") -> dict[st
 class FlowBackend:
     """One of our generators with the tokenizers that decode its latents."""
 
-    def __init__(self, facts: BackendFacts, model: GestureGenerator, tokenizers: dict[str, RVQVAE]):
+    def __init__(self, spec: MethodSpec, model: GestureGenerator, tokenizers: dict[str, RVQVAE]):
         if tuple(model.config.regions) != tuple(tokenizers):
             raise CheckpointError(f"generator regions {model.config.regions} do not match tokenizers {tuple(tokenizers)}")
-        self.facts, self.model, self.tokenizers = facts, model, tokenizers
+        self.spec, self.model, self.tokenizers = spec, model, tokenizers
 
     @torch.no_grad()
     def generate(self, speech: SpeechInput, steps: int, cfg: float, seed: int,
@@ -85,17 +85,11 @@ class FlowBackend:
 
 @dataclass(frozen=True)
 class Ours:
-    """Registry line of one of our methods: `Ours.of("gesturelsm")` (facts from the flows registry)."""
-    facts: BackendFacts
-
-    @classmethod
-    def of(cls, key: str) -> "Ours":
-        f = FLOW_FACTS[key]
-        return cls(BackendFacts(f.key, f.default_steps, f.max_steps, f.predicts, f.uses_step_size, GENERATED_REGIONS,
-                                inpaints=True))      # every flow of ours noises known latents (Method.noised)
+    """Registry line of one of our methods (a sampler of the flows registry, `flows.METHODS`, under the same key)."""
+    spec: MethodSpec
 
     def checkpoint(self, root: Path) -> Path:
-        return root / "generator" / f"{self.facts.key}.safetensors"
+        return root / "generator" / f"{self.spec.key}.safetensors"
 
     def root_of(self, file: Path) -> Path:
         return file.parent.parent
@@ -104,7 +98,7 @@ class Ours:
         root = self.root_of(file)
         if ("tokenizers", root) not in shared:
             shared["tokenizers", root] = load_tokenizers(root / "tokenizer", device)
-        return FlowBackend(self.facts, GestureGenerator.load(file).to(device), shared["tokenizers", root])
+        return FlowBackend(self.spec, GestureGenerator.load(file).to(device), shared["tokenizers", root])
 
 
 __all__ = ["FlowBackend", "Ours", "load_tokenizers"]

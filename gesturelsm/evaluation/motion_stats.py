@@ -30,7 +30,8 @@ from ..metrics.amplitude import RAISED_M, amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
 from ..metrics.feet import CONTACT_M, feet_stats
-from ..metrics.speech_response import beat_timing, energy_following
+from ..metrics.speech_response import (beat_timing, beat_timing_frames, energy_following, energy_following_frames,
+                                       min_seconds)
 
 SPEAKER_FILE = ASSETS / "speaker_stats.json"
 MANNEQUIN = ASSETS / "body" / "SMPLX_MANNEQUIN.npz"
@@ -54,9 +55,11 @@ STATISTICS: tuple[Statistic, ...] = (
     Statistic("bc", "beat consistency", "0-1", CLOSER,
               "How close the upper body's pauses in motion fall to the speech's onsets (BC, as gesturelsm eval)."),
     Statistic("beat_gain", "beat timing gain", "BC", "higher (> 0: gestures land on this speech's beats)",
-              "BC with the speech's own onsets minus BC with the same onsets shifted in time."),
+              "BC with the speech's own onsets minus BC with the same onsets shifted in time "
+              f"(needs at least {min_seconds(beat_timing_frames()):g} s of speech)."),
     Statistic("loudness_gain", "loudness following", "r", "higher (> 0: moves more when the speech is louder)",
-              "Correlation of upper-body speed with speech loudness minus the same with the loudness shifted >= 2 s."),
+              "Correlation of upper-body speed with speech loudness minus the same with the loudness shifted >= 2 s "
+              f"(needs at least {min_seconds(energy_following_frames()):g} s of speech)."),
     Statistic("raised_share", "raised share", "0-1", CLOSER,
               f"Share of frames with a wrist more than {RAISED_M:g} m above the pelvis (hands up, gesturing)."),
     Statistic("height_p95", "wrist height p95", "m", CLOSER,

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..presentation import COLORS, LABELS as NAMES
+from ..backends import color, label
 
 
 def quality_time_plot(bench: dict, out: str | Path, evaluation: dict | None = None, metric: str = "fgd_k",
@@ -35,7 +35,7 @@ def quality_time_plot(bench: dict, out: str | Path, evaluation: dict | None = No
         if not pts:
             continue
         xs, ys = [p[1] for p in pts], [p[2] for p in pts]
-        ax.plot(xs, ys, "-o", color=COLORS.get(m), label=NAMES.get(m, m))
+        ax.plot(xs, ys, "-o", color=color(m), label=label(m))
         for s, x, y in pts:
             ax.annotate(f"{s}", (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8)
     ax.set_xscale("log")

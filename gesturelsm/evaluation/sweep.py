@@ -1,8 +1,8 @@
 """A sweep over sampling settings on one speech: every (method, steps, CFG) generated once per seed, timed, and
 measured with evaluation/motion_stats.py; the CLI (`gesturelsm sweep`) and the page's Sweep tab call this.
 
-    grid = SweepGrid(("gesturelsm", "ddim"), (1, 2, 4, 8), (1.0, 2.0, 3.0), seeds=2)
-    check_grid(pipe, grid, seconds=10.0)                   # bounds, before any work
+    grid = sweep_grid(["gesturelsm", "ddim"], "1 2 4 8", "1 2 3", 2, available=pipe.methods)   # values, all at once
+    check_grid(pipe, grid, seconds=10.0)                   # size bounds, before any work
     speech = pipe.prepare_speech(audio, 16000)             # features once
     result = run_sweep(pipe, speech, grid)
     write_sweep(result, "runs/sweep", metric="wrist_speed")  # sweep.csv, sweep.md, sweep.json, sweep.png
@@ -10,7 +10,9 @@ measured with evaluation/motion_stats.py; the CLI (`gesturelsm sweep`) and the p
 Size bound (`SweepLimits`): at most `max_cells` (method, steps, CFG) combinations, `max_seeds` seeds, and
 `max_work` seconds of motion generated in all (cells x seeds x speech seconds), so one sweep cannot hold a server.
 Time per cell is the pipeline's generation time (features shared, then sampling + decoding, the paper's AITS
-convention) averaged over seeds; statistics are averaged over seeds with their standard deviation as the spread.
+convention) averaged over seeds, measured after one untimed warm-up generation per method and guidance mode (the
+first call of a method pays one-off costs that are not the setting's); statistics are averaged over seeds with their
+standard deviation as the spread.
 """
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ import numpy as np
 
 from ..constants import Progress
 from ..errors import GestureError, InputError
-from ..pipeline import finish
+from ..settings import CLI, DEFAULT_CFG, Limits, Names, PostProcess, grid_problems
+from ..settings.values import method_list
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
 
@@ -42,11 +45,15 @@ class SweepLimits:
                 f"all (combinations x seeds x speech seconds)")
 
 
+DEFAULT_STEPS = (1, 2, 4, 8)          # a sweep's step counts and CFG scales when none are given (page and CLI)
+DEFAULT_CFGS = (1.0, DEFAULT_CFG, 3.0)
+
+
 @dataclass(frozen=True)
 class SweepGrid:
     methods: tuple[str, ...]
-    steps: tuple[int, ...]
-    cfgs: tuple[float, ...]
+    steps: tuple[int, ...] = DEFAULT_STEPS
+    cfgs: tuple[float, ...] = DEFAULT_CFGS
     seeds: int = 1
 
     @property
@@ -54,27 +61,22 @@ class SweepGrid:
         return [(m, s, c) for m in self.methods for s in self.steps for c in self.cfgs]
 
 
-def parse_numbers(text: str | list | tuple, kind: type, name: str) -> tuple:
-    """'1 2, 4' -> (1, 2, 4); duplicates dropped, order kept; a clear InputError for anything else."""
-    parts = text.replace(",", " ").split() if isinstance(text, str) else list(text)
-    out = []
-    for p in parts:
-        try:
-            v = float(p)
-        except (TypeError, ValueError):
-            raise InputError(f"{name}: {p!r} is not a number") from None
-        if kind is int:
-            if v != int(v):
-                raise InputError(f"{name}: {p!r} is not a whole number")
-            v = int(v)
-        if v not in out:
-            out.append(v)
-    return tuple(out)
+def sweep_grid(methods, steps, cfgs, seeds, available: list[str], limits: SweepLimits = SweepLimits(),
+               settings_limits: Limits = Limits(), names: Names = CLI) -> SweepGrid:
+    """A grid from values as sent ("1 2, 4", lists, numbers as text or not): each checked by the settings' validator
+    against every chosen method's spec and `settings_limits` (a server's step caps); every problem at once, one line
+    each (InputError)."""
+    problems: list[str] = []
+    chosen = method_list(methods, available, problems, names.methods)
+    values = grid_problems(chosen or [], steps, cfgs, seeds, limits.max_seeds, settings_limits, names, problems)
+    if problems:
+        raise InputError("\n".join(problems))
+    return SweepGrid(tuple(chosen), *values)
 
 
 def check_grid(pipe, grid: SweepGrid, seconds: float, limits: SweepLimits = SweepLimits()) -> None:
-    """Every problem of a grid at once, one line each, before any work: empty lists, unknown methods, settings
-    outside the method registry's bounds (`pipe.check_settings`), and the size bounds."""
+    """Every problem of a grid at once, one line each, before any work: empty lists, methods not loaded, settings
+    outside the methods' specs (`pipe.check_settings`, the settings' validator), and the size bounds."""
     problems = [f"Give at least one {what}." for what, v in (("method", grid.methods), ("step count", grid.steps),
                                                               ("CFG scale", grid.cfgs)) if not v]
     if grid.seeds < 1 or grid.seeds > limits.max_seeds:
@@ -117,8 +119,9 @@ class SweepResult:
     speech_seconds: float
     text_mode: str
     reference: SpeakerReference | None
-    seconds: float = 0.0                 # the whole sweep, wall clock
-    grounding: bool = True               # the motions' feet were grounded (pipeline.finish)
+    seconds: float = 0.0                 # the whole sweep, wall clock (warm-up included)
+    warmup_seconds: float = 0.0          # of which the untimed warm-up (`warm_up`)
+    grounding: bool = True               # the motions' feet were grounded (settings.PostProcess)
 
     def cell_runs(self, cell: tuple[str, int, float]) -> list[SweepRun]:
         return [r for r in self.runs if (r.method, r.steps, r.cfg) == cell]
@@ -147,31 +150,48 @@ def _units(steps: int, cfg: float) -> float:
     return steps * (1.5 if cfg > 0 else 1.0) + 1.0
 
 
+def warm_up(pipe, speech, grid: SweepGrid, progress: Progress | None = None) -> float:
+    """One untimed 1-step generation per method and guidance mode of the grid (CFG 1 runs one network pass per
+    step, any other scale two in one batch), so no cell's time holds the one-off costs of a method's first call
+    (allocations, kernel set-up for the speech's shapes). Returns the seconds it took."""
+    t0 = time.perf_counter()
+    for m in grid.methods:
+        for c in {c == 1.0: c for c in grid.cfgs}.values():       # one scale of each mode
+            if progress:
+                progress(0.0, f"warming up {m}")
+            pipe.generate(speech, steps=1, cfg=c, seed=0, method=m)
+    return time.perf_counter() - t0
+
+
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
               progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
               keep_motions: bool = True, grounding: bool = True) -> SweepResult:
     """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
-    feet grounded (pipeline.finish, without smoothing: the sampler's own motion otherwise) unless `grounding` is
-    off. `cancelled()` is asked before every generation; True raises SweepCancelled. `progress(fraction, message)`
-    carries the estimate of the time left."""
+    feet grounded (settings.PostProcess, without smoothing: the sampler's own motion otherwise) unless `grounding` is
+    off, after `warm_up`. `cancelled()` is asked before every generation; True raises SweepCancelled.
+    `progress(fraction, message)` carries the estimate of the time left."""
     reference = reference if reference is not None else speaker_reference()
     context = SpeechContext.of(speech.audio, None if reference is None else reference.mean_speed)
     jobs = [(m, s, c, k) for (m, s, c) in grid.cells for k in range(grid.seeds)]
     total = sum(_units(s, c) for _, s, c, _ in jobs) or 1.0
-    done, runs, t0 = 0.0, [], time.perf_counter()
+    post = PostProcess(smoothing="off", grounding=grounding)
+    t0 = time.perf_counter()
+    warmup_s = warm_up(pipe, speech, grid, progress)
+    done, runs, t1 = 0.0, [], time.perf_counter()
     for i, (m, s, c, k) in enumerate(jobs):
         if cancelled is not None and cancelled():
             raise SweepCancelled("The sweep was cancelled; nothing was written.")
         if progress:
-            left = (time.perf_counter() - t0) / done * (total - done) if done else None
+            left = (time.perf_counter() - t1) / done * (total - done) if done else None
             eta = f", about {left:.0f} s left" if left is not None else ""
             progress(done / total, f"{i + 1} of {len(jobs)}: {m} {s} steps CFG {c:g} seed {k}{eta}")
         res = pipe.generate(speech, steps=s, cfg=c, seed=k, method=m)
-        motion, _ = finish(res.motion.slice(0, speech.num_frames), grounding=grounding, body=body)
+        motion, _ = post.apply(res.motion.slice(0, speech.num_frames), body)
         world, local = joint_positions(motion, body)
         runs.append(SweepRun(m, s, c, k, res.generation_seconds, statistics_of_joints(world, local, context),
                              motion if keep_motions else None, local))
         done += _units(s, c)
     if progress:
         progress(1.0, f"{len(jobs)} motions in {time.perf_counter() - t0:.0f} s")
-    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, grounding)
+    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, warmup_s,
+                       grounding)

@@ -8,14 +8,17 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
+from dataclasses import replace
 
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
-from ..backends import checkpoint_sources
+from ..backends import SPECS, checkpoint_sources
+from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
-from .sweep import SweepGrid, SweepLimits, check_grid, parse_numbers, run_sweep
+from ..settings.arguments import add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
+from ..settings.values import from_text
+from .sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, check_grid, run_sweep, sweep_grid
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
 
 LIMITS = SweepLimits()
@@ -29,9 +32,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    f"generation time). Size bound: {LIMITS.describe()}.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ...)")
     p.add_argument("--methods", nargs="+", default=None, help="default: every method the checkpoints provide")
-    p.add_argument("--steps", nargs="+", default=["1", "2", "4", "8"], help="sampling step counts")
-    p.add_argument("--cfg", nargs="+", default=["2"], help="classifier-free guidance scales")
-    p.add_argument("--seeds", type=int, default=1, help="seeds 0 .. N-1 per combination")
+    p.add_argument("--steps", nargs="+", default=list(DEFAULT_STEPS),
+                   help=f"sampling step counts (default: {' '.join(map(str, DEFAULT_STEPS))})")
+    p.add_argument("--cfg", nargs="+", default=list(DEFAULT_CFGS),
+                   help=f"classifier-free guidance scales (default: {' '.join(f'{c:g}' for c in DEFAULT_CFGS)})")
+    p.add_argument("--seeds", type=from_text, default=1, help="seeds 0 .. N-1 per combination (default: 1)")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--text", default=None, help="transcript (word timings aligned automatically)")
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
@@ -39,29 +44,44 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
-    p.add_argument("--max-work", type=float, default=LIMITS.max_work,
+    p.add_argument("--max-work", type=from_text, default=LIMITS.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
-    p.add_argument("--threads", type=int, default=None)
-    p.add_argument("--out", default="runs/sweep")
+    add_max_seconds_flag(p)
+    p.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
+    p.add_argument("--out", default="runs/sweep", help="output folder")
     p.set_defaults(func=run_sweep_cli)
 
 
 def run_sweep_cli(args: argparse.Namespace) -> int:
     import torch
 
-    if args.threads:
-        torch.set_num_threads(args.threads)
-    limits = SweepLimits(LIMITS.max_cells, LIMITS.max_seeds, args.max_work)
-    audio = load_audio(args.audio)
-    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods)
-    grid = SweepGrid(tuple(dict.fromkeys(args.methods or pipe.methods)), parse_numbers(args.steps, int, "--steps"),
-                     parse_numbers(args.cfg, float, "--cfg"), args.seeds)
-    check_grid(pipe, grid, len(audio) / SAMPLE_RATE, limits)
-    words = read_words(args.textgrid) if args.textgrid else None
-    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe)
-    result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
-                       progress=lambda f, m: print(f"[{100 * f:3.0f} %] {m}", file=sys.stderr, flush=True))
-    files = write_sweep(result, Path(args.out), args.metric)
+    p: list[str] = []
+    grid = None
+    try:              # the named methods' bounds, or every method's when none are named (each may be loaded)
+        grid = sweep_grid(args.methods or list(SPECS), args.steps, args.cfg, args.seeds, list(SPECS))
+    except InputError as exc:
+        p += str(exc).splitlines()
+    n_threads = threads(args.threads, p)
+    max_work = positive(args.max_work, "--max-work", p)
+    max_seconds = positive(args.max_seconds, "--max-seconds", p)
+    audio_path = input_file(args.audio, "AUDIO", p)
+    textgrid = input_file(args.textgrid, "--textgrid", p) if args.textgrid else None
+    out = output_folder(args.out, "--out", p)
+    refuse(p)
+    if n_threads:
+        torch.set_num_threads(n_threads)
+    audio = load_audio(audio_path, max_seconds=max_seconds)
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods,
+                                           max_seconds=max_seconds)
+    grid = replace(grid, methods=tuple(dict.fromkeys(args.methods or pipe.methods)))
+    check_grid(pipe, grid, len(audio) / SAMPLE_RATE, SweepLimits(LIMITS.max_cells, LIMITS.max_seeds, max_work))
+    words = read_words(textgrid) if textgrid else None
+    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
+                                 progress=say)
+    if speech.transcript:
+        print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
+    result = run_sweep(pipe, speech, grid, keep_motions=False, progress=say, grounding=grounding_on(args))
+    files = write_sweep(result, out, args.metric)
     print(markdown_text(result))
-    print(f"\nwrote {', '.join(str(p) for p in files.values())}")
+    print(f"\nwrote {', '.join(str(f) for f in files.values())}")
     return 0

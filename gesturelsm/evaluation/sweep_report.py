@@ -14,17 +14,12 @@ import numpy as np
 
 from ..errors import InputError
 from .motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
-from .plot import COLORS
-from .tables import NAMES
+from ..backends import color, label
 from .sweep import SweepResult
 
 FILES = ("sweep.csv", "sweep.md", "sweep.json", "sweep.png")
 PLOT_METRICS = tuple(s.key for s in (*STATISTICS, SEED_SPREAD))
 MARKERS = "osD^vP*X"
-
-
-def label(method: str) -> str:
-    return NAMES.get(method, method.replace("_", " "))
 
 
 def csv_text(result: SweepResult) -> str:
@@ -91,7 +86,7 @@ def sweep_plot(result: SweepResult, out: str | Path, metric: str = "wrist_speed"
             if not pts:
                 continue
             x, y, e, s = (np.array(v) for v in zip(*pts))
-            ax.errorbar(x, y, yerr=np.where(np.isfinite(e), e, 0), color=COLORS.get(m, f"C{mi}"),
+            ax.errorbar(x, y, yerr=np.where(np.isfinite(e), e, 0), color=color(m, f"C{mi}"),
                         marker=MARKERS[ci % len(MARKERS)], alpha=0.55 + 0.45 * (ci + 1) / len(result.grid.cfgs),
                         capsize=2, label=f"{label(m)}, CFG {c:g}")
             for xi, yi, si in zip(x, y, s):

@@ -1,7 +1,7 @@
 """Markdown tables for eval and bench reports, in the paper's layout, with the paper's numbers beside ours."""
 from __future__ import annotations
 
-from ..presentation import LABELS as NAMES
+from ..backends import label
 from . import paper
 
 
@@ -33,7 +33,7 @@ def eval_markdown(rep: dict) -> str:
         p = paper.paper_row(r["method"], r["steps"])
         ptxt = "-" if p is None else " / ".join(_f(p.get(k), "{:.3f}") for k in ("fgd", "bc", "diversity", "aits"))
         ptxt += " *" if p and p.get("note") else ""
-        cells = [NAMES.get(r["method"], r["method"]), str(r["steps"]), f"{r['cfg']:g}",
+        cells = [label(r["method"]), str(r["steps"]), f"{r['cfg']:g}",
                  *[_f(h.get(e), "{:.4g}") for e in ex],
                  f"{_f(h['bc'])} ({_f(gt.get('bc'))})", f"{_f(h['diversity'], '{:.2f}')} ({_f(gt.get('diversity'), '{:.2f}')})",
                  _f(h["expr_mse"], "{:.3f}"), *([_f(h["vertex_mse"], "{:.3g}")] if rep.get("face_vertices") else []),
@@ -48,7 +48,7 @@ def eval_markdown(rep: dict) -> str:
                   "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate cm/s |", "|---|---|---|---|---|---|---|"]
         for r in ao:
             a = r["audio_only"]
-            lines.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
+            lines.append(f"| {label(r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
                          f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'], '{:.1f}')} |")
     lines += amplitude_lines(rep)
     lines += feet_lines(rep)
@@ -76,7 +76,7 @@ def amplitude_lines(rep: dict) -> list[str]:
            "| method | steps | CFG | held-out: raised | p95 | speed | spread | audio-only: raised | p95 | speed | spread |",
            "|" + "---|" * 11, f"| ground truth | - | - | {cells(gt)} | - | - | - | - |"]
     for r in rep["rows"]:
-        out.append(f"| {NAMES.get(r['method'], r['method'])} | {r['steps']} | {r['cfg']:g} | {cells(r.get('heldout'))} "
+        out.append(f"| {label(r['method'])} | {r['steps']} | {r['cfg']:g} | {cells(r.get('heldout'))} "
                    f"| {cells(r.get('audio_only'))} |")
     return out
 
@@ -107,7 +107,7 @@ def feet_lines(rep: dict) -> list[str]:
     row("ground truth", "-", "-", "held-out", gt)
     for r in rep["rows"]:
         for part, clips in (("heldout", "held-out"), ("audio_only", "audio-only")):
-            row(NAMES.get(r["method"], r["method"]), str(r["steps"]), f"{r['cfg']:g}", clips, r.get(part))
+            row(label(r["method"]), str(r["steps"]), f"{r['cfg']:g}", clips, r.get(part))
     return out
 
 
@@ -122,7 +122,7 @@ def bench_markdown(rep: dict) -> str:
     for r in rep["rows"]:
         p = paper.paper_row(r["method"], r["steps"])
         lines.append("| " + " | ".join([
-            r["preset"], NAMES.get(r["method"], r["method"]), str(r["steps"]), _f(r.get("ms_per_step"), "{:.1f}"),
+            r["preset"], label(r["method"]), str(r["steps"]), _f(r.get("ms_per_step"), "{:.1f}"),
             _f(r["aits"], "{:.3f}"), _f(r.get("rtf_10s"), "{:.1f}x"), _f(r.get("rtf_60s"), "{:.1f}x"),
             _f(r.get("peak_mb"), "{:.0f}"), r.get("hardware", rep.get("hardware", "-")),
             _f(p and p.get("aits"), "{:.3f}")]) + " |")

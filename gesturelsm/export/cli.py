@@ -41,8 +41,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--grounding", choices=("on", "off"), default="on",
                    help="with --rig: the character's feet planted on its own legs (the same leg IK on its skeleton; "
                    "off: its legs as retargeted)")
-    p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style` "
-                   "(default | upper ...)")
+    p.add_argument("--style", default="default", help="keypoint framing as `gesturelsm render --style`, e.g. "
+                   "upper (default: default)")
     p.set_defaults(func=run)
 
 

@@ -1,9 +1,10 @@
 """Generative methods behind one interface (see base.py): GestureLSM's shortcut flow matching and the
 baselines it is compared with, on the same backbone. Convention: t = 0 noise, t = 1 data.
 
-The registry: `METHODS` maps each method's key to its class; the maths facts of a method (default and maximum
-steps, what it predicts, whether it takes a step size) are its class's `facts`. A new method = a new module in
-this folder + one line below; the backend registry (`gesturelsm.backends`) serves every method listed here.
+The registry: `METHODS` maps each method's key to its class; the maths facts of a method (its most steps, what its
+sampler asks the network for, whether it takes a step size) are its class's `facts`. A new method = a new module in
+this folder + one line below, and its spec line (label, default steps ...) in the backend registry
+(`gesturelsm.backends`), which serves it.
 `windows.py` is the long-audio window loop every backend's sampling runs in.
 """
 from ..errors import InputError
@@ -18,8 +19,6 @@ METHODS: dict[str, type] = {m.facts.key: m for m in (
     Shortcut, RectifiedFlow, DDIM,
 )}
 FACTS: dict[str, MethodFacts] = {k: m.facts for k, m in METHODS.items()}
-DEFAULT_STEPS = {k: f.default_steps for k, f in FACTS.items()}
-MAX_STEPS = {k: f.max_steps for k, f in FACTS.items()}
 
 
 def method_facts(name: str) -> MethodFacts:
@@ -38,5 +37,5 @@ def training_method(name: str, prediction: str = "data", time_sampler: str = "be
 
 
 __all__ = ["LossResult", "Method", "MethodFacts", "ModelFn", "euler_sample", "guided", "DDIM", "RectifiedFlow",
-           "Shortcut", "sample_t", "METHODS", "FACTS", "DEFAULT_STEPS", "MAX_STEPS", "method_facts", "make_method",
+           "Shortcut", "sample_t", "METHODS", "FACTS", "method_facts", "make_method",
            "training_method", "Held", "sample_windows", "sampled_windows", "window_layout"]

@@ -26,11 +26,13 @@ class LossResult:
 
 @dataclass(frozen=True)
 class MethodFacts:
-    """What the rest of the package needs to know about a method, written once, beside the method."""
+    """The sampling maths' facts of a method, beside it (what people see of it and the settings it runs with
+    are in its backend registry line, `gesturelsm.backends`)."""
     key: str                         # the name in checkpoints, the CLI and the API, e.g. "gesturelsm"
-    default_steps: int               # sampling steps when none are given
-    max_steps: int                   # the largest step count accepted (settings are checked against it)
-    predicts: str                    # what the model function returns to the sampler: "velocity" | "data" (x1)
+    max_steps: int                   # the most steps its sampler can take (shortcut: d down to 1/128; DDIM: its
+                                     # training steps)
+    samples_with: str                # what its sampler asks the model function for: "velocity" | "data" (x1); a
+                                     # network's own output is its checkpoint's GeneratorConfig.prediction
     uses_step_size: bool             # whether the network's d input is meaningful
 
 

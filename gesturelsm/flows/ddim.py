@@ -32,7 +32,7 @@ def model_time(k: torch.Tensor) -> torch.Tensor:
 @dataclass
 class DDIM(FactsMixin):
     facts: ClassVar[MethodFacts] = MethodFacts(
-        key="ddim", default_steps=20, max_steps=NUM_TRAIN_STEPS, predicts="data", uses_step_size=False)
+        key="ddim", max_steps=NUM_TRAIN_STEPS, samples_with="data", uses_step_size=False)
     alpha_bar: torch.Tensor = field(default_factory=cosine_alpha_bar)
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,

@@ -18,7 +18,7 @@ from .timesteps import sample_t
 @dataclass
 class RectifiedFlow(FactsMixin):
     facts: ClassVar[MethodFacts] = MethodFacts(
-        key="rectified_flow", default_steps=8, max_steps=128, predicts="velocity", uses_step_size=False)
+        key="rectified_flow", max_steps=128, samples_with="velocity", uses_step_size=False)
     time_sampler: str = "uniform"
     loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
 

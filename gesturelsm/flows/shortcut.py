@@ -30,7 +30,7 @@ from .timesteps import sample_t
 @dataclass
 class Shortcut(FactsMixin):
     facts: ClassVar[MethodFacts] = MethodFacts(
-        key="gesturelsm", default_steps=8, max_steps=128, predicts="velocity", uses_step_size=True)
+        key="gesturelsm", max_steps=128, samples_with="velocity", uses_step_size=True)
     alpha: float = 2.0
     beta: float = 1.2
     time_sampler: str = "beta"             # beta | uniform | logit_normal (ablation)

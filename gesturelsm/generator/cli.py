@@ -24,12 +24,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
     p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors")
-    p.add_argument("--method", default="gesturelsm", choices=list(METHODS))
+    p.add_argument("--method", default="gesturelsm", choices=list(METHODS), help="the sampling method it is trained for")
     p.add_argument("--preset", default="small", help="tiny | small (shipped) | paper")
     p.add_argument("--out", default="runs/generator", help="run folder")
-    p.add_argument("--steps", type=int, default=4000)
-    p.add_argument("--batch-size", type=int, default=32)
-    p.add_argument("--lr", type=float, default=2e-4)
+    p.add_argument("--steps", type=int, default=4000, help="training steps")
+    p.add_argument("--batch-size", type=int, default=32, help="windows per training step")
+    p.add_argument("--lr", type=float, default=2e-4, help="learning rate")
     p.add_argument("--betas", type=float, nargs=2, default=(0.5, 0.999), metavar=("B1", "B2"), help="Adam betas")
     p.add_argument("--prediction", default="data", choices=["data", "velocity"],
                    help="flows: the network predicts clean latents x1 (default) or the velocity (the paper)")
@@ -44,13 +44,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "gain = +-6 dB (motion unchanged); each variant also mirrored")
     p.add_argument("--set", nargs="+", default=[], metavar="FIELD=VALUE",
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
-    p.add_argument("--train-fraction", type=float, default=0.8)
+    p.add_argument("--train-fraction", type=float, default=0.8,
+                   help="without a split file: the first fraction of each take is training, the rest held out")
     p.add_argument("--speakers", nargs="*")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda | cuda:N; several processes (torchrun): "
                    "cpu trains with gloo, cuda with nccl and one GPU per process")
-    p.add_argument("--eval-every", type=int, default=500)
+    p.add_argument("--eval-every", type=int, default=500, help="steps between held-out evaluations")
     p.add_argument("--ship", metavar="DIR", help="also write an fp16 copy as DIR/<method>.safetensors")
     p.set_defaults(func=run_train)
 

@@ -229,7 +229,7 @@ class GestureGenerator(nn.Module):
     def output(self, y: torch.Tensor, x: torch.Tensor, t: torch.Tensor) -> torch.Tensor:
         """The denoiser's output as the method expects it: a flow's velocity (from x1 when the network predicts
         data, see GeneratorConfig.prediction), DDIM's clean latents."""
-        if self.config.prediction == "data" and method_facts(self.method).predicts == "velocity":
+        if self.config.prediction == "data" and method_facts(self.method).samples_with == "velocity":
             return velocity_from_data(y, x, t)
         return y
 

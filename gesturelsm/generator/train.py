@@ -72,7 +72,7 @@ def _build_model(takes: list[TakeTensors], tokenizers: dict[str, RVQVAE], tc: Ge
     base = config or PRESETS[tc.preset]
     cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
                              "regions": tuple(tokenizers), "uses_step_size": method.uses_step_size,
-                             "prediction": tc.prediction if method.facts.predicts == "velocity" else "data"})
+                             "prediction": tc.prediction if method.facts.samples_with == "velocity" else "data"})
     model = GestureGenerator(cfg, tc.method)
     std, neutral = latent_stats(tokenizers, takes, cfg)
     model.latent_std.copy_(std)

@@ -15,10 +15,12 @@ import numpy as np
 from ..audio import load_audio
 from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
-from ..errors import UserError
 from ..features.audio import audio_channels
 from ..motion.sequence import MotionSequence
 from ..pipeline import GesturePipeline
+from ..settings import CLI, Asked, settings_problems
+from ..settings.arguments import input_file, output_file, positive, refuse, threads
+from ..settings.values import from_text, whole_number
 from .stream import LiveConfig, MotionChunk, StreamingGenerator
 
 
@@ -65,46 +67,59 @@ def add_parser(sub) -> None:
     p = sub.add_parser("live", help="stream a speech file through the live generator (as if from a microphone)",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("audio", help="speech file (any common format and rate)")
-    p.add_argument("--chunk-ms", type=float, default=200.0, help="audio chunk size")
+    p.add_argument("--chunk-ms", type=from_text, default=200.0, help="audio chunk size")
     p.add_argument("--realtime", action="store_true", help="feed chunks at the pace of speech (else as fast as possible)")
     p.add_argument("--out", default=None, help="write the streamed motion as BEAT2 npz")
-    p.add_argument("--steps", type=int, default=LiveConfig.steps)
-    p.add_argument("--cfg", type=float, default=LiveConfig.cfg)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--commit", type=int, default=LiveConfig.commit, help="latents finalised per window (4 frames each)")
-    p.add_argument("--lookahead", type=int, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--steps", type=from_text, default=LiveConfig.steps, help="sampler steps per window")
+    p.add_argument("--cfg", type=from_text, default=LiveConfig.cfg, help="classifier-free guidance scale")
+    p.add_argument("--seed", type=from_text, default=LiveConfig.seed, help="generation seed")
+    p.add_argument("--commit", type=from_text, default=LiveConfig.commit,
+                   help="latents finalised per window (4 frames each)")
+    p.add_argument("--lookahead", type=from_text, default=LiveConfig.lookahead, help="latents of audio look-ahead")
     p.add_argument("--grounding", choices=("on", "off"), default="on",
                    help="feet on the ground, causally, chunk by chunk (off: the decoder's legs and root as they come)")
-    p.add_argument("--threads", type=int, default=1,
+    p.add_argument("--threads", type=from_text, default=1,
                    help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
     p.set_defaults(func=run)
 
 
+def check_arguments(args: argparse.Namespace) -> tuple:
+    """(config, chunk ms, threads): every argument before any work, all problems at once (InputError)."""
+    p: list[str] = []
+    settings, found = settings_problems(Asked([LiveConfig.method], args.steps, cfg=args.cfg, seed=args.seed),
+                                        [LiveConfig.method], names=CLI)
+    p += found
+    chunk_ms = positive(args.chunk_ms, "--chunk-ms", p, hi=10_000)
+    commit = whole_number(args.commit, "--commit", 1, 1000, p)
+    lookahead = whole_number(args.lookahead, "--lookahead", 0, 1000, p)
+    n_threads = threads(args.threads, p)
+    input_file(args.audio, "AUDIO", p)
+    out = output_file(args.out, "--out", ".npz", p) if args.out else None
+    refuse(p)
+    cfg = LiveConfig(commit=commit, lookahead=lookahead, steps=settings.steps_for(LiveConfig.method), cfg=settings.cfg,
+                     seed=settings.seed, grounding=args.grounding == "on")
+    return cfg, chunk_ms, n_threads, out
+
+
 def run(args: argparse.Namespace) -> int:
-    if args.chunk_ms <= 0:
-        raise UserError("--chunk-ms must be positive")
-    cfg = LiveConfig(commit=args.commit, lookahead=args.lookahead, steps=args.steps, cfg=args.cfg, seed=args.seed,
-                     grounding=args.grounding == "on")
+    cfg, chunk_ms, n_threads, out = check_arguments(args)
     audio = load_audio(args.audio)
     import torch
 
-    torch.set_num_threads(max(1, args.threads))
+    torch.set_num_threads(n_threads)
 
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[cfg.method],
                                            warm_up=False)   # audio only
     # JIT outside the timing
     audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
-    b = pipe.bounds(cfg.method)
-    if not b.min_steps <= cfg.steps <= b.max_steps:
-        raise UserError(f"--steps must be from {b.min_steps} to {b.max_steps} (got {cfg.steps})")
-    res = run_file(pipe, audio, cfg, args.chunk_ms, args.realtime)
+    res = run_file(pipe, audio, cfg, chunk_ms, args.realtime)
     look = (cfg.commit + cfg.lookahead) * 4 / 30
-    print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {args.chunk_ms:.0f} ms "
+    print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {chunk_ms:.0f} ms "
           f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s; "
           f"feet on the ground: {args.grounding}")
     print(f"latency median {np.median(res.latencies) * 1000:.0f} ms, p90 {np.percentile(res.latencies, 90) * 1000:.0f}"
           f" ms; real-time factor {res.real_time_factor:.2f}x; {sum(c.motion.num_frames for c in res.chunks)} frames")
-    if args.out:
-        print(f"wrote {res.motion().save(args.out)}")
+    if out:
+        print(f"wrote {res.motion().save(out)}")
     return 0

@@ -5,9 +5,14 @@ the speech scores the same either way on average (gain 0); z = gain / spread ove
 - beat_timing: beat consistency (metrics.beat) with the speech's onsets vs shifted onsets;
 - energy_following: correlation of the upper body's speed with the speech's loudness (RMS per frame), both
   smoothed over ~1 s, vs the loudness shifted by >= 2 s.
+
+Each needs speech long enough to shift (`min_seconds`): beat timing more than 6 s, since beat consistency ignores
+the first and last 2 s (IGNORE_FRAMES: no motion beat is detected there, as in the paper's metric) and the beats
+must move by at least 1 s either way inside the 2 s left; loudness following more than 4 s (2 s either way).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +23,24 @@ from .beat import IGNORE_FRAMES, joint_beats, joint_speed, score_beats
 from ..motion.regions import REGIONS
 
 UPPER = REGIONS["upper"].joints
+BEAT_MIN_SHIFT = 1.0            # s: the smallest shift of the beats (BC's tolerance is 0.3 s)
+LOUDNESS_MIN_SHIFT = 2.0        # s: the smallest shift of the loudness (both are smoothed over 1 s)
+
+
+def beat_timing_frames(fps: int = FPS, min_shift: float = BEAT_MIN_SHIFT) -> int:
+    """The fewest frames `beat_timing` scores: the span left after IGNORE_FRAMES at each end must hold a shift of
+    `min_shift` either way."""
+    return 2 * IGNORE_FRAMES + 1 + math.ceil(2 * min_shift * fps)
+
+
+def energy_following_frames(fps: int = FPS, min_shift: float = LOUDNESS_MIN_SHIFT) -> int:
+    """The fewest frames `energy_following` scores: a shift of `min_shift` either way."""
+    return 2 * round(min_shift * fps) + 1
+
+
+def min_seconds(frames: int, fps: int = FPS) -> float:
+    """Speech length, rounded up to a tenth of a second, that gives at least `frames` motion frames."""
+    return math.ceil(frames / fps * 10 - 1e-9) / 10
 
 
 @dataclass(frozen=True)
@@ -38,7 +61,7 @@ class ShiftTest:
 
 
 def beat_timing(joints: np.ndarray, beats: np.ndarray, fps: int = FPS, mean_speed: np.ndarray | None = None,
-                min_shift: float = 1.0, step: float = 0.25, joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
+                min_shift: float = BEAT_MIN_SHIFT, step: float = 0.25, joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
     """BC with the audio beats (s) as they are vs circularly shifted by `min_shift` .. span - `min_shift` seconds
     (every `step`) within the span where motion beats can occur (IGNORE_FRAMES from either end); the own score
     counts the beats inside that span too. No beat leaves the span, so the shifted scores are a fair baseline.
@@ -78,7 +101,8 @@ def _corr(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = SAMPLE_RATE, fps: int = FPS, smooth_s: float = 1.0,
-                     min_shift: float = 2.0, step: float = 0.25, joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
+                     min_shift: float = LOUDNESS_MIN_SHIFT, step: float = 0.25,
+                     joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
     """Pearson correlation of upper-body speed with speech loudness, both averaged over `smooth_s`, vs the same with
     the loudness circularly shifted by `min_shift` .. length - `min_shift` seconds (every `step`)."""
     speed = joint_speed(joints, fps)[:, list(joint_ids)].mean(1)                 # (T-1,)

@@ -22,12 +22,13 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
-from ..constants import FPS
+from ..constants import FPS, SAMPLE_RATE
 from ..errors import InputError, MotionFileError
 from .regions import GENERATED_REGIONS
 from .sequence import MotionSequence
 from .skeleton import NUM_JOINTS
 
+EDIT_LENGTH_SLACK = 1.0            # seconds the speech of an edit may differ from the motion (cut or padded)
 KEY_REGIONS = ("upper", "hands")   # the regions a keyframe pins, where they are regenerated
 KEY_SPACING = 12                   # frames (0.4 s): how far apart keyframes must be, the half-width of each one's pin
 LATENT_FRAMES = 4                  # frames per generator latent
@@ -163,6 +164,25 @@ def _checked_keys(spec: EditSpec, keyframes: Sequence[Keyframe], duration: float
     return keys
 
 
+def fit_speech(samples: np.ndarray, num_frames: int) -> tuple[np.ndarray, list[str]]:
+    """`samples` (mono, SAMPLE_RATE) cut or padded with silence to exactly `num_frames` frames of motion, when they
+    differ by up to EDIT_LENGTH_SLACK seconds (a warning says so); further apart, an EditError."""
+    n = int(np.ceil(num_frames * SAMPLE_RATE / FPS))
+    gap = (len(samples) - n) / SAMPLE_RATE
+    if abs(gap) > EDIT_LENGTH_SLACK:
+        raise EditError(length_mismatch(num_frames, len(samples) / SAMPLE_RATE))
+    warnings = []
+    if abs(gap) >= 1 / FPS:
+        warnings.append(f"the speech is {abs(gap):.2f} s {'longer' if gap > 0 else 'shorter'} than the motion: "
+                        f"{'its end is left out' if gap > 0 else 'silence is added at its end'}")
+    return np.pad(samples[:n], (0, max(0, n - len(samples)))), warnings
+
+
+def length_mismatch(num_frames: int, speech_seconds: float) -> str:
+    return (f"the motion is {num_frames / FPS:.2f} s long but the speech {speech_seconds:.2f} s: give the speech the "
+            f"motion was made from (they may differ by up to {EDIT_LENGTH_SLACK:g} s)")
+
+
 def keyframe(time: float, source, current: MotionSequence | None = None) -> Keyframe:
     """A keyframe at `time` s from a pose source: a (165,) or (55, 3) axis-angle array; (motion, frame) with a
     MotionSequence; "file.npz:FRAME" (a BEAT2-layout motion file and a frame of it, from 0); or a bare frame
@@ -200,5 +220,5 @@ def _pose_from_file(text: str) -> tuple[np.ndarray, str]:
     return _frame_of(motion, int(frame), Path(path).name), f"{Path(path).name}:{int(frame)}"
 
 
-__all__ = ["EditError", "EditSpec", "KEY_REGIONS", "KEY_SPACING", "Keyframe", "LATENT_FRAMES",
-           "edit_spec", "keyframe"]
+__all__ = ["EDIT_LENGTH_SLACK", "EditError", "EditSpec", "KEY_REGIONS", "KEY_SPACING", "Keyframe", "LATENT_FRAMES",
+           "edit_spec", "fit_speech", "keyframe", "length_mismatch"]

@@ -23,7 +23,7 @@ import numpy as np
 import torch
 
 from ..constants import FPS
-from .editing import EditSpec
+from .editing import KEY_SPACING, EditSpec
 from .regions import REGIONS
 from .rotations import axis_angle_to_matrix, geodesic_angle, matrix_to_axis_angle
 from .sequence import MotionSequence
@@ -158,5 +158,15 @@ def pin_pose(motion: MotionSequence, frame: int, pose: np.ndarray, joints: tuple
     return replace(motion, poses=poses.reshape(T, -1))
 
 
-__all__ = ["RAMP_MAX", "RAMP_MIN", "edit_weights", "joint_angles", "joint_speeds", "merge_edit", "pin_pose",
-           "slerp_axis_angle", "splice"]
+def apply_edit(original: MotionSequence, generated: MotionSequence, spec: EditSpec) -> MotionSequence:
+    """The edited motion: `original` merged with `generated` (`merge_edit`), then each keyframe's pinned regions
+    turned onto its pose at its frame (`pin_pose` over KEY_SPACING frames each side)."""
+    merged = merge_edit(original, generated, spec)
+    for k in spec.keyframes:
+        joints = tuple(j for r in spec.pinned(k) for j in REGIONS[r].joints)
+        merged = pin_pose(merged, k.frame, k.pose, joints, KEY_SPACING)
+    return merged
+
+
+__all__ = ["RAMP_MAX", "RAMP_MIN", "apply_edit", "edit_weights", "joint_angles", "joint_speeds", "merge_edit",
+           "pin_pose", "slerp_axis_angle", "splice"]

@@ -94,8 +94,11 @@ class MotionSequence:
         return cls(poses, trans, expr[:, :NUM_EXPRESSIONS], betas, fps)
 
     def save(self, path: str | Path) -> Path:
-        """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads)."""
+        """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads); returns the file written (numpy adds
+        .npz to a name without it)."""
         path = Path(path)
+        if not path.name.endswith(".npz"):
+            path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
         np.savez(path, poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
                  expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),

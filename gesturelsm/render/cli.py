@@ -30,7 +30,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--gen-times", nargs="+", metavar="SECONDS",
                    help="generation time per motion, shown under its label ('-' for none)")
     p.add_argument("--size", default="512x512", help="one body's tile, WIDTHxHEIGHT (default 512x512)")
-    p.add_argument("--style", default="default", help="default | plain | dark | upper (hips up, larger face)")
+    p.add_argument("--style", default="default", help="default | plain | dark | upper (hips up, larger face) "
+                   "(default: default)")
     p.add_argument("--background", help="background colour, e.g. '#ffffff'")
     p.add_argument("--floor", choices=["grid", "plain", "none"], help="floor look (default grid)")
     p.add_argument("--supersample", type=int, choices=[1, 2, 3], help="antialiasing: render k x larger and "

@@ -1,8 +1,8 @@
 """The web request's checks that run before any work (the app service raises its error from the problems
-these return; see `gesturelsm.serve.limits` for the rules and the numbers).
+these return; `gesturelsm.settings` checks the generation settings, `gesturelsm.serve.limits` holds the text bounds).
 
-- `check_request`: every field of a `Request` as a browser or API client may send it -> a normalised
-  request and the list of problems, one line each, all fields at once.
+- `check_request`: every field of a `Request` as a browser or API client may send it -> the request with
+  normalised values, its settings and the list of problems, one line each, all fields at once.
 - `textgrid_words`: an uploaded TextGrid, refused by size before it is parsed and by interval count
   before a tier is read (both scale with the speech's length), then clipped to the audio: words after its
   end are dropped with a note, and a TextGrid with no word inside the audio is a problem (it would
@@ -12,54 +12,33 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Sequence
 
 from ..align import TextGridError, read_result
-from ..backends import MAX_CFG
-from ..presentation import steps_setting_name
+from ..settings import PAGE, Asked, Limits, Settings, settings_problems
+from ..settings.values import one_of, switch, whole_number
 from . import limits
-from .limits import SEED_MAX, method_list, one_of, real_number, switch, transcript_problems, whole_number
+from .limits import transcript_problems
 
 
-def method_steps(raw: Any, chosen: Sequence[str] | None, facts: Mapping[str, Any], p: list[str]) -> dict | None:
-    """Steps per method from one value for every chosen method or a {method: value} mapping (the page sends its two
-    sliders that way, `presentation.steps_from_flags`). Each value is checked against its method's registered bound and named
-    after the setting that drives it ("Steps", "DDIM steps"); the same problem is said once."""
-    items = dict(raw) if isinstance(raw, Mapping) else {m: raw for m in (chosen or []) if m in facts}
-    steps, found = {}, []
-    for m, value in items.items():
-        if m not in facts:
-            continue                                    # not a generator (ground truth) or not loaded: no steps
-        steps[m] = whole_number(value, steps_setting_name(m), 1, facts[m].max_steps, found)
-    p += list(dict.fromkeys(found))
-    return None if found else steps
-
-
-def check_request(req: Any, methods: list[str], settings: Any, smoothing_choices: Iterable[str],
-                  sizes: Sequence[int], facts: Mapping[str, Any]) -> tuple[Any, list[str]]:
-    """(request with normalised values, problems). `settings` gives max_seconds; `facts` the methods' registered
-    facts (step bounds, which setting drives their steps)."""
-    p: list[str] = []
-    chosen = method_list(req.methods, methods, p)
-    steps = method_steps(req.steps, chosen, facts, p)
-    cfg = real_number(req.cfg, "CFG scale", 0.0, MAX_CFG, p)
-    seed = whole_number(req.seed, "Seed", 0, SEED_MAX, p)
-    smoothing = one_of(req.smoothing, "Smoothing", smoothing_choices, p)
+def check_request(req: Any, available: Sequence[str], limits_: Limits, sizes: Sequence[int]
+                  ) -> tuple[Any, Settings | None, list[str]]:
+    """(request with normalised values, its settings, problems). `available`: the methods a visitor may choose;
+    `limits_`: the server's (speech length, step caps)."""
+    settings, p = settings_problems(Asked(req.methods, req.steps, req.ddim_steps, req.cfg, req.seed,
+                                          req.stand_in_place, req.smoothing, req.transcribe, req.grounding), available,
+                                    limits_, PAGE)
     size = whole_number(req.size, "Video size", min(sizes), max(sizes), p)
     if size is not None:
         size = one_of(size, "Video size", sizes, p)
-    in_place = switch(req.stand_in_place, "Stand in place", p)
-    grounding = switch(req.grounding, "Feet on the ground", p)
     exports = switch(req.exports, "Exports", p)
-    transcribe = switch(req.transcribe, "Automatic transcription", p)
     text = "" if req.text is None else req.text
-    p += transcript_problems(text, settings.max_seconds, "of speech (the longest accepted)")
+    p += transcript_problems(text, limits_.max_seconds, "of speech (the longest accepted)")
     if req.textgrid_path is not None and not isinstance(req.textgrid_path, (str, Path)):
         p.append(f"The TextGrid must be an uploaded file (got {type(req.textgrid_path).__name__}).")
     if p:
-        return req, p
-    return replace(req, methods=chosen, steps=steps, cfg=cfg, seed=seed, smoothing=smoothing, size=size,
-                   stand_in_place=in_place, grounding=grounding, exports=exports, transcribe=transcribe, text=text), []
+        return req, None, p
+    return replace(req, methods=settings.methods, size=size, exports=exports, text=text), settings, []
 
 
 def textgrid_words(path: str | Path, seconds: float) -> tuple[list | None, list[str], list[str]]:

@@ -14,11 +14,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..backends import GROUND_TRUTH, label
 from ..constants import Progress
 from ..errors import InputError
 from ..motion.regions import GENERATED_REGIONS
-from ..pipeline import GROUND_TRUTH
-from .request import METHOD_LABELS, Result
+from .request import Result
 
 EDITED = ", edited"          # appended once to an edited motion's label (player and video)
 
@@ -27,7 +27,7 @@ def editable(pipeline, result: Result | None) -> list[str]:
     """The methods of `result`'s motions that can be edited (a loaded method whose sampler holds known latents)."""
     if result is None:
         return []
-    return [m for m in result.motions if m != GROUND_TRUTH and m in pipeline.methods and pipeline.facts(m).inpaints]
+    return [m for m in result.motions if m != GROUND_TRUTH and m in pipeline.methods and pipeline.spec(m).inpainting]
 
 
 def root_folder(result: Result) -> Path:
@@ -52,7 +52,7 @@ def _checked(pipeline, result: Result | None, method: str, start, end, regions, 
         raise InputError("Generate first: there is no motion to edit yet.")
     able = editable(pipeline, result)
     if method not in able:
-        names = ", ".join(METHOD_LABELS.get(m, m) for m in able) or "none of the shown ones"
+        names = ", ".join(label(m) for m in able) or "none of the shown ones"
         raise InputError(f"Choose a shown motion to edit; the methods that can edit: {names}.")
     a, b, s = _number(start), _number(end), _number(seed)
     if a is None or b is None:
@@ -76,9 +76,8 @@ def edit_result(pipeline, result: Result | None, method: str, start, end, region
     t0 = time.perf_counter()
     plan = result.plan
     res = pipeline.edit(result.motions[method], result.speech, {r: [(start, end)] for r in chosen},
-                        method=method, steps=plan.steps_for(method), cfg=plan.cfg, seed=seed,
-                        stand_in_place=plan.stand_in_place, smoothing=plan.smoothing, grounding=plan.grounding,
-                        body=body, progress=progress)
+                        method=method, steps=plan.steps_for(method), cfg=plan.settings.cfg, seed=seed,
+                        post=plan.settings.post, body=body, progress=progress)
     folder = root_folder(result) / f"edit-{len(result.edits) + 1}-{secrets.token_hex(4)}"
     folder.mkdir(parents=True)
     motions = {**result.motions, method: res.motion}
@@ -89,7 +88,7 @@ def edit_result(pipeline, result: Result | None, method: str, start, end, region
     seconds = time.perf_counter() - t0
     job = replace(result.job, folder=folder, motions=tuple(motions.values()), labels=tuple(labels),
                   started=time.perf_counter() - seconds)
-    what = (f"{METHOD_LABELS.get(method, method)}: {', '.join(chosen)} {start:.2f}-{end:.2f} s, "
+    what = (f"{label(method)}: {', '.join(chosen)} {start:.2f}-{end:.2f} s, "
             f"seed {seed} ({seconds:.2f} s)")
     warnings = (*result.warnings, *(w for w in res.warnings if w not in result.warnings))
     return replace(result, video=None, downloads=(), glb=None, warnings=warnings, seconds=seconds,

@@ -1,7 +1,8 @@
 """The values one web request passes through, each typed and never edited in place:
 
-- `ServiceSettings`: the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
-- `Request`: what a visitor or API client asks for, as sent (`serve/checks.py` checks and normalises it).
+- `ServiceSettings` (`config.py`): the server's limits and folders (the `python -m app` / `gesturelsm serve` flags).
+- `Request`: what a visitor or API client asks for, as sent (`serve/checks.py` checks it with the settings'
+  validator, `gesturelsm.settings`, and makes its `Plan`).
 - `RenderJob`: everything the side-by-side video of a request needs, fixed once the motions exist (motions,
   labels, the speech, size, folder, the request's start time), so the video can be rendered later.
 - `Result`: what the visitor sees (video, timing rows, downloads, summary) plus the job that renders its video;
@@ -12,18 +13,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..flows import DEFAULT_STEPS
-from ..motion.postprocess import DEFAULT_SMOOTHING
+from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
-from ..pipeline import FACTS, GROUND_TRUTH, Plan, SpeechInput, generation_seconds
-from ..presentation import LABELS
+from ..pipeline import Plan, SpeechInput, generation_seconds
+from ..settings import DEFAULTS, MISSING
 
-METHOD_LABELS = dict(LABELS)                            # every method, then ground truth: the page's order
 VIDEO_SIZES = (256, 384, 512, 640)
+DEFAULT_SIZE = 384                                       # pixels per body in the page's video
 STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")      # seconds each
 
 
@@ -50,43 +50,24 @@ class TimingRow:
 TIMING_COLUMNS = [f.metadata.get("column", f.name) for f in fields(TimingRow)]
 
 
-@dataclass(frozen=True)
-class ServiceSettings:
-    checkpoints: str | None = None          # folder with tokenizer/ and generator/ (default: shipped assets/)
-    body_model: str | None = None           # SMPL-X .npz (default: $GESTURELSM_SMPLX_MODEL or the mannequin)
-    beat2: str | None = None                # BEAT2-layout folder: ground truth for known takes
-    workdir: str | None = None              # where outputs go (default: <tmp>/gesturelsm-app)
-    max_seconds: float = 300.0              # longest speech accepted
-    max_upload_mb: float = 50.0             # largest upload accepted
-    keep_minutes: float = 60.0              # outputs older than this are deleted
-    concurrency: int = 1                    # requests generated at the same time (the rest queue)
-    max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
-    max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
-
-
 @dataclass
 class Request:
+    """One request as sent; the settings fields take whatever arrived (`Asked`), MISSING: the default."""
     audio_path: str | None
     text: str = ""
     textgrid_path: str | None = None
-    methods: Sequence[str] = ("gesturelsm",)
-    steps: Mapping[str, int] | int = field(default_factory=lambda: dict(DEFAULT_STEPS))   # per method; an int:
-    cfg: float = 2.0                                                                      # the same for all
-    seed: int = 0
-    stand_in_place: bool = False
-    smoothing: str = DEFAULT_SMOOTHING
-    size: int = 384
+    methods: Sequence[str] = DEFAULTS.methods
+    steps: Mapping[str, Any] | Any = MISSING  # {method: steps}, or one value (for "Steps" methods when ddim_steps
+    ddim_steps: Any = MISSING                 # is given too); MISSING: each method's own default
+    cfg: float = DEFAULTS.cfg
+    seed: int = DEFAULTS.seed
+    stand_in_place: bool = DEFAULTS.post.stand_in_place
+    smoothing: str = DEFAULTS.post.smoothing
+    size: int = DEFAULT_SIZE
     exports: bool = True
-    transcribe: bool = True                  # automatic transcript when neither text nor TextGrid is given
+    transcribe: bool = DEFAULTS.transcribe   # automatic transcript when neither text nor TextGrid is given
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
-    grounding: bool = True                   # feet on the ground (gesturelsm.grounding)
-
-    def plan(self, beat2: str | None = None) -> Plan:
-        steps = self.steps if isinstance(self.steps, Mapping) else {k: int(self.steps) for k in FACTS}
-        return Plan(list(dict.fromkeys(self.methods or ())), dict(steps), float(self.cfg), int(self.seed),
-                    bool(self.stand_in_place), str(self.smoothing), beat2,
-                    Path(self.audio_path).name if self.audio_path else None, bool(self.grounding))
+    grounding: bool = DEFAULTS.post.grounding   # feet on the ground (gesturelsm.grounding)
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,10 +130,10 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
     for m, t in timings.items():
         shared[m] = {**t, "rendering": render_s / n}
         g = generation_seconds(t)
-        rows.append(TimingRow(METHOD_LABELS[m], *(round(shared[m].get(k, 0.0), 3) for k in STAGES), round(g, 3),
+        rows.append(TimingRow(label(m), *(round(shared[m].get(k, 0.0), 3) for k in STAGES), round(g, 3),
                               round(duration / max(g, 1e-9), 1)))
     if ground_truth:
-        rows.append(TimingRow("Ground truth", 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None))
+        rows.append(TimingRow(GROUND_TRUTH_LABEL, 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None))
     rows.append(TimingRow(f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
                           round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)))
     return tuple(rows), shared

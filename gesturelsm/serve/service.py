@@ -9,7 +9,7 @@ this.
 One request = load the upload -> prepare the speech once (features, word timings) -> generate per method ->
 post-process (stand in place, smoothing, feet on the ground) -> render all methods side by side with the speech ->
 exports -> one timing row per method and stage. Generation and post-processing are the library's one request flow
-(`pipeline.generate_all`, `pipeline.finish`); this module adds the upload checks, rendering, exports and
+(`pipeline.generate_all`, `settings.PostProcess`); this module adds the upload checks, rendering, exports and
 the timing table. A request run with `render=False` returns its `Result` at once; `render(result)` and
 `export(result)` then return new results with the video and the downloads (`serve/request.py`). Every problem a
 visitor can fix raises an `errors.GestureError` with a message meant for the page.
@@ -35,16 +35,19 @@ from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..constants import Progress
 from ..errors import AudioError, GestureError, InputError, RenderError
+from ..evaluation.sweep import SweepLimits
 from ..export import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
-from ..motion.postprocess import SMOOTHING_WINDOWS
 from ..motion.sequence import MotionSequence
-from ..backends import checkpoint_sources
-from ..pipeline import FACTS, GROUND_TRUTH, GesturePipeline, Plan, SpeechInput
+from ..backends import GROUND_TRUTH, GROUND_TRUTH_LABEL, SPECS, checkpoint_sources, label
+from ..pipeline import GesturePipeline, Plan, SpeechInput
+from ..settings import Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
 from .editing import edit_result
 from .limits import transcript_problems
-from .request import METHOD_LABELS, VIDEO_SIZES, RenderJob, Request, Result, ServiceSettings, timing_rows
+from .config import ServiceSettings
+from .request import VIDEO_SIZES, RenderJob, Request, Result, timing_rows
+from .sweep import SweepOutcome, SweepRequest, run_sweep_request
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -66,11 +69,19 @@ class GestureService:
         return cls(pipe, settings, body)
 
     @property
+    def limits(self) -> Limits:
+        """What this server accepts beyond each method's own bounds: speech length, and the sliders' ends as step caps
+        for every request (Generate, Sweep, the API)."""
+        st = self.settings
+        return Limits(st.max_seconds, {"steps": st.max_steps, "ddim_steps": st.max_ddim_steps})
+
+    @property
     def methods(self) -> list[str]:
-        """Choices for the page: the loaded generators, then ground truth when a BEAT2 folder is set."""
-        order = {m: i for i, m in enumerate(METHOD_LABELS)}
+        """Choices for the page: the loaded generators in registry order, then ground truth when a BEAT2 folder is
+        set."""
+        order = {m: i for i, m in enumerate(SPECS)}
         gens = sorted(self.pipeline.methods, key=lambda m: order.get(m, len(order)))
-        return gens + (["ground_truth"] if self.settings.beat2 else [])
+        return gens + ([GROUND_TRUTH] if self.settings.beat2 else [])
 
     # ---- housekeeping ----------------------------------------------------------------------------------
     def warmup(self) -> float:
@@ -93,7 +104,7 @@ class GestureService:
         if not audio_path:
             return False
         try:
-            self._check(Request(audio_path))
+            self.check(Request(audio_path))
             audio = load_audio(audio_path, max_seconds=self.settings.max_seconds)
             self.pipeline.prefetch_transcript(audio, SAMPLE_RATE)
             return True
@@ -118,23 +129,29 @@ class GestureService:
         return removed
 
     # ---- checks ----------------------------------------------------------------------------------------
-    def _check(self, req: Request, need_file: bool = True) -> tuple[Request, Plan]:
-        """The upload's presence and size, then every field (`gesturelsm.serve.limits`): all problems at once, one line
-        each, before any work (steps and CFG against the method registry's bounds); returns the request with
-        normalised values and its plan."""
-        if need_file:
-            if not req.audio_path or not isinstance(req.audio_path, (str, os.PathLike)):
-                raise InputError("Please record or upload speech first (any common audio format).")
-            p = Path(req.audio_path)
-            if not p.is_file():
-                raise InputError("The uploaded audio file is missing on the server; please upload it again.")
-            mb = p.stat().st_size / 2 ** 20
-            if mb > self.settings.max_upload_mb:
-                raise InputError(f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB.")
-        req, problems = check_request(req, self.methods, self.settings, SMOOTHING_WINDOWS, VIDEO_SIZES, FACTS)
+    def _upload(self, audio_path) -> list[str]:
+        """The upload is there and within the size limit: [] or the problem."""
+        if not audio_path or not isinstance(audio_path, (str, os.PathLike)):
+            return ["Please record or upload speech first (any common audio format)."]
+        p = Path(audio_path)
+        if not p.is_file():
+            return ["The uploaded audio file is missing on the server; please upload it again."]
+        mb = p.stat().st_size / 2 ** 20
+        if mb > self.settings.max_upload_mb:
+            return [f"The audio file is {mb:.0f} MB; the limit is {self.settings.max_upload_mb:.0f} MB."]
+        return []
+
+    def check(self, req: Request, need_file: bool = True, extra: list[str] | None = None) -> tuple[Request, Plan]:
+        """The upload's presence and size, then every field (the settings' validator, `gesturelsm.settings`, with this
+        server's limits): all problems at once (with `extra` ones found by the caller), one line each, before any
+        work; returns the request with normalised values and its plan."""
+        upload = self._upload(req.audio_path) if need_file else []
+        req, settings, problems = check_request(req, self.methods, self.limits, VIDEO_SIZES)
+        problems = upload + problems + (extra or [])
         if problems:
             raise InputError("\n".join(problems))
-        return req, req.plan(self.settings.beat2)
+        name = Path(req.audio_path).name if req.audio_path else None
+        return req, Plan(settings, self.settings.beat2, name)
 
     def _words(self, req: Request, seconds: float) -> tuple[list | None, list[str]]:
         """Word timings of the uploaded TextGrid (None without one) and notes for the page, bounded by the
@@ -146,18 +163,25 @@ class GestureService:
             raise InputError("\n".join(problems))
         return words, notes
 
-    def _speech(self, req: Request, audio: np.ndarray | None, prog: Progress) -> tuple[Plan, SpeechInput, list[str]]:
-        """Checks, then the speech prepared once for every method, and notes for the page."""
+    def load(self, req: Request, extra: list[str] | None = None) -> tuple[Request, Plan, np.ndarray]:
+        """Checks (`check`), then the upload read as 16 kHz speech within the server's length limit."""
+        req, plan = self.check(req, extra=extra)
+        try:
+            audio = load_audio(req.audio_path, max_seconds=self.settings.max_seconds)
+        except AudioTooLongError as exc:
+            raise AudioError(f"The audio is too long: {exc}") from None
+        except AudioError as exc:
+            raise AudioError(f"The audio could not be read: {exc}") from None
+        return req, plan, audio
+
+    def speech(self, req: Request, audio: np.ndarray | None, prog: Progress, extra: list[str] | None = None
+               ) -> tuple[Plan, SpeechInput, list[str]]:
+        """Checks (`check`), then the speech prepared once for every method (the transcript typed, from the TextGrid,
+        recognised or none, as the request says), and notes for the page."""
         if audio is None:
-            req, plan = self._check(req)
-            try:
-                audio = load_audio(req.audio_path, max_seconds=self.settings.max_seconds)
-            except AudioTooLongError as exc:
-                raise AudioError(f"The audio is too long: {exc}") from None
-            except AudioError as exc:
-                raise AudioError(f"The audio could not be read: {exc}") from None
+            req, plan, audio = self.load(req, extra)
         else:
-            req, plan = self._check(req, need_file=False)
+            req, plan = self.check(req, need_file=False, extra=extra)
         seconds = len(audio) / SAMPLE_RATE
         problems = transcript_problems(req.text, seconds)
         if problems:
@@ -166,8 +190,14 @@ class GestureService:
         prog(0.02, "reading speech")
         speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
                                               progress=lambda f, m: prog(0.02 + 0.1 * f, m),
-                                              transcribe=bool(req.transcribe))
+                                              transcribe=plan.settings.transcribe)
         return plan, speech, notes
+
+    def sweep(self, req: SweepRequest, limits: SweepLimits = SweepLimits(), progress: Progress | None = None,
+              cancelled: Callable[[], bool] | None = None) -> SweepOutcome:
+        """A sweep of methods x steps x CFG x seeds on one upload, through the same checks, speech and request
+        folders as a request (`serve/sweep.py`)."""
+        return run_sweep_request(self, req, limits, progress, cancelled)
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Result:
@@ -175,17 +205,16 @@ class GestureService:
         t_start = time.perf_counter()
         prog = progress or (lambda f, m: None)
         self.cleanup()
-        plan, speech, notes = self._speech(req, audio, prog)
-        out = self.workdir / f"req-{secrets.token_hex(16)}"    # 128 random bits: not guessable by other visitors
-        out.mkdir(parents=True)
+        plan, speech, notes = self.speech(req, audio, prog)
+        out = self.folder()
         gen = self.pipeline.generate_all(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m), body=self.body)
         if not gen.motions:
             raise InputError("Nothing to show: choose a generator method.")
-        labels = [f"{METHOD_LABELS.get(m, m)} {r.steps} steps CFG {plan.cfg:g}" for m, r in gen.results.items()]
-        labels += ["Ground truth (BEAT2)"] * (GROUND_TRUTH in gen.motions)
+        labels = [f"{label(m)} {r.steps} steps CFG {r.cfg:g}" for m, r in gen.results.items()]
+        labels += [f"{GROUND_TRUTH_LABEL} (BEAT2)"] * (GROUND_TRUTH in gen.motions)
         gen_s = [r.generation_seconds for r in gen.results.values()] + [None] * (GROUND_TRUTH in gen.motions)
         job = RenderJob(out, tuple(gen.motions.values()), tuple(labels), tuple(gen_s), speech.audio, speech.duration,
-                        int(req.size), t_start, plan.grounding)
+                        int(req.size), t_start, plan.settings.post.grounding)
         motion_s = time.perf_counter() - t_start
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows, timings = timing_rows(timings, gen.ground_truth is not None, speech.duration, 0.0, motion_s)
@@ -203,6 +232,13 @@ class GestureService:
              progress: Progress | None = None) -> Result:
         """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
         return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
+
+    def folder(self) -> Path:
+        """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the
+        others after keep_minutes."""
+        out = self.workdir / f"req-{secrets.token_hex(16)}"
+        out.mkdir(parents=True)
+        return out
 
     def render(self, result: Result, progress: Progress | None = None,
                cancelled: Callable[[], bool] | None = None, character=None) -> Result:

@@ -2,8 +2,9 @@
 of pairwise preferences or 1-5 ratings with attention checks (`gesturelsm study serve`), responses in a
 database, and results with statistics (`gesturelsm study results`).
 
+    from gesturelsm.settings import Settings
     from gesturelsm.study import make_study
-    make_study(pipeline, "speech/", ["gesturelsm", "ddim"], "study/", raters=10)
+    make_study(pipeline, "speech/", "study/", Settings(methods=("gesturelsm", "ddim")), raters=10)
 
 The rendering side (batch) is imported on first use, so the server and the analysis start without torch.
 """

@@ -24,12 +24,11 @@ from typing import Callable, Mapping
 
 from ..align import read_result
 from ..audio import SAMPLE_RATE, load_audio
-from ..backends import FACTS
 from ..body.model import resolve_model_path
 from ..errors import AudioError, InputError, UserError
-from ..motion.postprocess import DEFAULT_SMOOTHING
 from ..pipeline import GROUND_TRUTH, Plan
 from ..render import render_video
+from ..settings import DEFAULTS, Settings
 from .design import Design, invite, read_raters, write_design
 from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
     weights_digest
@@ -88,18 +87,16 @@ def _transcript(audio: Path):
     return None, (txt.read_text().strip() if txt.exists() else None)
 
 
-def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | Path, *, raters: int = 10,
-               steps: Mapping[str, int] | None = None, cfg: float = 2.0, seed: int = 0, size: int = 512,
-               body=None, beat2: str | None = None, stand_in_place: bool = False, smoothing: str = DEFAULT_SMOOTHING,
-               design: Design = Design(), log: Callable[[str], None] = print, rig=None,
-               grounding: bool = True) -> StudyPlan:
+def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Settings = DEFAULTS, *, raters: int = 10,
+               size: int = 512, body=None, beat2: str | None = None, design: Design = Design(),
+               log: Callable[[str], None] = print, rig=None) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
-    before anything is rendered (naming.check_unchanged). `steps`: per method (missing: the method's default).
-    `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion on that
-    character beside it (VIDEO.vrm / .glb, the same blinded name)."""
-    methods = list(dict.fromkeys(methods))
-    steps = {m: int((steps or {}).get(m, f.default_steps)) for m, f in FACTS.items()}
+    before anything is rendered (naming.check_unchanged). `settings`: the methods (ground truth among them needs
+    `beat2`) and how each video is generated and post-processed (`gesturelsm.settings`; a method without steps runs
+    its default). `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion
+    on that character beside it (VIDEO.vrm / .glb, the same blinded name)."""
+    methods = list(dict.fromkeys(settings.methods))
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
             raise InputError(f"unknown method {m!r}; available: {', '.join(pipeline.methods)}, ground_truth")
@@ -107,17 +104,19 @@ def make_study(pipeline, audio_dir: str | Path, methods: list[str], out: str | P
         raise UserError("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
     if raters < 1:
         raise UserError("--raters must be at least 1")
+    base = Plan(settings, beat2)
+    pipeline.check_plan(base)
+    steps = {m: settings.steps_for(m) for m in settings.generators}
     audio_files = find_audio(audio_dir)
     out = Path(out)
-    base = Plan(methods, steps, cfg, seed, stand_in_place, smoothing, beat2, grounding=grounding)
     render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
                   character=file_label(rig.path) if rig is not None else None)
-    settings = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
-                                  weights_digest(pipeline.backends[m])) for m in methods}
-    check_unchanged(out, settings, asdict(design))
-    plan = plan_study(audio_files, methods, out, settings)
-    record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=cfg, seed=seed, size=size,
-                  stand_in_place=stand_in_place, smoothing=smoothing, grounding=grounding, design=asdict(design))
+    videos = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
+                                weights_digest(pipeline.backends[m])) for m in methods}
+    check_unchanged(out, videos, asdict(design))
+    plan = plan_study(audio_files, methods, out, videos)
+    record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=settings.cfg, seed=settings.seed,
+                  size=size, **asdict(settings.post), design=asdict(design))
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
     done, skipped = _render_missing(pipeline, plan, audio_files, base, size, body, rig, log)
     _write_key(plan)
@@ -158,20 +157,21 @@ def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Pl
         words, text = _transcript(a)
         try:
             speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
-        except ValueError as exc:  # InputError: too short, silent, too long
+        except InputError as exc:  # too short, silent, too long
             raise AudioError(f"{a.name}: {exc}") from None
         for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, replace(base, methods=[it.method], filename=a.name), body=body)
+            gen = pipeline.generate_all(speech, replace(base, settings=replace(base.settings, methods=(it.method,)),
+                                                        filename=a.name), body=body)
             if it.method not in gen.motions:
                 log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
                 continue
             render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
-                         character=rig, grounding=base.grounding)
+                         character=rig, grounding=base.settings.post.grounding)
             if rig is not None:
                 from ..export.rig import export_rig_glb
 
                 export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.grounding)
+                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.settings.post.grounding)
             done += 1
             log(f"  {it.video}  ({done} rendered)")
     return done, skipped

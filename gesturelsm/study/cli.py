@@ -9,16 +9,18 @@ from __future__ import annotations
 
 import argparse
 
+from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..errors import UserError
-from ..grounding.cli import add_grounding_flag, grounding_on
-from ..backends import FACTS, checkpoint_sources
-from ..presentation import steps_from_flags
-from ..motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from ..pipeline import GROUND_TRUTH, GesturePipeline
+from ..settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, input_folder,
+                                  output_folder, refuse)
+from ..settings.values import from_text, real_number, whole_number
 from .batch import make_study
 from .design import MODES, Design
+
+MAX_RATERS = 10_000
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -26,45 +28,56 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                               "links (resumable)", description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--audio-dir", required=True, help="folder of speech files (wav, flac, mp3, ...)")
-    p.add_argument("--methods", nargs="+", default=["gesturelsm", "rectified_flow", "ddim"],
-                   help="gesturelsm, rectified_flow, ddim, ground_truth (needs --beat2)")
+    p.add_argument("--methods", nargs="+", default=ours_default(),
+                   help=f"{', '.join(SPECS)}, {GROUND_TRUTH} (needs --beat2) (default: {' '.join(ours_default())})")
     p.add_argument("--out", required=True, help="output folder (videos/, key/, study.json)")
-    p.add_argument("--raters", type=int, default=10, help="number of rater links (a rerun with more adds links)")
-    p.add_argument("--steps", type=int, default=8, help="sampling steps for GestureLSM and rectified flow")
-    p.add_argument("--ddim-steps", type=int, default=20, help="DDIM steps")
-    p.add_argument("--cfg", type=float, default=2.0, help="classifier-free guidance scale")
-    p.add_argument("--seed", type=int, default=0, help="generation seed; also seeds the presentation orders")
-    p.add_argument("--size", type=int, default=512, help="video size in pixels (square)")
+    p.add_argument("--raters", type=from_text, default=10,
+                   help="number of rater links (a rerun with more adds links; default: 10)")
+    add_settings_flags(p, steps="two")
+    p.add_argument("--size", type=from_text, default=512, help="video size in pixels (square; default: 512)")
     p.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets/)")
     p.add_argument("--model", help="SMPL-X .npz body model (default: the built-in mannequin)")
     p.add_argument("--beat2", help="BEAT2-layout folder, for ground_truth videos of its takes")
-    p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
-    p.add_argument("--smoothing", default=DEFAULT_SMOOTHING, choices=list(SMOOTHING_WINDOWS),
-                   help=f"post-processing of every method and ground truth (default {DEFAULT_SMOOTHING})")
-    add_grounding_flag(p)
+    add_post_flags(p)
     p.add_argument("--design", default="pairwise", choices=MODES,
                    help="the study's design: pairwise preference between methods on the same speech, or each "
-                   "video rated 1-5 on realness, synchrony and smoothness")
-    p.add_argument("--attention", type=float, default=0.15,
+                   "video rated 1-5 on realness, synchrony and smoothness (default: pairwise)")
+    p.add_argument("--attention", type=from_text, default=0.15,
                    help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
                    "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
     p.set_defaults(func=run)
 
 
+def check_arguments(args: argparse.Namespace):
+    """(settings, raters, size, attention), every problem at once before any work (InputError)."""
+    p: list[str] = []
+    settings = cli_settings(args, args.methods, p)
+    attention = real_number(args.attention, "--attention", 0.0, 1.0, p)
+    raters = whole_number(args.raters, "--raters", 1, MAX_RATERS, p)
+    size = whole_number(args.size, "--size", 128, 1024, p)
+    if size is not None and size % 16:
+        p.append(f"--size must be a multiple of 16 from 128 to 1024 (got {size}).")
+    input_folder(args.audio_dir, "--audio-dir", p)
+    output_folder(args.out, "--out", p)
+    if args.rig:
+        input_file(args.rig, "--rig", p)
+    if args.beat2:
+        input_folder(args.beat2, "--beat2", p)
+    elif GROUND_TRUTH in args.methods:
+        p.append("ground_truth needs --beat2 (the BEAT2 folder the speech comes from)")
+    refuse(p)
+    return settings, raters, size, attention
+
+
 def run(args: argparse.Namespace) -> int:
-    if not 0 <= args.attention <= 1:
-        raise UserError("--attention must be a fraction from 0 to 1")
-    if args.size % 16 or not 128 <= args.size <= 1024:
-        raise UserError("--size must be a multiple of 16 from 128 to 1024")
-    gens = [m for m in args.methods if m != GROUND_TRUTH]
+    settings, raters, size, attention = check_arguments(args)
     rig = _character(args.rig)
-    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=gens or None)
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints),
+                                           methods=settings.generators or None)
     body = load_body_model(str(resolve_model_path(args.model)))
-    make_study(pipe, args.audio_dir, args.methods, args.out, raters=args.raters,
-               steps=steps_from_flags(args.steps, args.ddim_steps, FACTS), cfg=args.cfg, seed=args.seed, size=args.size,
-               body=body, beat2=args.beat2, stand_in_place=args.stand_in_place, smoothing=args.smoothing,
-               design=Design(args.design, args.attention, args.seed), rig=rig, grounding=grounding_on(args))
+    make_study(pipe, args.audio_dir, args.out, settings, raters=raters, size=size, body=body, beat2=args.beat2,
+               design=Design(args.design, attention, settings.seed), rig=rig)
     return 0
 
 

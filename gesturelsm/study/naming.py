@@ -1,7 +1,8 @@
 """What a study video is made of, and the blinded name that says so only to whoever holds the salt.
 
-A video's settings are one flat dict: every field of the pipeline's `Plan` the video was generated with (so a
-setting added to `Plan` changes the names without anything here changing), that method's steps, a digest of the
+A video's settings are one flat dict: every generation setting of the `Plan` the video was made with and every
+post-processing option (`gesturelsm.settings.Settings` and `PostProcess`: an option added there changes the names
+without anything here changing), that method's steps, a digest of the
 method's weights, and the rendering settings (size, the body model and the character, each as its file name and a
 digest of its bytes). The blinded name hashes the salt, the speech file, the method and that whole dict, so a
 video made with other settings never takes the name of one already there.
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import fields
+from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Iterator, Mapping
 
@@ -24,7 +25,8 @@ from ..errors import UserError
 from ..pipeline import GROUND_TRUTH, Plan
 
 SETTINGS_FILE = "study.json"
-PER_VIDEO = ("methods", "steps", "filename", "beat2")      # Plan fields that do not describe how a video looks
+PER_VIDEO = ("methods", "steps", "transcribe", "post")    # Settings fields that are not one video's (post: its
+                                                          # options are, one by one)
 FLAGS = {"steps": "--steps / --ddim-steps", "cfg": "--cfg", "seed": "--seed", "smoothing": "--smoothing",
          "stand_in_place": "--stand-in-place", "grounding": "--grounding", "size": "--size", "body": "--model", "character": "--rig",
          "weights": "--checkpoints", "mode": "--design", "attention": "--attention"}
@@ -33,7 +35,8 @@ FLAGS = {"steps": "--steps / --ddim-steps", "cfg": "--cfg", "seed": "--seed", "s
 def video_settings(plan: Plan, method: str, render: Mapping[str, object], weights: str | None) -> dict:
     """Everything that makes `method`'s video under `plan`: the plan's fields, the method's steps and weights
     (not for ground truth), and `render` (size, body, character)."""
-    out = {f.name: getattr(plan, f.name) for f in fields(plan) if f.name not in PER_VIDEO}
+    s = plan.settings
+    out = {f.name: getattr(s, f.name) for f in fields(s) if f.name not in PER_VIDEO} | asdict(s.post)
     if method != GROUND_TRUTH:
         out.update(steps=plan.steps_for(method), weights=weights)
     out.update(render)

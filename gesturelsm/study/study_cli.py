@@ -22,7 +22,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>")
     s.add_argument("study_dir", help="folder made by `gesturelsm batch`")
     s.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; 0.0.0.0 opens it)")
-    s.add_argument("--port", type=int, default=8600)
+    s.add_argument("--port", type=int, default=8600, help="port to listen on")
     s.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
     s.set_defaults(func=run_serve)
     i = sub.add_parser("invite", help="add N raters; prints their link paths")
@@ -42,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     r.add_argument("--keep-all", action="store_true", help="keep every rater (no attention rule)")
     r.add_argument("--reference", help="method whose Bradley-Terry score is 0 (default: the key's first)")
     r.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples of raters")
-    r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--seed", type=int, default=0, help="seed of the bootstrap resamples")
     r.set_defaults(func=run_results)
 
 

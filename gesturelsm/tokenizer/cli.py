@@ -18,18 +18,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train-tokenizer", help="train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder")
     p.add_argument("--data", required=True, help="BEAT2-layout folder (smplxflame_30/ ...)")
     p.add_argument("--out", default="runs/tokenizer", help="run folder (checkpoints, resume state)")
-    p.add_argument("--regions", nargs="+", default=list(GENERATED_REGIONS), choices=list(GENERATED_REGIONS))
+    p.add_argument("--regions", nargs="+", default=list(GENERATED_REGIONS), choices=list(GENERATED_REGIONS),
+                   help="the body regions to train a tokenizer for")
     p.add_argument("--preset", default="small", help="tiny | small (shipped) | paper")
-    p.add_argument("--steps", type=int, default=3000)
-    p.add_argument("--batch-size", type=int, default=64)
+    p.add_argument("--steps", type=int, default=3000, help="training steps")
+    p.add_argument("--batch-size", type=int, default=64, help="windows per training step")
     p.add_argument("--window", type=int, default=64, help="frames per training crop (multiple of 4)")
-    p.add_argument("--lr", type=float, default=2e-4)
+    p.add_argument("--lr", type=float, default=2e-4, help="learning rate")
     p.add_argument("--train-fraction", type=float, default=0.8,
                    help="without train_test_split.csv: the first fraction of every take trains")
     p.add_argument("--speakers", nargs="*", help="speaker ids or names to use")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda")
-    p.add_argument("--eval-every", type=int, default=500)
+    p.add_argument("--eval-every", type=int, default=500, help="steps between held-out evaluations")
     p.add_argument("--ship", metavar="DIR", help="also write fp16 inference copies here (e.g. assets/tokenizer)")
     p.add_argument("--decoder-only", metavar="DIR",
                    help="fine-tune only the decoders of the tokenizers in DIR (<region>.safetensors), encoder and "
@@ -41,7 +42,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")
     e.add_argument("--data", required=True, help="BEAT2-layout folder")
     e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"), help="folder with <region>.safetensors (default: shipped)")
-    e.add_argument("--train-fraction", type=float, default=0.8)
+    e.add_argument("--train-fraction", type=float, default=0.8,
+                   help="without a split file: the first fraction of each take is training, the rest held out")
     e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")
     e.add_argument("--json", help="also write the numbers as JSON here")
     e.set_defaults(func=run_eval)

@@ -12,6 +12,9 @@ import os
 import signal
 import sys
 
+from gesturelsm.errors import GestureError
+from gesturelsm.serve.config import QUEUE_SIZE, ServiceSettings
+
 DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
 
 Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
@@ -30,6 +33,7 @@ def _env(name: str, default=None):
 
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    d = ServiceSettings()
     p.add_argument("--host", default=_env("GESTURELSM_HOST", "127.0.0.1"),
                    help="address to bind (default 127.0.0.1; 0.0.0.0 serves the network)")
     p.add_argument("--port", type=int, default=int(_env("GESTURELSM_PORT", 7860)), help="port (default 7860)")
@@ -39,16 +43,16 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="folder with tokenizer/ and generator/ checkpoints (default: shipped assets/)")
     p.add_argument("--beat2", default=_env("GESTURELSM_BEAT2"),
                    help="BEAT2-layout folder: offers ground truth when the speech is one of its takes")
-    p.add_argument("--max-seconds", type=float, default=float(_env("GESTURELSM_MAX_SECONDS", 300)),
-                   help="longest speech accepted, seconds (default 300)")
-    p.add_argument("--max-upload-mb", type=float, default=float(_env("GESTURELSM_MAX_UPLOAD_MB", 50)),
-                   help="largest upload, MB (default 50)")
-    p.add_argument("--keep-minutes", type=float, default=float(_env("GESTURELSM_KEEP_MINUTES", 60)),
-                   help="delete generated files after this many minutes (default 60)")
-    p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", 1)),
-                   help="requests processed at once; the rest wait in the queue (default 1)")
-    p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", 32)),
-                   help="requests that may wait; beyond that visitors get 'Queue is full' (default 32)")
+    p.add_argument("--max-seconds", type=float, default=float(_env("GESTURELSM_MAX_SECONDS", d.max_seconds)),
+                   help=f"longest speech accepted, seconds (default {d.max_seconds:g})")
+    p.add_argument("--max-upload-mb", type=float, default=float(_env("GESTURELSM_MAX_UPLOAD_MB", d.max_upload_mb)),
+                   help=f"largest upload, MB (default {d.max_upload_mb:g})")
+    p.add_argument("--keep-minutes", type=float, default=float(_env("GESTURELSM_KEEP_MINUTES", d.keep_minutes)),
+                   help=f"delete generated files after this many minutes (default {d.keep_minutes:g})")
+    p.add_argument("--concurrency", type=int, default=int(_env("GESTURELSM_CONCURRENCY", d.concurrency)),
+                   help=f"requests processed at once; the rest wait in the queue (default {d.concurrency})")
+    p.add_argument("--queue-size", type=int, default=int(_env("GESTURELSM_QUEUE_SIZE", QUEUE_SIZE)),
+                   help=f"requests that may wait; beyond that visitors get 'Queue is full' (default {QUEUE_SIZE})")
     p.add_argument("--workdir", default=_env("GESTURELSM_WORKDIR"), help="output folder (default <tmp>/gesturelsm-app)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
     return p
@@ -80,8 +84,6 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
     # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
     # answer without them
-    from gesturelsm.errors import GestureError
-    from gesturelsm.serve.request import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import gradio as gr
 
+from gesturelsm.backends import label
 from gesturelsm.errors import GestureError, InputError
 from gesturelsm.motion.regions import GENERATED_REGIONS
 from gesturelsm.serve.editing import editable
-from gesturelsm.serve.request import METHOD_LABELS, Result
+from gesturelsm.serve.request import Result
 
 from .player import component as motion_player
 
@@ -81,7 +82,7 @@ class EditHandlers:
         duration = out.job.speech_seconds
         a = round(min(0.4 * duration, max(0.0, duration - DEFAULT_SECONDS)), 2)
         return (gr.update(visible=True),
-                gr.update(choices=[(METHOD_LABELS.get(m, m), m) for m in able], value=able[0]),
+                gr.update(choices=[(label(m), m) for m in able], value=able[0]),
                 a, round(min(duration, a + DEFAULT_SECONDS), 2), gr.update(interactive=False))
 
     def run(self, out, method, start, end, regions, seed, character=None, request: gr.Request = None,

@@ -2,26 +2,27 @@
 behind `gesturelsm sweep`), shown as a table with tooltips (`#sweep-table`), a plot of a chosen statistic against
 generation time (`#sweep-plot`) and the CSV / markdown / JSON / PNG downloads; any run opens in the page's
 in-browser player (`window.gesturelsmPlayer.load`). A progress bar carries the estimate of the time left; Cancel
-stops the sweep before its next motion. Sweeps share the generation queue with requests and are bounded by
+stops the sweep before its next motion. The sweep itself is the service's (`GestureService.sweep`: the same checks,
+transcript and request folders as Generate); sweeps share the generation queue with requests and are bounded by
 `PAGE_LIMITS` (said in the tab).
 """
 from __future__ import annotations
 
 import html
 import logging
-import secrets
 import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.audio import SAMPLE_RATE, load_audio
+from gesturelsm.backends import label, ours_default
 from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
-from gesturelsm.evaluation.sweep import SweepGrid, SweepLimits, SweepResult, check_grid, parse_numbers, run_sweep
-from gesturelsm.evaluation.sweep_report import PLOT_METRICS, label, sweep_plot, write_sweep
-from gesturelsm.presentation import steps_setting
+from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
+from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
+from gesturelsm.serve.sweep import SweepRequest
+from gesturelsm.settings import DEFAULTS
 
 from .player import component as motion_player
 
@@ -67,7 +68,8 @@ def table_html(result: SweepResult) -> str:
     return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><table>'
             f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table><p><small>'
             f"{len(result.runs)} motions of {result.speech_seconds:.1f} s in {result.seconds:.1f} s; mean ± standard "
-            f"deviation over {result.grid.seeds} seed(s). Hover a heading for what it measures.</small></p></div>")
+            f"deviation over {result.grid.seeds} seed(s). Transcript: {html.escape(result.text_mode)}. Hover a heading "
+            "for what it measures.</small></p></div>")
 
 
 def run_labels(result: SweepResult) -> list[tuple[str, str]]:
@@ -91,52 +93,21 @@ class SweepHandlers:
     def _refuse(msg: str):
         raise gr.Error(msg, duration=None, print_exception=False)
 
-    def _audio(self, path):
-        if not path or not Path(path).is_file():
-            self._refuse("Please upload speech for the sweep first.")
-        mb = Path(path).stat().st_size / 2 ** 20
-        if mb > self.service.settings.max_upload_mb:
-            self._refuse(f"The audio file is {mb:.0f} MB; the limit is {self.service.settings.max_upload_mb:.0f} MB.")
-        try:
-            return load_audio(path, max_seconds=self.service.settings.max_seconds)
-        except GestureError as exc:
-            self._refuse(f"The audio could not be used: {exc}")
-
-    def _server_steps(self, grid: SweepGrid) -> None:
-        """This server's step limits (its sliders' ends, ServiceSettings) on top of the methods' own bounds."""
-        st = self.service.settings
-        for m in grid.methods:
-            hi = st.max_ddim_steps if steps_setting(m) == "ddim_steps" else st.max_steps
-            if any(s > hi for s in grid.steps):
-                self._refuse(f"This server runs {label(m)} with at most {hi} steps (got {max(grid.steps)}).")
-
-    def run(self, audio_path, methods, steps, cfgs, seeds, metric, text, request: gr.Request = None,
-            progress=gr.Progress()):
+    def run(self, audio_path, methods, steps, cfgs, seeds, metric, text, auto_text=DEFAULTS.transcribe,
+            request: gr.Request = None, progress=gr.Progress()):
         """-> table html, plot, downloads, run choices, state."""
-        import soundfile as sf
-
         stop = self._flag(request)
         stop.clear()
         try:
-            grid = SweepGrid(tuple(methods or ()), parse_numbers(steps or "", int, "Steps"),
-                             parse_numbers(cfgs or "", float, "CFG"), int(seeds or 0))
-            self._server_steps(grid)
-            audio = self._audio(audio_path)
-            pipe = self.service.pipeline
-            check_grid(pipe, grid, len(audio) / SAMPLE_RATE, self.limits)
-            progress(0.0, desc="speech features")
-            speech = pipe.prepare_speech(audio, SAMPLE_RATE, text=text or None, transcribe=False)
-            result = run_sweep(pipe, speech, grid, progress=lambda f, m: progress(f, desc=m), cancelled=stop.is_set)
+            out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text, auto_text),
+                                     self.limits, progress=lambda f, m: progress(f, desc=m), cancelled=stop.is_set)
         except GestureError as exc:
             log.info("sweep refused: %s", " | ".join(str(exc).splitlines()))
             self._refuse(str(exc))
-        folder = self.service.workdir / f"req-{secrets.token_hex(16)}"    # cleaned up like the page's requests
-        files = write_sweep(result, folder / "sweep", metric if metric in PLOT_METRICS else "wrist_speed")
-        wav = folder / "speech.wav"
-        sf.write(wav, speech.audio, SAMPLE_RATE, subtype="PCM_16")
-        choices = run_labels(result)
-        return (table_html(result), str(files["sweep.png"]), [str(p) for p in files.values()],
-                gr.update(choices=choices, value=choices[0][1] if choices else None), PageSweep(result, folder, wav))
+        choices = run_labels(out.result)
+        return (table_html(out.result), str(out.files["sweep.png"]), [str(p) for p in out.files.values()],
+                gr.update(choices=choices, value=choices[0][1] if choices else None),
+                PageSweep(out.result, out.folder, out.wav))
 
     def cancel(self, request: gr.Request = None) -> str:
         self._flag(request).set()
@@ -165,6 +136,7 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
     """The Sweep tab (call inside `with gr.Blocks()`, after the player)."""
     h = SweepHandlers(service, limits)
     methods = [m for m in service.methods if m in service.pipeline.methods]
+    shown = [m for m in ours_default() if m in methods][:3]
     with gr.Tab("Sweep", elem_id="sweep-tab"):
         gr.Markdown("Tune steps and CFG by the numbers: every combination of the methods, step counts and CFG scales "
                     "is generated once per seed from this speech (its features computed once), timed and measured. "
@@ -173,11 +145,16 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
         with gr.Row():
             with gr.Column(scale=1):
                 audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech", elem_id="sweep-speech")
-                text = gr.Textbox(label="Transcript (optional; audio-only without it)", lines=2, elem_id="sweep-text")
-                chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=methods[:3], label="Methods",
+                text = gr.Textbox(label="Transcript (optional: recognised automatically without it, as for Generate)",
+                                  lines=2, elem_id="sweep-text")
+                auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
+                                        label="Transcribe automatically when no transcript is given (English)")
+                chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=shown, label="Methods",
                                           elem_id="sweep-methods")
-                steps = gr.Textbox("1 2 4 8", label="Steps (space-separated)", elem_id="sweep-steps")
-                cfgs = gr.Textbox("1 2 3", label="CFG scales (space-separated)", elem_id="sweep-cfg")
+                steps = gr.Textbox(" ".join(map(str, DEFAULT_STEPS)), label="Steps (space-separated)",
+                                   elem_id="sweep-steps")
+                cfgs = gr.Textbox(" ".join(f"{c:g}" for c in DEFAULT_CFGS), label="CFG scales (space-separated)",
+                                  elem_id="sweep-cfg")
                 seeds = gr.Number(1, precision=0, minimum=1, maximum=limits.max_seeds, label="Seeds per setting",
                                   elem_id="sweep-seeds")
                 metric = gr.Dropdown([(BY_KEY[k].label, k) for k in PLOT_METRICS], value="wrist_speed",
@@ -197,7 +174,7 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                 files = gr.File(label="Sweep table and plot (CSV, markdown, JSON, PNG)", file_count="multiple",
                                 elem_id="sweep-files")
         state, payload = gr.State(), gr.JSON(visible=False)
-        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text], [table, plot, files, pick, state],
+        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text], [table, plot, files, pick, state],
                        api_name="sweep", concurrency_limit=service.settings.concurrency, concurrency_id="generation")
         cancel.click(h.cancel, None, status, queue=False, api_visibility="private")
         run.click(lambda: "", None, status, queue=False, api_visibility="private")

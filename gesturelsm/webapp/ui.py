@@ -16,15 +16,17 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.backends import FACTS
+from gesturelsm.backends import SPECS, STEPS_SETTINGS, label, ours_default
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
-from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
-from gesturelsm.presentation import steps_from_flags
+from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.render.background import RenderCancelled
+from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
-from gesturelsm.serve.request import METHOD_LABELS, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
+from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
+from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings.check import cfg_bound
 
 from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .character import character_upload, choose, rig_downloads
@@ -34,7 +36,6 @@ from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
-QUEUE_SIZE = 32                 # requests waiting beyond the ones being served; more get "Queue is full"
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
@@ -109,13 +110,11 @@ class _Handlers:
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                auto_text=True, grounding=True, *, exports: bool, render: bool = True) -> Request:
+                auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, *, exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
-        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods,
-                       steps=steps_from_flags(steps, ddim_steps, FACTS), cfg=cfg, seed=seed,
-                       stand_in_place=in_place, grounding=grounding, smoothing=smoothing, size=size, exports=exports,
-                       transcribe=auto_text,
-                       render=render)
+        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods, steps=steps,
+                       ddim_steps=ddim_steps, cfg=cfg, seed=seed, stand_in_place=in_place, grounding=grounding,
+                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
 
     @staticmethod
     def _refuse(exc: GestureError):
@@ -140,7 +139,7 @@ class _Handlers:
             self.service.prefetch(audio)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, grounding=True, character=None, request: gr.Request = None, progress=gr.Progress()):
+                    auto_text, grounding=DEFAULTS.post.grounding, character=None, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript
         first (on the page session's `character` when one is loaded); the video (`show_video`) and the downloads
         (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes the request and
@@ -186,49 +185,66 @@ class _Handlers:
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=True, grounding=True, progress=gr.Progress()):
+                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, exports=True), progress)
         return (str(out.video), out.table, out.summary, *self._files(out))
 
 
+def _step_slider(service: GestureService, setting: str) -> gr.Slider:
+    """The slider of one step setting: up to the most steps this server accepts for the methods it drives, starting at
+    the first one's default (each method's spec; the server's caps, ServiceSettings.limits)."""
+    specs = [SPECS[m] for m in service.pipeline.methods if m in SPECS and SPECS[m].steps_setting == setting] or \
+        [s for s in SPECS.values() if s.steps_setting == setting]
+    hi = max(service.limits.max_steps(s) for s in specs)
+    return pass_through(gr.Slider(1, hi, value=specs[0].default_steps, step=1, label=STEPS_SETTINGS[setting],
+                                  info="for " + ", ".join(s.label for s in specs)))
+
+
+def _methods_info(methods: list[str]) -> str | None:
+    """What the choices' specs say a visitor should know: the authors' released weights run in our windowing, and
+    the methods that generate no face."""
+    specs = [SPECS[m] for m in methods if m in SPECS]
+    notes = ["Authors' weights: their released models; long speech uses our windowing with a neutral first seed."] \
+        if any(s.imported for s in specs) else []
+    faceless = [s.label for s in specs if "face" not in s.regions]
+    if faceless:
+        notes.append(f"{', '.join(faceless)} generate no face, so the face stays neutral.")
+    return " ".join(notes) or None
+
+
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
-    """Speech, transcript and settings; returns the request's inputs in `_Handlers.request` order, the button and
-    the Character upload."""
-    settings = service.settings
-    choices = [(METHOD_LABELS.get(m, m), m) for m in service.methods]
-    default_methods = [m for m in FACTS if m in service.methods and not FACTS[m].imported][:3]     # ours
+    """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
+    specs); returns the request's inputs in `_Handlers.request` order, the button and the Character upload."""
+    choices = [(label(m), m) for m in service.methods]
+    shown = [m for m in ours_default() if m in service.methods][:3]
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                      elem_id="speech")
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
-    auto_text = pass_through(gr.Checkbox(value=True, elem_id="auto-transcribe",
+    auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
                                          label="Transcribe automatically when no transcript is given (English)"))
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                        file_types=[".TextGrid", ".textgrid"], type="filepath")
-    methods = pass_through(gr.CheckboxGroup(
-        choices, value=default_methods, label="Methods shown side by side", elem_id="methods",
-        info=("Authors' weights: their released models; they generate no face, so the face stays neutral; "
-              "long speech uses our windowing with a neutral first seed."
-              if any(m in FACTS and FACTS[m].imported for m in service.methods) else None)))
+    methods = pass_through(gr.CheckboxGroup(choices, value=shown, label="Methods shown side by side",
+                                            elem_id="methods", info=_methods_info(service.methods)))
     character = character_upload()
     with gr.Row():
-        steps = pass_through(gr.Slider(1, min(settings.max_steps, FACTS["gesturelsm"].max_steps),
-                                       value=FACTS["gesturelsm"].default_steps, step=1,
-                                       label="Steps (GestureLSM, rectified flow)"))
-        cfg = pass_through(gr.Slider(0.0, 5.0, value=2.0, step=0.1, label="CFG scale"))
+        steps = _step_slider(service, "steps")
+        cfg = pass_through(gr.Slider(0.0, cfg_bound(service.pipeline.methods), value=DEFAULTS.cfg, step=0.1,
+                                     label="CFG scale"))
     with gr.Row():
-        ddim_steps = pass_through(gr.Slider(1, min(settings.max_ddim_steps, FACTS["ddim"].max_steps),
-                                            value=FACTS["ddim"].default_steps, step=1, label="DDIM steps"))
-        seed = pass_through(gr.Number(value=0, precision=0, label="Seed"))
+        ddim_steps = _step_slider(service, "ddim_steps")
+        seed = pass_through(gr.Number(value=DEFAULTS.seed, precision=0, label="Seed"))
     with gr.Accordion("Options", open=False):
-        grounding = pass_through(gr.Checkbox(value=True, elem_id="grounding",
+        grounding = pass_through(gr.Checkbox(value=DEFAULTS.post.grounding, elem_id="grounding",
                                              label="Feet on the ground (planted feet, no drift, on the floor)"))
-        in_place = pass_through(gr.Checkbox(value=False, label="Stand in place (no horizontal root movement)"))
-        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULT_SMOOTHING, label="Smoothing"))
-        size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=384,
+        in_place = pass_through(gr.Checkbox(value=DEFAULTS.post.stand_in_place,
+                                            label="Stand in place (no horizontal root movement)"))
+        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULTS.post.smoothing, label="Smoothing"))
+        size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=DEFAULT_SIZE,
                                            label="Video size"), VIDEO_SIZES)
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
     ex = _examples()

@@ -16,10 +16,10 @@ def _joints(motion, region):
 
 
 def test_the_registry_says_which_methods_can_edit_and_the_others_refuse(ckpt_dir):
-    from gesturelsm.backends import FACTS
+    from gesturelsm.backends import SPECS
     from gesturelsm.pipeline import GesturePipeline
 
-    assert {k for k, f in FACTS.items() if f.inpaints} == {"gesturelsm", "rectified_flow", "ddim",
+    assert {k for k, s in SPECS.items() if s.inpainting} == {"gesturelsm", "rectified_flow", "ddim",
                                                              "gesturelsm_authors", "diffusion_authors"}
     pipe = GesturePipeline.from_pretrained(checkpoints=[ckpt_dir], warm_up=False)
     speech = pipe.prepare_speech(speech_like(6.0), 16000, transcribe=False)

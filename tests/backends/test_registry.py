@@ -1,4 +1,4 @@
-"""One registry for every method: backends built from checkpoint folders or files, bounds from the facts,
+"""One registry for every method: backends built from checkpoint folders or files, bounds from the specs,
 the authors' methods as backends like ours, clear messages for missing or unknown ones."""
 from __future__ import annotations
 
@@ -9,22 +9,28 @@ import numpy as np
 import pytest
 
 from _support import speech_like
-from gesturelsm.backends import BACKENDS, FACTS, MAX_CFG, backend_facts, checkpoint_sources
+from gesturelsm.backends import BACKENDS, MAX_CFG, SPECS, checkpoint_sources, method_spec
 from gesturelsm.backends.authors import AuthorsBackend
-from gesturelsm.backends.ours import FlowBackend
+from gesturelsm.backends.ours import FlowBackend, Ours
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import CheckpointError, InputError
+from gesturelsm.flows import METHODS
 from gesturelsm.pipeline import GesturePipeline
 
 
-def test_registry_lists_ours_then_the_authors_methods_with_their_facts():
-    assert list(FACTS) == ["gesturelsm", "rectified_flow", "ddim", "gesturelsm_authors", "meanflow_authors",
+def test_registry_lists_ours_then_the_authors_methods_with_their_specs():
+    assert list(SPECS) == ["gesturelsm", "rectified_flow", "ddim", "gesturelsm_authors", "meanflow_authors",
                            "diffusion_authors"]
-    assert [k for k, f in FACTS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors", "diffusion_authors"]
-    assert (FACTS["gesturelsm"].default_steps, FACTS["ddim"].default_steps, FACTS["gesturelsm_authors"].default_steps,
-            FACTS["meanflow_authors"].default_steps, FACTS["diffusion_authors"].default_steps) == (8, 20, 2, 1, 20)
-    assert "face" in FACTS["gesturelsm"].regions and "face" not in FACTS["meanflow_authors"].regions
-    assert all(BACKENDS[k].facts is f for k, f in FACTS.items())
+    assert [k for k, f in SPECS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors", "diffusion_authors"]
+    assert (SPECS["gesturelsm"].default_steps, SPECS["ddim"].default_steps, SPECS["gesturelsm_authors"].default_steps,
+            SPECS["meanflow_authors"].default_steps, SPECS["diffusion_authors"].default_steps) == (8, 20, 2, 1, 20)
+    assert "face" in SPECS["gesturelsm"].regions and "face" not in SPECS["meanflow_authors"].regions
+    assert all(BACKENDS[k].spec is f for k, f in SPECS.items())
+    assert [k for k, f in SPECS.items() if f.steps_setting == "ddim_steps"] == ["ddim", "diffusion_authors"]
+    # what each sampler can hold fixed while it samples the rest (an editing feature needs it)
+    assert [k for k, f in SPECS.items() if not f.inpainting] == ["meanflow_authors"]
+    ours = [k for k, b in BACKENDS.items() if isinstance(b, Ours)]
+    assert ours == list(METHODS) and all(SPECS[k].max_steps == METHODS[k].facts.max_steps for k in ours)
 
 
 def test_backend_from_an_explicit_checkpoint_file_equals_the_folders():
@@ -51,17 +57,17 @@ def test_authors_methods_are_backends_without_patching(ckpt_dir):
     assert res.motion.num_frames == 30 and np.allclose(res.motion.expressions, 0)
 
 
-def test_bounds_come_from_the_facts():
+def test_bounds_come_from_the_specs():
     pipe = GesturePipeline.from_pretrained(ASSETS, warm_up=False)
     for m in pipe.methods:
         b = pipe.bounds(m)
-        assert (b.min_steps, b.max_steps, b.min_cfg, b.max_cfg) == (1, FACTS[m].max_steps, 0.0, MAX_CFG)
+        assert (b.min_steps, b.max_steps, b.min_cfg, b.max_cfg) == (1, SPECS[m].max_steps, 0.0, MAX_CFG)
         pipe.check_settings(m, b.max_steps, b.max_cfg)
-        with pytest.raises(InputError, match=f"from 1 to {b.max_steps} for {m}"):
+        with pytest.raises(InputError, match=f"Steps for {SPECS[m].label} must be from 1 to {b.max_steps} "):
             pipe.check_settings(m, b.max_steps + 1, 1.0)
     backend = pipe.backends["gesturelsm"]
-    backend.facts = replace(backend.facts, max_steps=3, max_cfg=1.5)    # the checker reads nothing else
-    with pytest.raises(InputError, match="from 1 to 3 for gesturelsm"):
+    backend.spec = replace(backend.spec, default_steps=2, max_steps=3, max_cfg=1.5)    # the checker reads nothing else
+    with pytest.raises(InputError, match="Steps for GestureLSM must be from 1 to 3 "):
         pipe.check_settings("gesturelsm", 4, 1.0)
     with pytest.raises(InputError, match="between 0 and 1.5"):
         pipe.check_settings("gesturelsm", 2, 2.0)
@@ -72,7 +78,7 @@ def test_unknown_method_is_named_with_the_choices():
     with pytest.raises(InputError, match="unknown method 'meanflow_authors'; available: gesturelsm$"):
         pipe.generate(speech_like(1.0), method="meanflow_authors")
     with pytest.raises(InputError, match="unknown method 'nope'; the methods are: gesturelsm, rectified_flow"):
-        backend_facts("nope")
+        method_spec("nope")
 
 
 def test_missing_checkpoints_are_said_clearly(tmp_path, ckpt_dir):

@@ -102,3 +102,34 @@ def test_the_speaker_row_is_what_the_statistics_give_for_the_take_against_its_ow
     got = statistics_of_joints(world[:n], local[:n], SpeechContext.of(audio[: n * 16000 // 30], ref.mean_speed))
     for k in ("bc", "beat_gain", "loudness_gain", "jerk", "diversity"):
         assert got[k] == pytest.approx(ref.statistics[k], rel=1e-3, abs=1e-5), k
+
+
+def test_the_speech_response_gains_need_the_speech_length_the_docs_and_tooltips_say():
+    """The beat timing gain was blank for 6 s of speech while the docs said about 5 s suffice: the shortest speech
+    each gain is computed for, found by trying every length, is the length docs/SWEEP.md and the page's tooltips
+    give."""
+    import math
+
+    from gesturelsm.evaluation.motion_stats import BY_KEY
+
+    motion = synthetic_motion(frames=300, seed=5)
+    audio = speech_like(10.0, seed=6)
+    world = stats_body().joints(motion.poses, motion.trans)
+    beats = SpeechContext.of(audio).beats
+
+    def shortest(test) -> float:
+        for frames in range(60, 300):
+            try:
+                test(frames)
+            except ValueError:
+                continue
+            return math.ceil(frames / 30 * 10 - 1e-9) / 10       # seconds of speech that give that many frames
+        raise AssertionError("never computed")
+
+    beat_s = shortest(lambda n: beat_timing(world[:n], beats[beats < n / 30]))
+    loud_s = shortest(lambda n: energy_following(world[:n], audio[: n * 16000 // 30]))
+    assert (beat_s, loud_s) == (6.1, 4.1)
+    docs = " ".join((Path(__file__).resolve().parents[2] / "docs" / "SWEEP.md").read_text().split())
+    assert f"the beat timing gain at least {beat_s:g} s, loudness following at least {loud_s:g} s" in docs
+    assert f"needs at least {beat_s:g} s of speech" in BY_KEY["beat_gain"].tooltip
+    assert f"needs at least {loud_s:g} s of speech" in BY_KEY["loudness_gain"].tooltip

@@ -9,9 +9,10 @@ import pytest
 import soundfile as sf
 
 from _support import served, speech_like
-from gesturelsm.presentation import LABELS
+from gesturelsm.backends import SPECS
 from gesturelsm.reference.runner import FACE_NOTE
-from gesturelsm.serve.request import TIMING_COLUMNS, ServiceSettings
+from gesturelsm.serve.config import ServiceSettings
+from gesturelsm.serve.request import TIMING_COLUMNS
 from gesturelsm.serve.service import GestureService
 
 
@@ -33,8 +34,8 @@ def test_page_offers_the_authors_methods_with_their_labels(service):
     cfg = build_demo(service).blocks.get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("label") == "Methods shown side by side")
     choices = dict((v, label) for label, v in box["props"]["choices"])
-    assert choices["gesturelsm_authors"] == LABELS["gesturelsm_authors"]
-    assert choices["meanflow_authors"] == LABELS["meanflow_authors"]
+    assert choices["gesturelsm_authors"] == SPECS["gesturelsm_authors"].label
+    assert choices["meanflow_authors"] == SPECS["meanflow_authors"].label
     assert {"gesturelsm", "rectified_flow", "ddim"} <= set(choices)          # ours stay beside theirs
     assert "generate no face" in box["props"]["info"]
 
@@ -50,7 +51,7 @@ def test_generate_through_the_page_api_with_the_authors_methods(app_url, tmp_pat
         True, "light", 256, False, api_name="/generate")
     assert table["headers"] == TIMING_COLUMNS
     names = [row[0] for row in table["data"]]
-    assert any(LABELS["gesturelsm_authors"] in n for n in names) and any(LABELS["meanflow_authors"] in n for n in names)
+    assert any(SPECS["gesturelsm_authors"].label in n for n in names) and any(SPECS["meanflow_authors"].label in n for n in names)
     assert any(n.startswith("GestureLSM") and "authors" not in n for n in names)
     assert FACE_NOTE in summary
     import imageio.v3 as iio

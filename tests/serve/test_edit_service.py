@@ -8,7 +8,8 @@ import pytest
 from gesturelsm.errors import InputError
 from gesturelsm.motion import MotionSequence
 from gesturelsm.serve.editing import EDITED, edited_method, editable, root_folder
-from gesturelsm.serve.request import Request, ServiceSettings
+from gesturelsm.serve.config import ServiceSettings
+from gesturelsm.serve.request import Request
 from gesturelsm.serve.service import GestureService
 from _support import speech_like
 

@@ -14,9 +14,7 @@ from pathlib import Path
 import pytest
 import soundfile as sf
 
-from gesturelsm.backends import FACTS
 from gesturelsm.errors import GestureError
-from gesturelsm.presentation import steps_from_flags
 from gesturelsm.serve.request import Request
 from gesturelsm.serve.service import GestureService
 
@@ -33,9 +31,7 @@ def no_work(service, monkeypatch):
 
 
 def _req(path, **kw):
-    """A request as the page sends it: its two step sliders become steps per method (presentation.steps_from_flags)."""
-    if "ddim_steps" in kw:
-        kw["steps"] = steps_from_flags(kw.pop("steps", 1), kw.pop("ddim_steps"), FACTS)
+    """A request as the page sends it (its two step sliders as `steps` and `ddim_steps`)."""
     return Request(str(path), **{"steps": 1, "size": 256, "exports": False, **kw})
 
 
@@ -78,9 +74,10 @@ def test_all_bad_fields_are_listed_one_line_each(no_work, speech_wav):
 
 
 def test_whole_floats_are_accepted_as_numbers(service, speech_wav):
-    req, _plan = service._check(_req(speech_wav, seed=7.0, steps=2.0, size=256.0, stand_in_place=None, text=None))
-    assert (req.seed, req.steps, req.size, req.stand_in_place, req.text) == (7, {"gesturelsm": 2}, 256, False, "")
-    assert type(req.seed) is int and type(req.steps["gesturelsm"]) is int
+    req, plan = service.check(_req(speech_wav, seed=7.0, steps=2.0, size=256.0, stand_in_place=None, text=None))
+    s = plan.settings
+    assert (s.seed, dict(s.steps), req.size, s.post.stand_in_place, req.text) == (7, {"gesturelsm": 2}, 256, False, "")
+    assert type(s.seed) is int and type(s.steps["gesturelsm"]) is int
 
 
 def test_transcript_is_bounded_by_the_speech(no_work, speech_wav):

@@ -13,7 +13,8 @@ from gesturelsm.webapp.ui import EXAMPLES
 def test_shipped_checkpoints_serve_an_example(tmp_path):
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip(f"shipped generator checkpoints not found in {ASSETS / 'generator'}")
-    from gesturelsm.serve.request import Request, ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
+    from gesturelsm.serve.request import Request
     from gesturelsm.serve.service import GestureService
 
     ex = json.loads((EXAMPLES / "examples.json").read_text())[0]

@@ -78,10 +78,11 @@ def test_batch_makes_one_study_design_blinded_and_resumable(study_assets, audio_
     (out / "videos" / videos[0]).unlink()
     logs = []
     from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.settings import Settings
     from gesturelsm.study import make_study
 
     pipe = GesturePipeline.from_pretrained(study_assets)
-    make_study(pipe, audio_dir, ["gesturelsm", "ddim"], out, raters=3, steps={"gesturelsm": 1, "ddim": 2}, size=128,
+    make_study(pipe, audio_dir, out, Settings(("gesturelsm", "ddim"), {"gesturelsm": 1, "ddim": 2}), raters=3, size=128,
                log=logs.append)
     assert sorted(p.name for p in (out / "videos").iterdir()) == every
     assert "1 videos rendered, 3 already there" in logs[-1]
@@ -109,21 +110,24 @@ def test_batch_errors_are_clear(study_assets, tmp_path, capsys):
 
 
 def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
-    """Each setting the key records, and any setting added to the pipeline's Plan, gives the video another name,
-    so a video made otherwise never passes for one already there; ground truth does not depend on steps."""
+    """Each setting the key records, and any generation setting or post-processing option added to the settings
+    (gesturelsm.settings), gives the video another name, so a video made otherwise never passes for one already
+    there; ground truth does not depend on steps."""
     from dataclasses import fields
 
     from gesturelsm.pipeline import GROUND_TRUTH, Plan
+    from gesturelsm.settings import PostProcess, Settings
     from gesturelsm.study.batch import plan_study
     from gesturelsm.study.naming import video_settings
 
     render = dict(size=512, body="SMPLX_MANNEQUIN.npz mannequin-sha", character=None)
-    base = Plan(["gesturelsm"], {"gesturelsm": 8}, 2.0, 0, False, "light")
+    base = Plan(Settings(("gesturelsm",), {"gesturelsm": 8}, 2.0, 0, PostProcess(False, "light")))
     settings = video_settings(base, "gesturelsm", render, "weights-one")
     changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, grounding=False, size=256,
                    body="SMPLX_NEUTRAL.npz mannequin-sha", character="me.vrm mannequin-sha", weights="weights-two")
-    plan_fields = {f.name for f in fields(Plan)} - {"methods", "steps", "filename", "beat2"}
-    assert plan_fields <= set(changed), "a setting of Plan is missing from this test"
+    plan_fields = ({f.name for f in fields(Settings)} - {"methods", "steps", "transcribe", "post"}) | \
+        {f.name for f in fields(PostProcess)}
+    assert plan_fields <= set(changed), "a setting is missing from this test"
     assert set(settings) == set(changed)
     files = [Path("a.wav")]
     name = plan_study(files, ["gesturelsm"], tmp_path, {"gesturelsm": settings}).items[0].video
@@ -181,6 +185,9 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
         def prepare_speech(self, *a, **k):
             return None
 
+        def check_plan(self, plan):
+            return None
+
         def generate_all(self, speech, plan, progress=None, body=None):
             plans.append(plan)
             raise Stop
@@ -193,7 +200,7 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
     with pytest.raises(Stop):
         main(["batch", "--audio-dir", str(tmp_path / "a"), "--methods", "gesturelsm", "--out", str(tmp_path / "o"),
               "--raters", "1", *flag])
-    assert [p.grounding for p in plans] == [want]
+    assert [p.settings.post.grounding for p in plans] == [want]
     assert json.loads((tmp_path / "o" / "study.json").read_text())["grounding"] is want
 
 

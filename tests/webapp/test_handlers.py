@@ -78,7 +78,7 @@ def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_w
     from gesturelsm.grounding import CHANGED_JOINTS
     from gesturelsm.pipeline import finish
 
-    cfg = build_demo(service).get_config_file()
+    cfg = build_demo(service).blocks.get_config_file()
     box = next(c for c in cfg["components"] if c["props"].get("elem_id") == "grounding")
     assert box["props"]["value"] is True
     deps = {d.get("api_name"): d for d in cfg["dependencies"]}

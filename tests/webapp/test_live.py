@@ -132,7 +132,7 @@ def test_player_arrays_are_the_streamed_poses_on_the_body(shipped_pipe):
 
 def test_closing_the_app_stops_its_live_streams(shipped_pipe, tmp_path):
     """`demo.close()` ends every running live session and joins its worker (none outlives the server)."""
-    from gesturelsm.serve.request import ServiceSettings
+    from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
     from gesturelsm.webapp.ui import serve_locally
 

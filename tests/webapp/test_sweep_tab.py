@@ -45,7 +45,7 @@ def test_page_statistics_are_empty_without_motion():
 @pytest.fixture(scope="module")
 def page_sweep(service, speech_wav):
     h = SweepHandlers(service)
-    return h, h.run(str(speech_wav), ["gesturelsm", "rectified_flow"], "1 2", "2", 2, "hand_spread", "",
+    return h, h.run(str(speech_wav), ["gesturelsm", "rectified_flow"], "1 2", "2", 2, "hand_spread", "", False,
                     progress=quiet)
 
 
@@ -89,9 +89,9 @@ def test_a_new_statistic_replots_without_generating(page_sweep):
 
 
 @pytest.mark.parametrize("args, message", [
-    (("", "2", 1), "Give at least one step count."),
-    (("1 40", "2", 1), "at most 32 steps (got 40)"),
-    (("1 200", "2", 1), "at most 32 steps (got 200)"),
+    (("", "2", 1), "Steps is empty: give at least one."),
+    (("1 40", "2", 1), "Steps must be from 1 to 32 (got 40)."),           # the server's cap, as for Generate
+    (("1 200", "2", 1), "Steps must be from 1 to 32 (got 200)."),
     (("1", "11", 1), "CFG scale must be between 0 and"),
     (("1 2 3 4 5 6 7", "0 1 2 3 4 5", 1), "a sweep takes at most 36"),
     (("1", "2", 5), "Seeds must be from 1 to 3"),
@@ -99,7 +99,8 @@ def test_a_new_statistic_replots_without_generating(page_sweep):
 def test_bad_sweeps_are_refused_with_one_clear_message(service, speech_wav, args, message):
     steps, cfg, seeds = args
     with pytest.raises(gr.Error, match=re.escape(message)):
-        SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], steps, cfg, seeds, "bc", "", progress=quiet)
+        SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], steps, cfg, seeds, "bc", "", False,
+                                   progress=quiet)
 
 
 def test_a_sweep_on_silence_or_without_speech_is_refused(service, tmp_path):
@@ -117,13 +118,44 @@ def test_cancel_stops_the_sweep_before_its_next_motion(service, speech_wav):
 
     def progress(f, desc=""):
         calls.append(desc)
-        if len(calls) == 3:                      # speech features, motion 1, then motion 2 starts: cancel now
+        if desc.startswith("2 of 3"):            # motion 2 starts: cancel now
             h.cancel(None)
 
     before = set(service.workdir.glob("req-*"))
     with pytest.raises(gr.Error, match="cancelled"):
-        h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "0", 1, "bc", "", progress=progress)
-    assert len(calls) == 3 and set(service.workdir.glob("req-*")) == before
+        h.run(str(speech_wav), ["gesturelsm"], "1 2 3", "0", 1, "bc", "", False, progress=progress)
+    assert not any(c.startswith("3 of 3") for c in calls) and set(service.workdir.glob("req-*")) == before
+
+
+def test_bad_sweeps_are_refused_like_generate_all_problems_at_once(service, speech_wav):
+    """The sweep takes a request's checks (GestureService.check): the upload and every field in one message."""
+    with pytest.raises(gr.Error) as err:
+        SweepHandlers(service).run(None, ["gesturelsm", "magic"], "0", "x", 9, "bc", "", progress=quiet)
+    assert err.value.message.splitlines() == [
+        "Please record or upload speech first (any common audio format).",
+        "Unknown method 'magic'; available: gesturelsm, rectified_flow, ddim.", "Steps must be from 1 to 32 (got 0).",
+        "CFG scale must be numbers (got 'x').", "Seeds must be from 1 to 3 (got 9)."]
+
+
+@pytest.fixture
+def recognised(monkeypatch):
+    """Automatic transcription that hears "hello there" in any speech."""
+    from types import SimpleNamespace
+
+    import gesturelsm.pipeline as pipeline
+    from gesturelsm.align import Word
+    from gesturelsm.asr.source import AutomaticWords
+
+    def hear(audio, remember=True):
+        return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
+                              "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
+    monkeypatch.setattr(pipeline, "automatic_words", hear)
+
+
+def test_the_sweep_tab_transcribes_the_speech_as_generate_does(service, speech_wav, recognised):
+    out = service.run(Request(str(speech_wav), methods=("gesturelsm",), steps=1, render=False, exports=False))
+    *_, state = SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
+    assert out.text_mode.startswith("automatic transcript (2 words") and state.result.text_mode == out.text_mode
 
 
 def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service):

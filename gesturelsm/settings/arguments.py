@@ -1,0 +1,176 @@
+"""The command line's side of the settings: the generation flags every command shares, with their defaults from
+`DEFAULTS` and the method specs (shown in `--help`), and the checks of the other arguments (input files, output
+paths, thread counts), so a command refuses bad arguments with one line before it loads a model or reads speech.
+
+    add_settings_flags(parser, steps="one")            # --steps --cfg --seed
+    add_post_flags(parser)                             # --smoothing --stand-in-place
+    ...
+    problems = []
+    settings = cli_settings(args, methods=[args.method], problems=problems)
+    audio = input_file(args.audio, "AUDIO", problems)
+    out = output_file(args.out, "--out", ".npz", problems)
+    refuse(problems)                                    # InputError: every problem, one per line
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import numbers
+import os
+import sys
+from pathlib import Path
+from typing import Any, Sequence
+
+from ..backends import GROUND_TRUTH, SPECS
+from ..errors import InputError
+from ..grounding.cli import add_grounding_flag, grounding_on
+from ..motion.postprocess import SMOOTHING_WINDOWS
+from .check import CLI, MISSING, Asked, settings_problems
+from .defaults import DEFAULTS, MAX_SECONDS, Limits, Settings
+from .values import from_text, shown, whole_number
+
+
+def default_steps_text(setting: str | None = None) -> str:
+    """"GestureLSM 8, DDIM 20, ..." for the methods a step setting drives (None: every method)."""
+    return ", ".join(f"{s.label} {s.default_steps}" for s in SPECS.values() if setting in (None, s.steps_setting))
+
+
+def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
+    """The step flags (`steps`: "one": --steps for the chosen method; "two": --steps and --ddim-steps as the page's
+    two sliders; "none": the command adds its own), --cfg and --seed. Numbers are read as text and checked by
+    `cli_settings`."""
+    if steps == "one":
+        p.add_argument("--steps", type=from_text, default=MISSING,
+                       help=f"sampling steps (default: the method's own: {default_steps_text()})")
+    elif steps == "two":
+        p.add_argument("--steps", type=from_text, default=MISSING,
+                       help=f"sampling steps of the methods other than diffusion (default: each method's own: "
+                            f"{default_steps_text('steps')})")
+        p.add_argument("--ddim-steps", type=from_text, default=MISSING,
+                       help=f"sampling steps of the diffusion methods (default: {default_steps_text('ddim_steps')})")
+    p.add_argument("--cfg", type=from_text, default=DEFAULTS.cfg,
+                   help=f"classifier-free guidance scale (default: {DEFAULTS.cfg:g})")
+    p.add_argument("--seed", type=from_text, default=DEFAULTS.seed,
+                   help=f"generation seed: the same seed gives the same motion (default: {DEFAULTS.seed})")
+
+
+def add_post_flags(p: argparse.ArgumentParser) -> None:
+    """--smoothing, --stand-in-place and --grounding: the post-processing of every motion (`PostProcess`)."""
+    p.add_argument("--smoothing", default=DEFAULTS.post.smoothing, choices=list(SMOOTHING_WINDOWS),
+                   help="post-processing (motion/postprocess.py); 'off' writes the raw model output "
+                        f"(default: {DEFAULTS.post.smoothing})")
+    p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
+    add_grounding_flag(p)
+
+
+def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--max-seconds", type=from_text, default=MAX_SECONDS,
+                   help=f"longest speech accepted, seconds (default: {MAX_SECONDS:g})")
+
+
+def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
+                 available: Sequence[str] | None = None, limits: Limits = Limits()) -> Settings | None:
+    """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
+    steps = getattr(args, "steps", MISSING)
+    if hasattr(args, "ddim_steps"):          # two flags: each drives only its own methods, an omitted one none
+        given = {"steps": steps, "ddim_steps": args.ddim_steps}
+        steps = {m: given[SPECS[m].steps_setting] for m in methods or () if m in SPECS
+                 and given[SPECS[m].steps_setting] is not MISSING}
+    asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
+                  cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
+                  stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing", MISSING),
+                  transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
+                  grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
+    settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
+    problems += found
+    return settings
+
+
+def threads(value: Any, problems: list[str], field: str = "--threads") -> int | None:
+    """A thread count from 1 to this machine's CPU count (None stays None: torch's own choice)."""
+    if value is None:
+        return None
+    return whole_number(from_text(value), field, 1, os.cpu_count() or 1, problems)
+
+
+def positive(value: Any, field: str, problems: list[str], hi: float | None = None) -> float | None:
+    """A finite number above 0 (and at most `hi`)."""
+    value = from_text(value)
+    ok = not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(float(value))
+    if not ok or value <= 0 or (hi is not None and value > hi):
+        most = f" and at most {hi:g}" if hi is not None else ""
+        problems.append(f"{field} must be a number above 0{most} (got {shown(value)}).")
+        return None
+    return float(value)
+
+
+def input_file(path: Any, field: str, problems: list[str]) -> Path | None:
+    """A file that exists and is readable (not a folder)."""
+    p = Path(path)
+    if not p.exists():
+        problems.append(f"{field} {p}: file not found.")
+    elif p.is_dir():
+        problems.append(f"{field} {p} is a folder; give a file.")
+    elif not os.access(p, os.R_OK):
+        problems.append(f"{field} {p}: the file cannot be read (permissions).")
+    else:
+        return p
+    return None
+
+
+def input_folder(path: Any, field: str, problems: list[str]) -> Path | None:
+    p = Path(path)
+    if not p.is_dir():
+        problems.append(f"{field} {p}: " + ("is a file; give a folder." if p.exists() else "folder not found."))
+        return None
+    return p
+
+
+def _blocked(p: Path) -> Path | None:
+    """The first existing parent of `p` that is not a folder (then nothing can be written under it)."""
+    for parent in p.parents:
+        if parent.exists():
+            return None if parent.is_dir() else parent
+    return None
+
+
+def output_file(path: Any, field: str, suffix: str, problems: list[str]) -> Path | None:
+    """Where a file will be written, with `suffix` added when the name lacks it (as the writer would add it); not a
+    folder, and under a folder (or a path that can become one)."""
+    p = Path(path)
+    if not p.name.endswith(suffix) and not p.is_dir():
+        p = p.with_name(p.name + suffix)
+    if p.is_dir():
+        problems.append(f"{field} {p} is a folder; give a file name ending in {suffix}.")
+    elif (bad := _blocked(p)) is not None:
+        problems.append(f"{field} {p}: {bad} is a file, not a folder.")
+    else:
+        return p
+    return None
+
+
+def output_folder(path: Any, field: str, problems: list[str]) -> Path | None:
+    """A folder that exists or can be made (not a file, nor under one)."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        problems.append(f"{field} {p} is a file; give a folder (it is made if missing).")
+    elif (bad := _blocked(p)) is not None:
+        problems.append(f"{field} {p}: {bad} is a file, not a folder.")
+    else:
+        return p
+    return None
+
+
+def say(fraction: float, message: str) -> None:
+    """A command's progress on stderr, one line per step (its results go to stdout)."""
+    print(f"[{100 * fraction:3.0f} %] {message}", file=sys.stderr, flush=True)
+
+
+def refuse(problems: list[str]) -> None:
+    """Raise every problem at once (one per line), if any."""
+    if problems:
+        raise InputError("\n".join(dict.fromkeys(problems)))
+
+
+__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text", "input_file",
+           "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

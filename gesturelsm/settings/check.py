@@ -1,0 +1,183 @@
+"""The one validator of generation settings, used by every entry point: the page's Generate and Sweep, the Gradio
+API, `gesturelsm generate / sweep / batch / eval / live`, the study batch and the pipeline itself.
+
+    settings = checked(Asked(methods=["gesturelsm", "ddim"], steps=8, ddim_steps=20, cfg=2.0, seed=0),
+                       available=pipe.methods)                   # InputError listing every problem, one per line
+
+Values are checked as sent (`values.py`) against each chosen method's spec (`gesturelsm.backends.SPECS`: steps from
+1 to its max_steps, CFG from 0 to its max_cfg) and the entry point's `Limits` (a server's step caps); fields are
+named as the entry point shows them (`PAGE`: "Steps", `CLI`: "--steps").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+from ..backends import SPECS, MethodSpec, method_spec
+from ..errors import InputError
+from ..motion.postprocess import SMOOTHING_WINDOWS
+from .defaults import DEFAULTS, SEED_MAX, Limits, PostProcess, Settings
+from .values import method_list, number_list, one_of, real_number, switch, whole_number
+
+
+class _Missing:
+    def __repr__(self) -> str:
+        return "MISSING"
+
+
+MISSING: Any = _Missing()           # a field the entry point did not receive: its default is used
+
+
+@dataclass(frozen=True)
+class Names:
+    """How an entry point names each setting in its messages."""
+    methods: str
+    steps: str
+    ddim_steps: str
+    cfg: str
+    seed: str
+    stand_in_place: str
+    smoothing: str
+    grounding: str
+    transcribe: str
+
+
+PAGE = Names("Methods", "Steps", "DDIM steps", "CFG scale", "Seed", "Stand in place", "Smoothing",
+             "Feet on the ground", "Automatic transcription")
+CLI = Names("--methods", "--steps", "--ddim-steps", "--cfg", "--seed", "--stand-in-place", "--smoothing",
+            "--grounding", "--no-transcribe")
+
+
+@dataclass(frozen=True)
+class Asked:
+    """Settings exactly as an entry point received them. `steps`: one value for every chosen method, or for those its
+    "steps" setting drives when `ddim_steps` is given too (the page's two sliders, `--steps` / `--ddim-steps`), or
+    {method: value}. A MISSING field takes its default (a method's own steps, `DEFAULTS` for the rest); None is a
+    value that was sent empty, and is refused."""
+    methods: Any = MISSING
+    steps: Any = MISSING
+    ddim_steps: Any = MISSING
+    cfg: Any = MISSING
+    seed: Any = MISSING
+    stand_in_place: Any = MISSING
+    smoothing: Any = MISSING
+    transcribe: Any = MISSING
+    grounding: Any = MISSING
+
+
+def _given(value: Any, default: Any) -> Any:
+    return default if value is MISSING else value
+
+
+def steps_per_method(asked: Asked, methods: Sequence[str]) -> dict[str, tuple[Any, str]]:
+    """{method: (value as sent, name of the setting that gave it)} for the chosen methods that have a spec; methods
+    whose setting was not sent are left out (they run their default)."""
+    out = {}
+    for m in methods:
+        if m not in SPECS:
+            continue                                # ground truth: no steps
+        spec = SPECS[m]
+        if isinstance(asked.steps, Mapping):
+            if m in asked.steps:
+                out[m] = (asked.steps[m], spec.steps_setting)
+        elif spec.steps_setting == "ddim_steps" and asked.ddim_steps is not MISSING:
+            out[m] = (asked.ddim_steps, "ddim_steps")
+        elif asked.steps is not MISSING and (spec.steps_setting == "steps" or asked.ddim_steps is MISSING):
+            out[m] = (asked.steps, "steps")
+    return out
+
+
+def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Names, problems: list[str]) -> dict | None:
+    """Steps per method, each within its spec's bound and the entry point's cap for its setting. A value is checked
+    once against the widest bound of the methods it drives (type, emptiness, below 1), then against each method's
+    own, naming the method when the bounds differ."""
+    groups: dict[tuple[str, str], list[str]] = {}
+    values: dict[tuple[str, str], Any] = {}
+    for m, (value, setting) in steps_per_method(asked, methods).items():
+        key = (setting, repr(value))
+        groups.setdefault(key, []).append(m)
+        values[key] = value
+    steps, found = {}, []
+    for key, ms in groups.items():
+        field, value = getattr(names, key[0]), values[key]
+        highs = {m: limits.max_steps(method_spec(m)) for m in ms}
+        widest = whole_number(value, field, 1, max(highs.values()), found)
+        for m in ms if widest is not None else ():
+            named = field if len(set(highs.values())) == 1 else f"{field} for {method_spec(m).label}"
+            steps[m] = whole_number(widest, named, 1, highs[m], found)
+    for setting in ("steps", "ddim_steps"):            # a value sent for no chosen method is still checked
+        value = getattr(asked, setting)
+        if not any(k[0] == setting for k in groups) and value is not MISSING and not isinstance(value, Mapping):
+            hi = max(limits.max_steps(s) for s in SPECS.values() if s.steps_setting == setting)
+            whole_number(value, getattr(names, setting), 1, hi, found)
+    problems += list(dict.fromkeys(found))
+    return None if found else steps
+
+
+def cfg_bound(methods: Sequence[str]) -> float:
+    """The largest CFG scale every chosen method accepts."""
+    return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
+
+
+def check_post(asked: Asked, names: Names, problems: list[str]) -> PostProcess | None:
+    n = len(problems)
+    in_place = switch(_given(asked.stand_in_place, DEFAULTS.post.stand_in_place), names.stand_in_place, problems)
+    smoothing = one_of(_given(asked.smoothing, DEFAULTS.post.smoothing), names.smoothing, SMOOTHING_WINDOWS, problems)
+    grounding = switch(_given(asked.grounding, DEFAULTS.post.grounding), names.grounding, problems)
+    return None if len(problems) > n else PostProcess(in_place, smoothing, grounding)
+
+
+def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
+                      default_methods: Sequence[str] = DEFAULTS.methods) -> tuple[Settings | None, list[str]]:
+    """(the settings, []) or (None, every problem, one line each). `available`: the methods that may be chosen (the
+    loaded ones, ground truth where a BEAT2 folder is set); `default_methods` when none were sent."""
+    p: list[str] = []
+    methods = method_list(_given(asked.methods, list(default_methods)), list(available), p, names.methods)
+    steps = check_steps(asked, methods or [], limits, names, p)
+    cfg = real_number(_given(asked.cfg, DEFAULTS.cfg), names.cfg, 0.0, cfg_bound(methods or []), p)
+    seed = whole_number(_given(asked.seed, DEFAULTS.seed), names.seed, 0, SEED_MAX, p)
+    post = check_post(asked, names, p)
+    transcribe = switch(_given(asked.transcribe, DEFAULTS.transcribe), names.transcribe, p)
+    if p:
+        return None, p
+    return Settings(tuple(methods), steps, cfg, seed, post, transcribe), []
+
+
+def checked(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
+            default_methods: Sequence[str] = DEFAULTS.methods) -> Settings:
+    """The settings, or an InputError with every problem, one per line."""
+    settings, problems = settings_problems(asked, available, limits, names, default_methods)
+    if problems:
+        raise InputError("\n".join(problems))
+    return settings
+
+
+def check_method_settings(spec: MethodSpec, steps: Any, cfg: Any, limits: Limits = Limits()) -> None:
+    """One method's steps and CFG scale against its spec (the pipeline's own check, for callers of its Python API):
+    InputError naming the method."""
+    p: list[str] = []
+    whole_number(steps, f"Steps for {spec.label}", 1, limits.max_steps(spec), p)
+    real_number(cfg, f"CFG scale for {spec.label}", 0.0, spec.max_cfg, p)
+    if p:
+        raise InputError("\n".join(p))
+
+
+def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max_seeds: int, limits: Limits,
+                  names: Names, problems: list[str]) -> tuple[tuple[int, ...], tuple[float, ...], int] | None:
+    """A sweep's lists: step counts and CFG scales (each within every chosen method's bounds) and a seed count."""
+    n = len(problems)
+    step_list = number_list(steps, names.steps, True, problems)
+    found: list[str] = []
+    for s in step_list or ():
+        check_steps(Asked(steps=s), methods, limits, names, found)
+    problems += list(dict.fromkeys(found))
+    cfg_list, found = number_list(cfgs, names.cfg, False, problems), []
+    for c in cfg_list or ():
+        real_number(c, names.cfg, 0.0, cfg_bound(methods), found)
+    problems += list(dict.fromkeys(found))
+    count = whole_number(seeds, "Seeds" if names is PAGE else "--seeds", 1, max_seeds, problems)
+    return None if len(problems) > n else (step_list, cfg_list, count)
+
+
+__all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_method_settings", "check_post",
+           "check_steps", "checked", "grid_problems", "settings_problems", "steps_per_method"]
