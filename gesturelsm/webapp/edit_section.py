@@ -92,18 +92,18 @@ class EditHandlers:
             new = self.h.service.edit(out, method, start, end, regions, seed,
                                       progress=lambda f, m: progress(f, desc=m))
         except GestureError as exc:
-            self.h._refuse(exc)
-        self.h._mark_newest(request, new)
+            self.h.refuse(exc)
+        self.h.mark_newest(request, new)
         return _resumed(motion_player.payload(self.h.service, new, character)), new.table, new.summary, new, \
             gr.update(interactive=True)
 
     def undo(self, out, character=None, request: gr.Request = None):
         """Back one edit: the result before it, with its own files (video and downloads when it had them)."""
         if out is None or out.previous is None:
-            self.h._refuse(InputError("Nothing to undo: no edit has been made since Generate."))
+            self.h.refuse(InputError("Nothing to undo: no edit has been made since Generate."))
         prev = out.previous
-        self.h._mark_newest(request, prev)
-        files, glb = self.h._files(prev)
+        self.h.mark_newest(request, prev)
+        files, glb = self.h.download_files(prev)
         return (_resumed(motion_player.payload(self.h.service, prev, character)), prev.table, prev.summary, prev,
                 str(prev.video) if prev.video else None, files or None, gr.update(interactive=prev.previous is not None))
 

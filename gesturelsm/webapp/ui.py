@@ -91,7 +91,7 @@ class _Handlers:
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
 
-    def _mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
+    def mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
             return
         with self._lock:
@@ -117,7 +117,7 @@ class _Handlers:
                        smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
 
     @staticmethod
-    def _refuse(exc: GestureError):
+    def refuse(exc: GestureError):
         """The one place the page turns errors into messages: one log line, no traceback (server bugs keep theirs)."""
         log.info("request refused: %s", " | ".join(str(exc).splitlines()))
         raise gr.Error(str(exc), duration=None, print_exception=False) from None
@@ -126,10 +126,10 @@ class _Handlers:
         try:
             return self.service.run(req, progress=lambda f, m: progress(f, desc=m))
         except GestureError as exc:
-            self._refuse(exc)
+            self.refuse(exc)
 
     @staticmethod
-    def _files(out: Result):
+    def download_files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
     def prefetch(self, audio, text, auto_text) -> None:
@@ -147,7 +147,7 @@ class _Handlers:
         args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
                 grounding)
         out = self._run(self.request(*args, exports=False, render=False), progress)
-        self._mark_newest(request, out)
+        self.mark_newest(request, out)
         recognised = out.transcript if out.transcript else gr.skip()      # the automatic transcript, to correct
         return motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised
 
@@ -171,7 +171,7 @@ class _Handlers:
             log.info("a video was not finished: the page asked for newer motion")
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
-            self._refuse(exc)
+            self.refuse(exc)
         return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
@@ -179,7 +179,7 @@ class _Handlers:
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
-        files, glb = self._files(out)
+        files, glb = self.download_files(out)
         files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
                                                 out.job.grounding)]
         return files, glb, out.summary, self._kept(request, out)
@@ -189,7 +189,7 @@ class _Handlers:
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, exports=True), progress)
-        return (str(out.video), out.table, out.summary, *self._files(out))
+        return (str(out.video), out.table, out.summary, *self.download_files(out))
 
 
 def _step_slider(service: GestureService, setting: str) -> gr.Slider:
