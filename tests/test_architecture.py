@@ -31,8 +31,9 @@ FLOORS: list[set[str]] = [
                                                                # each described once (its spec)
     {"settings"},                                              # one generation's settings, defaults, validator
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"study", "evaluation", "pipeline_cli", "live"},           # what uses the pipeline (live: streaming)
-    {"serve"},                                                 # one web request: checks, files, its sweep
+    {"study", "evaluation", "pipeline_cli", "edit_cli", "live"},  # what uses the pipeline (live: streaming; the
+                                                               # generate and edit commands)
+    {"serve"},                                                 # one web request: checks, files, its sweep, edits
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

@@ -63,8 +63,13 @@ class MotionSequence:
             data = np.load(path, allow_pickle=False)
         except FileNotFoundError:
             raise MotionFileError(f"{path}: file not found") from None
-        except Exception as exc:  # zip/npz corruption, wrong format
+        except ValueError:  # not numpy's format at all (numpy's own message would suggest loading pickles)
+            raise MotionFileError(f"{path}: not a .npz motion file (a BEAT2-layout .npz with 'poses' and 'trans' "
+                                  "arrays, as `gesturelsm generate` writes)") from None
+        except Exception as exc:  # zip/npz corruption
             raise MotionFileError(f"{path}: not a readable .npz motion file ({exc})") from None
+        if not isinstance(data, np.lib.npyio.NpzFile):  # a single .npy array
+            raise MotionFileError(f"{path}: one array, not a .npz motion file with 'poses' and 'trans' arrays")
         with data:
             for key in ("poses", "trans"):
                 if key not in data.files:

@@ -43,6 +43,7 @@ from ..pipeline import GesturePipeline, Plan, SpeechInput
 from ..settings import Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
+from .editing import edit_result
 from .limits import transcript_problems
 from .config import ServiceSettings
 from .request import VIDEO_SIZES, RenderJob, Request, Result, timing_rows
@@ -218,7 +219,7 @@ class GestureService:
         timings = {m: dict(r.timings) for m, r in gen.results.items()}
         rows, timings = timing_rows(timings, gen.ground_truth is not None, speech.duration, 0.0, motion_s)
         result = Result(None, rows, (), None, speech.text_mode, (*gen.warnings, *notes), gen.ground_truth, motion_s,
-                        motion_s, timings, dict(gen.motions), speech.transcript, job)
+                        motion_s, timings, dict(gen.motions), speech.transcript, job, speech, plan)
         if req.render:
             result = self.render(result, prog)
         if req.exports:
@@ -226,6 +227,11 @@ class GestureService:
             result = self.export(result)
         prog(1.0, "done")
         return result
+
+    def edit(self, result: Result | None, method: str, start: float | None, end: float | None, regions, seed,
+             progress: Progress | None = None) -> Result:
+        """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
+        return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
 
     def folder(self) -> Path:
         """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the

@@ -84,10 +84,11 @@ def component() -> gr.HTML:
     return gr.HTML(EMPTY, elem_id=f"{ELEMENT_ID}-box", label="Motion statistics")
 
 
-def attach(event, state, target: gr.HTML) -> None:
-    """Chain the statistics after `event` (the event that hands the motions to the player), in a pool of their own."""
-    event.then(show, state, target, api_name="motion_stats", api_visibility="private", show_progress="hidden",
-               concurrency_limit=1, concurrency_id="stats")
+def attach(event, state, target: gr.HTML, named: bool = True) -> None:
+    """Chain the statistics after `event` (the event that hands the motions to the player), in a pool of their own;
+    `named`: as the API's `motion_stats` (once per page: further events that show motions chain it unnamed)."""
+    event.then(show, state, target, api_name="motion_stats" if named else None, api_visibility="private",
+               show_progress="hidden", concurrency_limit=1, concurrency_id="stats")
 
 
 def values(html_text: str) -> dict[str, dict[str, float]]:

@@ -14,8 +14,9 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.constants import SAMPLE_RATE
-from gesturelsm.export.player_payload import body_glb, player_payload
+from gesturelsm.export.player_payload import body_glb, player_payload, write_motion
 from gesturelsm.motion.sequence import NUM_BETAS
+from gesturelsm.serve.editing import edited_method
 from gesturelsm.serve.request import Result
 from gesturelsm.serve.service import GestureService
 
@@ -60,7 +61,8 @@ def player_component(service: GestureService) -> gr.HTML:
 
 def payload(service: GestureService, out: Result, character=None) -> dict | None:
     """Write the player's files for a generated request (its folder) and return the player's payload; with a
-    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it."""
+    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it. For an edited result,
+    `compare` is the edited method's motion before the edit (the player's A/B), beside the character's `METHOD:before`."""
     import soundfile as sf
 
     if not out.motions:
@@ -70,6 +72,12 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
     p = player_payload(list(out.motions.values()), list(out.job.labels), list(out.motions), service.body, folder,
                        service.workdir / "player-bodies", url=file_url, audio=wav)
+    motions, edited = dict(out.motions), edited_method(out)
+    if edited is not None:
+        i, before = list(out.motions).index(edited), out.previous.motions[edited].slice(0, p["frames"])
+        path, _ = write_motion(before, service.body, folder / f"player-{i}-{edited}-before.bin")
+        p["compare"] = {"index": i, "method": edited, "motion": file_url(path)}
+        motions[f"{edited}:before"] = before
     if character is not None:
-        p["character"] = page_character(character, out.motions, folder, file_url, service.body, out.job.grounding)
+        p["character"] = page_character(character, motions, folder, file_url, service.body, out.job.grounding)
     return p
