@@ -2,6 +2,7 @@
 # make test-fast - the same without slow and browser tests (the edit-test loop)
 #   both run TEST_WORKERS test processes (pytest-xdist; one math thread each, see tests/conftest.py)
 # make demo  - create .venv, install everything, start the web app on http://127.0.0.1:7860
+#   REPLICAS=N (or MIN:MAX): generation and rendering in N Ray Serve replicas on this machine (docs/CLUSTER.md)
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.setup-done
@@ -27,7 +28,7 @@ test-fast: $(STAMP)
 	$(PYTEST) -m "not slow and not browser"
 
 demo: $(STAMP)
-	$(PY) -m app
+	$(PY) -m app $(if $(REPLICAS),--replicas $(REPLICAS))
 
 clean:
 	rm -rf $(VENV) .pytest_cache

@@ -14,7 +14,7 @@ import re
 import sys
 import traceback
 
-from . import pipeline_cli
+from . import edit_cli, pipeline_cli
 from .align import cli as align_cli
 from .asr import cli as asr_cli
 from .body import cli as body_cli
@@ -34,8 +34,9 @@ from .tokenizer import cli as tokenizer_cli
 from .webapp import cli as webapp_cli
 
 # in the order `gesturelsm --help` lists them
-SUBCOMMANDS = (body_cli, data_cli, align_cli, asr_cli, tokenizer_cli, generator_cli, pipeline_cli, render_cli,
-               export_cli, batch_cli, study_cli, evaluation_cli, sweep_cli, live_cli, reference_cli, webapp_cli)
+SUBCOMMANDS = (body_cli, data_cli, align_cli, asr_cli, tokenizer_cli, generator_cli, pipeline_cli, edit_cli,
+               render_cli, export_cli, batch_cli, study_cli, evaluation_cli, sweep_cli, live_cli, reference_cli,
+               webapp_cli)
 
 
 STATED = re.compile(r"\(default\b|default: ")      # a help text that says its default already

@@ -15,6 +15,8 @@ anything else as a bug, with its traceback in the log (the CLI: "internal error"
     ├── Unavailable           what this machine or server cannot do: a missing tool or model, no free stream
     │   └── RenderError       rendering cannot run here (no OpenGL backend, context creation failed)
     ├── Cancelled             work stopped because its result is not wanted
+    ├── ClusterError          a cluster that cannot be used (unreachable, other versions, too few CPUs), or
+    │                         units of a distributed run that failed every try
     └── UserError             any other problem with a command's arguments
 Modules add their own subclasses beside the code that raises them (e.g. `retarget.CharacterError`, an InputError).
 Every GestureError is also a ValueError, and Unavailable a RuntimeError, so code that catches those keeps working.
@@ -67,9 +69,15 @@ class Cancelled(GestureError):
     """Work stopped because whoever asked for it does not want its result (e.g. a page that shows newer motion)."""
 
 
+class ClusterError(GestureError):
+    """A Ray cluster that cannot be used (unreachable, other versions, the package missing on its workers, too few
+    CPUs), or work units that failed on every try; the message names the address or the units and what to do."""
+
+
 class UserError(GestureError):
     """An error caused by a command's arguments; printed without a traceback."""
 
 
 __all__ = ["GestureError", "InputError", "AudioError", "TextGridError", "MotionFileError", "DatasetError",
-           "BodyModelError", "CheckpointError", "Unavailable", "RenderError", "Cancelled", "UserError"]
+           "BodyModelError", "CheckpointError", "Unavailable", "RenderError", "Cancelled", "ClusterError",
+           "UserError"]

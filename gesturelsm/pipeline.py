@@ -4,6 +4,7 @@ benchmarks and the tests all call this.
     pipe = GesturePipeline.from_pretrained()            # shipped checkpoints in assets/
     res = pipe.generate(audio, sr, text="hello there", steps=8, cfg=2.0, seed=0, method="gesturelsm")
     res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
+    ed = pipe.edit(res.motion, audio, {"upper": [(3.0, 6.0)]}, seed=1)   # regenerate the upper body over 3-6 s
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
 against the method's spec with the one validator (`gesturelsm.settings`) and calls the backend's `generate`.
@@ -11,15 +12,15 @@ against the method's spec with the one validator (`gesturelsm.settings`) and cal
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Iterator, Mapping
+from typing import Iterator, Mapping, Sequence
 
 import numpy as np
 import torch
 
 from .align import align_words
-from .asr.source import automatic_words
+from .asr.source import AutomaticWords, automatic_words, remember_words
 from .audio import SAMPLE_RATE, resample, to_mono
 from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
                        load_backends)
@@ -29,9 +30,11 @@ from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .generator.model import GestureGenerator
+from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
+from .motion.merge import apply_edit, splice
 from .motion.postprocess import check_smoothing, fit_length
 from .motion.sequence import FPS, MotionSequence
-from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, PostProcess, Settings, check_method_settings
+from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, check_method_settings
 from .tokenizer.model import RVQVAE
 
 GROUND_TRUTH_MISSING = ("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; it is left "
@@ -75,26 +78,6 @@ class GenerationResult:
     def end_to_end_real_time_factor(self) -> float:
         """Seconds of speech per second of everything done for it, transcription included."""
         return self.motion.duration / max(self.speech_seconds, 1e-9)
-
-
-@dataclass(frozen=True)
-class Plan:
-    """What to make from one prepared speech: the settings (methods, steps, CFG, seed, post-processing) and where
-    the ground truth of a known take is looked up."""
-    settings: Settings = DEFAULTS
-    beat2: str | None = None                   # BEAT2-layout folder where GROUND_TRUTH is looked up
-    filename: str | None = None                # the speech file's name (a take is recognised by it first)
-
-    @property
-    def methods(self) -> tuple[str, ...]:
-        return self.settings.methods
-
-    @property
-    def generators(self) -> list[str]:
-        return self.settings.generators
-
-    def steps_for(self, method: str) -> int:
-        return self.settings.steps_for(method)
 
 
 @dataclass
@@ -211,10 +194,15 @@ class GesturePipeline:
         T = int(len(y) * FPS // SAMPLE_RATE)
         return y[: int(round(T * SAMPLE_RATE / FPS))], T
 
-    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> None:
+    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> AutomaticWords:
         """Transcribe now what prepare_speech(audio, sr) would transcribe, so that it finds the words ready
-        (asr.source remembers them by content). Bad audio raises InputError, as prepare_speech would."""
-        automatic_words(self._checked_audio(audio, sr)[0])
+        (asr.source remembers them by content); returns them. Bad audio raises InputError, as prepare_speech would."""
+        return automatic_words(self._checked_audio(audio, sr)[0])
+
+    def remember_transcript(self, audio: np.ndarray, sr: int, words: AutomaticWords) -> None:
+        """Words `prefetch_transcript` returned in another process for this audio: prepare_speech(audio, sr) here
+        uses them instead of transcribing again."""
+        remember_words(self._checked_audio(audio, sr)[0], words)
 
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
                        text: str | None = None, progress: Progress | None = None,
@@ -347,6 +335,61 @@ class GesturePipeline:
             progress(1.0, f"{method}: done")
         return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **out.timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
+
+    # ---- editing -----------------------------------------------------------------------------------------
+    @torch.no_grad()
+    def edit(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, regenerate: Mapping[str, Sequence],
+             keyframes: Sequence = (), method: str = DEFAULTS.methods[0], steps: int | None = None,
+             cfg: float = DEFAULTS.cfg, seed: int = DEFAULTS.seed, sr: int = SAMPLE_RATE, words: list | None = None,
+             text: str | None = None, transcribe: bool = DEFAULTS.transcribe, post: PostProcess = DEFAULTS.post,
+             body=None, progress: Progress | None = None) -> GenerationResult:
+        """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
+        speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
+        motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
+        for bit wherever nothing is regenerated; inside a range an edited region crosses over from the input's
+        motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed by `post` as
+        a generation is (stand in place, smoothing, feet on the ground on `body`; grounding only when the lower body
+        is regenerated, the only region it changes) before it is merged: the input is a finished motion and is not
+        processed again. Only methods whose spec says `inpainting` can edit."""
+        spec = self.spec(method)
+        if not spec.inpainting:
+            able = [m for m in self.methods if self.spec(m).inpainting]
+            raise EditError(f"{method} cannot edit a motion: its sampler cannot hold known latents; methods that "
+                            f"can: {', '.join(able) or 'none is loaded'}")
+        if motion.fps != FPS:
+            raise EditError(f"the motion is at {motion.fps} fps; an edit needs a {FPS} fps motion (as generate "
+                            "writes and BEAT2 has)")
+        steps = spec.default_steps if steps is None else steps
+        self.check_settings(method, steps, cfg)
+        check_smoothing(post.smoothing)
+        keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
+        ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
+        speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress)
+        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        out = self.backends[method].edit(speech, motion, ask, steps, cfg, seed, prog)
+        t0 = time.perf_counter()
+        gen, note = replace(post, grounding=post.grounding and "lower" in ask.regions).apply(
+            splice(motion, out.motion, out.start, ask.regions), body)
+        merged = apply_edit(motion, gen, ask)
+        if progress:
+            progress(1.0, f"{method}: edited {ask.describe()}")
+        return GenerationResult(merged, method, int(steps), float(cfg), int(seed),
+                                {**speech.timings, **out.timings, "merging": time.perf_counter() - t0},
+                                speech.text_mode, warnings + out.warnings + ([note] if note else []))
+
+    def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
+                     text: str | None, transcribe: bool, progress: Progress | None) -> tuple[SpeechInput, list[str]]:
+        """The speech of an edit, exactly as long as the motion: given prepared, it must be; given as samples, it
+        is cut or padded with silence when it differs by a little (motion.editing.fit_speech)."""
+        if isinstance(speech, SpeechInput):
+            if speech.num_frames != motion.num_frames:
+                raise EditError(length_mismatch(motion.num_frames, speech.duration))
+            return speech, list(speech.warnings)
+        if sr <= 0:
+            raise InputError(f"invalid sample rate {sr}")
+        y, warnings = fit_speech(resample(to_mono(speech), int(sr), SAMPLE_RATE), motion.num_frames)
+        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe)
+        return prepared, warnings + prepared.warnings
 
 
 __all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",

@@ -244,6 +244,7 @@ HEAVY_FIXTURES = {
     "beat2_root": "reads the real BEAT2 take",
     "beat2": "reads the real BEAT2 take",
     "eval_assets": "runs the evaluation runners (eval, bench, sweep) over checkpoints",
+    "ray_cluster": "starts a Ray cluster of two one-CPU nodes on this machine",
 }
 
 
@@ -256,5 +257,7 @@ def pytest_collection_modifyitems(config, items):
             # With `-n 2 --dist loadgroup` (the Makefile's): a module's tests stay in one process, so its module
             # fixtures are built once; the browser tests share one process, so two Chromiums never compete for
             # the 2 cores with a served app and a render each.
-            group = "browser" if item.get_closest_marker("browser") else item.nodeid.split("::")[0]
+            # The Ray cluster tests share one process too: two simulated clusters at once would not fit 2 cores.
+            group = ("browser" if item.get_closest_marker("browser") else
+                     "ray" if "ray_cluster" in getattr(item, "fixturenames", ()) else item.nodeid.split("::")[0])
             item.add_marker(pytest.mark.xdist_group(group))

@@ -16,8 +16,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors"},                                   # conventions, the error family
     {"safe_load"},                                             # safe loading
-    {"motion", "audio", "checkpoint", "flows", "kernels"},     # motion data, speech input (what a file is, reading
-                                                               # it), files, the methods, fast CPU kernels
+    {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech input (what a file is, reading
+     "cluster"},                                               # it), files, the methods, fast CPU kernels; units
+                                                               # of work here or as Ray tasks (no Ray until asked)
     {"body", "features", "align", "metrics"},                  # body models, speech features, word timings
     {"asr", "grounding"},                                      # speech recognition (times words with align); feet on
                                                                # the floor (leg IK on a body's or a rig's skeleton)
@@ -30,8 +31,9 @@ FLOORS: list[set[str]] = [
                                                                # each described once (its spec)
     {"settings"},                                              # one generation's settings, defaults, validator
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"study", "evaluation", "pipeline_cli", "live"},           # what uses the pipeline (live: streaming)
-    {"serve"},                                                 # one web request: checks, files, its sweep
+    {"study", "evaluation", "pipeline_cli", "edit_cli", "live"},  # what uses the pipeline (live: streaming; the
+                                                               # generate and edit commands)
+    {"serve"},                                                 # one web request: checks, files, its sweep, edits
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm

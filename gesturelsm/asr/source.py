@@ -89,15 +89,25 @@ class AutomaticWords:
 RECENT: Recent[AutomaticWords] = Recent(8)
 
 
+def _key(y: np.ndarray) -> tuple[int, bytes]:
+    return len(y), hashlib.blake2b(y.tobytes(), digest_size=16).digest()
+
+
 def automatic_words(audio_16k: np.ndarray, remember: bool = True) -> AutomaticWords:
     """Recognise (N,) float32 16 kHz speech (the same samples again: the remembered answer, see the module doc;
     remember=False recognises afresh and keeps nothing)."""
     y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
     if not remember:
         return _recognised(y)
-    key = (len(y), hashlib.blake2b(y.tobytes(), digest_size=16).digest())
-    got = RECENT.get(key, lambda: _recognised(y))
+    got = RECENT.get(_key(y), lambda: _recognised(y))
     return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings))
+
+
+def remember_words(audio_16k: np.ndarray, words: AutomaticWords) -> None:
+    """Keep `words`, recognised from these samples in another process (the web demo's replicas), as if recognised
+    here: `automatic_words` of the same samples returns them."""
+    y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
+    RECENT.get(_key(y), lambda: words)
 
 
 def _recognised(audio_16k: np.ndarray) -> AutomaticWords:

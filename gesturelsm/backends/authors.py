@@ -13,11 +13,17 @@ from pathlib import Path
 
 import torch
 
-from ..errors import CheckpointError
+from ..errors import CheckpointError, InputError
+from ..flows import Held
+from ..motion.editing import EditSpec, Keyframe
+from ..motion.regions import REGIONS as MOTION_REGIONS
+from ..motion.sequence import MotionSequence
+from ..reference.config import LATENT_SCALE, REGIONS
 from ..reference.convert import load_generator, load_rvqs
 from ..reference.model import ReferenceGenerator
 from ..reference.runner import FACE_NOTE, LONG_AUDIO_NOTE, ReferenceBundle, generate_reference
 from .base import BackendOutput, Progress, SpeechInput
+from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
 from .spec import MethodSpec
 
 RVQ_FILE = "reference_rvq.safetensors"
@@ -35,6 +41,33 @@ class AuthorsBackend:
         _, motion = generate_reference(self.bundle, self.model, self.vocab, speech.audio, speech.num_frames,
                                        speech.words, steps, cfg, seed, progress)
         return BackendOutput(motion, {"sampling": time.perf_counter() - t0}, [FACE_NOTE, LONG_AUDIO_NOTE])
+
+    @torch.no_grad()
+    def edit(self, speech: SpeechInput, motion: MotionSequence, spec: EditSpec, steps: int, cfg: float, seed: int,
+             progress: Progress | None = None) -> EditOutput:
+        """`spec` regenerated with the input's latents (their RVQ encoders) held (backends/editing.py)."""
+        if not self.spec.inpainting:
+            raise InputError(f"{self.spec.key}'s sampler cannot hold known latents, so it cannot edit a motion")
+        t0 = time.perf_counter()
+        known = self.bundle.encode(motion.to_features())[0]                        # (L, R * d)
+        L, R = known.shape[0], len(REGIONS)
+        held = held_latents(spec, REGIONS, known.reshape(L, R, -1).permute(1, 0, 2), self._pose_latent)
+        flat = lambda a: a.expand_as(held.known).permute(1, 0, 2).reshape(1, L, -1)  # noqa: E731  (R, L, d) -> (1, L, R d)
+        timings = {"encoding": time.perf_counter() - t0}
+        t1 = time.perf_counter()
+        lat, _ = generate_reference(self.bundle, self.model, self.vocab, speech.audio, speech.num_frames, speech.words,
+                                    steps, cfg, seed, progress, held=Held(flat(held.known), flat(held.mask)))
+        timings["sampling"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        lo, hi = decoded_span(spec, L)
+        span = self.bundle.decode(lat[:, lo:hi], min(motion.num_frames, 4 * hi) - 4 * lo)
+        timings["decoding"] = time.perf_counter() - t2
+        return EditOutput(span, 4 * lo, timings, [])
+
+    def _pose_latent(self, key: Keyframe, region: str) -> torch.Tensor:
+        """(d,) generator latent of `region` holding the keyframe's pose."""
+        x = static_clip(key.pose).to_features()[:, list(MOTION_REGIONS[region].columns)]
+        return middle_latent(self.bundle.rvqs[region].encode(self.bundle.normalise(region, x)[None]) / LATENT_SCALE)
 
 
 @dataclass(frozen=True)

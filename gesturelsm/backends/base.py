@@ -54,6 +54,11 @@ class Backend(Protocol):
         """Motion for the prepared speech; settings are already checked against `spec`. `progress(f, msg)`
         with f in [0, 1]."""
 
+    def edit(self, speech: SpeechInput, motion: MotionSequence, spec, steps: int, cfg: float, seed: int,
+             progress: Progress | None = None):
+        """Where `spec.inpainting`: `motion` (as long as the speech) with `spec` (motion.editing.EditSpec) regenerated
+        in latent space, as a backends.editing.EditOutput (the decoded span around the regenerated latents)."""
+
 
 class BackendKind(Protocol):
     """A registry line: a method's spec and how its checkpoint is found and loaded."""

@@ -14,11 +14,14 @@ import torch
 
 from ..errors import CheckpointError
 from ..generator.model import GestureGenerator
+from ..generator.data import encode_regions
 from ..generator.sampling import decode_latents, generate_latents
-from ..motion.regions import GENERATED_REGIONS, join_regions
+from ..motion.editing import EditSpec, Keyframe
+from ..motion.regions import GENERATED_REGIONS, REGIONS, join_regions
 from ..motion.sequence import MotionSequence
 from ..tokenizer.model import RVQVAE
 from .base import BackendOutput, Progress, SpeechInput
+from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
 from .spec import MethodSpec
 
 
@@ -50,6 +53,34 @@ class FlowBackend:
         motion = MotionSequence.from_features(join_regions({k: v.cpu() for k, v in parts.items()}))
         timings["decoding"] = time.perf_counter() - t1
         return BackendOutput(motion, timings, [])
+
+    @torch.no_grad()
+    def edit(self, speech: SpeechInput, motion: MotionSequence, spec: EditSpec, steps: int, cfg: float, seed: int,
+             progress: Progress | None = None) -> EditOutput:
+        """`spec` regenerated with the input's latents held (backends/editing.py)."""
+        t0 = time.perf_counter()
+        device = next(self.model.parameters()).device
+        known = encode_regions(self.tokenizers, motion.to_features().to(device)).cpu()       # (R, L, D) un-scaled
+        held = held_latents(spec, tuple(self.tokenizers), known, self._pose_latent)
+        timings = {"encoding": time.perf_counter() - t0}
+        t1 = time.perf_counter()
+        lat = generate_latents(self.model, speech.channels, speech.word_features, speech.has_word,
+                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress, held=held)
+        timings["sampling"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        lo, hi = decoded_span(spec, lat.shape[1])
+        n = min(motion.num_frames, 4 * hi) - 4 * lo
+        parts = decode_latents(self.tokenizers, lat[:, lo:hi].to(device), n)
+        span = MotionSequence.from_features(join_regions({k: v.cpu() for k, v in parts.items()}))
+        timings["decoding"] = time.perf_counter() - t2
+        return EditOutput(span, 4 * lo, timings, [])
+
+    def _pose_latent(self, key: Keyframe, region: str) -> torch.Tensor:
+        """(D,) un-scaled latent of `region` holding the keyframe's pose."""
+        tok = self.tokenizers[region]
+        x = static_clip(key.pose).to_features()[:, list(REGIONS[region].columns)]
+        device = next(tok.parameters()).device
+        return middle_latent(tok.encode(tok.normalizer.normalize(x.to(device))[None])).cpu()
 
 
 @dataclass(frozen=True)

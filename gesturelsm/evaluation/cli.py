@@ -2,6 +2,7 @@
 
     gesturelsm eval --data ../shared/data/beat2 [--checkpoints assets] [--methods ...] [--steps 1 2 4 8]
                     [--cfg 2] [--seeds 2] [--emage-weights AESKConv_240_100.bin] [--smplx SMPLX.npz] --out runs/eval
+                    [--cluster local|auto|ray://HOST:PORT]     (each clip a task, docs/CLUSTER.md)
     gesturelsm bench [--checkpoints assets] [--presets shipped paper] [--steps 1 2 4 8 20] [--repeats 3]
                      [--quality runs/eval/eval.json] [--data ../shared/data/beat2] --out runs/bench
 
@@ -10,11 +11,13 @@ Each writes <out>/<eval|bench>.json and .md (and bench.png) and prints the markd
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 from pathlib import Path
 
 from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
+from ..cluster import add_cluster_argument, connect
 from ..data.beat2 import Beat2Dataset
 from ..errors import CheckpointError
 from ..metrics.fgd import default_extractors
@@ -51,6 +54,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                                       "ground truth's own")
     p.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
     p.add_argument("--out", default="runs/eval", help="output folder")
+    add_cluster_argument(p, "each held-out clip (every method, setting and seed on it)")
     p.set_defaults(func=run_eval)
 
     b = sub.add_parser("bench", help="speed / memory on this machine: per step, AITS, RTF, end to end; plot",
@@ -154,9 +158,11 @@ def run_eval(args: argparse.Namespace) -> int:
     stats = Path(args.data) / "stats" / "mean_vel_smplxflame_30.npy"      # BEAT2's own, as the reference uses
     ms_path = Path(args.mean_speed) if args.mean_speed else (stats if stats.exists() else None)
     mean_speed = np.load(ms_path) if ms_path else None
-    rep = evaluate(pipe, clips, plan_grid(methods, steps, cfgs), seeds=seeds, body=body,
-                   extractors=default_extractors(args.emage_weights), mean_speed=mean_speed,
-                   face_vertices=bool(args.smplx), log=lambda m: print(m, flush=True))
+    with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
+        rep = evaluate(pipe, clips, plan_grid(methods, steps, cfgs), seeds=seeds, body=body,
+                       extractors=default_extractors(args.emage_weights), mean_speed=mean_speed,
+                       face_vertices=bool(args.smplx), log=lambda m: print(m, flush=True), connection=conn,
+                       checkpoints=checkpoint_sources(args.checkpoints))
     rep.update({"policy": policy, "data": str(args.data), "checkpoints": str(args.checkpoints or "assets"),
                 "face_vertices": bool(args.smplx), "body": str(body.path),
                 "bc_mean_speed": str(ms_path) if ms_path else "ground truth's own per-joint mean speed"})

@@ -13,16 +13,19 @@ Conventions:
 - BC: speeds normalised by per-joint mean speeds of the ground-truth motion of the folder on the same body
   (or `mean_speed`, e.g. BEAT2's mean_vel_smplxflame_30.npy when the body is the real SMPL-X).
 - Averages: per clip, then over clips and seeds. Clips with motion and audio-only clips are reported apart.
+- Each clip is a unit of work (every plan item and seed on it): in this process, or as a task on a Ray cluster
+  (`gesturelsm eval --cluster`, gesturelsm.cluster) whose worker gets the body model, the feature extractors and the
+  reference speeds by value; the report is assembled here in clip order either way.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import asdict, dataclass, field
 from typing import Callable
 
 import numpy as np
 
 from ..body import load_body_model
+from ..cluster import Connection, Files, Job, Unit, run_units
 from ..constants import SAMPLE_RATE
 from ..metrics.amplitude import amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
@@ -31,6 +34,7 @@ from ..metrics.face import expression_mse, face_vertex_mse
 from ..metrics.fgd import default_extractors, fgd
 from ..metrics.feet import FeetStats, feet_stats
 from ..metrics.physics import jitter
+from ..pipeline import GesturePipeline
 from .clips import EvalClip
 
 Log = Callable[[str], None]
@@ -106,20 +110,21 @@ def summarise(stats: list[MotionStats], gt_stats: list[MotionStats] | None, extr
 
 def evaluate(pipe, clips: list[EvalClip], plan: list[EvalPlanItem], seeds: int = 1, body=None,
              extractors=None, mean_speed: np.ndarray | None = None, face_vertices: bool = False,
-             log: Log | None = None) -> dict:
-    """-> report dict (JSON-ready): ground truth summary, one row per plan item, clip list, settings."""
+             log: Log | None = None, connection: Connection | None = None, checkpoints: list | None = None) -> dict:
+    """-> report dict (JSON-ready): ground truth summary, one row per plan item, clip list, settings. With
+    `connection` each clip is a task on its cluster, whose worker loads `checkpoints` (what `checkpoint_sources`
+    gave); clips that fail are listed (ClusterError) after the others ran."""
     log = log or (lambda m: None)
     body = body or load_body_model()
     extractors = default_extractors() if extractors is None else extractors
     with_motion = [c for c in clips if c.motion is not None]
-    audio_only = [c for c in clips if c.motion is None]
     if mean_speed is None:
         if with_motion:
             sp = [joint_speed(body.joints(c.motion.poses, c.motion.trans)) for c in with_motion]
             mean_speed = np.concatenate(sp).mean(0)
         else:
             mean_speed = None            # each motion normalised by its own mean speed
-    beats = {c.name: audio_beats(c.audio) for c in clips}
+    beats = {c.name: audio_beats(c.audio) for c in with_motion}
     gt_stats = [motion_stats(c.motion, body, beats[c.name], mean_speed, extractors) for c in with_motion]
     report: dict = {
         "clips": [{"name": c.name, "seconds": round(c.duration, 2), "ground_truth": c.motion is not None,
@@ -127,26 +132,72 @@ def evaluate(pipe, clips: list[EvalClip], plan: list[EvalPlanItem], seeds: int =
         "ground_truth": summarise(gt_stats, None, extractors) if gt_stats else None,
         "rows": [], "seeds": seeds, "extractors": [e.name for e in extractors],
     }
-    speech = {c.name: pipe.prepare_speech(c.audio, SAMPLE_RATE, words=c.words) for c in clips}
-    for item in plan:
-        t0 = time.perf_counter()
-        st_m, st_a, gen_s, dur = [], [], [], []
-        for c in clips:
-            for seed in range(seeds):
-                res = pipe.generate(speech[c.name], steps=item.steps, cfg=item.cfg, seed=seed, method=item.method)
-                gen_s.append(res.generation_seconds)
-                dur.append(res.motion.duration)
-                m = res.motion
-                gt = None
-                if c.motion is not None:
-                    n = min(m.num_frames, c.motion.num_frames)
-                    m, gt = m.slice(0, n), c.motion.slice(0, n)
-                s = motion_stats(m, body, beats[c.name], mean_speed, extractors, gt, face_vertices)
-                (st_m if gt is not None else st_a).append(s)
+    ship = connection is not None
+    spec = EvalSpec(tuple(Files.of(p, ship) for p in (checkpoints or [])), tuple(dict.fromkeys(i.method for i in plan)),
+                    tuple(plan), seeds, body, tuple(extractors), mean_speed, face_vertices)
+    units = [Unit(f"{i + 1}/{len(clips)} {c.name}", c, cost=c.duration) for i, c in enumerate(clips)]
+    got: dict[str, list] = {}
+
+    def done(unit: Unit, rows: list) -> None:
+        got[unit.key] = rows
+        log(f"clip {unit.key}: done")
+
+    report_units = run_units(Job(eval_clip, build_eval, spec), units, done, connection=connection,
+                             built=None if ship else EvalBuilt(pipe, spec), keep_going=ship, noun="clips")
+    report_units.raise_failures("clips")
+    for j, item in enumerate(plan):
+        runs = [run for u in units for run in got[u.key][j]]           # clip order, then seeds
+        st_m = [st for st, _, _, with_gt in runs if with_gt]
+        st_a = [st for st, _, _, with_gt in runs if not with_gt]
+        gen_s, dur = [g for _, g, _, _ in runs], [d for _, _, d, _ in runs]
         row = {**asdict(item), "heldout": summarise(st_m, gt_stats, extractors) if st_m else None,
                "audio_only": summarise(st_a, None, extractors) if st_a else None,
                "seconds_per_clip": float(np.mean(gen_s)), "clip_seconds": float(np.mean(dur)),
                "real_time_factor": float(np.sum(dur) / max(np.sum(gen_s), 1e-9))}
         report["rows"].append(row)
-        log(f"{item.label}: done in {time.perf_counter() - t0:.1f} s")
     return report
+
+
+@dataclass(frozen=True)
+class EvalSpec:
+    """What every clip of an evaluation shares, sent once to each worker."""
+    checkpoints: tuple[Files, ...]            # what `checkpoint_sources` gave
+    methods: tuple[str, ...]
+    plan: tuple[EvalPlanItem, ...]
+    seeds: int
+    body: object = field(repr=False)          # the body model every metric's joints come from
+    extractors: tuple = field(repr=False)     # FGD feature extractors
+    mean_speed: np.ndarray | None = field(default=None, repr=False)
+    face_vertices: bool = False
+
+
+@dataclass
+class EvalBuilt:
+    pipeline: object
+    spec: EvalSpec
+
+
+def build_eval(spec: EvalSpec) -> EvalBuilt:
+    return EvalBuilt(GesturePipeline.from_pretrained(checkpoints=[f.local() for f in spec.checkpoints] or None,
+                                                     methods=list(spec.methods) or None), spec)
+
+
+def eval_clip(built: EvalBuilt, clip: EvalClip) -> list[list[tuple[MotionStats, float, float, bool]]]:
+    """One unit of an evaluation: every plan item and seed on one clip; per item, per seed: (the motion's stats,
+    generation seconds, motion seconds, measured against ground truth)."""
+    spec, pipe = built.spec, built.pipeline
+    beats = audio_beats(clip.audio)
+    speech = pipe.prepare_speech(clip.audio, SAMPLE_RATE, words=clip.words)
+    rows = []
+    for item in spec.plan:
+        per_seed = []
+        for seed in range(spec.seeds):
+            res = pipe.generate(speech, steps=item.steps, cfg=item.cfg, seed=seed, method=item.method)
+            m, gt = res.motion, None
+            if clip.motion is not None:
+                n = min(m.num_frames, clip.motion.num_frames)
+                m, gt = m.slice(0, n), clip.motion.slice(0, n)
+            stats = motion_stats(m, spec.body, beats, spec.mean_speed, list(spec.extractors), gt, spec.face_vertices)
+            per_seed.append((stats, res.generation_seconds, res.motion.duration, gt is not None))
+        rows.append(per_seed)
+    return rows

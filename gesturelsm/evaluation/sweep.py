@@ -22,8 +22,11 @@ from typing import Callable
 
 import numpy as np
 
+from ..body import load_body_model
+from ..cluster import Connection, Files, Job, Stopped, Unit, run_units
 from ..constants import Progress
 from ..errors import GestureError, InputError
+from ..pipeline import GesturePipeline, SpeechInput
 from ..settings import CLI, DEFAULT_CFG, Limits, Names, PostProcess, grid_problems
 from ..settings.values import method_list
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
@@ -163,35 +166,76 @@ def warm_up(pipe, speech, grid: SweepGrid, progress: Progress | None = None) -> 
     return time.perf_counter() - t0
 
 
+@dataclass(frozen=True)
+class SweepSpec:
+    """What every cell of a sweep shares, sent once to each worker: the grid and the speech prepared on the driver."""
+    checkpoints: tuple[Files, ...]            # what `checkpoint_sources` gave
+    grid: SweepGrid
+    speech: SpeechInput = field(repr=False)
+    context: SpeechContext = field(repr=False)
+    body: Files | None = None                 # None: the statistics' own body
+    keep_motions: bool = False
+    grounding: bool = True
+
+
+@dataclass
+class SweepBuilt:
+    pipeline: object
+    speech: SpeechInput
+    context: SpeechContext
+    body: object = None
+    keep_motions: bool = True
+    grounding: bool = True
+
+
+def build_sweep(spec: SweepSpec) -> SweepBuilt:
+    """A worker's models, warmed up (`warm_up`) before its first timed cell as in one process."""
+    pipe = GesturePipeline.from_pretrained(checkpoints=[f.local() for f in spec.checkpoints] or None,
+                                           methods=list(spec.grid.methods) or None)
+    body = load_body_model(str(spec.body.local())) if spec.body is not None else None
+    warm_up(pipe, spec.speech, spec.grid)
+    return SweepBuilt(pipe, spec.speech, spec.context, body, spec.keep_motions, spec.grounding)
+
+
+def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
+    """One unit of a sweep: (method, steps, CFG, seed) generated, timed and measured."""
+    method, steps, cfg, seed = job
+    res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method)
+    post = PostProcess(smoothing="off", grounding=built.grounding)
+    motion, _ = post.apply(res.motion.slice(0, built.speech.num_frames), built.body)
+    world, local = joint_positions(motion, built.body)
+    return SweepRun(method, steps, cfg, seed, res.generation_seconds, statistics_of_joints(world, local, built.context),
+                    motion if built.keep_motions else None, local)
+
+
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
               progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
-              keep_motions: bool = True, grounding: bool = True) -> SweepResult:
+              keep_motions: bool = True, grounding: bool = True, connection: Connection | None = None,
+              checkpoints: list | None = None) -> SweepResult:
     """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
     feet grounded (settings.PostProcess, without smoothing: the sampler's own motion otherwise) unless `grounding` is
-    off, after `warm_up`. `cancelled()` is asked before every generation; True raises SweepCancelled.
-    `progress(fraction, message)` carries the estimate of the time left."""
+    off, after `warm_up`. Each (cell, seed) is a unit of work: in this process with `pipe`, or with `connection`
+    (gesturelsm.cluster) a task whose worker loads `checkpoints` (what `checkpoint_sources` gave) and warms up once.
+    `cancelled()` is asked before every generation; True raises SweepCancelled. `progress(fraction, message)`
+    carries the estimate of the time left. On a cluster, cells that fail are listed (ClusterError) after the others
+    ran; here the first error stops."""
     reference = reference if reference is not None else speaker_reference()
     context = SpeechContext.of(speech.audio, None if reference is None else reference.mean_speed)
-    jobs = [(m, s, c, k) for (m, s, c) in grid.cells for k in range(grid.seeds)]
-    total = sum(_units(s, c) for _, s, c, _ in jobs) or 1.0
-    post = PostProcess(smoothing="off", grounding=grounding)
+    units = [Unit(f"{m} {s} steps CFG {c:g} seed {k}", (m, s, c, k), cost=_units(s, c))
+             for (m, s, c) in grid.cells for k in range(grid.seeds)]
+    ship = connection is not None
+    spec = SweepSpec(tuple(Files.of(p, ship) for p in (checkpoints or [])), grid, speech, context,
+                     Files.of(getattr(body, "path", None), ship), keep_motions, grounding)
+    runs: dict[str, SweepRun] = {}
     t0 = time.perf_counter()
-    warmup_s = warm_up(pipe, speech, grid, progress)
-    done, runs, t1 = 0.0, [], time.perf_counter()
-    for i, (m, s, c, k) in enumerate(jobs):
-        if cancelled is not None and cancelled():
-            raise SweepCancelled("The sweep was cancelled; nothing was written.")
-        if progress:
-            left = (time.perf_counter() - t1) / done * (total - done) if done else None
-            eta = f", about {left:.0f} s left" if left is not None else ""
-            progress(done / total, f"{i + 1} of {len(jobs)}: {m} {s} steps CFG {c:g} seed {k}{eta}")
-        res = pipe.generate(speech, steps=s, cfg=c, seed=k, method=m)
-        motion, _ = post.apply(res.motion.slice(0, speech.num_frames), body)
-        world, local = joint_positions(motion, body)
-        runs.append(SweepRun(m, s, c, k, res.generation_seconds, statistics_of_joints(world, local, context),
-                             motion if keep_motions else None, local))
-        done += _units(s, c)
-    if progress:
-        progress(1.0, f"{len(jobs)} motions in {time.perf_counter() - t0:.0f} s")
-    return SweepResult(grid, runs, speech.duration, speech.text_mode, reference, time.perf_counter() - t0, warmup_s,
-                       grounding)
+    warmup_s = 0.0 if ship else warm_up(pipe, speech, grid, progress)     # on a cluster: each worker's own
+    try:
+        report = run_units(Job(sweep_cell, build_sweep, spec), units, lambda u, r: runs.__setitem__(u.key, r),
+                           connection=connection, progress=progress, cancelled=cancelled, noun="motions",
+                           built=None if ship else SweepBuilt(pipe, speech, context, body, keep_motions, grounding),
+                           keep_going=ship)
+    except Stopped:
+        raise SweepCancelled("The sweep was cancelled; nothing was written.") from None
+    report.raise_failures("sweep cells")
+    return SweepResult(grid, [runs[u.key] for u in units], speech.duration, speech.text_mode, reference,
+                       time.perf_counter() - t0, warmup_s, grounding)

@@ -2,17 +2,19 @@
 
     gesturelsm sweep speech.wav --methods gesturelsm rectified_flow ddim --steps 1 2 4 8 --cfg 1 2 3 --seeds 2 \
         [--text "what is said" | --textgrid words.TextGrid | --no-transcribe] [--metric wrist_speed] [--grounding off] \
-        --out runs/sweep
+        --out runs/sweep [--cluster local|auto|ray://HOST:PORT]   (each cell and seed a task, docs/CLUSTER.md)
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from dataclasses import replace
 
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import SPECS, checkpoint_sources
+from ..cluster import ProgressLine, add_cluster_argument, connect
 from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
@@ -49,6 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_max_seconds_flag(p)
     p.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
     p.add_argument("--out", default="runs/sweep", help="output folder")
+    add_cluster_argument(p, "each combination and seed")
     p.set_defaults(func=run_sweep_cli)
 
 
@@ -80,7 +83,10 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
                                  progress=say)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
-    result = run_sweep(pipe, speech, grid, keep_motions=False, progress=say, grounding=grounding_on(args))
+    with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
+        result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
+                           progress=ProgressLine(sys.stderr), connection=conn,
+                           checkpoints=checkpoint_sources(args.checkpoints))
     files = write_sweep(result, out, args.metric)
     print(markdown_text(result))
     print(f"\nwrote {', '.join(str(f) for f in files.values())}")

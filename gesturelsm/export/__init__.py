@@ -14,8 +14,8 @@ from .bvh import export_bvh
 from .glb import export_glb, read_glb
 from .keypoints import export_keypoints, keypoints_2d, keypoints_3d
 from .live_link import export_arkit, read_live_link_csv
-from .npz import export_npz
+from .npz import export_npz, npz_bytes
 from .skeleton import ANIMATOR_NAMES
 
 __all__ = ["ANIMATOR_NAMES", "ARKIT_NAMES", "ArkitFace", "arkit_face", "export_arkit", "export_bvh", "export_glb",
-           "export_keypoints", "export_npz", "keypoints_2d", "keypoints_3d", "read_glb", "read_live_link_csv"]
+           "export_keypoints", "export_npz", "keypoints_2d", "npz_bytes", "keypoints_3d", "read_glb", "read_live_link_csv"]

@@ -8,6 +8,8 @@ mocap_frame_rate 30 (int32). No object arrays (plain numpy strings), so no pickl
 """
 from __future__ import annotations
 
+import io
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +23,24 @@ def export_npz(seq: MotionSequence, path: str | Path) -> Path:
     path = Path(path)
     if path.suffix.lower() != ".npz":
         raise InputError(f"{path}: use a .npz file name")
+    _check(seq)
+    return seq.save(path)
+
+
+def npz_bytes(seq: MotionSequence) -> bytes:
+    """The same npz as `export_npz` writes, as bytes that depend on the motion only: np.savez stamps each member
+    with the time of writing, this stamps 1980-01-01, so the same motion made twice (here or on a cluster's
+    worker) is the same file, byte for byte. np.load reads it as any npz."""
+    _check(seq)
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for key, arr in seq.npz_arrays().items():
+            with zf.open(zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0)), "w", force_zip64=True) as fh:
+                np.lib.format.write_array(fh, np.asanyarray(arr), allow_pickle=False)
+    return buf.getvalue()
+
+
+def _check(seq: MotionSequence) -> None:
     if seq.num_frames == 0:
         raise InputError("the motion has no frames")
     if seq.fps != FPS:
@@ -28,4 +48,3 @@ def export_npz(seq: MotionSequence, path: str | Path) -> Path:
     for name in ("poses", "trans", "expressions", "betas"):
         if not np.isfinite(getattr(seq, name)).all():
             raise InputError(f"the motion's {name} contain NaN or infinite values")
-    return seq.save(path)

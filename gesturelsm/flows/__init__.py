@@ -13,7 +13,7 @@ from .ddim import DDIM
 from .rectified import RectifiedFlow
 from .shortcut import Shortcut
 from .timesteps import sample_t
-from .windows import sample_windows, window_layout
+from .windows import Held, sample_windows, sampled_windows, window_layout
 
 METHODS: dict[str, type] = {m.facts.key: m for m in (
     Shortcut, RectifiedFlow, DDIM,
@@ -38,4 +38,4 @@ def training_method(name: str, prediction: str = "data", time_sampler: str = "be
 
 __all__ = ["LossResult", "Method", "MethodFacts", "ModelFn", "euler_sample", "guided", "DDIM", "RectifiedFlow",
            "Shortcut", "sample_t", "METHODS", "FACTS", "method_facts", "make_method",
-           "training_method", "sample_windows", "window_layout"]
+           "training_method", "Held", "sample_windows", "sampled_windows", "window_layout"]

@@ -89,14 +89,22 @@ def euler_sample(f: ModelFn, noise: torch.Tensor, steps: int, cfg_scale: float, 
 def inpainting(f: ModelFn, method: "Method", known: torch.Tensor, mask: torch.Tensor, noise: torch.Tensor) -> ModelFn:
     """f for sampling with part of x known (replacement inpainting): before every call the known entries of x are
     set to `known` noised to the call's time with the sampler's own initial `noise`, so the prediction of the
-    rest is conditioned on them (any method, any step count). known, noise: (B, ...) like x; mask: broadcastable
-    bool, True where known. CFG-stacked batches (a multiple of B) are handled."""
+    rest is conditioned on them (any method, any step count). known, noise: (B, ...) like x; mask: broadcastable,
+    bool (True where known) or float weights in [0, 1] (soft: x becomes mask * noised known + (1 - mask) * x).
+    CFG-stacked batches (a multiple of B) are handled."""
     def g(x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, drop: torch.Tensor, **kw) -> torch.Tensor:
         r = x.shape[0] // known.shape[0]
-        x = torch.where(mask, method.noised(known.repeat(r, *[1] * (x.ndim - 1)),
-                                            noise.repeat(r, *[1] * (x.ndim - 1)), t), x)
-        return f(x, t, d, drop, **kw)
+        rep = lambda a: a.repeat(r, *[1] * (x.ndim - 1))  # noqa: E731
+        return f(hold(x, method.noised(rep(known), rep(noise), t), rep(mask) if mask.shape[0] > 1 else mask), t, d,
+                 drop, **kw)
     return g
+
+
+def hold(x: torch.Tensor, known: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+    """x with `known` where `mask`: bool (exactly there) or float weights in [0, 1] (mixed by them)."""
+    if mask.dtype == torch.bool:
+        return torch.where(mask, known, x)
+    return mask * known + (1 - mask) * x
 
 
 def guided(f: ModelFn, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, scale: float) -> torch.Tensor:

@@ -23,7 +23,7 @@ from .train import GenTrainConfig, train_generator
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
-    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors")
+    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
     p.add_argument("--method", default="gesturelsm", choices=list(METHODS), help="the sampling method it is trained for")
     p.add_argument("--preset", default="small", help="tiny | small (shipped) | paper")
     p.add_argument("--out", default="runs/generator", help="run folder")

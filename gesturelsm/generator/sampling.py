@@ -5,6 +5,10 @@ neutral seed (no ground truth needed); the overlap each window generates again i
 window's version, so there is no jump at borders. Speech features are computed for up to 16 windows per call
 (bounded memory), and the conditional and unconditional CFG passes run as one batch. The last window is
 padded with silence and cropped.
+
+Edits hold known latents (`held`: the input motion's latents where it is kept, poses pinned by keyframes): only the
+windows with latents to regenerate are sampled, and in those the known latents are held to their values noised to
+each step's time (flows/base.py `inpainting`), so the regenerated ones are sampled in their context.
 """
 from __future__ import annotations
 
@@ -14,7 +18,8 @@ import torch
 import torch.nn.functional as F
 
 from ..constants import Progress
-from ..flows import make_method, sample_windows, window_layout
+from ..flows import Held, make_method, sample_windows, sampled_windows, window_layout
+from ..flows.base import inpainting
 from ..tokenizer.model import quantize_regions
 from .data import samples_for
 from .model import GestureGenerator
@@ -23,10 +28,11 @@ from .model import GestureGenerator
 @torch.no_grad()
 def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
                      has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
-                     progress: Progress | None = None, cond_batch: int = 16) -> torch.Tensor:
+                     progress: Progress | None = None, cond_batch: int = 16, held: Held | None = None) -> torch.Tensor:
     """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents.
     The speech condition and its contexts are computed for `cond_batch` windows at a time (one batched call instead
-    of one per window; the windows' denoising stays sequential because each seeds the next)."""
+    of one per window; the windows' denoising stays sequential because each seeds the next). `held`: known
+    un-scaled latents (R, ceil(T/4), D) and where they are known (mask broadcastable to them)."""
     c = model.config
     t, s = c.window_latents, c.seed_latents
     method = make_method(model.method)
@@ -40,12 +46,18 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     words = F.pad(words, (0, 0, 0, max(0, 4 * total - words.shape[0])))
     has_word = F.pad(has_word, (0, max(0, 4 * total - has_word.shape[0])))
     R, D = c.num_regions, c.latent_dim
+    std = model.latent_std.cpu()[:, None, None]
+    if held is not None:
+        held = Held(held.known / std, held.mask)
+    todo = sampled_windows(L, t, s, held)
+    padded = held.padded(total) if held is not None else None
     batch: dict = {}
 
     def sample(i: int, st: int, seed_lat: torch.Tensor, g: torch.Generator) -> torch.Tensor:
-        j = i % cond_batch
+        k = todo.index(i)
+        j = k % cond_batch
         if j == 0:                                             # speech condition of the next cond_batch windows
-            chunk = starts[i:i + cond_batch]
+            chunk = [starts[w] for w in todo[k:k + cond_batch]]
             a = torch.stack([audio_ch[:, samples_for(4 * c0):samples_for(4 * c0) + n_a] for c0 in chunk])
             w = torch.stack([words[4 * c0:4 * (c0 + t)] for c0 in chunk])
             hw = torch.stack([has_word[4 * c0:4 * (c0 + t)] for c0 in chunk])
@@ -55,10 +67,14 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
         ctx_c, ctx_u = batch["ctx"]
         noise = torch.randn(1, R, t, D, generator=g).to(dev)
         f = model.bind(batch["conds"][j:j + 1], seed_lat[None].to(dev), (ctx_c.rows(slice(j, j + 1)), ctx_u))
+        if padded is not None:
+            win = padded.window(st, t)
+            f = inpainting(f, method, win.known[None].to(dev), win.mask[None].to(dev), noise)
         return method.sample(f, noise, steps, cfg_scale)[0]                                 # (R, t, D) scaled
 
-    out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress)
-    return out[:, :L] * model.latent_std.cpu()[:, None, None]
+    out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress,
+                         held=held)
+    return out[:, :L] * std
 
 
 @torch.no_grad()

@@ -7,7 +7,7 @@ import argparse
 def add_grounding_flag(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grounding", choices=["on", "off"], default="on",
                    help="feet on the ground: planted feet, no drift, the body on the floor (docs/GROUNDING.md); "
-                        "'off' keeps the decoder's root and legs (default on)")
+                        "'off' keeps the decoder's root and legs")
 
 
 def grounding_on(args: argparse.Namespace) -> bool:

@@ -5,7 +5,8 @@ product of these sizes, a convolution of this layer on this length, the generato
 ways are run on that call's own tensors (a bounded slice of them), alternating, several times, and the path is
 taken only when the default's median time is at least MARGIN times the fast path's. Where the two are about
 equal, or the fast one is slower, the default stays. Both compute the same function (the fast paths differ from
-the defaults by float summation order only), so a choice changes speed, never results.
+the defaults by float summation order only), so a choice changes speed, and results only within float rounding
+(a few 1e-4 rad after a sampler's repeated steps); `GESTURELSM_KERNELS=none` gives the default ops' bits.
 
 The choice is kept for the process and on disk (cache.py), per CPU, torch build and thread count: later processes
 on the same machine measure nothing. Timing: this thread's CPU time when torch runs on one thread (other

@@ -63,8 +63,13 @@ class MotionSequence:
             data = np.load(path, allow_pickle=False)
         except FileNotFoundError:
             raise MotionFileError(f"{path}: file not found") from None
-        except Exception as exc:  # zip/npz corruption, wrong format
+        except ValueError:  # not numpy's format at all (numpy's own message would suggest loading pickles)
+            raise MotionFileError(f"{path}: not a .npz motion file (a BEAT2-layout .npz with 'poses' and 'trans' "
+                                  "arrays, as `gesturelsm generate` writes)") from None
+        except Exception as exc:  # zip/npz corruption
             raise MotionFileError(f"{path}: not a readable .npz motion file ({exc})") from None
+        if not isinstance(data, np.lib.npyio.NpzFile):  # a single .npy array
+            raise MotionFileError(f"{path}: one array, not a .npz motion file with 'poses' and 'trans' arrays")
         with data:
             for key in ("poses", "trans"):
                 if key not in data.files:
@@ -88,6 +93,13 @@ class MotionSequence:
                 raise MotionFileError(f"{path}: contains NaN or infinite values")
         return cls(poses, trans, expr[:, :NUM_EXPRESSIONS], betas, fps)
 
+    def npz_arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of a BEAT2-compatible npz, by key (export/npz.py documents the layout)."""
+        return dict(poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
+                    expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
+                    model=np.array("smplx2020"), gender=np.array("neutral"),
+                    mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+
     def save(self, path: str | Path) -> Path:
         """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads); returns the file written (numpy adds
         .npz to a name without it)."""
@@ -95,10 +107,7 @@ class MotionSequence:
         if not path.name.endswith(".npz"):
             path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez(path, poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
-                 expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
-                 model=np.array("smplx2020"), gender=np.array("neutral"),
-                 mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+        np.savez(path, **self.npz_arrays())
         return path
 
     # ---- features ---------------------------------------------------------------------------------

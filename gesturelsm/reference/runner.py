@@ -14,7 +14,8 @@ import numpy as np
 import torch
 
 from ..constants import Progress
-from ..flows import sample_windows, window_layout
+from ..flows import Held, sample_windows, window_layout
+from ..motion.regions import REGIONS as MOTION_REGIONS
 from ..motion.regions import join_regions
 from ..motion.sequence import MotionSequence
 from .config import LATENT_SCALE, REGIONS, SAMPLES_PER_FRAME
@@ -63,6 +64,15 @@ class ReferenceBundle:
             out.append(z[:, mid - frames // 2: mid - frames // 2 + frames])
         return torch.cat(out, -1) / LATENT_SCALE
 
+    def encode(self, feats: torch.Tensor) -> torch.Tensor:
+        """(T, 433) raw features (ours: the same 6D rows and [dx, y, dz] as theirs) -> (1, ceil(T/4), 3 * code_dim)
+        generator latents, the encoder output before quantisation / LATENT_SCALE (what their generator samples)."""
+        pad = (-feats.shape[0]) % 4
+        feats = torch.cat([feats, feats[-1:].expand(pad, -1)]) if pad else feats
+        out = [self.rvqs[r].encode(self.normalise(r, feats[:, list(MOTION_REGIONS[r].columns)])[None])
+               for r in REGIONS]
+        return torch.cat(out, -1) / LATENT_SCALE
+
     def decode(self, latents: torch.Tensor, num_frames: int) -> MotionSequence:
         """(1, N, 3 * code_dim) generator latents -> motion (jaw, eyes, face neutral)."""
         parts, d = {}, self.rvqs["upper"].cfg.code_dim
@@ -76,8 +86,11 @@ class ReferenceBundle:
 @torch.no_grad()
 def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2index: dict[str, int], audio: np.ndarray,
                        num_frames: int, words: list | None, steps: int, cfg_scale: float, seed: int,
-                       progress: Progress | None = None) -> tuple[torch.Tensor, MotionSequence]:
-    """16 kHz speech -> (latents (1, N, 384), motion of num_frames frames)."""
+                       progress: Progress | None = None, held: Held | None = None
+                       ) -> tuple[torch.Tensor, MotionSequence | None]:
+    """16 kHz speech -> (latents (1, N, 384), motion of num_frames frames). `held`: known latents (1, N, 384) and
+    their mask, held while sampling (edits: only windows with latents to regenerate are sampled); the motion is
+    then left to the caller to decode (None)."""
     c = model.cfg
     W, L = c.frames, -(-num_frames // 4)                              # 128 frames = 32 latents per window
     starts = window_layout(L, c.seq_len, c.seed_frames)              # windows advance by 112 frames
@@ -93,11 +106,17 @@ def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2
         a = torch.from_numpy(feats[f0 * SAMPLES_PER_FRAME:(f0 + W) * SAMPLES_PER_FRAME]).float()[None]
         w = torch.from_numpy(toks[f0:f0 + W])[None]
         noise = torch.randn(1, c.regions * c.input_dim, c.seq_len, generator=gen)
-        return model.sample(a, w, seed_lat, noise, steps=steps, cfg_scale=cfg_scale).transpose(1, 2)  # (1, 32, 384)
+        hold = None
+        if padded is not None:
+            win = padded.window(st, c.seq_len)
+            hold = (win.known.transpose(1, 2), win.mask.expand_as(win.known).transpose(1, 2))
+        return model.sample(a, w, seed_lat, noise, steps=steps, cfg_scale=cfg_scale,
+                            hold=hold).transpose(1, 2)                                            # (1, 32, 384)
 
+    padded = held.padded(starts[-1] + c.seq_len) if held is not None else None
     latents = sample_windows(L, c.seq_len, c.seed_frames, bundle.neutral_seed(c.seed_frames), sample,
-                             seed, crossfade=False, progress=progress)
-    return latents, bundle.decode(latents, num_frames)
+                             seed, crossfade=False, progress=progress, held=held)
+    return latents, None if held is not None else bundle.decode(latents, num_frames)
 
 
 LONG_AUDIO_NOTE = ("authors' model run with our long-audio handling: 128-frame windows, neutral first seed, "

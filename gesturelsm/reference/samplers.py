@@ -7,6 +7,12 @@
 - diffusion: DDIM (eta 0) on the 1000-step squared-cosine schedule, x0 prediction, 'leading' spacing
   (steps 950, 900, ..., 0 for 20), final alpha 1; the first latent is sqrt(1 - abar_950) * noise.
 Guidance whenever scale > 1: u + s (c - u) with the learned null condition, both halves in one batch.
+
+Holding known latents (edits): the shortcut and diffusion samplers take `hold` = (known, mask) like the noise, and
+before every network call set the known entries to the known latents noised to the call's time with the sampler's
+own noise (shortcut: t known + (1 - t) noise; diffusion: sqrt(abar_k) known + sqrt(1 - abar_k) noise), so the rest
+is sampled in their context; the result has them exactly (mixed in, where the mask is a float weight: flows/base.py
+`hold`). MeanFlow cannot: its one step sees the known latents only as pure noise.
 """
 from __future__ import annotations
 
@@ -15,6 +21,7 @@ from typing import Callable
 
 import torch
 
+from ..flows.base import hold as held
 from .denoiser import ReferenceDenoiser
 
 KV = list[tuple[torch.Tensor, torch.Tensor]]
@@ -44,14 +51,16 @@ def _velocity(model: ReferenceDenoiser, kv: KV, seed: torch.Tensor, scale: float
 
 
 def shortcut(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
-             steps: int, scale: float) -> torch.Tensor:
+             steps: int, scale: float, hold: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
     f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     ts = torch.linspace(1e-8, 1 - 1e-8, steps + 1)
     d = torch.tensor([1.0 / steps])
     x = noise
     for k in range(steps):
+        if hold is not None:
+            x = held(x, ts[k] * hold[0] + (1 - ts[k]) * noise, hold[1])
         x = x + (ts[k + 1] - ts[k]) * f(x, ts[k:k + 1], d)
-    return x
+    return x if hold is None else held(x, hold[0], hold[1])
 
 
 def meanflow(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
@@ -74,19 +83,23 @@ def cosine_alphas_cumprod(n: int = 1000, max_beta: float = 0.999) -> torch.Tenso
 
 
 def diffusion(model: ReferenceDenoiser, noise: torch.Tensor, speech: torch.Tensor, seed: torch.Tensor,
-              steps: int, scale: float, train_steps: int = 1000) -> torch.Tensor:
+              steps: int, scale: float, train_steps: int = 1000,
+              hold: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
     f = _velocity(model, guided_kv(model, speech, scale, steps), seed, scale)
     ac = cosine_alphas_cumprod(train_steps)
     ratio = train_steps // steps
     ks = [k * ratio for k in reversed(range(steps))]
     x = (1 - ac[ks[0]]) ** 0.5 * noise
     for k in ks:
+        if hold is not None:
+            x = held(x, ac[k] ** 0.5 * hold[0] + (1 - ac[k]) ** 0.5 * noise, hold[1])
         x0 = f(x, torch.tensor([float(k)]), None)
         a_t = ac[k]
         a_prev = ac[k - ratio] if k - ratio >= 0 else torch.tensor(1.0)
         eps = (x - a_t ** 0.5 * x0) / (1 - a_t) ** 0.5
         x = a_prev ** 0.5 * x0 + (1 - a_prev) ** 0.5 * eps
-    return x
+    return x if hold is None else held(x, hold[0], hold[1])
 
 
 SAMPLERS = {"shortcut": shortcut, "meanflow": meanflow, "diffusion": diffusion}
+HOLDS_KNOWN = ("shortcut", "diffusion")         # the samplers that take `hold`

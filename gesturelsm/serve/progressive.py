@@ -84,7 +84,7 @@ class Growing:
         take = self.made[GROUND_TRUTH].take if has_gt else None
         pending = tuple(m for m in self.slots if m not in self.made)
         return Result(None, rows, (), None, sp.text_mode, tuple(warnings), take, self.ready_s, self.ready_s, timings,
-                      motions, sp.transcript, job, pending=pending,
+                      motions, sp.transcript, job, speech=sp, plan=self.plan, pending=pending,
                       failed={m: self.failed[m] for m in self.slots if m in self.failed},
                       slots=tuple((m, slot_label(m, self.plan)) for m in self.slots))
 

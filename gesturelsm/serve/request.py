@@ -6,7 +6,8 @@
 - `RenderJob`: everything the side-by-side video of a request needs, fixed once the motions exist (motions,
   labels, the speech, size, folder, the request's start time), so the video can be rendered later.
 - `Result`: what the visitor sees (video, timing rows, downloads, summary) plus the job that renders its video;
-  `GestureService.render` and `.export` return a new `Result` with the video or the downloads filled in.
+  `GestureService.render` and `.export` return a new `Result` with the video or the downloads filled in, and
+  `GestureService.edit` one with a motion edited (the result before it is its `previous`: undo).
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
-from ..pipeline import generation_seconds
+from ..pipeline import Plan, SpeechInput, generation_seconds
 from ..settings import DEFAULTS, MISSING
 
 VIDEO_SIZES = (256, 384, 512, 640)
@@ -99,6 +100,10 @@ class Result:
     motions: Mapping[str, MotionSequence] = field(repr=False)   # shown, post-processed, by method
     transcript: str | None                   # the automatic transcript used (shown in the transcript box)
     job: RenderJob = field(repr=False)
+    speech: SpeechInput | None = field(default=None, repr=False)   # prepared once: edits reuse it
+    plan: Plan | None = None                 # the settings the motions were made with (edits use them too)
+    previous: "Result | None" = field(default=None, repr=False)    # the result before an edit (undo goes back to it)
+    edits: tuple[str, ...] = ()              # the edits made since Generate, oldest first, as the summary says them
     pending: tuple[str, ...] = ()            # methods still being made (a result that grows: serve/progressive.py)
     failed: Mapping[str, str] = field(default_factory=dict)       # method -> why it has no motion
     slots: tuple[tuple[str, str], ...] = ()  # (method, label) of every method shown, made or not, in page order
@@ -120,6 +125,7 @@ class Result:
         lines = [f"**Transcript:** {self.text_mode}", ready]
         if self.ground_truth:
             lines.append(f"**Ground truth:** BEAT2 take `{self.ground_truth}`")
+        lines += [f"**Edited:** {e}" for e in self.edits]
         lines += [f"Note: {w}" for w in self.warnings]
         return "\n\n".join(lines)
 

@@ -45,6 +45,7 @@ from ..pipeline import GesturePipeline, Plan, SpeechInput
 from ..settings import Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
+from .editing import edit_result
 from .limits import transcript_problems
 from .config import ServiceSettings
 from .prepared import PreparedUploads, file_key
@@ -253,6 +254,11 @@ class GestureService:
         if type(self).run is not GestureService.run and type(self).stream is GestureService.stream:
             return iter([self.run(req, progress, audio)])
         return stream_request(self, req, progress, audio)
+
+    def edit(self, result: Result | None, method: str, start: float | None, end: float | None, regions, seed,
+             progress: Progress | None = None) -> Result:
+        """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
+        return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
 
     def folder(self) -> Path:
         """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the

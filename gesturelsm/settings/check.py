@@ -24,6 +24,10 @@ class _Missing:
     def __repr__(self) -> str:
         return "MISSING"
 
+    def __reduce__(self) -> str:
+        """Pickled by name: a request sent to another process (a Ray Serve replica) keeps its fields MISSING."""
+        return "MISSING"
+
 
 MISSING: Any = _Missing()           # a field the entry point did not receive: its default is used
 

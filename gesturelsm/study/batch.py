@@ -5,33 +5,36 @@ Output folder:
                                  hashes a secret salt with the speech, the method and every setting that makes
                                  the video: naming.py)
     key/conditions.csv           video -> speech file, method and its settings (keep away from raters)
+    key/motion/v_<10 hex>.npz    the motion behind each video (BEAT2 layout), to measure what raters saw
     key/salt.txt                 the secret that makes the names; reused on reruns so names stay stable
     key/mismatch.csv             attention-check videos: one clip's video (motion_of) with another clip's speech
     key/design.json, raters.json, links.csv   the study's one design (see design.py): pairwise or rating, its
                                  attention checks, one unguessable link per rater for `gesturelsm study serve`
     study.json                   the settings of the videos and the design; a rerun with other ones is refused
-Reruns skip videos that exist (videos are written under a temporary name and renamed when complete) and may add
-speech files, methods and raters; the key and the attention checks keep the rows of earlier runs.
+Reruns skip videos that exist with their motion (every file is written under a temporary name and renamed when
+complete; a video's motion is made again alone when only it is missing) and may add speech files, methods and
+raters; the key and the attention checks keep the rows of earlier runs. Each video is one unit of work (videos.py),
+made in this process or, with --cluster, as a task on a Ray cluster; the files land the same either way.
 """
 from __future__ import annotations
 
 import csv
 import json
 import secrets
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping
 
-from ..align import read_result
-from ..audio import SAMPLE_RATE, load_audio
+from ..backends import checkpoint_sources
 from ..body.model import resolve_model_path
-from ..errors import AudioError, InputError, UserError
+from ..cluster import Connection, Files
+from ..errors import InputError, UserError
 from ..pipeline import GROUND_TRUTH, Plan
-from ..render import render_video
 from ..settings import DEFAULTS, Settings
 from .design import Design, invite, read_raters, write_design
 from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
     weights_digest
+from .videos import Built, VideoSpec, render_missing
 
 AUDIO_EXTENSIONS = (".wav", ".flac", ".mp3", ".ogg", ".m4a", ".webm", ".opus", ".aac")
 @dataclass
@@ -78,24 +81,19 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path,
     return StudyPlan(out, salt, items, settings)
 
 
-def _transcript(audio: Path):
-    """(words, text) from <stem>.TextGrid or <stem>.txt beside the audio, else (None, None)."""
-    tg = audio.with_suffix(".TextGrid")
-    if tg.exists():
-        return read_result(tg).words, None
-    txt = audio.with_suffix(".txt")
-    return None, (txt.read_text().strip() if txt.exists() else None)
-
-
 def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Settings = DEFAULTS, *, raters: int = 10,
                size: int = 512, body=None, beat2: str | None = None, design: Design = Design(),
-               log: Callable[[str], None] = print, rig=None) -> StudyPlan:
+               log: Callable[[str], None] = print, rig=None, connection: Connection | None = None,
+               checkpoints: list[Path] | None = None) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
     before anything is rendered (naming.check_unchanged). `settings`: the methods (ground truth among them needs
     `beat2`) and how each video is generated and post-processed (`gesturelsm.settings`; a method without steps runs
     its default). `rig`: a retarget.Character; each video then shows the character's own mesh and gets the motion
-    on that character beside it (VIDEO.vrm / .glb, the same blinded name)."""
+    on that character beside it (VIDEO.vrm / .glb, the same blinded name). Each video is a unit of work
+    (videos.py): in this process, or with `connection` (gesturelsm.cluster) a task on its cluster, whose workers
+    load `checkpoints` (what `checkpoint_sources` gave; default the shipped ones). Videos that fail are listed in a
+    ClusterError once everything else is written."""
     methods = list(dict.fromkeys(settings.methods))
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
@@ -118,7 +116,14 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
     record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=settings.cfg, seed=settings.seed,
                   size=size, **asdict(settings.post), design=asdict(design))
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
-    done, skipped = _render_missing(pipeline, plan, audio_files, base, size, body, rig, log)
+    ship = connection is not None
+    spec = VideoSpec(tuple(Files.of(c, ship) for c in (checkpoints or checkpoint_sources(None))),
+                     tuple(m for m in methods if m != GROUND_TRUTH), Files.of(getattr(body, "path", None), ship),
+                     Files.of(rig.path, ship) if rig is not None else None, size)
+    done, skipped, report = render_missing(plan.items, audio_files, out, base, spec, Built(pipeline, body, rig, size),
+                                           log, connection)
+    if not report.done and not skipped:
+        report.raise_failures("videos")                # nothing to write a study around
     _write_key(plan)
     write_mismatch(plan, audio_files, methods)
     write_design(out, design)
@@ -129,6 +134,7 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
     log(f"{done} videos rendered, {skipped} already there; the key is {out / 'key' / 'conditions.csv'} (do not "
         f"give it to raters); {max(have, raters)} rater links (`gesturelsm study serve {out}`) in "
         f"{out / 'key' / 'links.csv'}")
+    report.raise_failures("videos")                    # after everything else is written: a rerun makes only these
     return plan
 
 
@@ -138,43 +144,6 @@ def _write_settings(out: Path, plan: StudyPlan, record: dict) -> None:
     videos = {**old.get("videos", {}), **plan.settings}
     methods = list(dict.fromkeys([*old.get("methods", []), *plan.settings]))
     (out / SETTINGS_FILE).write_text(json.dumps(dict(record, methods=methods, videos=videos), indent=1) + "\n")
-
-
-def _render_missing(pipeline, plan: StudyPlan, audio_files: list[Path], base: Plan, size: int, body, rig,
-                    log: Callable[[str], None]) -> tuple[int, int]:
-    """Every video of the plan that is not there yet, one speech at a time; (rendered, already there)."""
-    videos = plan.out / "videos"
-    videos.mkdir(parents=True, exist_ok=True)
-    by_audio: dict[str, list[StudyItem]] = {}
-    for it in plan.items:
-        by_audio.setdefault(it.audio, []).append(it)
-    done = skipped = 0
-    for a in audio_files:
-        todo = [it for it in by_audio[a.name] if not (videos / it.video).exists()]
-        skipped += len(by_audio[a.name]) - len(todo)
-        if not todo:
-            continue
-        words, text = _transcript(a)
-        try:
-            speech = pipeline.prepare_speech(load_audio(a), SAMPLE_RATE, words=words, text=text)
-        except InputError as exc:  # too short, silent, too long
-            raise AudioError(f"{a.name}: {exc}") from None
-        for it in todo:                   # one plan per video: a video is rendered (and resumable) on its own
-            gen = pipeline.generate_all(speech, replace(base, settings=replace(base.settings, methods=(it.method,)),
-                                                        filename=a.name), body=body)
-            if it.method not in gen.motions:
-                log(f"  {a.name}: not a take of {base.beat2}; no ground-truth video")
-                continue
-            render_video([gen.motions[it.method]], speech.audio, videos / it.video, size=(size, size), body=body,
-                         character=rig, grounding=base.settings.post.grounding)
-            if rig is not None:
-                from ..export.rig import export_rig_glb
-
-                export_rig_glb(gen.motions[it.method], rig, (videos / it.video).with_suffix(
-                    ".vrm" if rig.skeleton.kind.startswith("vrm") else ".glb"), body=body, grounding=base.settings.post.grounding)
-            done += 1
-            log(f"  {it.video}  ({done} rendered)")
-    return done, skipped
 
 
 def write_mismatch(plan: StudyPlan, audio_files: list[Path], methods: list[str]) -> list[str]:

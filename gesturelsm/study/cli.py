@@ -4,14 +4,19 @@ study's one design (pairwise or 1-5 ratings, with attention checks) with a link 
 
     gesturelsm batch --audio-dir speech/ --methods gesturelsm rectified_flow ddim --out study/ --raters 12
     (a transcript per speech file is used when speech/NAME.txt or speech/NAME.TextGrid exists)
+    gesturelsm batch ... --cluster local        (or auto, ray://HOST:PORT: each video a task, docs/CLUSTER.md)
+
+Each video's motion is kept beside the key (key/motion/v_XXXXXXXXXX.npz, BEAT2 layout).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
 from ..body.model import resolve_model_path
+from ..cluster import add_cluster_argument, connect
 from ..errors import UserError
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from ..settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, input_folder,
@@ -43,9 +48,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="the study's design: pairwise preference between methods on the same speech, or each "
                    "video rated 1-5 on realness, synchrony and smoothness (default: pairwise)")
     p.add_argument("--attention", type=from_text, default=0.15,
-                   help="attention checks per real trial (mismatched speech and repeated trials; default 0.15)")
+                   help="attention checks per real trial (mismatched speech and repeated trials)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
                    "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
+    add_cluster_argument(p, "each video (generate, render, exports)")
     p.set_defaults(func=run)
 
 
@@ -76,8 +82,10 @@ def run(args: argparse.Namespace) -> int:
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints),
                                            methods=settings.generators or None)
     body = load_body_model(str(resolve_model_path(args.model)))
-    make_study(pipe, args.audio_dir, args.out, settings, raters=raters, size=size, body=body, beat2=args.beat2,
-               design=Design(args.design, attention, settings.seed), rig=rig)
+    with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
+        make_study(pipe, args.audio_dir, args.out, settings, raters=raters, size=size, body=body, beat2=args.beat2,
+                   design=Design(args.design, attention, settings.seed), rig=rig, connection=conn,
+                   checkpoints=checkpoint_sources(args.checkpoints))
     return 0
 
 

@@ -12,6 +12,7 @@ import os
 import signal
 import sys
 
+from gesturelsm.cluster import cluster_argument, parse_cluster, replicas_argument
 from gesturelsm.errors import GestureError
 from gesturelsm.serve.config import QUEUE_SIZE, ServiceSettings
 
@@ -19,8 +20,13 @@ DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in
 
 Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
 GESTURELSM_CHECKPOINTS, GESTURELSM_BEAT2, GESTURELSM_MAX_SECONDS, GESTURELSM_MAX_UPLOAD_MB,
-GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR, GESTURELSM_THREADS. No
-telemetry: Gradio analytics and the Hugging Face hub's telemetry are switched off before Gradio is imported.
+GESTURELSM_KEEP_MINUTES, GESTURELSM_CONCURRENCY, GESTURELSM_QUEUE_SIZE, GESTURELSM_WORKDIR, GESTURELSM_THREADS,
+GESTURELSM_REPLICAS, GESTURELSM_CLUSTER. No telemetry: Gradio analytics and the Hugging Face hub's telemetry are
+switched off before Gradio is imported.
+
+Replicas (docs/CLUSTER.md): `--replicas N` runs generation and rendering in N Ray Serve replicas (`MIN:MAX`: as many
+as the queue asks for), each taking --concurrency requests at a time, on `--cluster` (default local: this machine's
+cores); the page stays here, one front end, with the Live tab's streams. Without --replicas nothing of Ray is loaded.
 
 Logging (stderr): one line per refused request (what the visitor must change), per expired-file sweep and
 at shutdown; full tracebacks only for server errors.
@@ -58,6 +64,13 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="math threads per request and per live stream (default 1: on 2 cores a generator step is "
                    "fastest on one, and two oversubscribe a machine that also runs a browser)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
+    p.add_argument("--replicas", type=replicas_argument, default=_env("GESTURELSM_REPLICAS"), metavar="N|MIN:MAX",
+                   help="generate and render in N Ray Serve replicas (MIN:MAX autoscales on the queue); default: in "
+                        "this process")
+    p.add_argument("--cluster", type=cluster_argument, default=_env("GESTURELSM_CLUSTER"),
+                   metavar="local|auto|ray://HOST:PORT",
+                   help="where the replicas run: local (start Ray on this machine's cores, the default), auto (the "
+                        "cluster `ray start --head` started here) or ray://HOST:PORT")
     return p
 
 
@@ -85,19 +98,39 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
     logging.basicConfig(level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.getLogger("gesturelsm").setLevel(logging.INFO)
-    # lazy (here and .ui below): the service loads torch, .ui imports gradio; `--help` and bad arguments
-    # answer without them
-    from gesturelsm.serve.service import GestureService
-
+    # lazy (the service in `page_service`, .ui in `_serve`): the service loads torch, .ui imports gradio; `--help` and
+    # bad arguments answer without them
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency),
                                threads=max(1, args.threads))
     try:
-        service = GestureService.from_settings(settings)
-    except GestureError as exc:
+        service = page_service(args, settings)
+    except GestureError as exc:                          # one line each
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
+    try:
+        return _serve(service, args)
+    finally:
+        if args.replicas:
+            service.close()                             # the replicas stop; a joined cluster stays up
+
+
+def page_service(args: argparse.Namespace, settings):
+    """The page's service: in this process, or with --replicas over Ray Serve replicas on --cluster."""
+    if args.cluster and not args.replicas:
+        raise GestureError("--cluster says where replicas run: give --replicas N too")
+    if args.replicas:
+        from gesturelsm.serve.replicated import ReplicatedService
+
+        return ReplicatedService.start(settings, args.replicas, args.cluster or parse_cluster("local"),
+                                       warmup=not args.no_warmup, name=f"gesturelsm-{args.port}")
+    from gesturelsm.serve.service import GestureService
+
+    return GestureService.from_settings(settings)
+
+
+def _serve(service, args: argparse.Namespace) -> int:
     if not args.no_warmup:
         service.warmup()
     from .ui import build_demo

@@ -146,7 +146,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
         session = manager.open(replace(manager.config, grounding=grounding_of(text)),      # LiveBusy: said below
                                on_publish=lambda: loop.call_soon_threadsafe(ready.set))
         if token is not None:                   # before any motion: the page shows the character from frame 0
-            character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding_of(first))
+            character, meta = await asyncio.to_thread(stream_character, characters, token, body, grounding_of(text))
             if not await say(ws, encode(MotionRecord(meta=meta))):
                 return
         pusher = asyncio.create_task(push())

@@ -101,8 +101,9 @@ def component() -> gr.HTML:
 
 
 def attach(event, state, target: gr.HTML) -> None:
-    """Compute the statistics whenever `event` fires (each time the motions handed to the player grow), in a pool of
-    their own; a burst of such events computes once, for the newest."""
+    """Compute the statistics whenever `event` fires (each time the motions handed to the player change: as they
+    grow, after an edit, after an undo), in a pool of their own; a burst of such events computes once, for the
+    newest."""
     event(show, state, target, api_name="motion_stats", api_visibility="private", show_progress="hidden",
           concurrency_limit=1, concurrency_id="stats", trigger_mode="always_last")
 

@@ -28,7 +28,7 @@ from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.check import cfg_bound
 
-from . import live, live_socket, stats_view, sweep_tab
+from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
@@ -92,7 +92,7 @@ class _Handlers:
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
 
-    def _mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
+    def mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
             return
         with self._lock:
@@ -118,7 +118,7 @@ class _Handlers:
                        smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
 
     @staticmethod
-    def _refuse(exc: GestureError):
+    def refuse(exc: GestureError):
         """The one place the page turns errors into messages: one log line, no traceback (server bugs keep theirs)."""
         log.info("request refused: %s", " | ".join(str(exc).splitlines()))
         raise gr.Error(str(exc), duration=None, print_exception=False) from None
@@ -127,10 +127,10 @@ class _Handlers:
         try:
             return self.service.run(req, progress=lambda f, m: progress(f, desc=m))
         except GestureError as exc:
-            self._refuse(exc)
+            self.refuse(exc)
 
     @staticmethod
-    def _files(out: Result):
+    def download_files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
     def prefetch(self, audio, text, textgrid, auto_text) -> None:
@@ -152,11 +152,11 @@ class _Handlers:
         req = self.request(*args, exports=False, render=False)
         try:
             for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
-                self._mark_newest(request, out)
+                self.mark_newest(request, out)
                 recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
                 yield motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised
         except GestureError as exc:
-            self._refuse(exc)
+            self.refuse(exc)
 
     def _kept(self, request: gr.Request | None, out: Result):
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
@@ -178,7 +178,7 @@ class _Handlers:
             log.info("a video was not finished: the page asked for newer motion")
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
-            self._refuse(exc)
+            self.refuse(exc)
         return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
 
     def made_downloads(self, out: Result | None, request: gr.Request = None):
@@ -193,7 +193,7 @@ class _Handlers:
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
-        files, glb = self._files(out)
+        files, glb = self.download_files(out)
         files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
                                                 out.job.grounding)]
         return files, glb, out.summary, self._kept(request, out)
@@ -203,7 +203,7 @@ class _Handlers:
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, exports=True), progress)
-        return (str(out.video), out.table, out.summary, *self._files(out))
+        return (str(out.video), out.table, out.summary, *self.download_files(out))
 
 
 def _step_slider(service: GestureService, setting: str) -> gr.Slider:
@@ -270,8 +270,10 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
 
 
 def _output_column(service: GestureService) -> tuple:
-    """Player, video, summary, timings, downloads, GLB viewer: (payload, video, summary, table, files, view)."""
+    """Player (with the Edit section under it), video, summary, timings, downloads, GLB viewer: (payload, video,
+    summary, table, files, view, show3d, stats, edit)."""
     motion_player.player_component(service)
+    edit = edit_section.component()
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
     # sharing. A <video> on screen, even paused, holds headless Chromium's software-composited page at ~20 redraws
@@ -291,7 +293,7 @@ def _output_column(service: GestureService) -> tuple:
     show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")
     view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420, elem_id="view3d",
                       visible=False)
-    return payload, video, summary, table, files, view, show3d, stats
+    return payload, video, summary, table, files, view, show3d, stats, edit
 
 
 # Runs in the browser before the GLB is requested (Gradio awaits it): waits until the viewer shown by the step
@@ -318,7 +320,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
             with gr.Column(scale=1):
                 inputs, button, upload = _input_column(service)
             with gr.Column(scale=2):
-                payload, video, summary, table, files, view, show3d, stats = _output_column(service)
+                payload, video, summary, table, files, view, show3d, stats, edit = _output_column(service)
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS, threads=settings.threads)
@@ -344,15 +346,22 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
                     api_visibility="private", concurrency_limit=1, concurrency_id="prefetch")
         shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
                              api_name="generate_motion", **gen)
-        # every payload the button's handler sends (one per method made) goes to the player at once, in the browser
+        # every payload a handler sends (Generate's, one per method made; an edit's; an undo's) goes to the player at
+        # once, in the browser; the statistics and the downloads made so far follow it, beside the chain below
         payload.change(None, payload, None, js=motion_player.LOAD_JS, api_visibility="private")
-        stats_view.attach(payload.change, state, stats)    # beside the chain below: neither waits for the other
+        stats_view.attach(payload.change, state, stats)
         payload.change(h.made_downloads, state, files, api_visibility="private", show_progress="hidden",
                        concurrency_limit=1, concurrency_id="downloads", trigger_mode="always_last")
-        shown.then(h.show_video, [state, character], [video, table, summary, state], api_name="show_video",
-                  api_visibility="private", show_progress="hidden", **render) \
-            .then(h.add_exports, [state, character], [files, view, summary, state], api_name="add_exports",
-                  api_visibility="private", **render)
+
+        def follow(event, named: bool = False) -> None:     # after Generate, an edit or an undo (motions in state)
+            event.then(h.show_video, [state, character], [video, table, summary, state],
+                       api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
+                       **render) \
+                .then(h.add_exports, [state, character], [files, view, summary, state],
+                      api_name="add_exports" if named else None, api_visibility="private", **render)
+        follow(shown, named=True)
+        edit_section.attach(edit, h, shown, state, character, dict(payload=payload, table=table, summary=summary,
+                                                                   video=video, files=files), follow)
         glb = gr.State()                               # the file is handed over only once the viewer is mounted
         show3d.click(lambda out: (gr.update(visible=True, value=None), out), state, [view, glb], queue=False,
                      api_visibility="private") \

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gesturelsm.cli import main
-from gesturelsm.export import export_keypoints, export_npz, keypoints_2d
+from gesturelsm.export import export_keypoints, export_npz, keypoints_2d, npz_bytes
 from gesturelsm.motion import MotionSequence
 from gesturelsm.render import RenderStyle, fit_camera, render_frames
 
@@ -70,6 +70,26 @@ def test_npz_is_beat2_and_blender_addon_readable(tmp_path, standing):
         export_npz(bad, tmp_path / "bad.npz")
     with pytest.raises(ValueError, match=".npz"):
         export_npz(standing, tmp_path / "m.txt")
+
+
+def test_npz_bytes_are_the_same_npz_and_depend_on_the_motion_only(tmp_path, standing):
+    import zipfile
+
+    data = npz_bytes(standing)
+    (tmp_path / "b.npz").write_bytes(data)
+    with np.load(tmp_path / "b.npz", allow_pickle=False) as got, np.load(export_npz(standing, tmp_path / "a.npz"),
+                                                                         allow_pickle=False) as want:
+        assert got.files == want.files
+        assert all(np.array_equal(got[k], want[k]) and got[k].dtype == want[k].dtype for k in want.files)
+    with zipfile.ZipFile(tmp_path / "b.npz") as zf:                        # no time of writing inside
+        assert {i.date_time for i in zf.infolist()} == {(1980, 1, 1, 0, 0, 0)}
+    assert npz_bytes(MotionSequence(standing.poses, standing.trans, standing.expressions)) == data
+    moved = MotionSequence(standing.poses, standing.trans + 0.5, standing.expressions)
+    assert npz_bytes(moved) != data
+    bad = MotionSequence(standing.poses.copy(), standing.trans, standing.expressions)
+    bad.poses[0, 0] = np.inf
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        npz_bytes(bad)
 
 
 def test_export_cli(tmp_path, standing, capsys):

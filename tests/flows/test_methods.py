@@ -196,3 +196,24 @@ def test_noised_is_each_methods_training_path():
     k = torch.tensor([999, 500, 0])
     ab = cosine_alpha_bar()[k][:, None]
     assert_close_rel(DDIM().noised(x1, x0, model_time(k)), ab.sqrt() * x1 + (1 - ab).sqrt() * x0)
+
+
+@pytest.mark.parametrize("method", [Shortcut(), RectifiedFlow(), DDIM()])
+def test_soft_inpainting_mixes_the_noised_known_part_in_by_its_weight(method):
+    from gesturelsm.flows.base import inpainting
+
+    torch.manual_seed(0)
+    known, noise = torch.randn(1, 2, 6, 3), torch.randn(1, 2, 6, 3)
+    weight = torch.tensor([1.0, 0.5, 0.0, 0.0, 0.0, 0.0]).reshape(1, 1, 6, 1)
+    seen = []
+
+    def f(x, t, d, drop):
+        seen.append((x.clone(), t.clone()))
+        return torch.ones_like(x)
+
+    method.sample(inpainting(f, method, known, weight, noise), noise, 2, cfg_scale=1.0)
+    x, t = seen[-1]
+    x_prev, _ = seen[-2]
+    noised = method.noised(known, noise, t)
+    assert torch.equal(x[:, :, 0], noised[:, :, 0])                          # weight 1: the known part only
+    assert not torch.allclose(x[:, :, 1], noised[:, :, 1])                   # weight 0.5: mixed with the state

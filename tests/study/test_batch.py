@@ -171,12 +171,13 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
     from gesturelsm.cli import main
     from gesturelsm.pipeline import GesturePipeline
     from gesturelsm.study import batch as batch_module
+    from gesturelsm.study import videos as videos_module
 
     plans = []
 
     class Stop(BaseException):
-        """Raised once the plan is seen: the plan is all this test needs (a BaseException: the CLI reports an
-        Exception as an internal error and exits)."""
+        """Raised once the plan is seen: the plan is all this test needs (a BaseException: the batch lists a video's
+        Exception among its failures and goes on, and the CLI reports an Exception as an internal error)."""
 
     class Pipe:
         methods = ["gesturelsm"]
@@ -194,7 +195,7 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
 
     monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: Pipe()))
     monkeypatch.setattr(batch_module, "weights_digest", lambda backend: "w")
-    monkeypatch.setattr(batch_module, "load_audio", lambda path: np.zeros(16000, np.float32))
+    monkeypatch.setattr(videos_module, "load_audio", lambda path: np.zeros(16000, np.float32))
     (tmp_path / "a").mkdir()
     sf.write(tmp_path / "a" / "s.wav", np.zeros(16000, np.float32), 16000)
     with pytest.raises(Stop):
@@ -216,7 +217,11 @@ def test_a_rerun_with_other_settings_is_refused_and_the_key_describes_the_videos
 
     out = tmp_path / "study"
     assert batch(out) == 0
-    before = {p.name: p.read_bytes() for p in [out / "study.json", *(out / "key").iterdir()]}
+    def files():                                  # the settings, the key and the motions behind the videos
+        return {p.relative_to(out): p.read_bytes() for p in [out / "study.json", *(out / "key").rglob("*")]
+                if p.is_file()}
+    before = files()
+    assert len([p for p in before if p.parent.name == "motion"]) == 4
     videos = sorted(p.name for p in (out / "videos").iterdir())
     capsys.readouterr()
     assert batch(out, "2") == 2
@@ -227,7 +232,7 @@ def test_a_rerun_with_other_settings_is_refused_and_the_key_describes_the_videos
     assert batch(out, "1", "--design", "rating") == 2
     assert "--design" in capsys.readouterr().err
     assert sorted(p.name for p in (out / "videos").iterdir()) == videos                 # nothing rendered
-    assert {p.name: p.read_bytes() for p in [out / "study.json", *(out / "key").iterdir()]} == before
+    assert files() == before
     key = _rows(out / "key" / "conditions.csv")
     assert {(r["method"], r["steps"], r["size"], r["smoothing"]) for r in key} == {
         ("gesturelsm", "1", "128", "light"), ("ddim", "1", "128", "light")}

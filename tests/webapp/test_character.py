@@ -125,7 +125,8 @@ def test_a_broken_character_is_a_warning_and_the_mannequin_stays(service, speech
     with pytest.warns(UserWarning, match="me.vrm: not a glTF / VRM file"):
         chosen, upload = choose(str(tmp_path / "me.vrm"))
     assert chosen is None and upload["value"] is None                 # the upload is emptied
-    payload = _Handlers(service).show_motion(*_request(speech_wav, ["gesturelsm"]), chosen, progress=quiet)[0]
+    shown = _Handlers(service).show_motion(*_request(speech_wav, ["gesturelsm"]), chosen, progress=quiet)
+    payload = list(shown)[-1][0]                                       # the button's last yield
     assert "character" not in payload and payload["bodies"][0]["method"] == "gesturelsm"
 
 
@@ -141,7 +142,7 @@ def test_a_chosen_character_gets_every_method_in_the_payload_and_the_downloads(s
     chosen, upload = choose(str(tmp_path / "me.glb"))
     assert chosen.name == "me.glb" and "me.glb" in upload["label"]
     h, methods = _Handlers(service), list(service.methods)[:2]
-    payload, _, _, out, _ = h.show_motion(*_request(speech_wav, methods), chosen, progress=quiet)
+    payload, _, _, out, _ = list(h.show_motion(*_request(speech_wav, methods), chosen, progress=quiet))[-1]
     c = payload["character"]
     assert c["name"] == "me.glb" and list(c["methods"]) == [b["method"] for b in payload["bodies"]] == methods
     assert c["frames"] == payload["frames"] and c["nodes"][0] == skel.bones["pelvis"]
@@ -177,7 +178,7 @@ def test_the_character_follows_the_pages_feet_on_the_ground_option(service, spee
     h, roots = _Handlers(service), {}
     for on in (True, False):
         request = _request(speech_wav, ["gesturelsm"])[:-1] + (on,)
-        payload, _, _, out, _ = h.show_motion(*request, chosen, progress=quiet)
+        payload, _, _, out, _ = list(h.show_motion(*request, chosen, progress=quiet))[-1]
         assert out.job.grounding is on
         want = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=on)
         other = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=not on)
@@ -223,6 +224,8 @@ def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, 
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
         page.locator("#generate").click()
         page.wait_for_selector(f"{player}[data-state=playing][data-character='cryptovoxels.vrm']", timeout=180000)
+        page.wait_for_function("() => { const p = window.gesturelsmPlayer; "           # every method's body joined
+                               "return Number(p.element.dataset.bodies) === p.payload.bodies.length; }", timeout=180000)
         n0 = int(page.get_attribute(player, "data-frames"))
         page.wait_for_function(f"() => Number(document.querySelector('{player}').dataset.frames) > {n0}",
                                timeout=30000)                            # frames advance on the speech's clock

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 
 import gradio as gr
 import numpy as np
@@ -152,9 +153,11 @@ def recognised(monkeypatch):
     monkeypatch.setattr(pipeline, "automatic_words", hear)
 
 
-def test_the_sweep_tab_transcribes_the_speech_as_generate_does(service, speech_wav, recognised):
-    out = service.run(Request(str(speech_wav), methods=("gesturelsm",), steps=1, render=False, exports=False))
-    *_, state = SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
+def test_the_sweep_tab_transcribes_the_speech_as_generate_does(service, speech_wav, recognised, tmp_path):
+    wav = tmp_path / "heard.wav"            # an upload of its own: the service reuses what it prepared for a file
+    shutil.copyfile(speech_wav, wav)
+    out = service.run(Request(str(wav), methods=("gesturelsm",), steps=1, render=False, exports=False))
+    *_, state = SweepHandlers(service).run(str(wav), ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
     assert out.text_mode.startswith("automatic transcript (2 words") and state.result.text_mode == out.text_mode
 
 
@@ -163,10 +166,15 @@ def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service)
 
     demo = build_demo(service)
     deps = {d.get("api_name"): d for d in demo.blocks.get_config_file()["dependencies"]}
-    gen = deps["generate_motion"]["id"]
-    assert deps["motion_stats"]["trigger_after"] == gen                  # right after the motions exist ...
-    player = [d for d in deps.values() if d["trigger_after"] == gen and d.get("js") and "gesturelsmPlayer" in d["js"]]
-    assert len(player) == 1                                              # ... beside the player's step, not before it
+    gen, stats = deps["generate_motion"], deps["motion_stats"]
+    # every payload handed to the player (Generate's, as methods are made; an edit's; an undo's) triggers the
+    # statistics at once, beside the player's step, not chained after the video or before the player
+    (payload, event), = stats["targets"]
+    assert event == "change" and payload in gen["outputs"] and stats["trigger_after"] is None
+    player = [d for d in deps.values() if d["targets"] == stats["targets"] and d.get("js")
+              and "gesturelsmPlayer" in d["js"]]
+    assert len(player) == 1
+    assert deps["edit_motion"]["outputs"][0] == payload                   # an edit hands the player a payload too
     fns = demo.blocks.fns
     pools = {f.api_name: f.concurrency_id for f in (fns.values() if isinstance(fns, dict) else fns)}
     assert pools["motion_stats"] == "stats" and pools["sweep"] == "generation"

@@ -14,8 +14,9 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.constants import SAMPLE_RATE
-from gesturelsm.export.player_payload import body_glb, player_payload
+from gesturelsm.export.player_payload import body_glb, player_payload, write_motion
 from gesturelsm.motion.sequence import NUM_BETAS
+from gesturelsm.serve.editing import edited_method
 from gesturelsm.serve.request import Result
 from gesturelsm.serve.service import GestureService
 
@@ -66,7 +67,9 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     """Write the player's files for a generated request (its folder) and return the player's payload; with a
     character (gesturelsm/webapp/character.py) its `character` entry puts every method on it. For a result that is
     still growing (serve/progressive.py) every method shown has a body entry, with its motion file once it is made
-    (`motion`) or why it failed (`error`); files already written for the request are not written again."""
+    (`motion`) or why it failed (`error`); files already written for the request are not written again. For an
+    edited result, `compare` is the edited method's motion before the edit (the player's A/B), beside the
+    character's `METHOD:before`."""
     import soundfile as sf
 
     slots = list(out.slots) or list(zip(out.motions, out.job.labels))
@@ -76,17 +79,24 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     wav = folder / "speech.wav"
     if not wav.exists():
         sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
-    made = [m for m, _ in slots if m in out.motions]
-    p = player_payload([out.motions[m] for m in made], [dict(slots)[m] for m in made], made, service.body, folder,
+    order = [m for m, _ in slots]
+    made = [m for m in order if m in out.motions]
+    labels = {**dict(slots), **dict(zip(out.motions, out.job.labels))}     # an edited motion's label says so
+    p = player_payload([out.motions[m] for m in made], [labels[m] for m in made], made, service.body, folder,
                        service.workdir / "player-bodies", url=file_url, audio=wav,
-                       names=[f"player-{[m for m, _ in slots].index(k)}-{k}.bin" for k in made])
+                       names=[f"player-{order.index(k)}-{k}.bin" for k in made])
     ready = {b["method"]: b for b in p["bodies"]}
     rest = body_url(service)
     p["bodies"] = [ready.get(m) or {"label": label, "method": m, "body": rest, "motion": None, "expressions": 0,
                                     **({"error": out.failed[m]} if m in out.failed else {})} for m, label in slots]
     p["frames"] = p["frames"] or int(round(out.job.speech_seconds * p["fps"]))
     p["duration"] = p["frames"] / p["fps"]
-    if character is not None and made:
-        p["character"] = page_character(character, {m: out.motions[m] for m in made}, folder, file_url, service.body,
-                                        out.job.grounding)
+    motions, edited = {m: out.motions[m] for m in made}, edited_method(out)
+    if edited is not None:
+        i, before = order.index(edited), out.previous.motions[edited].slice(0, p["frames"])
+        path, _ = write_motion(before, service.body, folder / f"player-{i}-{edited}-before.bin")
+        p["compare"] = {"index": i, "method": edited, "motion": file_url(path)}
+        motions[f"{edited}:before"] = before
+    if character is not None:           # from the first payload on: the slots are built on the character
+        p["character"] = page_character(character, motions, folder, file_url, service.body, out.job.grounding)
     return p

@@ -26,13 +26,18 @@
 // Test contract on the element: data-state = empty | loading | playing | paused (playing from the first body that
 // moves), data-bodies = bodies moving now, data-frames = motion frames drawn so far, data-frame = index of the frame
 // on screen, data-fps = draws in the last second, data-character = the file name of the character on screen
-// (absent: the mannequin), data-failed = slots whose motion failed (absent: none).
+// (absent: the mannequin), data-failed = slots whose motion failed (absent: none), data-edit-start / data-edit-end =
+// the edit range drawn on the timeline, data-ab = edited | original: which motion an edited body shows (absent:
+// nothing edited). An edited payload's `compare` ({index, method, motion}) is the motion before the edit of body
+// `index`: the A/B button (#edit-ab) swaps that body between it and the edited one on the same clock (on a
+// character: the payload's character methods `method` and `method:before`).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { Body, JOINTS, Pending, clayMatcap, loadGlb } from './body.js';
 import { CharacterBody, fetchCharacter } from './character.js';
 import { adoptStyles, el } from './dom.js';
 import { drawProfile, lap, requested } from './measure.js';
+import { decodeMotion } from './motion_decoder.js';
 import { loadPayload } from './progressive.js';
 
 const SPACING = 1.2;           // metres between bodies, as in the server-side video
@@ -69,8 +74,15 @@ export class MotionPlayer {
     this.controls.addEventListener('change', () => { this.dirty = true; });
     const bar = el('div', { class: 'mp-bar' }, element);
     this.button = el('button', { class: 'mp-play', type: 'button', text: 'Play' }, bar);
-    this.range = el('input', { class: 'mp-seek', type: 'range', min: '0', max: '0', step: '0.001', value: '0' }, bar);
+    const seek = el('div', { class: 'mp-seek-box' }, bar);
+    this.range = el('input', { class: 'mp-seek', type: 'range', min: '0', max: '0', step: '0.001', value: '0' }, seek);
+    this.band = el('div', { class: 'mp-edit-range' }, seek);
     this.time = el('span', { class: 'mp-time', text: '0.00 / 0.00 s' }, bar);
+    this.ab = el('button', { class: 'mp-ab', type: 'button', text: 'A/B: edited' }, bar);
+    if (element.id === 'motion-player') this.ab.id = 'edit-ab';          // the page's player (not the Live tab's)
+    this.ab.addEventListener('click', () => this.toggleCompare());
+    this.editRange = null; this.compare = null; this.records = [];
+    this._showCompare();
     this.button.addEventListener('click', () => (this.clock && this.clock.paused ? this.play() : this.pause()));
     this.range.addEventListener('input', () => this.seek(parseFloat(this.range.value)));
     this.audio = el('audio', { class: 'mp-audio', preload: 'auto' }, element);
@@ -131,6 +143,7 @@ export class MotionPlayer {
     if (wait) { wait.previousSibling.remove(); wait.remove(); }
     this.scene.remove(old.root); this.scene.add(b.root);
     this.bodies[i] = b;
+    if (record) this.records[i] = record;
     if (record && !(this.ch && character)) this.appendRecord(i, record, this.specs[i].motion);
     this.range.max = String(this.frames() / this.fps);
     this._count();
@@ -235,7 +248,59 @@ export class MotionPlayer {
 
   // The page's payload (progressive.js): the speech and one slot per method; each method's body joins the clock
   // as its motion arrives (the same payload again, with more motion files), the first one starts the speech.
+  // `payload.resume` (an edit, an undo): the same speech again, so the time on screen and play / pause are kept.
   load(payload) { return loadPayload(this, payload); }
+
+  // ---- edits: the range on the timeline, A/B of an edited body ------------------------------------------------
+  currentTime() { return this.clock ? Math.round((this.clock.currentTime || 0) * 100) / 100 : 0; }
+
+  setRange(start, end) {
+    const T = this.frames() / this.fps, d = this.element.dataset;
+    this.editRange = [start, end];
+    if (!(T > 0) || !(start >= 0) || !(end > start)) {
+      this.band.style.display = 'none'; delete d.editStart; delete d.editEnd;
+      return;
+    }
+    const a = Math.min(start, T), b = Math.min(end, T);
+    this.band.style.display = '';
+    this.band.style.left = `${(100 * a) / T}%`; this.band.style.width = `${(100 * (b - a)) / T}%`;
+    d.editStart = String(start); d.editEnd = String(end);
+  }
+
+  toggleCompare() {
+    const c = this.compare;
+    if (!c) return;
+    c.showing = c.showing === 'edited' ? 'original' : 'edited';
+    const b = this.bodies[c.index];
+    if (b.payload) b.method = c.showing === 'edited' ? c.method : `${c.method}:before`;   // on the character
+    else { b.frames = 0; this.appendRecord(c.index, c.showing === 'edited' ? c.edited : c.original); }
+    this.shown = -1; this.dirty = true;
+    this._showCompare();
+    this._frame();                                   // posed now: the other motion is on screen from this call on
+  }
+
+  async _loadCompare(payload, gen) {
+    this.compare = null;
+    const c = payload.compare;
+    if (c) {
+      try {
+        const r = await fetch(c.motion);
+        if (!r.ok) throw new Error(`${c.motion}: HTTP ${r.status}`);
+        const original = decodeMotion(await r.arrayBuffer(), c.motion);
+        if (gen !== this.generation) return;
+        this.compare = { index: c.index, method: c.method, edited: this.records[c.index], original, showing: 'edited' };
+      } catch (e) { this.element.dataset.error = String(e.message || e); }
+    }
+    this._showCompare();
+  }
+
+  _showCompare() {
+    const c = this.compare;
+    this.ab.style.display = c ? '' : 'none';
+    if (!c) { delete this.element.dataset.ab; return; }
+    this.element.dataset.ab = c.showing;
+    this.ab.textContent = c.showing === 'edited' ? 'A/B: edited (show the original)' : 'A/B: original (show the edit)';
+  }
 
   // ---- internals -----------------------------------------------------------------------------------------
   _setState(s) { if (this.element.dataset.state !== s) this.element.dataset.state = s; }

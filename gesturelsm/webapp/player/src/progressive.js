@@ -5,6 +5,9 @@
 // restarts); the first one starts the speech from its beginning. On the visitor's character (payload.character) a
 // method's frames come inside the payload (character.methods, there whenever its body has `motion`), and its
 // motion file is drawn only if the character cannot be loaded.
+// A payload with `resume` (an edit or an undo: the same speech, another request folder) keeps the time on screen and
+// play / pause: its first body starts the speech where the previous one was. A payload with `compare` (an edit) loads
+// the motion before the edit for the A/B button once the edited body has joined.
 // With measuring on (measure.js) the element's data-marks holds, in ms from the first payload: bodies (slots
 // built), motion (first motion decoded), play (first body moving, the speech playing), all (every slot moving).
 import { decodeMotion } from './motion_decoder.js';
@@ -19,10 +22,13 @@ function fetchRecord(url) {
 // A new request: the speech starts loading, the slots are built (the bodies ready at once join straight away).
 function begin(p, payload) {
   const req = { id: payload.id, joined: new Set(), failed: new Set(), marks: p.measure ? { start: performance.now() } : null };
+  const was = p.clock ? { t: p.clock.currentTime || 0, paused: p.clock.paused } : (p.request && p.request.resume);
+  req.resume = payload.resume ? was || null : null;
   p.request = req;
   p.payload = payload;
   delete p.element.dataset.error; delete p.element.dataset.characterError;
   p.pause();
+  p.records = []; p.compare = null; p._showCompare();     // no A/B until this request's edited body is in
   p.clock = null;                                    // no clock until a body moves: data-state stays loading
   p.audio.src = payload.audio || '';                 // the speech loads while the methods are generated
   const specs = payload.bodies.map((b) => ({ ...b, pending: true }));
@@ -34,9 +40,9 @@ function begin(p, payload) {
 }
 
 async function start(p, req) {
-  p.audio.currentTime = 0;
+  p.audio.currentTime = req.resume ? req.resume.t : 0;
   p.attachClock(p.audio);
-  await p.play();
+  if (!(req.resume && req.resume.paused)) await p.play();
   if (req.marks && p.measure) {
     req.marks.play = performance.now() - req.marks.start;
     p.marks = req.marks;
@@ -57,7 +63,11 @@ async function arrive(p, req, payload, i) {
   if (!(await req.slots) || p.request !== req) return;       // a newer request replaced this one
   if (req.marks && req.marks.motion === undefined) req.marks.motion = performance.now() - req.marks.start;
   p.join(i, record, payload.character);
-  if (req.joined.size === 0) { req.joined.add(i); await start(p, req); } else req.joined.add(i);
+  p.setRange(...(p.editRange || []));                      // the edit range drawn against the frames now in
+  const first = req.joined.size === 0;
+  req.joined.add(i);
+  if (first) await start(p, req);
+  if (payload.compare && payload.compare.index === i) await p._loadCompare(payload, p.generation);
   allIn(p, req);
 }
 

@@ -1,0 +1,170 @@
+"""`gesturelsm edit`: regenerate body regions of a motion over time ranges, keep the rest, pin key poses
+(GesturePipeline.edit; docs/EDITING.md).
+
+    gesturelsm edit take.npz speech.wav --regenerate upper,hands@3.0-6.0 --seed 2 --out take_v2.npz
+    gesturelsm edit take.npz speech.wav --regenerate upper@3-6 --regenerate face@10-12 \\
+        --keyframe pose.npz:120@4.5 --out take_v3.npz      # frame 120 of pose.npz is the upper body at 4.5 s
+    gesturelsm edit take.npz speech.wav --regenerate upper@3-6 --keyframe 40@4.5 --out take_v4.npz
+                                                           # frame 40 of take.npz itself, at 4.5 s
+"""
+from __future__ import annotations
+
+import argparse
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from .align.textgrid import read_words
+from .audio import load_audio
+from .backends import SPECS, checkpoint_sources
+from .body.model import resolve_body
+from .constants import SAMPLE_RATE
+from .errors import UserError
+from .export import export_bvh, export_glb
+from .export.rig import export_rig
+from .motion.editing import edit_spec, fit_speech, keyframe
+from .motion.regions import GENERATED_REGIONS
+from .motion.sequence import MotionSequence
+from .pipeline import GesturePipeline
+from .retarget import check_usable, load_character
+from .settings import DEFAULT_METHOD, Settings
+from .settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, output_file, refuse,
+                                 say)
+
+# REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
+# gets its own message (outside the speech, unknown region) rather than this syntax's
+_RANGE = re.compile(r"^\s*([^@]+)@\s*(-?[0-9.]+)\s*-\s*(-?[0-9.]+)\s*$")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    g = sub.add_parser("edit", help="regenerate body regions of a motion over time ranges, keep the rest",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    g.add_argument("motion", help="the motion to edit (BEAT2-layout .npz, e.g. written by `gesturelsm generate`)")
+    g.add_argument("audio", help="the speech the motion goes with (wav, flac, mp3, ...)")
+    g.add_argument("--regenerate", action="append", default=[], metavar="REGIONS@START-END",
+                   help=f"regions ({', '.join(GENERATED_REGIONS)}; comma-separated) and a range in seconds to "
+                   "regenerate, e.g. upper,hands@3.0-6.0; repeat for more")
+    g.add_argument("--keyframe", action="append", default=[], metavar="POSE.npz:FRAME@TIME",
+                   help="pin the upper body (and the hands, where regenerated) at TIME s to frame FRAME of POSE.npz "
+                   "(a BEAT2-layout motion; FRAME alone: a frame of MOTION); repeat for more")
+    src = g.add_mutually_exclusive_group()
+    src.add_argument("--text", help="transcript; word timings are aligned automatically")
+    src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
+    src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
+    g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
+                   help="a method whose sampler can hold known latents: "
+                   + ", ".join(k for k, s in SPECS.items() if s.inpainting) + f" (default: {DEFAULT_METHOD})")
+    add_settings_flags(g, steps="one")
+    g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
+    add_post_flags(g)                  # applied to the regenerated motion; the kept motion is the input's
+    g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible; .npz is added to a name without it)")
+    g.add_argument("--bvh", help="also write the edited motion as BVH")
+    g.add_argument("--glb", help="also write the edited motion as an animated GLB")
+    g.add_argument("--rig", help="your character (.vrm / .glb / .gltf / .bvh): also writes OUT's stem + the "
+                   "character's suffix, the edited motion on it (docs/CHARACTERS.md)")
+    g.set_defaults(func=run_edit)
+
+
+@dataclass(frozen=True)
+class Checked:
+    """The command's arguments after the checks."""
+    settings: Settings
+    regenerate: dict[str, list[tuple[float, float]]]
+    motion: Path
+    audio: Path
+    textgrid: Path | None
+    rig: Path | None
+    out: Path
+    bvh: Path | None
+    glb: Path | None
+
+
+def check_arguments(args: argparse.Namespace) -> Checked:
+    """Every argument, all problems at once (InputError), before anything is loaded."""
+    p: list[str] = []
+    settings = cli_settings(args, [args.method], p)
+    try:
+        regenerate = parse_regenerate(args.regenerate)
+    except UserError as exc:
+        p.append(str(exc))
+        regenerate = {}
+    files = [input_file(args.motion, "MOTION", p), input_file(args.audio, "AUDIO", p),
+             input_file(args.textgrid, "--textgrid", p) if args.textgrid else None,
+             input_file(args.rig, "--rig", p) if args.rig else None, output_file(args.out, "--out", ".npz", p),
+             output_file(args.bvh, "--bvh", ".bvh", p) if args.bvh else None,
+             output_file(args.glb, "--glb", ".glb", p) if args.glb else None]
+    refuse(p)
+    return Checked(settings, regenerate, *files)
+
+
+def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
+    """['upper,hands@3-6', 'face@10-12'] -> {'upper': [(3, 6)], 'hands': [(3, 6)], 'face': [(10, 12)]}."""
+    out: dict[str, list[tuple[float, float]]] = {}
+    for item in items:
+        m = _RANGE.match(item)
+        if not m:
+            raise UserError(f"--regenerate {item!r}: write REGIONS@START-END in seconds, e.g. upper,hands@3.0-6.0")
+        try:
+            rng = (float(m.group(2)), float(m.group(3)))
+        except ValueError:
+            raise UserError(f"--regenerate {item!r}: {m.group(2)}-{m.group(3)} is not a range of seconds") from None
+        regions = [r.strip().lower() for r in m.group(1).split(",") if r.strip()]
+        if not regions:
+            raise UserError(f"--regenerate {item!r}: name the regions before @ ({', '.join(GENERATED_REGIONS)}), "
+                            "e.g. upper,hands@3.0-6.0")
+        for region in regions:
+            out.setdefault(region, []).append(rng)
+    if not out:
+        raise UserError("nothing to regenerate: give --regenerate REGIONS@START-END, e.g. upper,hands@3.0-6.0")
+    return out
+
+
+def parse_keyframes(items: list[str], motion: MotionSequence) -> list:
+    """['pose.npz:120@4.5', '40@6'] -> keyframes (a bare FRAME is a frame of `motion`)."""
+    keys = []
+    for item in items:
+        source, sep, when = item.rpartition("@")
+        try:
+            t = float(when)
+        except ValueError:
+            t = None
+        if not sep or not source or t is None:
+            raise UserError(f"--keyframe {item!r}: write POSE.npz:FRAME@TIME (or FRAME@TIME for a frame of the motion "
+                            "being edited), e.g. pose.npz:120@4.5")
+        keys.append(keyframe(t, int(source) if source.isdigit() else source, current=motion))
+    return keys
+
+
+def run_edit(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    a = check_arguments(args)
+    rig = load_character(a.rig) if a.rig else None                  # a bad character stops before the work
+    if rig is not None:
+        check_usable(rig, draw=False)
+    motion = MotionSequence.load(a.motion)
+    keys = parse_keyframes(args.keyframe, motion)
+    edit_spec(a.regenerate, motion.num_frames, keys, SPECS[args.method].regions, args.method)   # before the models
+    audio = load_audio(a.audio)
+    fit_speech(audio, motion.num_frames)                             # the speech is the motion's (or nearly)
+    words = read_words(a.textgrid) if a.textgrid else None
+    say(0.0, f"loading the models ({args.method})")
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
+    st = a.settings
+    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
+                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
+                    post=st.post, progress=say)
+    path = res.motion.save(a.out)
+    done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=st.post.grounding),
+                        a.bvh and export_bvh(res.motion, a.bvh, body=resolve_body(None)),
+                        a.glb and export_glb(res.motion, a.glb, body=resolve_body(None))) if p]
+    for p in done:
+        print(f"wrote {p}")
+    for w in res.warnings:
+        print(f"warning: {w}")
+    asked = "; ".join(f"{r} {', '.join(f'{x:g}-{y:g} s' for x, y in rr)}" for r, rr in a.regenerate.items())
+    print(f"{path}: {asked} regenerated with {args.method}, {res.steps} steps, CFG {res.cfg:g}, seed {res.seed}"
+          f"{f', {len(keys)} keyframe(s)' if keys else ''}; {res.text_mode}")
+    stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
+    print(f"timings: {stages}; total {time.perf_counter() - t0:.1f}s")
+    return 0

@@ -1,0 +1,138 @@
+"""The web demo on Ray Serve replicas (`python -m app --replicas N`) over a simulated two-node cluster: the page, one
+front end, serves concurrent API requests through two replicas, still when one replica is killed during them (its
+call is made again on another, with the same motion for the same seed), and the dead replica's folder goes away.
+Too few CPUs for the replicas is one line, before any model is loaded."""
+from __future__ import annotations
+
+import os
+import signal
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import soundfile as sf
+
+from gesturelsm.cluster import parse_cluster, parse_replicas
+from gesturelsm.serve.replicas import SCRATCH, Upload
+
+from _support import gradio_client, served, speech_like
+
+AUTO = parse_cluster("auto")
+SCRATCH_ROOT = Path(tempfile.gettempdir()) / SCRATCH
+pids_seen: set[int] = set()                 # every replica these tests saw, for the check after they stop
+
+
+def _settings(assets: Path, workdir: Path):
+    from gesturelsm.serve.config import ServiceSettings
+
+    return ServiceSettings(checkpoints=str(assets), workdir=str(workdir), max_seconds=20, render_nice=0)
+
+
+def test_too_few_cpus_for_the_replicas_is_one_line_before_loading(ray_cluster, tiny_assets, tmp_path, capsys):
+    import ray
+
+    from gesturelsm.webapp.cli import main
+
+    t0 = time.perf_counter()
+    code = main(["--replicas", "3", "--cluster", "auto", "--checkpoints", str(tiny_assets), "--workdir",
+                 str(tmp_path), "--no-warmup", "--port", "0"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and err[-1] == ("python -m app: error: --replicas 3 needs 3 CPU(s) but the Ray cluster at auto: "
+                                     "2 node(s), 2 CPU(s) has 2: ask for less, or add nodes (`ray start "
+                                     "--address=HEAD:6379` on another machine)")
+    assert time.perf_counter() - t0 < 60 and not ray.is_initialized()
+    assert main(["--cluster", "auto", "--port", "0"]) == 2
+    assert capsys.readouterr().err.strip().endswith("--cluster says where replicas run: give --replicas N too")
+
+
+@pytest.fixture(scope="module")
+def replicated(ray_cluster, tiny_assets, tmp_path_factory):
+    from gesturelsm.serve.replicated import ReplicatedService
+
+    service = ReplicatedService.start(_settings(tiny_assets, tmp_path_factory.mktemp("front")), parse_replicas("2"),
+                                      AUTO, warmup=False)
+    try:
+        yield service
+    finally:
+        service.close()
+    left = [p.name for p in SCRATCH_ROOT.glob("replica-*") if int(p.name.split("-")[1]) in pids_seen]
+    assert left == [], f"stopped replicas left their folders: {left}"
+
+
+def _replica_pids() -> list[int]:
+    import ray._private.state
+
+    pids = sorted(a["Pid"] for a in ray._private.state.actors(actor_state_name="ALIVE").values()
+                  if "GestureReplica" in a["Name"])
+    pids_seen.update(pids)
+    return pids
+
+
+def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tiny_assets, tmp_path):
+    from gradio_client import handle_file
+
+    from gesturelsm.serve.request import Request
+    from gesturelsm.serve.service import GestureService
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(1.5, seed=4), 16000)
+    assert replicated.settings.concurrency == 2                     # two replicas, one request each
+    pids = _replica_pids()
+    assert len(pids) == 2
+    scratch = SCRATCH_ROOT
+    killed_folders = sorted(p.name for p in scratch.glob(f"replica-{pids[0]}-*"))
+    assert len(killed_folders) == 1
+    seeds = [0, 1, 0, 1]
+    with served(replicated) as url:
+        jobs = [gradio_client(url).submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
+                                          "off", 256, False, api_name="/generate") for seed in seeds]
+        time.sleep(2.0)                                             # both replicas are busy with a request
+        os.kill(pids[0], signal.SIGKILL)
+        answers = [j.result(timeout=900) for j in jobs]
+    motions = []
+    for video, rows, summary, files, glb in answers:
+        assert Path(video).is_file() and Path(video).stat().st_size > 1000
+        npz = next(Path(f) for f in files if Path(f).name == "gesturelsm.npz")
+        with np.load(npz) as d:
+            motions.append(d["poses"].copy())
+    assert len({str(Path(a[0]).parent) for a in answers}) == 4    # four requests, four folders
+    here = GestureService(replicated.pipeline, replicated.settings, replicated.body)
+    for seed, got in zip(seeds, motions):                          # the same motion as this process makes
+        want = here.run(Request(str(wav), methods=["gesturelsm"], steps=1, cfg=2.0, seed=seed, smoothing="off",
+                                render=False, exports=False, transcribe=False)).motions["gesturelsm"]
+        np.testing.assert_allclose(got, want.poses, atol=1e-5)
+    assert not np.allclose(motions[0], motions[1])
+    deadline = time.monotonic() + 300                              # its replacement removes the dead one's folder
+    while time.monotonic() < deadline and any(scratch.glob(killed_folders[0])):
+        time.sleep(1)
+    assert not any(scratch.glob(killed_folders[0]))
+    assert len(_replica_pids()) == 2 and pids[0] not in _replica_pids()
+
+
+def test_a_visitors_error_comes_back_as_one_line(replicated, tmp_path):
+    from gesturelsm.errors import InputError
+    from gesturelsm.serve.request import Request
+
+    silent = tmp_path / "silent.wav"
+    sf.write(silent, np.zeros(16000, np.float32), 16000)
+    with pytest.raises(InputError, match="silent"):
+        replicated.run(Request(str(silent), methods=["gesturelsm"], transcribe=False))
+    with pytest.raises(InputError, match="Unknown method"):        # checked here, no replica asked
+        replicated.run(Request(str(silent), methods=["nope"]))
+
+
+def test_a_prefetched_transcript_goes_with_the_request(replicated, tmp_path):
+    """The page asks a replica to transcribe an upload while the visitor chooses the settings; the request then
+    carries those words, so whichever replica makes it does not transcribe again."""
+    from gesturelsm.serve.request import Request
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(2.0, seed=7), 16000)
+    assert replicated.prefetch(str(wav)) is True
+    assert replicated.prefetch(None) is False
+    out = replicated.run(Request(str(wav), methods=["gesturelsm"], render=False, exports=False))
+    remembered = replicated._remembered(Upload(wav.name, wav.read_bytes()))
+    assert remembered is not None and out.text_mode == remembered.text_mode
+    assert out.timings["gesturelsm"]["transcription"] < 0.05         # found ready, not recognised again
