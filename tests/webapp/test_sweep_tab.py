@@ -137,22 +137,7 @@ def test_bad_sweeps_are_refused_like_generate_all_problems_at_once(service, spee
         "CFG scale must be numbers (got 'x').", "Seeds must be from 1 to 3 (got 9)."]
 
 
-@pytest.fixture
-def recognised(monkeypatch):
-    """Automatic transcription that hears "hello there" in any speech."""
-    from types import SimpleNamespace
-
-    import gesturelsm.pipeline as pipeline
-    from gesturelsm.align import Word
-    from gesturelsm.asr.source import AutomaticWords
-
-    def hear(audio, remember=True):
-        return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
-                              "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
-    monkeypatch.setattr(pipeline, "automatic_words", hear)
-
-
-def test_the_sweep_tab_transcribes_the_speech_as_generate_does(service, speech_wav, recognised):
+def test_the_sweep_tab_transcribes_the_speech_as_generate_does(service, speech_wav, hears_hello):
     out = service.run(Request(str(speech_wav), methods=("gesturelsm",), steps=1, render=False, exports=False))
     *_, state = SweepHandlers(service).run(str(speech_wav), ["gesturelsm"], "1", "2", 1, "bc", "", progress=quiet)
     assert out.text_mode.startswith("automatic transcript (2 words") and state.result.text_mode == out.text_mode
