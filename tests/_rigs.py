@@ -11,7 +11,9 @@ from typing import Iterator
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gesturelsm.export.bvh import euler_zxy_to_matrix
 from gesturelsm.motion.skeleton import JOINT_INDEX, JOINT_NAMES, PARENTS
+from gesturelsm.retarget.bvh_read import parse_hierarchy
 from gesturelsm.retarget.names import MIXAMO, preset_map
 from gesturelsm.retarget.skeleton import Skeleton, trs_matrix
 
@@ -260,3 +262,20 @@ def character_js_page(folder: Path) -> Iterator:
             yield page
         finally:
             browser.close()
+
+
+def bvh_positions(path: Path) -> tuple[list[str], np.ndarray]:
+    """Joint names and (T, N, 3) world positions of a ZXY BVH, by its own forward kinematics."""
+    text = path.read_text()
+    names, parents, offsets, _ = parse_hierarchy(text, path.name)
+    rows = text.split("Frame Time:", 1)[1].split("\n", 1)[1].split()
+    data = np.asarray(rows, np.float64).reshape(-1, 3 + 3 * len(names))
+    R = euler_zxy_to_matrix(np.radians(data[:, 3:].reshape(len(data), -1, 3)))
+    G, P = np.empty_like(R), np.empty((len(data), len(names), 3))
+    for i, p in enumerate(parents):
+        if p < 0:
+            G[:, i], P[:, i] = R[:, i], data[:, :3]
+        else:
+            G[:, i] = G[:, p] @ R[:, i]
+            P[:, i] = P[:, p] + G[:, p] @ offsets[i]
+    return names, P

@@ -261,3 +261,18 @@ def pytest_collection_modifyitems(config, items):
             group = ("browser" if item.get_closest_marker("browser") else
                      "ray" if "ray_cluster" in getattr(item, "fixturenames", ()) else item.nodeid.split("::")[0])
             item.add_marker(pytest.mark.xdist_group(group))
+
+
+@pytest.fixture
+def hears_hello(monkeypatch):
+    """Automatic transcription that hears "hello there" in any speech."""
+    from types import SimpleNamespace
+
+    import gesturelsm.pipeline as pipeline
+    from gesturelsm.align import Word
+    from gesturelsm.asr.source import AutomaticWords
+
+    def hear(audio, remember=True):
+        return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
+                              "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
+    monkeypatch.setattr(pipeline, "automatic_words", hear)

@@ -43,21 +43,6 @@ def test_generate_refuses_a_bad_character_before_generating(tmp_path, capsys):
     assert not (tmp_path / "t.npz").exists()
 
 
-@pytest.fixture
-def hears_hello(monkeypatch):
-    """Automatic transcription that hears "hello there" in any speech."""
-    from types import SimpleNamespace
-
-    import gesturelsm.pipeline as pipeline
-    from gesturelsm.align import Word
-    from gesturelsm.asr.source import AutomaticWords
-
-    def hear(audio, remember=True):
-        return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
-                              "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
-    monkeypatch.setattr(pipeline, "automatic_words", hear)
-
-
 def test_generate_says_what_it_does_and_shows_the_recognised_words(tiny_assets, tmp_path, capsys, hears_hello):
     sf.write(tmp_path / "s.wav", speech_like(2.0, seed=2), 16000)
     assert main(["generate", str(tmp_path / "s.wav"), "--checkpoints", str(tiny_assets), "--steps", "1",

@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from _rigs import character_js_page, gltf_validator_errors
+from _rigs import bvh_positions, character_js_page, gltf_validator_errors
 from gesturelsm.cli import main
-from gesturelsm.export.bvh import euler_zxy_to_matrix
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.retarget import load_character, retarget_motion
 
@@ -65,29 +64,9 @@ def test_glb_keeps_the_vrm_and_carries_the_rotations(exported, character):
     np.testing.assert_allclose(times, np.arange(seq.num_frames) / 30, atol=1e-6)
 
 
-def _bvh_positions(path: Path) -> tuple[list[str], np.ndarray]:
-    """Joint names and (T, N, 3) world positions of a ZXY BVH, by its own forward kinematics."""
-    from gesturelsm.retarget.bvh_read import parse_hierarchy
-
-    text = path.read_text()
-    names, parents, offsets, _ = parse_hierarchy(text, path.name)
-    rows = text.split("Frame Time:", 1)[1].split("\n", 1)[1].split()
-    data = np.asarray(rows, np.float64).reshape(-1, 3 + 3 * len(names))
-    R = euler_zxy_to_matrix(np.radians(data[:, 3:].reshape(len(data), -1, 3)))
-    G = np.empty_like(R)
-    P = np.empty((len(data), len(names), 3))
-    for i, p in enumerate(parents):                       # DFS order: parents come first
-        if p < 0:
-            G[:, i], P[:, i] = R[:, i], data[:, :3]
-        else:
-            G[:, i] = G[:, p] @ R[:, i]
-            P[:, i] = P[:, p] + G[:, p] @ offsets[i]
-    return names, P
-
-
 def test_bvh_poses_the_skeleton_as_retargeted(exported):
     seq, result, out = exported
-    names, P = _bvh_positions(out / "take.bvh")
+    names, P = bvh_positions(out / "take.bvh")
     skel = result.skeleton
     for name in ("Left wrist", "Right wrist", "Head", "Left ankle", "Right toe"):
         i = skel.names.index(name)

@@ -6,17 +6,15 @@ grounded pass through with a one-line note."""
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from _rigs import Y_UP_TO_Z_UP, build_rig, vrm_body_bones, write_gltf
+from _rigs import Y_UP_TO_Z_UP, build_rig, bvh_positions, vrm_body_bones, write_gltf
 from _standing import other_legs, segments, standing, stepping, swaying
 from gesturelsm.body.model import resolve_body
 from gesturelsm.cli import main
-from gesturelsm.export.bvh import euler_zxy_to_matrix
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_bvh, export_rig_glb
 from gesturelsm.grounding import ground_motion
@@ -107,25 +105,6 @@ def test_only_the_legs_change_the_upper_body_bit_for_bit(grounded, character, bo
     knee, ankle = character.skeleton.bones["left_knee"], character.skeleton.bones["left_ankle"]
     shin = np.linalg.norm(on.positions[:, ankle] - on.positions[:, knee], axis=1)
     np.testing.assert_allclose(shin, shin[0], rtol=1e-6)                    # bones keep their lengths
-
-
-def bvh_positions(path: Path) -> tuple[list[str], np.ndarray]:
-    """Joint names and (T, N, 3) world positions of a ZXY BVH, by its own forward kinematics."""
-    from gesturelsm.retarget.bvh_read import parse_hierarchy
-
-    text = path.read_text()
-    names, parents, offsets, _ = parse_hierarchy(text, path.name)
-    rows = text.split("Frame Time:", 1)[1].split("\n", 1)[1].split()
-    data = np.asarray(rows, np.float64).reshape(-1, 3 + 3 * len(names))
-    R = euler_zxy_to_matrix(np.radians(data[:, 3:].reshape(len(data), -1, 3)))
-    G, P = np.empty_like(R), np.empty((len(data), len(names), 3))
-    for i, p in enumerate(parents):
-        if p < 0:
-            G[:, i], P[:, i] = R[:, i], data[:, :3]
-        else:
-            G[:, i] = G[:, p] @ R[:, i]
-            P[:, i] = P[:, p] + G[:, p] @ offsets[i]
-    return names, P
 
 
 def test_the_files_carry_the_grounded_legs(grounded, character, body, tmp_path):
