@@ -105,6 +105,7 @@ export class MotionPlayer {
   async setBodies(specs, fps = 30, character = null) {
     const gen = ++this.generation;
     this._setState('loading');
+    this.element.dataset.bodies = '0';                     // nothing moves until the new bodies are loaded
     const gltfs = await Promise.all(specs.map((s) => loadGlb(s.body)));
     const ch = character ? await fetchCharacter(character).catch((e) => {     // it cannot load: the mannequin
       this.element.dataset.characterError = String(e.message || e);
