@@ -140,6 +140,29 @@ CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", 
 
 
 @contextlib.contextmanager
+def routed_page(files: dict) -> Iterator:
+    """A headless Chromium page opened at http://player.test/index.html whose requests to http://player.test/PATH are
+    answered from `files` ({PATH: (body bytes, content type)}; a query string is ignored)."""
+    from playwright.sync_api import sync_playwright
+
+    from app.screenshot import CHROMIUM_ARGS
+
+    def serve(route):
+        body, kind = files[route.request.url.split("player.test", 1)[1].split("?")[0]]
+        route.fulfill(status=200, body=body, content_type=kind)
+
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page()
+            page.route("http://player.test/**", serve)
+            page.goto("http://player.test/index.html")
+            yield page
+        finally:
+            browser.close()
+
+
+@contextlib.contextmanager
 def player_page(url: str, player: str, extra_args: Sequence[str] = ()) -> Iterator:
     """A page of headless Chromium (Debian's; WebGL through SwiftShader) at `url`, once the in-browser player
     `player` (a CSS selector) has loaded; skips, saying why, when no chromium is installed."""

@@ -146,11 +146,8 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
     the bundle's decodeMotion in Chromium: the same header fields, meta and every float of every frame, also of a
     version-2 record's character section (with and without the face's morph weights); cut or foreign bytes give the
     decoder's message naming the source."""
-    from playwright.sync_api import sync_playwright
-
-    from _support import CHROMIUM
+    from _support import CHROMIUM, routed_page
     from gesturelsm.webapp.player.component import BUNDLE
-    from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.export.motion_codec import MotionRecord, encode
 
     if CHROMIUM is None:
@@ -172,19 +169,8 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
              "/c.bin": (encode(crec), "application/octet-stream"),
              "/f.bin": (encode(frec), "application/octet-stream")}
 
-    def serve(route):
-        body, kind = files[route.request.url.split("player.test", 1)[1]]
-        route.fulfill(status=200, body=body, content_type=kind)
-
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page()
-            page.route("http://player.test/**", serve)
-            page.goto("http://player.test/index.html")
-            got = page.evaluate(DECODE_JS)
-        finally:
-            browser.close()
+    with routed_page(files) as page:
+        got = page.evaluate(DECODE_JS)
     assert (got["kind"], got["joints"], got["fps"], got["start"], got["frames"]) == ("quaternion", 55, 30, 42, T)
     assert got["meta"] == rec.meta
     for k in ("rotations", "root", "expressions"):             # float32 -> JS number -> float32: bit for bit

@@ -10,7 +10,7 @@ import io
 import numpy as np
 import pytest
 
-from _support import CHROMIUM
+from _support import CHROMIUM, routed_page
 
 pytestmark = pytest.mark.browser
 T = 300                                     # 10 s at 30 fps
@@ -60,9 +60,6 @@ STATE = """() => { const p = window.player, e = p.element;
 
 
 def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
-    from playwright.sync_api import sync_playwright
-
-    from app.screenshot import CHROMIUM_ARGS
     from gesturelsm.webapp.player.component import BUNDLE
 
     if CHROMIUM is None:
@@ -71,43 +68,32 @@ def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
         pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
     files, rotations = _files(tmp_path)
 
-    def serve(route):
-        body, kind = files[route.request.url.split("player.test", 1)[1].split("?")[0]]
-        route.fulfill(status=200, body=body, content_type=kind)
-
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            page = browser.new_page()
-            page.route("http://player.test/**", serve)
-            page.goto("http://player.test/index.html")
-            page.evaluate("""async () => { const m = await import('/player.js');
-                window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
-            page.evaluate("(p) => { window.player.load(p); }", _payload([None, None]))    # speech and slots only
-            page.wait_for_timeout(500)
-            first = page.evaluate(STATE)
-            assert (first["state"], first["bodies"]) == ("loading", 0)
-            assert "generating" in first["labels"][0] and "generating" in first["labels"][2]
-            page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", None]))
-            page.wait_for_function("() => window.player.element.dataset.state === 'playing'", timeout=30000)
-            page.wait_for_function("() => window.player.clock.currentTime > 1.0", timeout=30000)
-            before = page.evaluate(STATE)
-            assert before["bodies"] == 1 and before["failed"] is None
-            page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", "/m1.bin"]))   # and one fails
-            page.wait_for_function("() => window.player.element.dataset.bodies === '2'", timeout=30000)
-            joined = page.evaluate(STATE)
-            assert joined["t"] >= before["t"] and joined["state"] == "playing"        # nothing restarted
-            assert joined["failed"] == "1" and joined["labels"][2].endswith("failed: it failed on the server")
-            assert "generating" not in " ".join(joined["labels"])
-            page.evaluate("() => window.player.pause()")
-            page.wait_for_function("""() => { const p = window.player;
-                return p.element.dataset.state === 'paused'
-                  && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
-                                   timeout=10000)
-            end = page.evaluate(STATE)
-            shown = [np.asarray(page.evaluate(f"() => window.player.jointRotations({k})")) for k in range(2)]
-        finally:
-            browser.close()
+    with routed_page(files) as page:
+        page.evaluate("""async () => { const m = await import('/player.js');
+            window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
+        page.evaluate("(p) => { window.player.load(p); }", _payload([None, None]))    # speech and slots only
+        page.wait_for_timeout(500)
+        first = page.evaluate(STATE)
+        assert (first["state"], first["bodies"]) == ("loading", 0)
+        assert "generating" in first["labels"][0] and "generating" in first["labels"][2]
+        page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", None]))
+        page.wait_for_function("() => window.player.element.dataset.state === 'playing'", timeout=30000)
+        page.wait_for_function("() => window.player.clock.currentTime > 1.0", timeout=30000)
+        before = page.evaluate(STATE)
+        assert before["bodies"] == 1 and before["failed"] is None
+        page.evaluate("(p) => { window.player.load(p); }", _payload(["/m0.bin", "/m1.bin"]))   # and one fails
+        page.wait_for_function("() => window.player.element.dataset.bodies === '2'", timeout=30000)
+        joined = page.evaluate(STATE)
+        assert joined["t"] >= before["t"] and joined["state"] == "playing"        # nothing restarted
+        assert joined["failed"] == "1" and joined["labels"][2].endswith("failed: it failed on the server")
+        assert "generating" not in " ".join(joined["labels"])
+        page.evaluate("() => window.player.pause()")
+        page.wait_for_function("""() => { const p = window.player;
+            return p.element.dataset.state === 'paused'
+              && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                               timeout=10000)
+        end = page.evaluate(STATE)
+        shown = [np.asarray(page.evaluate(f"() => window.player.jointRotations({k})")) for k in range(2)]
     f = end["frame"]
     assert f >= int(before["t"] * 30) and f > 30                # the same speech position, well past the start
     for k in range(2):                                          # both bodies show that frame of their own motion
