@@ -65,19 +65,9 @@ class GenerationResult:
         return generation_seconds(self.timings)
 
     @property
-    def speech_seconds(self) -> float:
-        """Every stage this speech needed: generation plus alignment or recognition of the words."""
-        return sum(self.timings.values())
-
-    @property
     def real_time_factor(self) -> float:
         """Seconds of speech per second of generation (the paper's convention)."""
         return self.motion.duration / max(self.generation_seconds, 1e-9)
-
-    @property
-    def end_to_end_real_time_factor(self) -> float:
-        """Seconds of speech per second of everything done for it, transcription included."""
-        return self.motion.duration / max(self.speech_seconds, 1e-9)
 
 
 @dataclass

@@ -63,10 +63,5 @@ class MethodSpec:
     def bounds(self) -> Bounds:
         return Bounds(1, self.max_steps, 0.0, self.max_cfg)
 
-    @property
-    def steps_name(self) -> str:
-        """The name of the setting that drives its steps, as the page shows it ("Steps", "DDIM steps")."""
-        return STEPS_SETTINGS[self.steps_setting]
-
 
 __all__ = ["Bounds", "GROUND_TRUTH", "GROUND_TRUTH_LABEL", "MAX_CFG", "MethodSpec", "STEPS_SETTINGS"]
