@@ -45,7 +45,9 @@ def check_checkout(checkout: Path) -> None:
     """One line for a folder that cannot be served: not a checkout, or its player bundle not built."""
     if not (checkout / "app" / "__main__.py").is_file():
         raise SystemExit(f"{checkout}: not a gesturelsm checkout (no app/__main__.py)")
-    if not (checkout / "gesturelsm" / "webapp" / "player" / "dist" / "player.js").is_file():
+    # the second: checkouts from before the player moved under the web package
+    bundles = ("gesturelsm/webapp/player/dist/player.js", "app/player/dist/player.js")
+    if not any((checkout / b).is_file() for b in bundles):
         raise SystemExit(f"{checkout}: its player bundle is not built (run `make setup` there)")
 
 

@@ -9,6 +9,7 @@ it renders. Shipped checkpoints, eSpeak NG speech (as app/measure.py), audio onl
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--think-s 3] [--repeat 3]
                                                   [--vs /path/to/other/checkout] [--quick] [--character avatar.vrm]
+                                                  [--without-ahead] [--new-seed]
 
 The page is the checkout's own `python -m app` in a process of its own (benchmarks/_served.py: its warm-up, its
 math threads), opened with the player's measurement hooks on (`?measure=1`, gesturelsm/webapp/player/src/measure.js).
@@ -17,7 +18,10 @@ the table gives medians. --vs CHECKOUT serves that checkout's page too (e.g. a w
 alternates the two run by run, so both see the same minutes of a shared machine. With --character PATH every case
 runs twice per repeat, on the mannequin and with PATH chosen in the page's Character upload (then "playing" also
 waits for `#motion-player[data-character]`), interleaved the same way. --think-s: seconds between the upload and
-the click (0: at once, so the click also waits for the work the upload started).
+the click (0: at once, so the click also waits for the work the upload started). The page makes the motion of the
+settings it shows while the visitor thinks (gesturelsm/serve/ahead.py): --without-ahead serves this checkout a second
+time with --no-ahead (interleaved the same way), and --new-seed types another seed right before each click, so the
+click asks for other motion than the one made ahead (the server starts on it when the seed changes).
 """
 from __future__ import annotations
 
@@ -131,9 +135,11 @@ def open_page(browser, url: str, wav: Path, methods: list[str], character: Path 
 
 
 def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 0.0, workdir: Path = Path("."),
-             character: Path | None = None, quick: bool = False) -> dict:
+             character: Path | None = None, quick: bool = False, new_seed: bool = False) -> dict:
     page = open_page(browser, url, wav, methods, character)
     page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being prepared)
+    if new_seed:                                      # ... who types another seed and clicks at once
+        page.get_by_label("Seed").fill("5")
     t0 = time.perf_counter()
     first, every, marks = click_and_wait(page, len(methods), on=Path(character).name if character is not None else None)
     r = {"play": first, "all": every, "marks": marks, "drawn2": frames_drawn(page, 2.0)}
@@ -229,6 +235,10 @@ def main(argv: list[str] | None = None) -> int:
                    "of main) and alternate the two run by run")
     p.add_argument("--quick", action="store_true", help="only the columns up to the payload: the next run starts "
                    "without waiting for the mp4 (no fps while it renders, idle fps, scrubbing or generating again)")
+    p.add_argument("--without-ahead", action="store_true", help="also serve this checkout with --no-ahead (no motion "
+                   "made before the click) and alternate it with the others run by run")
+    p.add_argument("--new-seed", action="store_true", help="type another seed right before each click: the click asks "
+                   "for other motion than the settings shown at the upload")
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--character", type=Path, metavar="PATH",
                    help="also run every case with this character chosen in the page (.vrm / .glb / .gltf)")
@@ -241,16 +251,18 @@ def main(argv: list[str] | None = None) -> int:
     from app.measure import speech
     from app.screenshot import CHROMIUM_ARGS
 
-    pages = [(REPO, "this checkout")] + ([(args.vs, f"{args.vs.name} (--vs)")] if args.vs else [])
+    pages = [(REPO, "this checkout", ())] + ([(REPO, "this checkout, --no-ahead", ("--no-ahead",))]
+                                            if args.without_ahead else []) \
+        + ([(args.vs, f"{args.vs.name} (--vs)", ())] if args.vs else [])
     cols = HEADER + ([] if args.quick else FULL)
-    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; think {args.think_s:g} s; "
-          f"medians of {args.repeat}\n")
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; think {args.think_s:g} s"
+          f"{'; another seed typed right before the click' if args.new_seed else ''}; medians of {args.repeat}\n")
     with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as stack:
         tmp = Path(tmp)
         apps = []
-        for i, (checkout, name) in enumerate(pages):
+        for i, (checkout, name, extra) in enumerate(pages):
             (tmp / f"app{i}").mkdir()
-            apps.append(stack.enter_context(served_app(checkout, tmp / f"app{i}" / "work", name)))
+            apps.append(stack.enter_context(served_app(checkout, tmp / f"app{i}" / "work", name, extra=extra)))
         print("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols), flush=True)
         browser = stack.enter_context(sync_playwright()).chromium.launch(executable_path=args.chromium,
                                                                          args=CHROMIUM_ARGS)
@@ -266,7 +278,7 @@ def main(argv: list[str] | None = None) -> int:
                             k += 1
                             run_wav = unique_speech(wav, k, tmp / f"run{k}.wav")
                             cases[(a.name, b)].append(run_case(browser, a.url, run_wav, ALL[:n], args.think_s,
-                                                               a.workdir, b, args.quick))
+                                                               a.workdir, b, args.quick, args.new_seed))
                 for (name, b), runs in cases.items():
                     print(row(dur, n, name, "mannequin" if b is None else b.name, runs, args.quick), flush=True)
         browser.close()

@@ -25,6 +25,7 @@ class ServiceSettings:
     render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
     threads: int = 1                        # math threads per request and live stream (a step is fastest on 1 of 2
                                             # cores, and a browser on the same machine keeps the other)
+    ahead: bool = True                      # make the motion of the page's settings before the click (serve/ahead.py)
 
 
 __all__ = ["QUEUE_SIZE", "ServiceSettings"]

@@ -2,7 +2,8 @@
 
 `stream_request(service, req)` yields `Result`s: the first once the speech is prepared (no motion yet, every method
 `pending`), then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
-far in the page's order, their timing rows and notes; the last is what `GestureService.run` returns before the video
+far in the page's order, their timing rows and notes (the methods made ahead of the click, `serve/ahead.py`, come in
+the first result); the last is what `GestureService.run` returns before the video
 and the downloads. A method that fails does not stop the others: the result names it in `failed` (method -> the
 visitor's line) and in a note; only when no method is made is its error raised. A failure that is not one of the
 errors a visitor can fix (a `GestureError`) is logged with its traceback and shown as a failure on the server.
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import replace
 from typing import Iterator
 
 import numpy as np
@@ -23,6 +25,10 @@ from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
 from .request import RenderJob, Request, Result, timing_rows
 
 log = logging.getLogger("gesturelsm.app")
+
+
+MADE_AHEAD = ("Made ahead: generation started after the upload with these settings, before Generate was clicked "
+              "(the same settings and seed make the same motion; the table's times are the generation's own).")
 
 
 class MethodFailed(GestureError):
@@ -92,20 +98,28 @@ class Growing:
 def stream_request(service, req: Request, progress: Progress | None = None,
                    audio: np.ndarray | None = None) -> Iterator[Result]:
     """The request's result after the speech is prepared and after each method (module docstring); `service` is the
-    `GestureService` whose checks, prepared speech, pipeline and request folders it uses."""
+    `GestureService` whose checks, prepared speech, motion made ahead, pipeline and request folders it uses."""
+    with service.ahead.generating():                     # no motion is made ahead while a request generates
+        yield from _stream(service, req, progress, audio)
+
+
+def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None) -> Iterator[Result]:
     started = time.perf_counter()
     prog = progress or (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
     plan, speech, notes = service.speech(req, audio, prog)
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
-    each = service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
-                                          body=service.body, keep_going=True)
-    if GROUND_TRUTH not in plan.methods:             # else the take's lookup comes first and settles its slot
+    run = service.ahead.take(service.motion_key(req, plan)) if audio is None else None
+    ready = len(run.made) if run is not None else 0      # made before the click: shown at once, in one result
+    if run is not None:
+        grow.notes = notes + [MADE_AHEAD]
+    if GROUND_TRUTH not in plan.methods and not ready:   # else the take's lookup comes first and settles its slot
         yield grow.result()
-    for x in each:
+    for i, x in enumerate(_made(service, plan, speech, run, prog)):
         grow.add(x)
-        yield grow.result()
+        if i + 1 >= ready:
+            yield grow.result()
     if not grow.result().motions:
         errors = [x.error for x in grow.made.values() if x.error is not None]
         if len(errors) == 1 and isinstance(errors[0], GestureError):
@@ -114,3 +128,20 @@ def stream_request(service, req: Request, progress: Progress | None = None,
             raise MethodFailed("; ".join(f"{label(m)}: {grow.failed[m]}" for m in grow.slots
                                          if m in grow.failed))
         raise InputError("Nothing to show: choose a generator method.")
+
+
+def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iterator[Made]:
+    """The plan's methods as they are made: by the run made ahead for them (`serve/ahead.py`) when there is one, and
+    here what it did not make (a run that stopped on an error of the server's)."""
+    todo = list(plan.methods)
+    if run is not None:
+        for x in run.items():
+            if x.method in todo:
+                todo.remove(x.method)
+            prog(0.12 + 0.5 * (1 - len(todo) / len(plan.methods)), f"{label(x.method)} made")
+            yield x
+        if not todo:
+            return
+        plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
+    yield from service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
+                                              body=service.body, keep_going=True)

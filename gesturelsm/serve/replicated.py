@@ -127,10 +127,11 @@ class ReplicatedService(GestureService):
         return _receive(reply, result.job.folder)
 
     def prefetch(self, audio_path: str | None, text: str = "", textgrid_path: str | None = None,
-                 transcribe: bool = True) -> bool:
+                 transcribe: bool = True, ahead: Request | None = None) -> bool:
         """A replica transcribes the upload while the visitor chooses the settings (when the request would: no
         transcript typed, no TextGrid, transcription on); the words go with the request. The rest of the speech is
-        prepared on the replica that makes the request."""
+        prepared on the replica that makes the request; no motion is made ahead (`ahead` is not used: which replica
+        takes the click is not known before it)."""
         if not audio_path or transcript_source(text, bool(textgrid_path), transcribe) != AUTOMATIC:
             return False
         try:

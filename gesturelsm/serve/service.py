@@ -45,6 +45,7 @@ from ..pipeline import GesturePipeline, Plan, SpeechInput
 from ..settings import Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
+from .ahead import Ahead, motion_key
 from .editing import edit_result
 from .limits import transcript_problems
 from .config import ServiceSettings
@@ -66,6 +67,7 @@ class GestureService:
         self.workdir = Path(settings.workdir or Path(tempfile.gettempdir()) / "gesturelsm-app")
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.uploads = PreparedUploads()            # uploads decoded and prepared before the click (prefetch)
+        self.ahead = Ahead()                        # motion made before the click for the page's settings (prefetch)
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
@@ -109,24 +111,56 @@ class GestureService:
         return time.perf_counter() - t0
 
     def prefetch(self, audio_path: str | None, text: str = "", textgrid_path: str | None = None,
-                 transcribe: bool = True) -> bool:
+                 transcribe: bool = True, ahead: Request | None = None) -> bool:
         """Prepare an upload before the visitor asks for it (the page calls this when speech is uploaded or recorded,
-        and when the transcript, TextGrid or transcription choice change): the file decoded and the speech prepared
-        for those transcript settings (features, the words typed / from the TextGrid / recognised and their timings),
-        remembered so that Generate only generates (`serve/prepared.py`). Never raises: a file that cannot be used is
-        left for the request to refuse with its message. Returns whether the speech is ready."""
+        and when the transcript or the settings change): the file decoded and the speech prepared for those transcript
+        settings (features, the words typed / from the TextGrid / recognised and their timings), remembered so that
+        Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make now),
+        its motion is made in the background for a click that asks for the same (`serve/ahead.py`). Never raises: a
+        file or settings that cannot be used are left for the request to refuse with its message. Returns whether the
+        speech is ready."""
         if not audio_path:
             return False
         try:
             self.speech(Request(audio_path, text=text or "", textgrid_path=textgrid_path, transcribe=transcribe),
                          None, lambda f, m: None)
-            return True
         except GestureError as exc:                      # the request refuses it with this message
             log.info("upload not prepared %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
             return False
         except Exception:                                # a bug: keep its traceback in the log, not on the page
             log.exception("preparing the upload %s failed", Path(audio_path).name)
             return False
+        if ahead is not None:
+            try:
+                self.make_ahead(ahead)
+            except GestureError as exc:                  # settings the click would refuse: nothing made ahead
+                log.info("no motion made ahead: %s", " | ".join(str(exc).splitlines()))
+            except Exception:
+                log.exception("making motion ahead failed")
+        return True
+
+    def make_ahead(self, req: Request):
+        """Start making `req`'s motion in the background (`serve/ahead.py`); the run, or None where none is started
+        (the server is busy, or such a run exists; or the server is set not to: `ServiceSettings.ahead`). Raises the
+        request's GestureError when it would be refused."""
+        if not self.settings.ahead:
+            return None
+        req, plan = self.check(req)
+
+        def make(run):
+            torch.set_num_threads(self.settings.threads)
+            _, speech, _ = self.speech(req, None, lambda f, m: None)     # prepared by the prefetch
+            return self.pipeline.generate_each(speech, plan, progress=run.check, body=self.body, keep_going=True)
+        return self.ahead.start(self.motion_key(req, plan), make)
+
+    def motion_key(self, req: Request, plan: Plan):
+        """What the motion of a checked request depends on (`serve/ahead.py`)."""
+        return motion_key(file_key(req.audio_path), self._speech_key(req, plan), plan)
+
+    @staticmethod
+    def _speech_key(req: Request, plan: Plan) -> tuple:
+        """The transcript settings an upload's speech is prepared for."""
+        return ((req.text or "").strip(), file_key(req.textgrid_path), plan.settings.transcribe)
 
     def cleanup(self, max_age_s: float | None = None) -> int:
         """Delete request folders older than keep_minutes; returns how many were removed."""
@@ -219,8 +253,7 @@ class GestureService:
             return speech, notes
         if path is None:
             return (plan, *prepare())
-        key = ((req.text or "").strip(), file_key(req.textgrid_path), plan.settings.transcribe)
-        speech, notes = self.uploads.prepared(path, key, prepare)
+        speech, notes = self.uploads.prepared(path, self._speech_key(req, plan), prepare)
         if not fresh:      # prepared before this request: its stages took no time of this request's
             speech = replace(speech, timings={k: 0.0 for k in speech.timings})
         return plan, speech, notes
@@ -229,7 +262,9 @@ class GestureService:
               cancelled: Callable[[], bool] | None = None) -> SweepOutcome:
         """A sweep of methods x steps x CFG x seeds on one upload, through the same checks, speech and request
         folders as a request (`serve/sweep.py`)."""
-        return run_sweep_request(self, req, limits, progress, cancelled)
+        self.ahead.cancel()
+        with self.ahead.generating():
+            return run_sweep_request(self, req, limits, progress, cancelled)
 
     # ---- one request -----------------------------------------------------------------------------------
     def run(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None) -> Result:
@@ -258,7 +293,9 @@ class GestureService:
     def edit(self, result: Result | None, method: str, start: float | None, end: float | None, regions, seed,
              progress: Progress | None = None) -> Result:
         """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
-        return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
+        self.ahead.cancel()
+        with self.ahead.generating():
+            return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
 
     def folder(self) -> Path:
         """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the

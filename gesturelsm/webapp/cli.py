@@ -64,6 +64,10 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="math threads per request and per live stream (default 1: on 2 cores a generator step is "
                    "fastest on one, and two oversubscribe a machine that also runs a browser)")
     p.add_argument("--no-warmup", action="store_true", help="skip the warm-up generation at start")
+    p.add_argument("--no-ahead", action="store_true",
+                   help="do not make the motion of the settings shown before Generate is clicked (by default the page "
+                   "makes it while the visitor reads the settings, when the server is idle, and a click asking for the "
+                   "same shows it at once)")
     p.add_argument("--replicas", type=replicas_argument, default=_env("GESTURELSM_REPLICAS"), metavar="N|MIN:MAX",
                    help="generate and render in N Ray Serve replicas (MIN:MAX autoscales on the queue); default: in "
                         "this process")
@@ -103,7 +107,7 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
     settings = ServiceSettings(checkpoints=args.checkpoints, body_model=args.model, beat2=args.beat2,
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency),
-                               threads=max(1, args.threads))
+                               threads=max(1, args.threads), ahead=not args.no_ahead)
     try:
         service = page_service(args, settings)
     except GestureError as exc:                          # one line each

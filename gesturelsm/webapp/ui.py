@@ -133,11 +133,15 @@ class _Handlers:
     def download_files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def prefetch(self, audio, text, textgrid, auto_text) -> None:
-        """Speech uploaded or recorded (or its transcript settings changed): decode it and prepare the speech (features,
-        transcript, word timings) while the visitor chooses the settings, so Generate only generates
-        (serve/prepared.py). Silent: the request reports problems."""
-        self.service.prefetch(audio, text or "", textgrid, bool(auto_text))
+    def prefetch(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                 auto_text, grounding=DEFAULTS.post.grounding) -> None:
+        """Speech uploaded or recorded (or its transcript or settings changed): decode it and prepare the speech
+        (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
+        (serve/prepared.py), then make the motion the settings shown now ask for, for a click that asks for the same
+        (serve/ahead.py). Silent: the request reports problems."""
+        ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
+                             auto_text, grounding, exports=False, render=False)
+        self.service.prefetch(audio, text or "", textgrid, bool(auto_text), ahead=ahead)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                     auto_text, grounding=DEFAULTS.post.grounding, character=None, request: gr.Request = None,
@@ -305,6 +309,16 @@ VIEWER_MOUNTED_JS = """async (...args) => {
     return args; }"""
 
 
+def _changes(inputs: list) -> list:
+    """The events after which the page's request may differ: speech uploaded or recorded, the transcript left, a slider
+    let go, any other input changed."""
+    audio, text = inputs[0], inputs[1]
+    events = [audio.upload, audio.stop_recording, text.blur]
+    for c in inputs[2:]:
+        events.append(c.release if isinstance(c, gr.Slider) else c.change)
+    return events
+
+
 def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
     settings = service.settings
     h = _Handlers(service)
@@ -324,6 +338,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS, threads=settings.threads)
+            service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service)
@@ -339,11 +354,11 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
             token, spec = gr.State(None, delete_callback=characters.drop), gr.JSON(visible=False)
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
-        audio, textgrid, auto_text = inputs[0], inputs[2], inputs[11]
-        # the upload's work before the click (serve/prepared.py): decoding, features, transcript and word timings
-        for changed in (audio.upload, audio.stop_recording, text.blur, textgrid.change, auto_text.change):
-            changed(h.prefetch, [audio, text, textgrid, auto_text], None, show_progress="hidden",
-                    api_visibility="private", concurrency_limit=1, concurrency_id="prefetch")
+        # the upload's work before the click (serve/prepared.py: decoding, features, transcript and word timings),
+        # then the motion of the settings shown (serve/ahead.py), again whenever they change
+        for changed in _changes(inputs):
+            changed(h.prefetch, inputs, None, show_progress="hidden", api_visibility="private", concurrency_limit=1,
+                    concurrency_id="prefetch", trigger_mode="always_last")
         shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
                              api_name="generate_motion", **gen)
         # every payload a handler sends (Generate's, one per method made; an edit's; an undo's) goes to the player at

@@ -53,6 +53,21 @@ def test_build_demo_has_the_controls(service):
     for event in ("upload", "stop_recording"):
         dep = early[event]
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
+    # ... and then the motion of the settings shown is made ahead (serve/ahead.py): the prefetch gets every input the
+    # Generate button sends, again when a slider is let go or another setting changes
+    click = next(d for d in cfg["dependencies"] if d.get("api_name") == "generate_motion")
+    prefetches = [d for d in cfg["dependencies"] if (d.get("api_name") or "").startswith("prefetch")]
+    assert all(d["inputs"] == click["inputs"][:-1] for d in prefetches)          # all but the page's character
+    by_label = {c["id"]: c["props"].get("label") for c in cfg["components"]}
+    wired = {(by_label.get(t[0]), t[1]) for d in prefetches for t in d["targets"]}
+    assert {("CFG scale", "release"), ("Seed", "change"), ("Methods shown side by side", "change")} <= wired
+    assert not service.ahead.busy()                      # a live stream keeps its cores: nothing is made ahead
+    stream = demo.live.open()
+    try:
+        assert service.ahead.busy()
+    finally:
+        stream.stop()
+    assert not service.ahead.busy()
     # with the in-browser player, the mp4 waits in a closed accordion (a <video> on screen slows the player's draws)
     from gesturelsm.webapp.player.component import BUNDLE
 
@@ -85,9 +100,15 @@ def test_app_entry_flags_and_env(monkeypatch):
     # the demo switches analytics and telemetry off before it loads anything (stopped here at its first load)
     monkeypatch.delenv("GRADIO_ANALYTICS_ENABLED", raising=False)
     monkeypatch.delenv("HF_HUB_DISABLE_TELEMETRY", raising=False)
-    monkeypatch.setattr(GestureService, "from_settings", classmethod(lambda cls, s: (_ for _ in ()).throw(
-        CheckpointError("stopped by the test"))))
+    seen = []
+
+    def stop(cls, settings):
+        seen.append(settings)
+        raise CheckpointError("stopped by the test")
+    monkeypatch.setattr(GestureService, "from_settings", classmethod(stop))
     assert run_demo(args, "python -m app") == 2
+    assert run_demo(build_parser().parse_args(["--no-ahead"]), "python -m app") == 2
+    assert [s.ahead for s in seen] == [True, False]            # motion made before the click: on unless --no-ahead
     assert os.environ["GRADIO_ANALYTICS_ENABLED"] == "False" and os.environ["HF_HUB_DISABLE_TELEMETRY"] == "1"
 
 

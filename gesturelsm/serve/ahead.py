@@ -1,0 +1,167 @@
+"""Motion made ahead of the click, with the settings the page shows, and handed to the click that asks for exactly
+them.
+
+When the page's speech is uploaded (or its settings change), `GestureService.prefetch` prepares the speech and then,
+while the visitor reads the settings, starts making the methods those settings ask for in a thread of its own
+(`Ahead.start`). A click whose request makes the same motion (the same upload and transcript settings, methods, steps,
+CFG, seed and post-processing: `motion_key`) takes that run (`Ahead.take`) and is shown each method as the run makes
+it, the ones already made at once. A click that asks for anything else cancels the run and generates as always. The
+motion is the same either way: the run is `GesturePipeline.generate_each` with the request's own plan and seed.
+
+One run at a time in the whole server: a new one cancels the one before unless a click has taken it. A run is not
+started while the server generates for a click or something else says it is busy (`busy`, e.g. live streams), and a
+click for other motion cancels it, so work made ahead never takes the cores from work asked for. A cancelled run
+stops at its next window. The settings as the page shows them are a guess of what the click will ask for, so a run
+is work that may be thrown away: it is never made for a server that has no idle core time to give (see `busy`).
+"""
+from __future__ import annotations
+
+import logging
+import threading
+from typing import Callable, Hashable, Iterator
+
+from ..pipeline import Made, Plan
+
+log = logging.getLogger("gesturelsm.app")
+
+
+class Cancelled(BaseException):
+    """Raised inside a run's progress callback to stop it at its next window (a BaseException so that a method's own
+    error handling, `generate_each(keep_going=True)`, does not record it as that method's failure)."""
+
+
+def motion_key(upload: Hashable, speech: Hashable, plan: Plan) -> Hashable:
+    """What a request's motion depends on: the upload (`prepared.file_key`), the transcript settings it was prepared
+    for, and the plan (methods, steps, CFG, seed, post-processing, where ground truth is looked up)."""
+    s = plan.settings
+    return (upload, speech, tuple(s.methods), tuple(sorted(s.steps.items())), float(s.cfg), int(s.seed), s.post,
+            bool(s.transcribe), plan.beat2, plan.filename)
+
+
+class Run:
+    """One run made ahead: the methods made so far, in the order they were made."""
+
+    def __init__(self, key: Hashable, busy: Callable[[], bool] = lambda: False):
+        self.key, self.busy = key, busy
+        self.made: list[Made] = []
+        self.done = False
+        self.failed = False                    # stopped before its first method (or by an error of the server's)
+        self.cancelled = threading.Event()
+        self.taken = False
+        self._cond = threading.Condition()
+        self.thread: threading.Thread | None = None
+
+    def add(self, x: Made) -> None:
+        with self._cond:
+            self.made.append(x)
+            self._cond.notify_all()
+
+    def finish(self, failed: bool = False) -> None:
+        with self._cond:
+            self.done, self.failed = True, failed
+            self._cond.notify_all()
+
+    def check(self, *_) -> None:
+        """A progress callback: stops the run when it was cancelled, or, while no click has taken it, when something
+        else needs the cores (a live stream started)."""
+        if not self.taken and not self.cancelled.is_set() and self.busy():
+            self.cancelled.set()
+        if self.cancelled.is_set():
+            raise Cancelled()
+
+    def items(self) -> Iterator[Made]:
+        """Each method as the run makes it (the made ones at once), until the run ends."""
+        i = 0
+        while True:
+            with self._cond:
+                while i >= len(self.made) and not self.done:
+                    self._cond.wait()
+                if i >= len(self.made):
+                    return
+                x = self.made[i]
+            i += 1
+            yield x
+
+
+class Ahead:
+    """The server's one run made ahead (module docstring). `busy()`: whether something else needs the cores now (no
+    run is started then); requests in flight are counted by `generating`."""
+
+    def __init__(self, busy: Callable[[], bool] = lambda: False):
+        self.busy = busy
+        self._lock = threading.Lock()
+        self._run: Run | None = None
+        self._requests = 0
+
+    def start(self, key: Hashable, make: Callable[[Run], Iterator[Made]]) -> Run | None:
+        """Make `make(run)`'s methods in a thread of its own for requests with `key`; the run before is cancelled
+        (unless taken). Nothing is started (None) while a request is generated, `busy()` says so, a taken run is still
+        being made, or a run for the same key exists."""
+        with self._lock:
+            old = self._run
+            if old is not None and old.key == key and not old.cancelled.is_set():
+                return None
+            if self._requests or (old is not None and old.taken and not old.done) or self.busy():
+                return None
+            if old is not None and not old.taken:
+                old.cancelled.set()
+            run = self._run = Run(key, self.busy)
+        run.thread = threading.Thread(target=self._make, args=(run, make, old), daemon=True,
+                                      name="gesturelsm-ahead")
+        run.thread.start()
+        return run
+
+    @staticmethod
+    def _make(run: Run, make: Callable[[Run], Iterator[Made]], before: Run | None) -> None:
+        if before is not None and before.thread is not None:
+            before.thread.join()                   # one run on the cores at a time: the cancelled one stops first
+        failed = False
+        try:
+            if run.cancelled.is_set():
+                raise Cancelled()
+            for x in make(run):
+                run.add(x)
+                run.check()
+        except Cancelled:                          # only a run no click has taken is cancelled
+            failed = True
+            log.info("motion made ahead was cancelled after %d method(s)", len(run.made))
+        except Exception:                          # noqa: BLE001 (a bug: logged; the click generates for itself)
+            log.exception("making motion ahead failed")
+            failed = True
+        finally:
+            run.finish(failed)
+
+    def take(self, key: Hashable) -> Run | None:
+        """The run for `key` (the click then reads it: `Run.items`), else None; any other run not taken is cancelled,
+        since a click now needs the cores."""
+        with self._lock:
+            run = self._run
+            if run is None or run.taken:
+                return None
+            if run.key != key or run.cancelled.is_set() or (run.done and run.failed):
+                run.cancelled.set()
+                return None
+            run.taken = True
+            return run
+
+    def generating(self) -> "_Generating":
+        """A context in which a request is counted as generating (no run is started meanwhile)."""
+        return _Generating(self)
+
+    def cancel(self) -> None:
+        with self._lock:
+            if self._run is not None and not self._run.taken:
+                self._run.cancelled.set()
+
+
+class _Generating:
+    def __init__(self, ahead: Ahead):
+        self.ahead = ahead
+
+    def __enter__(self):
+        with self.ahead._lock:
+            self.ahead._requests += 1
+
+    def __exit__(self, *exc):
+        with self.ahead._lock:
+            self.ahead._requests -= 1
