@@ -84,8 +84,8 @@ class Run:
 
 
 class Ahead:
-    """The server's one run made ahead (module docstring). `busy()`: whether something else needs the cores now (no
-    run is started then); requests in flight are counted by `generating`."""
+    """The server's one run made ahead (module docstring). `busy()`: whether something else needs the cores (no run is
+    started then); requests in flight are counted by `generating`."""
 
     def __init__(self, busy: Callable[[], bool] = lambda: False):
         self.busy = busy
@@ -133,7 +133,7 @@ class Ahead:
 
     def take(self, key: Hashable) -> Run | None:
         """The run for `key` (the click then reads it: `Run.items`), else None; any other run not taken is cancelled,
-        since a click now needs the cores."""
+        since this click needs the cores."""
         with self._lock:
             run = self._run
             if run is None or run.taken:

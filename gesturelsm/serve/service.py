@@ -115,7 +115,7 @@ class GestureService:
         """Prepare an upload before the visitor asks for it (the page calls this when speech is uploaded or recorded,
         and when the transcript or the settings change): the file decoded and the speech prepared for those transcript
         settings (features, the words typed / from the TextGrid / recognised and their timings), remembered so that
-        Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make now),
+        Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make at this moment),
         its motion is made in the background for a click that asks for the same (`serve/ahead.py`). Never raises: a
         file or settings that cannot be used are left for the request to refuse with its message. Returns whether the
         speech is ready."""

@@ -137,7 +137,7 @@ class _Handlers:
                  auto_text, grounding=DEFAULTS.post.grounding) -> None:
         """Speech uploaded or recorded (or its transcript or settings changed): decode it and prepare the speech
         (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
-        (serve/prepared.py), then make the motion the settings shown now ask for, for a click that asks for the same
+        (serve/prepared.py), then make the motion the settings on screen ask for, for a click that asks for the same
         (serve/ahead.py). Silent: the request reports problems."""
         ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                              auto_text, grounding, exports=False, render=False)
@@ -354,8 +354,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
             token, spec = gr.State(None, delete_callback=characters.drop), gr.JSON(visible=False)
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
-        # the upload's work before the click (serve/prepared.py: decoding, features, transcript and word timings),
-        # then the motion of the settings shown (serve/ahead.py), again whenever they change
+        # before the click: the upload's speech prepared (serve/prepared.py), the settings' motion made (serve/ahead.py)
         for changed in _changes(inputs):
             changed(h.prefetch, inputs, None, show_progress="hidden", api_visibility="private", concurrency_limit=1,
                     concurrency_id="prefetch", trigger_mode="always_last")

@@ -76,7 +76,9 @@ def _shown(page, i: int) -> np.ndarray:
 
 
 @pytest.mark.browser
-def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
+def test_player_plays_generated_methods_in_sync_with_the_speech(shipped, monkeypatch):
+    service, shipped_url = shipped
+    monkeypatch.setattr(service.ahead, "busy", lambda: True)      # nothing made ahead: the click makes each method
     with player_page(shipped_url, PLAYER) as page:
         assert page.get_attribute(PLAYER, "data-state") == "empty"
         page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
@@ -115,6 +117,29 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped_url):
             for i in range(2):                           # each body shows its own method's frame exactly
                 np.testing.assert_allclose(shown[i], motions[i][frame], atol=1e-6)
             assert np.abs(shown[0] - shown[1]).max() > 1e-3      # and the methods differ
+
+
+@pytest.mark.browser
+def test_the_motion_made_ahead_plays_at_the_click_in_one_payload(shipped):
+    """The settings on screen are made while the visitor reads them (serve/ahead.py): the click's first payload
+    already has every body, and the summary says so."""
+    import time
+
+    service, url = shipped
+    with player_page(url, PLAYER) as page:
+        page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
+        page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
+        page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
+        t0 = time.monotonic()
+        while not (service.ahead._run is not None and service.ahead._run.done and len(service.ahead._run.made) == 2):
+            assert time.monotonic() - t0 < 120, "nothing was made ahead"
+            time.sleep(0.2)
+        page.evaluate(WATCH_PAYLOADS)
+        page.locator("#generate").click()
+        page.wait_for_selector(f"{PLAYER}[data-bodies='2']", timeout=120000)
+        assert page.evaluate("() => window.seen") == [2]
+        page.locator("#summary", has_text="Made ahead").wait_for(timeout=30000)
+        assert service.ahead._run.taken
 
 
 DECODE_JS = """async () => {
