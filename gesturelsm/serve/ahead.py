@@ -119,6 +119,7 @@ class Ahead:
         try:
             if run.cancelled.is_set():
                 raise Cancelled()
+            log.info("making motion ahead: %s", ", ".join(run.key[2]) if isinstance(run.key, tuple) else run.key)
             for x in make(run):
                 run.add(x)
                 run.check()
