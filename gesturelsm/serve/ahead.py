@@ -10,8 +10,9 @@ motion is the same either way: the run is `GesturePipeline.generate_each` with t
 
 One run at a time in the whole server: a new one cancels the one before unless a click has taken it. A run is not
 started while the server generates for a click or something else says it is busy (`busy`, e.g. live streams), and a
-click for other motion cancels it, so work made ahead never takes the cores from work asked for. A cancelled run
-stops at its next window. The settings as the page shows them are a guess of what the click will ask for, so a run
+click for other motion cancels it, so work made ahead does not take the cores from generation asked for (it may run
+beside a video rendering, as a request does: renders run niced in a process of their own). A cancelled run stops at
+its next window. The settings as the page shows them are a guess of what the click will ask for, so a run
 is work that may be thrown away: it is never made for a server that has no idle core time to give (see `busy`).
 """
 from __future__ import annotations
@@ -96,7 +97,7 @@ class Ahead:
     def start(self, key: Hashable, make: Callable[[Run], Iterator[Made]]) -> Run | None:
         """Make `make(run)`'s methods in a thread of its own for requests with `key`; the run before is cancelled
         (unless taken). Nothing is started (None) while a request is generated, `busy()` says so, a taken run is still
-        being made, or a run for the same key exists."""
+        being made, or a run for the same key exists (also one a click has taken: its motion is on the page)."""
         with self._lock:
             old = self._run
             if old is not None and old.key == key and not old.cancelled.is_set():
@@ -106,23 +107,27 @@ class Ahead:
             if old is not None and not old.taken:
                 old.cancelled.set()
             run = self._run = Run(key, self.busy)
-        run.thread = threading.Thread(target=self._make, args=(run, make, old), daemon=True,
-                                      name="gesturelsm-ahead")
-        run.thread.start()
+            run.thread = threading.Thread(target=self._make, args=(run, make, old), daemon=True,
+                                          name="gesturelsm-ahead")
+            try:
+                run.thread.start()
+            except RuntimeError:                   # no thread to be had: nothing is made ahead
+                log.exception("making motion ahead could not start")
+                run.cancelled.set()
+                run.finish(failed=True)
+                return None
         return run
 
     @staticmethod
     def _make(run: Run, make: Callable[[Run], Iterator[Made]], before: Run | None) -> None:
-        if before is not None and before.thread is not None:
-            before.thread.join()                   # one run on the cores at a time: the cancelled one stops first
         failed = False
         try:
-            if run.cancelled.is_set():
-                raise Cancelled()
+            if before is not None and before.thread is not None and before.thread.ident is not None:
+                before.thread.join()               # one run on the cores at a time: the cancelled one stops first
+            run.check()
             log.info("making motion ahead: %s", ", ".join(run.key[2]) if isinstance(run.key, tuple) else run.key)
-            for x in make(run):
+            for x in make(run):                    # its windows check for cancelling (make's progress: run.check)
                 run.add(x)
-                run.check()
         except Cancelled:                          # only a run no click has taken is cancelled
             failed = True
             log.info("motion made ahead was cancelled after %d method(s)", len(run.made))
@@ -150,9 +155,17 @@ class Ahead:
         return _Generating(self)
 
     def cancel(self) -> None:
+        """Cancel the run unless a click has taken it."""
         with self._lock:
             if self._run is not None and not self._run.taken:
                 self._run.cancelled.set()
+
+    def stop(self, timeout: float | None = None) -> None:
+        """Cancel the run (unless taken) and wait for its thread to end."""
+        self.cancel()
+        run = self._run
+        if run is not None and run.thread is not None and run.thread.ident is not None:
+            run.thread.join(timeout)
 
 
 class _Generating:

@@ -110,13 +110,17 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
     service.cleanup()
     plan, speech, notes = service.speech(req, audio, prog)
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
-    run = service.ahead.take(service.motion_key(req, plan)) if audio is None else None
+    if audio is None:
+        run = service.ahead.take(service.motion_key(req, plan))
+    else:                                                # samples, not an upload: nothing was made ahead for them
+        service.ahead.cancel()
+        run = None
     ready = len(run.made) if run is not None else 0      # made before the click: shown at once, in one result
-    if run is not None:
-        grow.notes = notes + [MADE_AHEAD]
     if GROUND_TRUTH not in plan.methods and not ready:   # else the take's lookup comes first and settles its slot
         yield grow.result()
     for i, x in enumerate(_made(service, plan, speech, run, prog)):
+        if run is not None and any(x is y for y in run.made) and MADE_AHEAD not in grow.notes:
+            grow.notes = grow.notes + [MADE_AHEAD]
         grow.add(x)
         if i + 1 >= ready:
             yield grow.result()

@@ -25,7 +25,8 @@ def upload(speech_wav, tmp_path):
 
 @pytest.fixture
 def calls(service, monkeypatch):
-    """Every `GesturePipeline.generate` call: (thread name, method)."""
+    """Every `GesturePipeline.generate` call: (thread name, method); no run of another test still going."""
+    service.ahead.stop(60)
     seen = []
     generate = service.pipeline.generate
 
@@ -34,7 +35,7 @@ def calls(service, monkeypatch):
         return generate(*a, **k)
     monkeypatch.setattr(service.pipeline, "generate", counted)
     yield seen
-    service.ahead.cancel()
+    service.ahead.stop(60)
 
 
 def _request(path, **kw) -> Request:
@@ -89,12 +90,27 @@ def _gated(service, monkeypatch, after: int):
     return gate
 
 
+def _open_after_take(service, monkeypatch, gate) -> dict:
+    """Open the gate the moment the click has asked for the run (taken or not); what the run was then."""
+    take, seen = service.ahead.take, {}
+
+    def taking(key):
+        out = take(key)
+        run = service.ahead._run
+        seen.update(taken=out is not None, done=run.done, made=len(run.made))
+        gate.set()
+        return out
+    monkeypatch.setattr(service.ahead, "take", taking)
+    return seen
+
+
 def test_a_click_takes_a_run_still_being_made(service, upload, calls, monkeypatch):
     gate = _gated(service, monkeypatch, after=1)
     req = _request(upload)
+    seen = _open_after_take(service, monkeypatch, gate)
     run = _ahead(service, req)
-    threading.Timer(0.3, gate.set).start()
     results = list(service.stream(req))
+    assert seen == {"taken": True, "done": False, "made": seen["made"]} and seen["made"] <= 1   # still being made
     assert run.taken and run.done and not run.failed
     assert sorted(m for _, m in calls) == sorted(ALL)                           # each method made once, ahead
     assert {t for t, _ in calls} == {"gesturelsm-ahead"}
@@ -105,12 +121,13 @@ def test_a_click_takes_a_run_still_being_made(service, upload, calls, monkeypatc
 
 def test_a_click_for_other_settings_cancels_the_run_and_makes_its_own(service, upload, calls, monkeypatch, caplog):
     gate = _gated(service, monkeypatch, after=1)
+    seen = _open_after_take(service, monkeypatch, gate)
     run = _ahead(service, _request(upload, seed=0))
     other = _request(upload, seed=1)
     with caplog.at_level(logging.INFO, logger="gesturelsm.app"):
-        threading.Timer(0.3, gate.set).start()
         shown = service.run(other).motions
         run.thread.join(60)
+    assert seen["taken"] is False and seen["done"] is False
     assert run.cancelled.is_set() and run.failed and not run.taken and len(run.made) < len(ALL)
     assert any("cancelled" in r.getMessage() for r in caplog.records)
     assert sorted(m for t, m in calls if t != "gesturelsm-ahead") == sorted(ALL)    # the click made its own
@@ -174,3 +191,27 @@ def test_settings_a_request_would_refuse_start_nothing(service, upload):
         service.make_ahead(_request(upload, seed=-5))
     assert service.prefetch(upload, "", None, False, ahead=_request(upload, seed=-5)) is True     # speech prepared
     assert service.ahead._run is before
+
+
+@pytest.mark.parametrize("change", [dict(seed=1), dict(cfg=1.5), dict(steps={**STEPS, "ddim": 3}),
+                                    dict(methods=("gesturelsm", "ddim")), dict(grounding=False),
+                                    dict(stand_in_place=True), dict(smoothing="off"), dict(text="hello there"),
+                                    dict(transcribe=True)])
+def test_every_setting_that_changes_the_motion_changes_its_key(service, upload, change):
+    from dataclasses import replace
+
+    base = _request(upload)
+    key = service.motion_key(*service.check(base))
+    assert service.motion_key(*service.check(replace(base, **change))) != key
+    for same in (dict(size=512), dict(exports=True), dict(render=True)):           # what is only shown or written
+        assert service.motion_key(*service.check(replace(base, **same))) == key
+
+
+def test_a_request_left_unfinished_does_not_stop_runs_for_good(service, upload, calls):
+    req = _request(upload)
+    stream = service.stream(req)
+    next(stream)                                                   # the page went away after the first result
+    assert service.ahead._requests == 1 and service.make_ahead(_request(upload, seed=3)) is None
+    stream.close()
+    assert service.ahead._requests == 0
+    assert service.make_ahead(_request(upload, seed=3)) is not None
