@@ -72,7 +72,8 @@ def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
         page.evaluate("""async () => { const m = await import('/player.js');
             window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
         page.evaluate("(p) => { window.player.load(p); }", _payload([None, None]))    # speech and slots only
-        page.wait_for_timeout(500)
+        page.wait_for_function("() => window.player.element.querySelectorAll('.mp-label').length === 3",
+                               timeout=30000)                                     # the three slots are built
         first = page.evaluate(STATE)
         assert (first["state"], first["bodies"]) == ("loading", 0)
         assert "generating" in first["labels"][0] and "generating" in first["labels"][2]
