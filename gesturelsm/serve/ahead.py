@@ -17,6 +17,7 @@ is work that may be thrown away: it is never made for a server that has no idle 
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 from typing import Callable, Hashable, Iterator
@@ -42,11 +43,11 @@ def motion_key(upload: Hashable, speech: Hashable, plan: Plan) -> Hashable:
 class Run:
     """One run made ahead: the methods made so far, in the order they were made."""
 
-    def __init__(self, key: Hashable, busy: Callable[[], bool] = lambda: False):
-        self.key, self.busy = key, busy
+    def __init__(self, key: Hashable, busy: Callable[[], bool] = lambda: False, what: str = ""):
+        self.key, self.busy, self.what = key, busy, what
         self.made: list[Made] = []
         self.done = False
-        self.failed = False                    # stopped before its first method (or by an error of the server's)
+        self.failed = False                    # cancelled, or stopped by an error of the server's (not finished)
         self.cancelled = threading.Event()
         self.taken = False
         self._cond = threading.Condition()
@@ -94,8 +95,9 @@ class Ahead:
         self._run: Run | None = None
         self._requests = 0
 
-    def start(self, key: Hashable, make: Callable[[Run], Iterator[Made]]) -> Run | None:
-        """Make `make(run)`'s methods in a thread of its own for requests with `key`; the run before is cancelled
+    def start(self, key: Hashable, make: Callable[[Run], Iterator[Made]], what: str = "") -> Run | None:
+        """Make `make(run)`'s methods (`what`: their names, for the log) in a thread of its own for requests with
+        `key`; the run before is cancelled
         (unless taken). Nothing is started (None) while a request is generated, `busy()` says so, a taken run is still
         being made, or a run for the same key exists (also one a click has taken: its motion is on the page)."""
         with self._lock:
@@ -106,7 +108,7 @@ class Ahead:
                 return None
             if old is not None and not old.taken:
                 old.cancelled.set()
-            run = self._run = Run(key, self.busy)
+            run = self._run = Run(key, self.busy, what)
             run.thread = threading.Thread(target=self._make, args=(run, make, old), daemon=True,
                                           name="gesturelsm-ahead")
             try:
@@ -125,7 +127,7 @@ class Ahead:
             if before is not None and before.thread is not None and before.thread.ident is not None:
                 before.thread.join()               # one run on the cores at a time: the cancelled one stops first
             run.check()
-            log.info("making motion ahead: %s", ", ".join(run.key[2]) if isinstance(run.key, tuple) else run.key)
+            log.info("making motion ahead: %s", run.what)
             for x in make(run):                    # its windows check for cancelling (make's progress: run.check)
                 run.add(x)
         except Cancelled:                          # only a run no click has taken is cancelled
@@ -150,9 +152,16 @@ class Ahead:
             run.taken = True
             return run
 
-    def generating(self) -> "_Generating":
+    @contextlib.contextmanager
+    def generating(self) -> Iterator[None]:
         """A context in which a request is counted as generating (no run is started meanwhile)."""
-        return _Generating(self)
+        with self._lock:
+            self._requests += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._requests -= 1
 
     def cancel(self) -> None:
         """Cancel the run unless a click has taken it."""
@@ -167,15 +176,3 @@ class Ahead:
         if run is not None and run.thread is not None and run.thread.ident is not None:
             run.thread.join(timeout)
 
-
-class _Generating:
-    def __init__(self, ahead: Ahead):
-        self.ahead = ahead
-
-    def __enter__(self):
-        with self.ahead._lock:
-            self.ahead._requests += 1
-
-    def __exit__(self, *exc):
-        with self.ahead._lock:
-            self.ahead._requests -= 1

@@ -115,10 +115,10 @@ class GestureService:
         """Prepare an upload before the visitor asks for it (the page calls this when speech is uploaded or recorded,
         and when the transcript or the settings change): the file decoded and the speech prepared for those transcript
         settings (features, the words typed / from the TextGrid / recognised and their timings), remembered so that
-        Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make at this moment),
-        its motion is made in the background for a click that asks for the same (`serve/ahead.py`). Never raises: a
-        file or settings that cannot be used are left for the request to refuse with its message. Returns whether the
-        speech is ready."""
+        Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make at
+        this moment), its motion is made in the background for a click that asks for the same (`serve/ahead.py`).
+        Never raises: a file or settings that cannot be used are left for the request to refuse with its message.
+        Returns whether the speech is ready."""
         if not audio_path:
             return False
         try:
@@ -151,7 +151,7 @@ class GestureService:
             torch.set_num_threads(self.settings.threads)
             _, speech, _ = self.speech(req, None, lambda f, m: None)     # prepared by the prefetch
             return self.pipeline.generate_each(speech, plan, progress=run.check, body=self.body, keep_going=True)
-        return self.ahead.start(self.motion_key(req, plan), make)
+        return self.ahead.start(self.motion_key(req, plan), make, ", ".join(plan.methods))
 
     def motion_key(self, req: Request, plan: Plan):
         """What the motion of a checked request depends on (`serve/ahead.py`)."""
