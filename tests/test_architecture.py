@@ -31,8 +31,8 @@ FLOORS: list[set[str]] = [
                                                                # each described once (its spec)
     {"settings"},                                              # one generation's settings, defaults, validator
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"study", "evaluation", "pipeline_cli", "edit_cli", "live"},  # what uses the pipeline (live: streaming; the
-                                                               # generate and edit commands)
+    {"study", "evaluation", "pipeline_cli", "edit_cli", "live",  # what uses the pipeline (live: streaming; the
+     "genea"},                                                 # generate and edit commands; GENEA submissions)
     {"serve"},                                                 # one web request: checks, files, its sweep, edits
     {"webapp"},                                                # the Gradio page over serve and live
     {"cli"},                                                   # the command line registry
