@@ -190,12 +190,33 @@ def read_raters(study: str | Path) -> dict[str, Rater]:
     return out
 
 
-def invite(study: str | Path, n: int) -> list[Rater]:
+def base_url(study: str | Path, given: str | None = None) -> str | None:
+    """The study's public address: `given` (checked: http(s)://HOST[:PORT][/PATH]), else the one an earlier
+    invite wrote into key/links.csv's `url` column, else None."""
+    if given:
+        from urllib.parse import urlsplit
+
+        parts = urlsplit(given.strip())
+        if parts.scheme not in ("http", "https") or not parts.netloc or parts.query or parts.fragment:
+            raise UserError(f"--base-url {given!r}: give the address raters open, like https://study.example.org "
+                            "or http://192.168.1.5:8600")
+        return given.strip().rstrip("/")
+    path = Path(study) / "key" / "links.csv"
+    if path.exists():
+        for row in _read_csv(path):
+            if row.get("url") and row.get("link") and row["url"].endswith(row["link"]):
+                return row["url"][: -len(row["link"])]
+    return None
+
+
+def invite(study: str | Path, n: int, url: str | None = None) -> list[Rater]:
     """Add n raters with fresh unguessable tokens; their trial lists are fixed now (the key's videos may still
-    grow). Returns the new raters; key/raters.json and key/links.csv are rewritten atomically."""
+    grow). Returns the new raters; key/raters.json and key/links.csv are rewritten atomically. `url`: the study's
+    public address: links.csv then has a `url` column with each rater's full link (also later, for every rater)."""
     if n < 1:
         raise UserError("the number of raters to invite must be at least 1")
     study = Path(study)
+    url = base_url(study, url)
     design, cond = read_design(study), read_conditions(study)
     raters = read_raters(study)
     start = max((r.id for r in raters.values()), default=0) + 1
@@ -208,8 +229,8 @@ def invite(study: str | Path, n: int) -> list[Rater]:
     everyone = sorted([*raters.values(), *new], key=lambda r: r.id)
     _atomic_write(study / "key" / "raters.json",
                   json.dumps([dict(id=r.id, token=r.token, trials=[asdict(t) for t in r.trials]) for r in everyone]))
-    _atomic_write(study / "key" / "links.csv",
-                  "rater,link\n" + "".join(f"{r.id},/r/{r.token}\n" for r in everyone))
+    _atomic_write(study / "key" / "links.csv", ("rater,link,url\n" if url else "rater,link\n") + "".join(
+        f"{r.id},/r/{r.token}" + (f",{url}/r/{r.token}" if url else "") + "\n" for r in everyone))
     return new
 
 
@@ -219,5 +240,5 @@ def _atomic_write(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-__all__ = ["Conditions", "Design", "MODES", "SCALES", "SCALE_QUESTIONS", "Rater", "Trial", "invite", "read_conditions", "read_design",
+__all__ = ["Conditions", "Design", "MODES", "SCALES", "SCALE_QUESTIONS", "Rater", "Trial", "base_url", "invite", "read_conditions", "read_design",
            "read_raters", "rater_trials", "real_trials", "write_design"]

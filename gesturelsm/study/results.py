@@ -57,7 +57,13 @@ class Results:
     raters: list[RaterCheck]
     rows: list[dict] = field(default_factory=list)          # pairwise pairs, or rating means
     scores: list[dict] = field(default_factory=list)        # Bradley-Terry (pairwise only)
-    ranking: list[str] = field(default_factory=list)
+    ranking: list[str] = field(default_factory=list)        # by score (the plot's order)
+    no_ranking: str = ""                                    # why the data cannot support a ranking ("" : it can)
+    unclear: list[str] = field(default_factory=list)        # adjacent pairs of the ranking not told apart
+
+    @property
+    def kept(self) -> int:
+        return sum(c.kept for c in self.raters)
 
 
 def _chosen(t: Trial, answer: dict) -> str | None:
@@ -163,11 +169,33 @@ def _pairwise(res: Results, kept: list, genuine: dict, ref: int, n_boot: int, se
                              float("nan"), ci_low=lo, ci_high=hi, p=pv, p_holm=pa, raters=int(raters_on[i, j]),
                              trials=int(n + ties[i, j])))
     sc = stats.bt_bootstrap(per_rater, ref, n_boot, seed)
+    elo, elo_boot = stats.elo(sc.score), stats.elo(sc.boot)
+    elo_low, elo_high = np.quantile(elo_boot, 0.025, axis=0), np.quantile(elo_boot, 0.975, axis=0)
     for i, name in enumerate(res.methods):
-        res.scores.append(dict(method=name, score=sc.score[i], ci_low=sc.low[i], ci_high=sc.high[i],
+        res.scores.append(dict(method=name, score=sc.score[i], ci_low=sc.low[i], ci_high=sc.high[i], elo=elo[i],
+                               elo_low=elo_low[i], elo_high=elo_high[i],
                                raters=int(raters_on[i].max(initial=0)) if m > 1 else 0,
                                trials=int(wins[i].sum() + wins[:, i].sum() + ties[i].sum())))
     res.ranking = [res.methods[i] for i in np.argsort(-sc.score, kind="stable")]
+    res.no_ranking = _unsupported(len(kept), res.rows)
+    p_of = {frozenset((r["method_a"], r["method_b"])): r["p_holm"] for r in res.rows}
+    res.unclear = [f"{a} vs {b}" for a, b in zip(res.ranking, res.ranking[1:])
+                   if p_of.get(frozenset((a, b)), 1.0) >= 0.05]
+
+
+MIN_RATERS = 2          # an interval over raters, and a ranking, need at least this many
+
+
+def _unsupported(kept: int, rows: list[dict]) -> str:
+    """What is missing for a ranking ("" when nothing is): raters kept, and comparisons of every pair by them."""
+    if kept < MIN_RATERS:
+        return (f"{kept} rater kept; intervals over raters and a ranking need at least {MIN_RATERS} (invite more "
+                "raters: `gesturelsm study invite`)")
+    thin = [f"{r['method_a']} vs {r['method_b']} ({r['raters']} rater{'s' * (r['raters'] != 1)}, "
+            f"{r['trials']} comparison{'s' * (r['trials'] != 1)})" for r in rows if r["raters"] < MIN_RATERS]
+    if thin:
+        return f"pairs compared by fewer than {MIN_RATERS} raters: {', '.join(thin)}"
+    return ""
 
 
 def _rating(res: Results, kept: list, genuine: dict, n_boot: int, seed: int) -> None:
@@ -180,6 +208,9 @@ def _rating(res: Results, kept: list, genuine: dict, n_boot: int, seed: int) -> 
                                  raters=sum(len(g) > 0 for g in groups), trials=int(sum(len(g) for g in groups))))
     means = {name: np.mean([r["mean"] for r in res.rows if r["method"] == name]) for name in res.methods}
     res.ranking = sorted(res.methods, key=lambda x: -np.nan_to_num(means[x], nan=-np.inf))
+    if len(kept) < MIN_RATERS:
+        res.no_ranking = (f"{len(kept)} rater kept; intervals over raters and a ranking need at least {MIN_RATERS} "
+                          "(invite more raters: `gesturelsm study invite`)")
 
 
 def write(res: Results, out: str | Path, rule: Rule) -> Path:
@@ -198,7 +229,8 @@ def write(res: Results, out: str | Path, rule: Rule) -> Path:
         _csv(out / "ratings.csv", res.rows)
     (out / "results.md").write_text(markdown(res, rule))
     plot_results(res, out / "results.png")
-    (out / "summary.json").write_text(json.dumps(dict(mode=res.mode, ranking=res.ranking,
+    (out / "summary.json").write_text(json.dumps(dict(mode=res.mode, ranking=[] if res.no_ranking else res.ranking,
+                                                      no_ranking=res.no_ranking, not_told_apart=res.unclear,
                                                       kept=[c.rater for c in res.raters if c.kept]), indent=1))
     return out
 
@@ -217,11 +249,18 @@ def markdown(res: Results, rule: Rule) -> str:
              f"Raters kept: {len(kept)} of {len(res.raters)}"
              + "".join(f"; rater {c.rater} dropped ({c.reason})" for c in res.raters if not c.kept) + ".", ""]
     if res.mode == "pairwise":
-        lines += ["## Bradley-Terry scores (log-strength, reference = 0; 95% bootstrap over raters)", "",
-                  "| rank | method | score | 95% interval | raters | trials |", "|---|---|---|---|---|---|"]
+        lines += ["## Bradley-Terry scores and Elo (log-strength, reference = 0; Elo = 1000 + 400/ln 10 x (score - "
+                  "mean score); 95% bootstrap over raters)", "",
+                  "| rank | method | score | 95% interval | Elo | 95% interval | raters | trials |",
+                  "|---|---|---|---|---|---|---|---|"]
         by = {s["method"]: s for s in res.scores}
-        lines += [f"| {k} | {m} | {by[m]['score']:+.2f} | [{by[m]['ci_low']:+.2f}, {by[m]['ci_high']:+.2f}] | "
-                  f"{by[m]['raters']} | {by[m]['trials']} |" for k, m in enumerate(res.ranking, 1)]
+        few = f"n/a ({len(kept)} rater)" if len(kept) < MIN_RATERS else ""
+        for k, m in enumerate(res.ranking, 1):
+            b = by[m]
+            bt = few or f"[{b['ci_low']:+.2f}, {b['ci_high']:+.2f}]"
+            el = few or f"[{b['elo_low']:.0f}, {b['elo_high']:.0f}]"
+            lines.append(f"| {'-' if res.no_ranking else k} | {m} | {b['score']:+.2f} | {bt} | {b['elo']:.0f} | {el} | "
+                         f"{b['raters']} | {b['trials']} |")
         lines += ["", "## Pairwise preference (ties left out of the win rate; sign test, Holm-corrected)", "",
                   "| A vs B | A wins | B wins | ties | A win rate [95% Wilson] | p | p (Holm) | raters | trials |",
                   "|---|---|---|---|---|---|---|---|---|"]
@@ -233,7 +272,12 @@ def markdown(res: Results, rule: Rule) -> str:
                   "| scale | method | mean | 95% interval | raters | trials |", "|---|---|---|---|---|---|"]
         lines += [f"| {r['scale']} | {r['method']} | {r['mean']:.2f} | [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
                   f"{r['raters']} | {r['trials']} |" for r in res.rows]
-    lines += ["", "Ranking: " + " > ".join(res.ranking), ""]
+    if res.no_ranking:
+        lines += ["", f"Ranking: none, the data cannot support one: {res.no_ranking}.", ""]
+    else:
+        lines += ["", "Ranking: " + " > ".join(res.ranking)
+                  + (f" (not told apart at 5%, sign test with Holm's correction: {', '.join(res.unclear)})"
+                     if res.unclear else ""), ""]
     return "\n".join(lines)
 
 

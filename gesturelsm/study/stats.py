@@ -14,6 +14,7 @@ import numpy as np
 from scipy.stats import binomtest
 
 Z95 = 1.959963984540054
+ELO_SCALE = 400 / np.log(10)     # Elo points per unit of Bradley-Terry log-strength (200 points: preferred ~76 %)
 
 
 def wilson(k: float, n: float, z: float = Z95) -> tuple[float, float]:
@@ -93,6 +94,13 @@ def bt_bootstrap(per_rater: np.ndarray, reference: int = 0, n_boot: int = 1000, 
     return Scores(score, np.quantile(boot, a, axis=0), np.quantile(boot, 1 - a, axis=0), boot)
 
 
+def elo(scores: np.ndarray) -> np.ndarray:
+    """Elo ratings from Bradley-Terry log-strengths (..., M): 1000 + 400 / ln 10 x (score - mean score), so the
+    mean method rates 1000 and a gap of 400 points is odds of 10 : 1 (GENEA's realism rating)."""
+    s = np.asarray(scores, np.float64)
+    return 1000 + ELO_SCALE * (s - s.mean(-1, keepdims=True))
+
+
 def bootstrap_mean(per_rater: list[np.ndarray], n_boot: int = 1000, seed: int = 0,
                    level: float = 0.95) -> tuple[float, float, float]:
     """Mean of all values with a percentile-bootstrap interval that resamples raters (each item: one rater's
@@ -109,4 +117,4 @@ def bootstrap_mean(per_rater: list[np.ndarray], n_boot: int = 1000, seed: int = 
     return float(sums.sum() / sizes.sum()), float(np.quantile(means, a)), float(np.quantile(means, 1 - a))
 
 
-__all__ = ["Scores", "bootstrap_mean", "bradley_terry", "bt_bootstrap", "holm", "sign_test", "wilson"]
+__all__ = ["Scores", "bootstrap_mean", "bradley_terry", "bt_bootstrap", "elo", "holm", "sign_test", "wilson"]

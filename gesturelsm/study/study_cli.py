@@ -25,9 +25,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--port", type=int, default=8600, help="port to listen on")
     s.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
     s.set_defaults(func=run_serve)
-    i = sub.add_parser("invite", help="add N raters; prints their link paths")
-    i.add_argument("study_dir")
-    i.add_argument("n", type=int)
+    i = sub.add_parser("invite", help="add N raters and print their links",
+                       description="Add N raters to a study made by `gesturelsm batch`: each gets an unguessable "
+                       "link and a fixed list of trials; key/links.csv lists every rater's link (a running server "
+                       "picks new raters up). Example: gesturelsm study invite study/ 5 --base-url "
+                       "https://study.example.org")
+    i.add_argument("study_dir", help="folder made by `gesturelsm batch`")
+    i.add_argument("n", type=int, help="how many raters to add")
+    i.add_argument("--base-url", help="the study's public address (where `study serve` is reached, e.g. "
+                   "https://study.example.org): links are printed in full and key/links.csv gains a url column "
+                   "(remembered for later invites; default: the address given before, else link paths only)")
     i.set_defaults(func=run_invite)
     r = sub.add_parser("results", help="unblind, apply the attention rule, write STUDY_DIR/results/")
     r.add_argument("study_dir")
@@ -63,10 +70,17 @@ def run_serve(args: argparse.Namespace) -> int:
 
 
 def run_invite(args: argparse.Namespace) -> int:
-    from .design import invite
+    from .design import base_url, invite
 
-    for r in invite(_folder(args.study_dir), args.n):
-        print(f"rater {r.id}: /r/{r.token}")
+    folder = _folder(args.study_dir)
+    if args.n < 1:
+        raise UserError("N, the number of raters to invite, must be at least 1")
+    new = invite(folder, args.n, args.base_url)
+    url = base_url(folder)
+    for r in new:
+        print(f"rater {r.id}: {url or ''}/r/{r.token}")
+    print(f"{len(new)} rater link(s) added; every link is in {folder / 'key' / 'links.csv'}"
+          + ("" if url else " (paths: put the study's address before them, or give --base-url)"))
     return 0
 
 
