@@ -14,7 +14,7 @@ from gesturelsm import cli
 from gesturelsm.errors import InputError
 
 PACKAGE = Path(cli.__file__).resolve().parent
-COMMANDS = {"align", "batch", "bench", "body", "data", "edit", "eval", "eval-tokenizer", "export", "generate",
+COMMANDS = {"align", "batch", "bench", "body", "data", "edit", "eval", "eval-tokenizer", "export", "genea", "generate",
             "import-reference", "live", "render", "serve", "study", "sweep", "train", "train-tokenizer", "transcribe"}
 
 
