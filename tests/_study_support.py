@@ -50,7 +50,18 @@ def make_synthetic_study(out: Path, methods=("alpha", "beta", "gamma"), speeches
         a = sf.read(audio_dir / it.audio, dtype="float32")[0]
         synthetic_video(out / "videos" / it.video, a, colours[list(methods).index(it.method) % 4], seconds)
     _write_key(plan)
-    write_mismatch(plan, files, list(methods))
+    if mode == "appropriateness":                   # each video's motion, then the mismatched videos batch makes
+        from gesturelsm.study.appropriateness import COLUMNS, write_mismatched
+        from gesturelsm.study.batch import _merge_csv
+
+        (out / "key" / "motion").mkdir(parents=True, exist_ok=True)
+        for k, it in enumerate(plan.items):
+            T = int(round(seconds * 30))
+            np.savez(out / "key" / "motion" / it.video.replace(".mp4", ".npz"),
+                     poses=np.full((T, 165), 0.01 * k, np.float32), trans=np.zeros((T, 3), np.float32))
+        _merge_csv(out / "key" / "conditions.csv", write_mismatched(plan, files, list(methods)), COLUMNS)
+    else:
+        write_mismatch(plan, files, list(methods))
     write_design(out, Design(mode, attention, 0))
     invite(out, raters)
     return out

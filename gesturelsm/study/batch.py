@@ -8,6 +8,8 @@ Output folder:
     key/motion/v_<10 hex>.npz    the motion behind each video (BEAT2 layout), to measure what raters saw
     key/salt.txt                 the secret that makes the names; reused on reruns so names stay stable
     key/mismatch.csv             attention-check videos: one clip's video (motion_of) with another clip's speech
+                                 (--design appropriateness: no such checks; its mismatched videos are the trials'
+                                 own, listed in conditions.csv with `speech` and `motion_of`: appropriateness.py)
     key/design.json, raters.json, links.csv   the study's one design (see design.py): pairwise or rating, its
                                  attention checks, one unguessable link per rater for `gesturelsm study serve`
     study.json                   the settings of the videos and the design; a rerun with other ones is refused
@@ -31,6 +33,7 @@ from ..cluster import Connection, Files
 from ..errors import InputError, UserError
 from ..pipeline import GROUND_TRUTH, Plan
 from ..settings import DEFAULTS, Settings
+from .appropriateness import COLUMNS, write_mismatched
 from .design import Design, invite, read_raters, write_design
 from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
     weights_digest
@@ -125,7 +128,10 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
     if not report.done and not skipped:
         report.raise_failures("videos")                # nothing to write a study around
     _write_key(plan)
-    write_mismatch(plan, audio_files, methods)
+    if design.mode == "appropriateness":              # its own mismatches are the question, not attention checks
+        _merge_csv(out / "key" / "conditions.csv", write_mismatched(plan, audio_files, methods, log), COLUMNS)
+    else:
+        write_mismatch(plan, audio_files, methods)
     write_design(out, design)
     have = len(read_raters(out))
     if have < raters:

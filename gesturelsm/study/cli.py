@@ -45,8 +45,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--beat2", help="BEAT2-layout folder, for ground_truth videos of its takes")
     add_post_flags(p)
     p.add_argument("--design", default="pairwise", choices=MODES,
-                   help="the study's design: pairwise preference between methods on the same speech, or each "
-                   "video rated 1-5 on realness, synchrony and smoothness (default: pairwise)")
+                   help="the study's design: pairwise preference between methods on the same speech; each "
+                   "video rated 1-5 on realness, synchrony and smoothness; or appropriateness: a method's motion for "
+                   "the speech heard against its motion for another speech, both with the speech heard (GENEA's "
+                   "mismatching protocol) (default: pairwise)")
     p.add_argument("--attention", type=from_text, default=0.15,
                    help="attention checks per real trial (mismatched speech and repeated trials)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "

@@ -37,8 +37,10 @@ SCALE_QUESTIONS = {
     "synchrony": "How well do the gestures match the rhythm of the speech? (1 = not at all, 5 = perfectly)",
     "smoothness": "How smooth is the motion, free of jitter and jumps? (1 = very jerky, 5 = perfectly smooth)",
 }
-MODES = ("pairwise", "rating")
-KINDS = {"pairwise": "pair", "rating": "rating"}
+MODES = ("pairwise", "rating", "appropriateness")
+KINDS = {"pairwise": "pair", "rating": "rating", "appropriateness": "pair"}
+QUESTIONS = {"appropriateness": "Watch both videos with sound: the speech is the same, the movements differ. Whose "
+                                "gestures fit this speech better?"}
 
 
 @dataclass(frozen=True)
@@ -80,6 +82,8 @@ class Conditions:
     """What the key says: genuine video -> (speech, method); mismatch video -> (speech, motion_of video)."""
     genuine: dict[str, tuple[str, str]]
     mismatch: dict[str, tuple[str, str]]
+    # appropriateness: video -> (speech heard, method, speech its motion was made for), the motion cut to the speech
+    other: dict[str, tuple[str, str, str]] = field(default_factory=dict)
 
     @property
     def methods(self) -> list[str]:
@@ -98,11 +102,14 @@ def read_conditions(study: str | Path) -> Conditions:
     if not path.exists():
         raise InputError(f"{study} is not a study folder made by `gesturelsm batch` (no key/conditions.csv)")
     have = lambda v: (study / "videos" / v).exists()   # noqa: E731
-    genuine = {r["video"]: (r["audio"], r["method"]) for r in _read_csv(path) if have(r["video"])}
+    rows = [r for r in _read_csv(path) if have(r["video"])]
+    mismatched = lambda r: r.get("motion_of") not in (None, "", r["audio"])   # noqa: E731
+    genuine = {r["video"]: (r["audio"], r["method"]) for r in rows if not mismatched(r)}
+    other = {r["video"]: (r["audio"], r["method"], r["motion_of"]) for r in rows if mismatched(r)}
     mm = study / "key" / "mismatch.csv"
     mismatch = {r["video"]: (r["audio"], r["motion_of"]) for r in (_read_csv(mm) if mm.exists() else [])
                 if have(r["video"]) and r["motion_of"] in genuine}
-    return Conditions(genuine, mismatch)
+    return Conditions(genuine, mismatch, other)
 
 
 def real_trials(cond: Conditions, design: Design) -> list[Trial]:
@@ -110,6 +117,8 @@ def real_trials(cond: Conditions, design: Design) -> list[Trial]:
     kind = KINDS[design.mode]
     if design.mode == "rating":
         return [Trial(0, kind, v) for v in cond.genuine]
+    if design.mode == "appropriateness":
+        return appropriateness_trials(cond)
     by_audio: dict[str, dict[str, str]] = {}
     for v, (a, m) in cond.genuine.items():
         by_audio.setdefault(a, {})[m] = v
@@ -123,22 +132,34 @@ def real_trials(cond: Conditions, design: Design) -> list[Trial]:
     return out
 
 
+def appropriateness_trials(cond: Conditions) -> list[Trial]:
+    """Per method and speech heard: the method's motion for that speech beside its motion for another speech (cut to
+    the heard speech's length, played with it); matched on the left in this canonical order."""
+    by = {(a, m): v for v, (a, m) in cond.genuine.items()}
+    out = [Trial(0, "pair", by[(a, m)], v) for v, (a, m, _) in cond.other.items() if (a, m) in by]
+    if not out:
+        raise InputError("an appropriateness study needs, for some method, its videos of two speech files where "
+                         "the other speech is at least as long as the one heard")
+    return out
+
+
 def rater_trials(cond: Conditions, design: Design, rater: int) -> list[Trial]:
     """Rater's trials: real trials shuffled with (seed, rater), sides balanced, checks mixed in."""
     rng = np.random.default_rng([design.seed, rater])
     base = real_trials(cond, design)
     trials = [base[i] for i in rng.permutation(len(base))]
-    if design.mode == "pairwise":
+    if KINDS[design.mode] == "pair":
         for j, t in enumerate(trials):
             if (j + rater) % 2:
                 t.left, t.right = t.right, t.left
     n_checks = int(np.ceil(design.attention * len(trials))) if design.attention > 0 else 0
-    n_mismatch = (n_checks + 1) // 2 if cond.mismatch else 0
-    n_repeat = n_checks - n_mismatch if cond.mismatch else n_checks
+    mm_ok = bool(cond.mismatch) and design.mode != "appropriateness"    # there, mismatches are the question
+    n_mismatch = (n_checks + 1) // 2 if mm_ok else 0
+    n_repeat = n_checks - n_mismatch
     kind = KINDS[design.mode]
     checks: list[Trial] = []
     mm = list(cond.mismatch.items())
-    for i in rng.permutation(len(mm))[:n_mismatch] if mm else []:
+    for i in rng.permutation(len(mm))[:n_mismatch] if mm and n_mismatch else []:
         video, (_, motion_of) = mm[i]
         if design.mode == "rating":
             checks.append(Trial(0, kind, video, check="mismatch"))
@@ -240,5 +261,5 @@ def _atomic_write(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-__all__ = ["Conditions", "Design", "MODES", "SCALES", "SCALE_QUESTIONS", "Rater", "Trial", "base_url", "invite", "read_conditions", "read_design",
+__all__ = ["Conditions", "Design", "MODES", "QUESTIONS", "appropriateness_trials", "SCALES", "SCALE_QUESTIONS", "Rater", "Trial", "base_url", "invite", "read_conditions", "read_design",
            "read_raters", "rater_trials", "real_trials", "write_design"]

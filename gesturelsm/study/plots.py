@@ -1,5 +1,5 @@
-"""results.png: Bradley-Terry scores with intervals and the pairwise win-rate matrix (pairwise studies), or
-mean ratings with intervals per scale (rating studies). Drawn with matplotlib's Agg backend (no display)."""
+"""results.png: Bradley-Terry scores with intervals and the pairwise win-rate matrix (pairwise studies), the
+matched share per method (appropriateness studies), or mean ratings with intervals per scale (rating studies). Drawn with matplotlib's Agg backend (no display)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -41,6 +41,17 @@ def plot_results(res, path: str | Path) -> Path:
         mx.set_yticks(range(m), res.methods, fontsize=8)
         mx.set_title("Row beats column (win rate)", fontsize=10)
         fig.colorbar(im, ax=mx, fraction=0.046)
+    elif res.mode == "appropriateness":
+        fig, ax = plt.subplots(figsize=(6, 0.6 + 0.5 * len(res.rows)), dpi=90)
+        y = np.arange(len(res.rows))
+        share = np.array([r["matched_share"] for r in res.rows])
+        err = np.array([[r["matched_share"] - r["low"] for r in res.rows], [r["high"] - r["matched_share"]
+                                                                          for r in res.rows]])
+        ax.errorbar(share, y, xerr=np.nan_to_num(err), fmt="o", color="#1f5fa8", capsize=4)
+        ax.axvline(0.5, color="#999", lw=0.8)
+        ax.set_yticks(y, [f"{r['method']}\n({r['answers']} answers)" for r in res.rows], fontsize=8)
+        ax.set_xlim(0, 1)
+        ax.set_xlabel("share choosing the motion made for the speech heard (95% CI; 0.5 = chance)")
     else:
         scales = list(dict.fromkeys(r["scale"] for r in res.rows))
         fig, ax = plt.subplots(figsize=(7, 3.2), dpi=90)

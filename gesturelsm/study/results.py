@@ -23,7 +23,7 @@ import numpy as np
 from sqlalchemy.exc import DBAPIError
 
 from ..errors import UserError
-from . import db, stats
+from . import appropriateness, db, stats
 from .design import SCALES, Rater, Trial, read_conditions, read_design, read_raters
 from .store import marker_key, missing_message, read_markers
 
@@ -131,6 +131,12 @@ def analyse(study: str | Path, url: str | None = None, rule: Rule = Rule(), refe
     if design.mode == "pairwise":
         _pairwise(res, [(raters[r], by_rater[r]) for r in kept], cond.genuine,
                   methods.index(reference) if reference else 0, n_boot, seed)
+    elif design.mode == "appropriateness":
+        res.rows = appropriateness.analyse([(raters[r], by_rater[r]) for r in kept], cond, n_boot, seed)
+        res.ranking = [r["method"] for r in sorted(res.rows, key=lambda r: -np.nan_to_num(r["matched_share"],
+                                                                                           nan=-1.0))]
+        res.no_ranking = ("an appropriateness study tests each method against chance (50 %), not the methods "
+                          "against each other")
     else:
         _rating(res, [(raters[r], by_rater[r]) for r in kept], cond.genuine, n_boot, seed)
     return res
@@ -225,6 +231,8 @@ def write(res: Results, out: str | Path, rule: Rule) -> Path:
     if res.mode == "pairwise":
         _csv(out / "pairwise.csv", res.rows)
         _csv(out / "scores.csv", res.scores)
+    elif res.mode == "appropriateness":
+        _csv(out / "appropriateness.csv", res.rows)
     else:
         _csv(out / "ratings.csv", res.rows)
     (out / "results.md").write_text(markdown(res, rule))
@@ -267,12 +275,16 @@ def markdown(res: Results, rule: Rule) -> str:
         lines += [f"| {r['method_a']} vs {r['method_b']} | {r['a_wins']} | {r['b_wins']} | {r['ties']} | "
                   f"{r['a_win_rate']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | {r['p']:.3g} | {r['p_holm']:.3g}"
                   f"{' *' if r['p_holm'] < 0.05 else ''} | {r['raters']} | {r['trials']} |" for r in res.rows]
+    elif res.mode == "appropriateness":
+        lines += appropriateness.markdown(res.rows)
     else:
         lines += ["## Mean ratings (1-5; 95% bootstrap over raters)", "",
                   "| scale | method | mean | 95% interval | raters | trials |", "|---|---|---|---|---|---|"]
         lines += [f"| {r['scale']} | {r['method']} | {r['mean']:.2f} | [{r['ci_low']:.2f}, {r['ci_high']:.2f}] | "
                   f"{r['raters']} | {r['trials']} |" for r in res.rows]
-    if res.no_ranking:
+    if res.mode == "appropriateness":
+        lines += ["", f"Ranking: none; {res.no_ranking}.", ""]
+    elif res.no_ranking:
         lines += ["", f"Ranking: none, the data cannot support one: {res.no_ranking}.", ""]
     else:
         lines += ["", "Ranking: " + " > ".join(res.ranking)

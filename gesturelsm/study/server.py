@@ -7,7 +7,7 @@ Routes (everything a rater can reach; the key, file names and method names are n
     GET  /api/<token>/video/<trial>/<side>  a video of a trial already on screen (left | right), Range requests
 Refusals are HTTP 4xx with {"error": message}, and a database that cannot take an answer just now is 503 with
 {"error": message} (store.py); the page shows the message. A state is
-{n, k, trial: {index, kind, scales?} | null, code: completion code | null}.
+{n, k, trial: {index, kind, question?, scales?} | null, code: completion code | null}.
 Database work runs off the event loop (store.Store), so a slow or locked database never holds up pages and videos.
 Videos carry their size and type only: no modification time (it would order the conditions by render time) and
 no validator such as an ETag (the same one in two trials would link them); the address is per rater and trial.
@@ -28,7 +28,7 @@ from starlette.routing import Route
 
 from ..errors import GestureError
 from . import db
-from .design import SCALE_QUESTIONS, SCALES, Rater, read_design, read_raters
+from .design import QUESTIONS, SCALE_QUESTIONS, SCALES, Rater, read_design, read_raters
 from .page import PAGE
 from .store import Store
 
@@ -46,12 +46,13 @@ class Study:
     store: Store
     _raters: dict[str, Rater]
     _mtime: float = 0.0
+    question: str | None = None                 # the design's own question (the page's default otherwise)
 
     @classmethod
     def open(cls, folder: str | Path, url: str | None = None, log=print) -> "Study":
         folder = Path(folder)
-        read_design(folder)                             # a clear error when the folder is not a study
-        study = cls(folder, Store.open(folder, url, log), {})
+        design = read_design(folder)                    # a clear error when the folder is not a study
+        study = cls(folder, Store.open(folder, url, log), {}, question=QUESTIONS.get(design.mode))
         study._reload()
         return study
 
@@ -78,6 +79,8 @@ class Study:
         if st.code is None and st.shown_trial < n:
             t = rater.trials[st.shown_trial]
             trial = dict(index=t.index, kind=t.kind)
+            if self.question and t.kind == "pair":
+                trial["question"] = self.question
             if t.kind == "rating":
                 trial["scales"] = [dict(name=s, question=SCALE_QUESTIONS[s]) for s in SCALES]
         return dict(n=n, k=st.answered, trial=trial, code=st.code)
