@@ -35,6 +35,7 @@ from ..pipeline import GROUND_TRUTH, Plan
 from ..settings import DEFAULTS, Settings
 from .appropriateness import COLUMNS, write_mismatched
 from .design import Design, invite, read_raters, write_design
+from .segments import check_lengths, cut_segments, read_segments
 from .naming import SETTINGS_FILE, blinded_name, check_unchanged, file_label, read_settings, video_settings, \
     weights_digest
 from .videos import Built, VideoSpec, render_missing
@@ -87,7 +88,7 @@ def plan_study(audio_files: list[Path], methods: list[str], out: str | Path,
 def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Settings = DEFAULTS, *, raters: int = 10,
                size: int = 512, body=None, beat2: str | None = None, design: Design = Design(),
                log: Callable[[str], None] = print, rig=None, connection: Connection | None = None,
-               checkpoints: list[Path] | None = None) -> StudyPlan:
+               checkpoints: list[Path] | None = None, segments: str | Path | None = None) -> StudyPlan:
     """Render what is missing and (re)write the key, the attention-check videos, the study's design and links up
     to `raters` raters (existing links are kept); returns the plan. A folder made with other settings is refused
     before anything is rendered (naming.check_unchanged). `settings`: the methods (ground truth among them needs
@@ -96,7 +97,8 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
     on that character beside it (VIDEO.vrm / .glb, the same blinded name). Each video is a unit of work
     (videos.py): in this process, or with `connection` (gesturelsm.cluster) a task on its cluster, whose workers
     load `checkpoints` (what `checkpoint_sources` gave; default the shipped ones). Videos that fail are listed in a
-    ClusterError once everything else is written."""
+    ClusterError once everything else is written. `segments`: a CSV of evaluation segments (segments.py); the study
+    is then over those segments, cut from each speech's whole videos."""
     methods = list(dict.fromkeys(settings.methods))
     for m in methods:
         if m != GROUND_TRUTH and m not in pipeline.methods:
@@ -109,15 +111,20 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
     pipeline.check_plan(base)
     steps = {m: settings.steps_for(m) for m in settings.generators}
     audio_files = find_audio(audio_dir)
+    segs = read_segments(segments, audio_files) if segments is not None else None
+    if segs is not None:
+        audio_files = [a for a in audio_files if a.name in segs]
+        check_lengths(segs, audio_files)
     out = Path(out)
     render = dict(size=size, body=file_label(body.path if body is not None else resolve_model_path(None)),
                   character=file_label(rig.path) if rig is not None else None)
     videos = {m: video_settings(base, m, render, None if m == GROUND_TRUTH else
                                 weights_digest(pipeline.backends[m])) for m in methods}
-    check_unchanged(out, videos, asdict(design))
+    shape = {**asdict(design), **({"segments": file_label(Path(segments))} if segments is not None else {})}
+    check_unchanged(out, videos, shape)
     plan = plan_study(audio_files, methods, out, videos)
     record = dict(audio_dir=str(audio_dir), raters=raters, steps=steps, cfg=settings.cfg, seed=settings.seed,
-                  size=size, **asdict(settings.post), design=asdict(design))
+                  size=size, **asdict(settings.post), design=shape)
     _write_settings(out, plan, record)                 # before rendering: an interrupted run is resumed alike
     ship = connection is not None
     spec = VideoSpec(tuple(Files.of(c, ship) for c in (checkpoints or checkpoint_sources(None))),
@@ -127,11 +134,7 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
                                            log, connection)
     if not report.done and not skipped:
         report.raise_failures("videos")                # nothing to write a study around
-    _write_key(plan)
-    if design.mode == "appropriateness":              # its own mismatches are the question, not attention checks
-        _merge_csv(out / "key" / "conditions.csv", write_mismatched(plan, audio_files, methods, log), COLUMNS)
-    else:
-        write_mismatch(plan, audio_files, methods)
+    _write_trials(plan, audio_files, methods, design, segs, log)
     write_design(out, design)
     have = len(read_raters(out))
     if have < raters:
@@ -142,6 +145,19 @@ def make_study(pipeline, audio_dir: str | Path, out: str | Path, settings: Setti
         f"{out / 'key' / 'links.csv'}")
     report.raise_failures("videos")                    # after everything else is written: a rerun makes only these
     return plan
+
+
+def _write_trials(plan: StudyPlan, audio_files: list[Path], methods: list[str], design: Design,
+                  segs: dict | None, log) -> None:
+    """The key and the design's extra videos, over the whole speech files or (with segments) over the segments."""
+    if segs is not None:
+        files, items = cut_segments(plan, audio_files, segs, StudyItem)
+        plan, audio_files = StudyPlan(plan.out, plan.salt, items, plan.settings), files
+    _write_key(plan)
+    if design.mode == "appropriateness":              # its own mismatches are the question, not attention checks
+        _merge_csv(plan.out / "key" / "conditions.csv", write_mismatched(plan, audio_files, methods, log), COLUMNS)
+    else:
+        write_mismatch(plan, audio_files, methods)
 
 
 def _write_settings(out: Path, plan: StudyPlan, record: dict) -> None:

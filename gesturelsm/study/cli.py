@@ -53,6 +53,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="attention checks per real trial (mismatched speech and repeated trials)")
     p.add_argument("--rig", help="your character (.vrm / .glb): the videos show its own mesh instead of the "
                    "mannequin, and each video also gets its motion on the character (same blinded name, .vrm / .glb)")
+    p.add_argument("--segments", help="CSV of evaluation segments (file_name,start_seconds,end_seconds,"
+                   "duration_seconds, the GENEA Leaderboard's layout): each video is cut to the listed segments and "
+                   "the study is over them (docs/STUDY.md)")
     add_cluster_argument(p, "each video (generate, render, exports)")
     p.set_defaults(func=run)
 
@@ -70,6 +73,8 @@ def check_arguments(args: argparse.Namespace):
     output_folder(args.out, "--out", p)
     if args.rig:
         input_file(args.rig, "--rig", p)
+    if args.segments:
+        input_file(args.segments, "--segments", p)
     if args.beat2:
         input_folder(args.beat2, "--beat2", p)
     elif GROUND_TRUTH in args.methods:
@@ -87,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
         make_study(pipe, args.audio_dir, args.out, settings, raters=raters, size=size, body=body, beat2=args.beat2,
                    design=Design(args.design, attention, settings.seed), rig=rig, connection=conn,
-                   checkpoints=checkpoint_sources(args.checkpoints))
+                   checkpoints=checkpoint_sources(args.checkpoints), segments=args.segments)
     return 0
 
 

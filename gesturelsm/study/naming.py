@@ -29,7 +29,8 @@ PER_VIDEO = ("methods", "steps", "transcribe", "post")    # Settings fields that
                                                           # options are, one by one)
 FLAGS = {"steps": "--steps / --ddim-steps", "cfg": "--cfg", "seed": "--seed", "smoothing": "--smoothing",
          "stand_in_place": "--stand-in-place", "grounding": "--grounding", "size": "--size", "body": "--model", "character": "--rig",
-         "weights": "--checkpoints", "mode": "--design", "attention": "--attention"}
+         "weights": "--checkpoints", "mode": "--design", "attention": "--attention",
+         "segments": "--segments"}
 
 
 def video_settings(plan: Plan, method: str, render: Mapping[str, object], weights: str | None) -> dict:
