@@ -27,6 +27,7 @@ import numpy as np
 from ..body import load_body_model
 from ..cluster import Connection, Files, Job, Unit, run_units
 from ..constants import SAMPLE_RATE
+from ..metrics import leaderboard as lb
 from ..metrics.amplitude import amplitude_stats
 from ..metrics.beat import audio_beats, beat_consistency, joint_speed
 from ..metrics.diversity import l1_diversity
@@ -70,6 +71,8 @@ class MotionStats:
     expr_mse: float | None = None
     vertex_mse: float | None = None
     amplitude: dict[str, float] = field(default_factory=dict)   # metrics.amplitude.AmplitudeStats fields
+    poses: np.ndarray | None = field(default=None, repr=False)   # (T, 165): the GENEA Leaderboard's pose columns
+    clip: str = ""                                               # which clip (its seeds are one speech's samples)
 
 
 def motion_stats(motion, body, beats: np.ndarray, mean_speed: np.ndarray, extractors, gt=None,
@@ -78,7 +81,8 @@ def motion_stats(motion, body, beats: np.ndarray, mean_speed: np.ndarray, extrac
     world = body.joints(motion.poses, motion.trans)                             # (T, 55, 3)
     local = body.joints(motion.poses, zero)                                     # translation removed
     s = MotionStats(beat_consistency(world, beats=beats, mean_speed=mean_speed), l1_diversity(local),
-                    jitter(world), feet_stats(world).as_dict(), amplitude=amplitude_stats(world).as_dict())
+                    jitter(world), feet_stats(world).as_dict(), amplitude=amplitude_stats(world).as_dict(),
+                    poses=np.asarray(motion.poses, np.float32))
     for ex in extractors:
         if len(local) >= 32:
             s.features[ex.name] = ex(motion, local)
@@ -105,6 +109,24 @@ def summarise(stats: list[MotionStats], gt_stats: list[MotionStats] | None, extr
             gen = [s.features[ex.name] for s in stats if ex.name in s.features]
             ok = sum(len(r) for r in real) >= 2 and sum(len(g) for g in gen) >= 2
             out[ex.name] = fgd(real, gen, normalize=ex.name != "fgd_emage") if ok else None
+    out.update(genea_columns(stats, gt_stats))
+    return out
+
+
+def genea_columns(stats: list[MotionStats], gt_stats: list[MotionStats] | None) -> dict:
+    """The GENEA Leaderboard's pose columns (metrics/leaderboard.py; the seeds of a clip are its samples): FD_g and
+    FD_k against the ground truth's clips, DIV_k, and DIV_sample (None with one seed)."""
+    gen = [s.poses for s in stats if s.poses is not None and len(s.poses) > 2]
+    out = dict(fid_g=None, fid_k=None, var_k=lb.div_k(gen) if gen else None, sample_div=None)
+    groups: dict[str, list] = {}
+    for s in stats:
+        if s.poses is not None and s.clip:          # ground truth's clips are no one speech's samples
+            groups.setdefault(s.clip, []).append(s.poses)
+    if groups and all(len(g) >= 2 for g in groups.values()):
+        out["sample_div"] = lb.div_sample(list(groups.values()))
+    real = [g.poses for g in gt_stats or [] if g.poses is not None and len(g.poses) > 2]
+    if real and gen and sum(map(len, real)) > 2 and sum(map(len, gen)) > 2:
+        out["fid_g"], out["fid_k"] = lb.fd_g(real, gen), lb.fd_k(real, gen)
     return out
 
 
@@ -198,6 +220,7 @@ def eval_clip(built: EvalBuilt, clip: EvalClip) -> list[list[tuple[MotionStats, 
                 n = min(m.num_frames, clip.motion.num_frames)
                 m, gt = m.slice(0, n), clip.motion.slice(0, n)
             stats = motion_stats(m, spec.body, beats, spec.mean_speed, list(spec.extractors), gt, spec.face_vertices)
+            stats.clip = clip.name
             per_seed.append((stats, res.generation_seconds, res.motion.duration, gt is not None))
         rows.append(per_seed)
     return rows

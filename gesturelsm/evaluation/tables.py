@@ -9,6 +9,21 @@ def _f(v, fmt: str = "{:.3f}") -> str:
     return "-" if v is None else fmt.format(v)
 
 
+def genea_lines(rep: dict) -> list[str]:
+    """The GENEA Leaderboard's pose columns per row (docs/GENEA.md; the seeds of a clip are its samples)."""
+    rows = [r for r in rep["rows"] if r.get("heldout")]
+    if not rows:
+        return []
+    lines = ["", "GENEA Leaderboard pose columns (raw axis-angle poses, as its exp_eval_metrics.py; the seeds of a "
+             "clip are its samples; DIV_sample needs 2 seeds or more):", "",
+             "| method | steps | CFG | FD_g | FD_k | DIV_k | DIV_sample |", "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        h = r["heldout"]
+        lines.append(f"| {label(r['method'])} | {r['steps']} | {r['cfg']:g} | "
+                     + " | ".join(_f(h.get(k), "{:.4g}") for k in ("fid_g", "fid_k", "var_k", "sample_div")) + " |")
+    return lines
+
+
 def eval_markdown(rep: dict) -> str:
     ex = rep["extractors"]
     gt = rep.get("ground_truth") or {}
@@ -52,6 +67,7 @@ def eval_markdown(rep: dict) -> str:
                          f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'], '{:.1f}')} |")
     lines += amplitude_lines(rep)
     lines += feet_lines(rep)
+    lines += genea_lines(rep)
     lines += ["", "FGD_k / FGD_g: Frechet distances of training-free kinetic / geometric joint features, z-scored by "
               "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is better. Div: metres, L1 over "
               "55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, AITS on an A100; * the paper's "

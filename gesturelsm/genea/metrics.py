@@ -28,7 +28,7 @@ import numpy as np
 from scipy.signal import argrelextrema
 
 from ..errors import InputError
-from ..metrics.frechet import GaussianStats, frechet_distance
+from ..metrics.leaderboard import div_k, div_sample, fd_g, fd_k, fit
 
 KEYS = ("fgd", "fid_g", "fid_k", "bc_m2a", "bc_a2m", "srgr", "div", "var_k", "sample_div")
 HEADERS = {"fgd": "FGD", "fid_g": "FD_g", "fid_k": "FD_k", "bc_m2a": "BA_m2a", "bc_a2m": "BA_a2m", "srgr": "SRGR",
@@ -76,37 +76,18 @@ def pair_folders(generated: Path, human: Path) -> Pairing:
     return Pairing(hum, dict(gen))
 
 
-def fit(rows: np.ndarray) -> GaussianStats:
-    """Mean and unbiased covariance (numpy's np.cov, as the reference fits them)."""
-    if len(rows) < 2:
-        raise InputError("too few frames to fit a Gaussian")
-    return GaussianStats(rows.mean(0), np.atleast_2d(np.cov(rows, rowvar=False)), len(rows))
-
-
 def pose_metrics(pairing: Pairing) -> dict[str, float]:
     """fid_g, fid_k and var_k: no network, no weights."""
     human = [read_poses(p)[0] for p in pairing.human.values()]
     samples = [read_poses(p)[0] for files in pairing.generated.values() for p in files]
-    g_static, h_static = np.concatenate(samples), np.concatenate(human)
-    g_diff = np.concatenate([np.diff(s, axis=0) for s in samples])
-    h_diff = np.concatenate([np.diff(h, axis=0) for h in human])
-    var_k = float(np.mean([np.var(s, axis=0).mean() for s in samples]))
-    return dict(fid_g=frechet_distance(fit(h_static), fit(g_static)),
-                fid_k=frechet_distance(fit(h_diff), fit(g_diff)), var_k=var_k)
+    return dict(fid_g=fd_g(human, samples), fid_k=fd_k(human, samples), var_k=div_k(samples))
 
 
 def sample_diversity(pairing: Pairing) -> float | None:
     """DIV_sample, or None when a take has a single sample (the reference gives none then)."""
-    values = []
-    for files in pairing.generated.values():
-        files = [f for f in files if len(f.stem.split("_")) >= 6]     # the reference's: a sample suffix
-        if len(files) < 2:
-            return None
-        poses = [read_poses(f)[0] for f in files]
-        n = min(len(p) for p in poses)
-        stack = np.stack([p[:n] for p in poses]).reshape(len(poses), -1)
-        values.append(float(np.var(stack, axis=0).mean()))
-    return float(np.mean(values))
+    groups = [[read_poses(f)[0] for f in files if len(f.stem.split("_")) >= 6]    # the reference's: a suffix
+              for files in pairing.generated.values()]
+    return div_sample(groups)
 
 
 def _gahr(a: np.ndarray, b: np.ndarray) -> float:

@@ -86,3 +86,15 @@ def test_eval_cli_rejects_bad_settings(eval_assets, tiny_beat2, tmp_path, capsys
     assert main(["eval", "--data", str(tiny_beat2), "--checkpoints", str(eval_assets), "--steps", "0",
                  "--out", str(tmp_path)]) == 2
     assert "steps" in capsys.readouterr().err
+
+
+def test_eval_reports_the_genea_columns_and_ground_truth_against_itself_scores_zero(tiny_beat2):
+    from gesturelsm.evaluation.tables import eval_markdown
+
+    clips, _ = heldout_clips(tiny_beat2, train_fraction=0.5)
+    rep = evaluate(OraclePipeline(clips), clips, [EvalPlanItem("oracle", 1, 1.0)], seeds=2)
+    h = rep["rows"][0]["heldout"]
+    # not exactly 0: two seeds pool the clips twice and the reference's unbiased covariance scales by N - 1
+    assert h["fid_g"] == pytest.approx(0.0, abs=1e-3) and h["fid_k"] == pytest.approx(0.0, abs=1e-3)
+    assert h["var_k"] > 0 and h["sample_div"] == pytest.approx(0.0, abs=1e-12)   # the oracle: the same each seed
+    assert "GENEA Leaderboard pose columns" in eval_markdown(rep)
