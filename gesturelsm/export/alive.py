@@ -111,3 +111,11 @@ def face_presets(body, seq, blinker: Blinker | None) -> tuple[dict[str, np.ndarr
     w = face_weights(body, seq.poses, seq.expressions, seq.betas, wide_open=JAW_FULL)
     mouth = sum(w[v] for v in VISEMES)
     return w, with_blinks(w["blink"], blinker, mouth)
+
+
+def alive_face_weights(body, seq, blinker: Blinker | None = None) -> dict[str, np.ndarray]:
+    """{preset: (T,)} for the VRM visemes and `blink` as exports show them (a VRM / GLB's face, the page's
+    character): the mouth on JAW_FULL's scale, blinks from `blinker` (a stream's, carried over its chunks) or a new
+    one seeded 0 (module docstring)."""
+    w, blink = face_presets(body, seq, blinker if blinker is not None else Blinker(int(seq.fps)))
+    return {**w, "blink": blink}

@@ -192,20 +192,24 @@ def global_rotations(poses: np.ndarray, joint: str) -> Rotation:
     return rot
 
 
-def head_rotation(poses: np.ndarray) -> np.ndarray:
-    """(T, 3) HeadYaw, HeadPitch, HeadRoll (radians): the head relative to the pelvis's heading (module docstring)."""
+def head_rotation(poses: np.ndarray, neutral: bool = True) -> np.ndarray:
+    """(T, 3) HeadYaw, HeadPitch, HeadRoll (radians): the head relative to the pelvis's heading and (`neutral`) to
+    the speaker's neutral head (module docstring); neutral=False: to the rest pose's upright head."""
     aa = np.asarray(poses, np.float64).reshape(len(poses), -1, 3)
     forward = Rotation.from_rotvec(aa[:, 0]).apply([0.0, 0.0, 1.0])
     heading = np.arctan2(forward[:, 0], forward[:, 2])
     facing = Rotation.from_rotvec(np.stack([np.zeros_like(heading), heading, np.zeros_like(heading)], -1))
-    return _yaw_pitch_roll(neutral_head(facing.inv() * global_rotations(poses, "head")))
+    rot = facing.inv() * global_rotations(poses, "head")
+    return _yaw_pitch_roll(neutral_head(rot) if neutral else rot)
 
 
-def eye_rotations(poses: np.ndarray) -> np.ndarray:
-    """(T, 6) LeftEyeYaw/Pitch/Roll, RightEyeYaw/Pitch/Roll: the SMPL-X eye joints relative to the head."""
+def eye_rotations(poses: np.ndarray, neutral: bool = True) -> np.ndarray:
+    """(T, 6) LeftEyeYaw/Pitch/Roll, RightEyeYaw/Pitch/Roll: the SMPL-X eye joints relative to the head (and, with
+    `neutral`, to the speaker's neutral eyes)."""
     aa = np.asarray(poses, np.float64).reshape(len(poses), -1, 3)
     eye = lambda s: Rotation.from_rotvec(aa[:, JOINT_INDEX[f"{s}_eye_smplhf"]])    # noqa: E731
-    return np.concatenate([_yaw_pitch_roll(neutral_eye(eye(s), k)) for k, s in enumerate(("left", "right"))], -1)
+    return np.concatenate([_yaw_pitch_roll(neutral_eye(eye(s), k) if neutral else eye(s))
+                           for k, s in enumerate(("left", "right"))], -1)
 
 
 def _eye_look(eyes: np.ndarray) -> dict[str, np.ndarray]:
@@ -218,17 +222,19 @@ def _eye_look(eyes: np.ndarray) -> dict[str, np.ndarray]:
     return {k: np.clip(v, 0.0, 1.0) + 0.0 for k, v in out.items()}
 
 
-def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Blinker | None = None) -> ArkitFace:
+def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Blinker | None = None,
+               neutral: bool = True) -> ArkitFace:
     """The motion's face as ARKit blendshape weights with head and eye rotations (module docstring). `body`: a
     BodyModel, a model path, or None for $GESTURELSM_SMPLX_MODEL / the built-in mannequin. `blinks`: procedural
     blinks where the model does not blink (alive.py), from `blinker` (a stream's, carried over chunks) or a new
-    one seeded 0; False: the eyelids as measured."""
+    one seeded 0; False: the eyelids as measured. `neutral`: head and eye angles relative to the speaker's neutral
+    (False: to the rest pose)."""
     body = resolve_body(body)
     if len(body.module.lmk_faces_idx) != 51:
         raise BodyModelError(f"the body model {body.path.name} has no 51 facial landmarks to measure the face on")
     poses = np.asarray(seq.poses, np.float64)
     T = len(poses)
-    eyes = eye_rotations(poses) if T else np.zeros((0, 6))
+    eyes = eye_rotations(poses, neutral) if T else np.zeros((0, 6))
     measured = landmark_weights(body, poses, seq.expressions, seq.betas) if T else {}
     measured.update(_eye_look(eyes))
     weights = np.zeros((T, len(ARKIT_NAMES)))
@@ -242,5 +248,5 @@ def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Bli
         for side in ("Left", "Right"):
             k = ARKIT_NAMES.index(f"EyeBlink{side}")
             weights[:, k] = np.maximum(weights[:, k], closed)
-    head = head_rotation(poses) if T else np.zeros((0, 3))
+    head = head_rotation(poses, neutral) if T else np.zeros((0, 3))
     return ArkitFace(weights, head, eyes, int(seq.fps))
