@@ -14,7 +14,8 @@ rest rotation is identity (the VRM 0.x convention receivers expect), so a T-pose
 The T-pose is the body's own rest skeleton with its arms straightened along the body's sides (x) and its legs
 straight down (the mannequin's rest is such a T-pose already; hands and fingers keep their rest) (`tpose_skeleton`); the motion is put on it by the character retargeter (world bone
 directions, `retarget.solve`), so each received bone points where the motion's bone points. Positions are the
-T-pose's bone offsets in metres (the Hips' carries the motion's root translation).
+T-pose's bone offsets in metres; the Hips' is its place above the avatar's root (soles on y = 0) moving with the
+motion's root translation.
 Handedness: the body's frame is right-handed (y up, facing +z, its left +x); Unity's is left-handed (y up, facing
 +z, the avatar's left -x): positions go as (-x, y, z) and quaternions (x, y, z, w) as (x, -y, -z, w).
 
@@ -88,7 +89,8 @@ def _straightened(joint: str) -> np.ndarray | None:
 
 def tpose_skeleton(body=None) -> Skeleton:
     """The normalised T-pose (module docstring) as a retargeting skeleton: the 55 SMPL-X joints, metres, identity
-    rest rotations, the body's own bone lengths; upper arms and forearms along +-x, legs along -y."""
+    rest rotations, the body's own bone lengths; upper arms and forearms along +-x, legs along -y; its soles on
+    y = 0 (the hips about 0.9 m up, where an avatar's are)."""
     body = resolve_body(body)
     rest = np.asarray(body.rest_joints(), np.float64)
     pos = rest.copy()
@@ -98,6 +100,7 @@ def tpose_skeleton(body=None) -> Skeleton:
         offset = rest[j] - rest[p]
         d = _straightened(JOINT_NAMES[j])
         pos[j] = pos[p] + (offset if d is None else d * np.linalg.norm(offset))
+    pos[:, 1] -= float(np.asarray(body.rest_vertices())[:, 1].min())      # standing on y = 0, as avatars do
     parents = np.asarray(PARENTS)
     local = np.array([pos[j] - (pos[p] if p >= 0 else 0.0) for j, p in enumerate(parents)])
     n = len(JOINT_NAMES)

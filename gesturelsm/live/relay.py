@@ -28,6 +28,7 @@ class EngineRelay:
         self.body = resolve_body(body)
         self.owner = None
         self._lock = threading.Lock()
+        self._closing: list[threading.Thread] = []
 
     @property
     def targets(self) -> str:
@@ -54,4 +55,11 @@ class EngineRelay:
         with self._lock:
             if self.owner is session:
                 self.owner = None
-        threading.Thread(target=stream.close, name="engine-stream-close", daemon=True).start()
+        closer = threading.Thread(target=stream.close, name="engine-stream-close", daemon=True)
+        self._closing = [t for t in self._closing if t.is_alive()] + [closer]
+        closer.start()                          # the queued frames still leave on their clock, the session ends now
+
+    def wait_sent(self, timeout: float = 30.0) -> None:
+        """Until the ended streams' queued frames have left (for tests and shutdown)."""
+        for t in list(self._closing):
+            t.join(timeout)

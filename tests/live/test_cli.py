@@ -1,6 +1,8 @@
 """`gesturelsm live FILE`: writes the streamed motion (offline frame count) and prints latency; bad input is one line."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import soundfile as sf
 
@@ -70,8 +72,10 @@ def test_live_cli_sends_the_stream_to_a_vmc_and_live_link_receiver(shipped_pipe,
         rx.close()
         ll.close()
     out = capsys.readouterr().out
-    assert "sent 60 frames" in out, out
-    assert len(rx.packets) == 60 and len(ll.packets) == 60
+    m = re.search(r"sent (\d+) frames to .*; dropped (\d+) late", out)
+    sent, dropped = int(m.group(1)), int(m.group(2))
+    assert sent + dropped == 60 and sent >= 30, out                    # 2 s at 30 fps (a loaded machine drops some)
+    assert len(rx.packets) == sent and len(ll.packets) == sent
     msgs = decode_bundle(rx.packets[30][1])
     assert sum(m[0] == "/VMC/Ext/Bone/Pos" for m in msgs) == 55 and msgs[-1][0] == "/VMC/Ext/T"
     assert ll.packets[0][1][0] == 6                                    # Live Link Face's version byte
