@@ -23,6 +23,7 @@ from ..errors import UserError
 from ..motion.sequence import MotionSequence
 from .engine_stream import EngineStream, parse_address
 
+PLAYER_GRACE_S = 2.0
 PLAYERS = (("paplay", []), ("aplay", ["-q"]), ("afplay", []), ("ffplay", ["-nodisp", "-autoexit", "-loglevel", "quiet"]))
 
 
@@ -45,6 +46,15 @@ def audio_output() -> tuple[str, list[str]] | None:
             continue
         return exe, args
     return None
+
+
+def _stop_player(p: subprocess.Popen, grace: float) -> None:
+    """Let the speech end (up to `grace` s past the motion's last frame), then stop its player."""
+    try:
+        p.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        p.terminate()
+        p.wait()
 
 
 def add_parser(sub) -> None:
@@ -98,15 +108,16 @@ def run(args: argparse.Namespace) -> int:
     to = ", ".join(f"{k} {a}" for k, a in (("VMC", vmc), ("Live Link Face", livelink)) if a is not None)
     print(f"streaming {seq.num_frames} frames ({seq.num_frames / seq.fps:.1f} s at {seq.fps} fps) to {to}"
           + ("; looping, Ctrl-C stops" if args.loop else ""))
+    interrupted = False
     try:
         report = stream.play(seq, loop=args.loop, started=started)
     except KeyboardInterrupt:
-        report = stream.report
+        report, interrupted = stream.report, True
         print("stopped")
     finally:
         stream.close()
         for p in proc:
-            p.terminate()
+            _stop_player(p, 0.0 if interrupted else PLAYER_GRACE_S)
         if player is not None:
             Path(player[1]).unlink(missing_ok=True)
     print(f"sent {report.sent} of {report.frames} frames in {report.seconds:.1f} s; dropped {report.dropped} late "

@@ -166,3 +166,27 @@ def test_blinks_are_natural_irregular_and_not_always_mid_word():
     assert w.max() == pytest.approx(1.0) and w.min() == 0.0
     chunked = Blinker(fps, seed=3)
     assert np.allclose(np.concatenate([chunked.next(mouth[i:i + 37]) for i in range(0, T, 37)]), w)
+
+
+def test_speech_plays_in_sync_where_there_is_an_audio_output_and_one_line_where_none(tmp_path, capsys, monkeypatch):
+    """No audio output (this machine): one line, and the motion streams. A (stand-in) player: started with the
+    speech decoded to a wav as the first frame leaves, and stopped at the end."""
+    import sys
+
+    import soundfile as sf
+    from _support import speech_like
+    from gesturelsm.export import stream_cli
+
+    path = speaking_motion(0.5).save(tmp_path / "take.npz")
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(0.5), 16000)
+    monkeypatch.setattr(stream_cli, "audio_output", lambda: None)
+    assert main(["stream", str(path), "--vmc", "127.0.0.1:9", "--speech", str(wav)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("no audio output") == 1 and "of 15 frames" in out
+    log = tmp_path / "played.txt"
+    script = "import os, sys; open(sys.argv[1], 'w').write(str(os.path.getsize(sys.argv[2])))"
+    monkeypatch.setattr(stream_cli, "audio_output", lambda: (sys.executable, ["-c", script, str(log)]))
+    assert main(["stream", str(path), "--vmc", "127.0.0.1:9", "--speech", str(wav)]) == 0
+    assert "no audio output" not in capsys.readouterr().out
+    assert int(log.read_text()) == 44 + 2 * 8000             # the speech as a 16 kHz 16-bit wav (the player ran)
