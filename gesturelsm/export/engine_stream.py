@@ -49,8 +49,8 @@ def parse_address(text: str, flag: str = "--vmc") -> Address:
     if host.startswith("[") and host.endswith("]"):
         host = host[1:-1]
     if not sep or not host or not port.isdigit() or not 1 <= int(port) <= 65535:
-        raise UserError(f"{flag} {text!r}: give HOST:PORT, e.g. 127.0.0.1:{VMC_PORT if flag != '--livelink' else LIVE_LINK_PORT}"
-                        " (a port from 1 to 65535)")
+        example = LIVE_LINK_PORT if flag == "--livelink" else VMC_PORT
+        raise UserError(f"{flag} {text!r}: give HOST:PORT, e.g. 127.0.0.1:{example} (a port from 1 to 65535)")
     try:
         ipaddress.ip_address(host)
         flags = socket.AI_NUMERICHOST

@@ -24,7 +24,8 @@ from ..motion.sequence import MotionSequence
 from .engine_stream import EngineStream, parse_address
 
 PLAYER_GRACE_S = 2.0
-PLAYERS = (("paplay", []), ("aplay", ["-q"]), ("afplay", []), ("ffplay", ["-nodisp", "-autoexit", "-loglevel", "quiet"]))
+PLAYERS = (("paplay", []), ("aplay", ["-q"]), ("afplay", []),
+           ("ffplay", ["-nodisp", "-autoexit", "-loglevel", "quiet"]))
 
 
 def audio_output() -> tuple[str, list[str]] | None:
@@ -58,13 +59,14 @@ def _stop_player(p: subprocess.Popen, grace: float) -> None:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("stream", help="play a motion in real time to VTuber apps / Unity / Unreal (VMC, Live Link Face)",
+    p = sub.add_parser("stream", help="play a motion in real time to VTuber apps / Unity / Unreal (VMC, Live Link)",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("motion", help="BEAT2-layout .npz motion file")
     p.add_argument("--vmc", help="send VMC protocol bundles to HOST:PORT (receivers listen on 39539)")
     p.add_argument("--livelink", help="send Live Link Face packets to HOST:PORT (Unreal listens on 11111)")
     p.add_argument("--speech", help="play this speech file in sync, where the machine has an audio output")
-    p.add_argument("--loop", action="store_true", help="play again and again until interrupted (Ctrl-C; the speech plays once)")
+    p.add_argument("--loop", action="store_true",
+                   help="play again and again until interrupted (Ctrl-C; the speech plays once)")
     p.add_argument("--perfect-sync", action="store_true",
                    help="VMC: the 52 ARKit blendshapes too (perfect-sync avatars), besides the VRM presets")
     p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")

@@ -12,10 +12,10 @@ Per frame, one OSC bundle:
 The bones' rotations are local (relative to the parent bone) and relative to a normalised T-pose: every bone's
 rest rotation is identity (the VRM 0.x convention receivers expect), so a T-pose frame sends identity rotations.
 The T-pose is the body's own rest skeleton with its arms straightened along the body's sides (x) and its legs
-straight down (the mannequin's rest is such a T-pose already; hands and fingers keep their rest) (`tpose_skeleton`); the motion is put on it by the character retargeter (world bone
-directions, `retarget.solve`), so each received bone points where the motion's bone points. Positions are the
-T-pose's bone offsets in metres; the Hips' is its place above the avatar's root (soles on y = 0) moving with the
-motion's root translation.
+straight down (the mannequin's rest is such a T-pose already; hands and fingers keep their rest; `tpose_skeleton`);
+the motion is put on it by the character retargeter (world bone directions, `retarget.solve`), so each received bone
+points where the motion's bone points. Positions are the T-pose's bone offsets in metres; the Hips' is its place
+above the avatar's root (soles on y = 0) moving with the motion's root translation.
 Handedness: the body's frame is right-handed (y up, facing +z, its left +x); Unity's is left-handed (y up, facing
 +z, the avatar's left -x): positions go as (-x, y, z) and quaternions (x, y, z, w) as (x, -y, -z, w).
 
@@ -32,7 +32,7 @@ from pythonosc.osc_message_builder import OscMessageBuilder
 
 from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
-from ..motion.skeleton import JOINT_INDEX, JOINT_NAMES, PARENTS
+from ..motion.skeleton import JOINT_NAMES, PARENTS
 from ..retarget import Ground, Skeleton, SourceBody, retarget
 from ..retarget.solve import prepare
 from .alive import Blinker, face_presets
@@ -210,10 +210,5 @@ def vmc_bundle(frames: VmcFrames, t: int, seconds: float) -> bytes:
     return b.build().dgram
 
 
-def joint_of(bone: str) -> str:
-    """A HumanBodyBones name -> its SMPL-X joint."""
-    return {v: k for k, v in UNITY_BONE.items()}[bone]
-
-
-__all__ = ["HUMAN_BODY_BONES", "JOINT_INDEX", "UNITY_BONE", "VRM_PRESETS", "VmcFrames", "VmcMaker", "joint_of",
-           "tpose_skeleton", "vmc_bundle", "vmc_frames"]
+__all__ = ["HUMAN_BODY_BONES", "UNITY_BONE", "VRM_PRESETS", "VmcFrames", "VmcMaker", "tpose_skeleton", "vmc_bundle",
+           "vmc_frames"]
