@@ -24,6 +24,7 @@ from .evaluation import cli as evaluation_cli
 from .evaluation import sweep_cli
 from .genea import cli as genea_cli
 from .export import cli as export_cli
+from .export import stream_cli
 from .generator import cli as generator_cli
 from .live import cli as live_cli
 from .reference import cli as reference_cli
@@ -36,7 +37,8 @@ from .webapp import cli as webapp_cli
 
 # in the order `gesturelsm --help` lists them
 SUBCOMMANDS = (body_cli, data_cli, align_cli, asr_cli, tokenizer_cli, generator_cli, pipeline_cli, edit_cli,
-               render_cli, export_cli, batch_cli, study_cli, genea_cli, evaluation_cli, sweep_cli, live_cli, reference_cli,
+               render_cli, export_cli, batch_cli, study_cli, genea_cli, evaluation_cli, sweep_cli, live_cli,
+               stream_cli, reference_cli,
                webapp_cli)
 
 

@@ -15,7 +15,8 @@ from gesturelsm.errors import InputError
 
 PACKAGE = Path(cli.__file__).resolve().parent
 COMMANDS = {"align", "batch", "bench", "body", "data", "edit", "eval", "eval-tokenizer", "export", "genea", "generate",
-            "import-reference", "live", "render", "serve", "study", "sweep", "train", "train-tokenizer", "transcribe"}
+            "import-reference", "live", "render", "serve", "stream", "study", "sweep", "train", "train-tokenizer",
+            "transcribe"}
 
 
 def _commands() -> set[str]:

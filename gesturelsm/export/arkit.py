@@ -6,10 +6,11 @@ on the body's head (every other joint at rest, so the head frame is the rest fra
 forward) and its 51 facial landmarks (iBUG 17-67) are read per frame. Two references per frame: `lm` (jaw +
 expressions) and `jaw` (the same jaw pose, expressions 0); and the neutral face (jaw closed, expressions 0).
 Scales: the neutral mouth width w (outer corners); a displacement of M = FULL_MOVE * w (about 5 mm on an adult
-face) is a full weight of 1; the inner-lip gap at face.py's WIDE_OPEN jaw rotation is a full opening. Every weight
+face) is a full weight of 1; the inner-lip gap at alive.py's JAW_FULL jaw rotation (0.12 rad: a face capture's scale
+for speech) is a full opening. Every weight
 is clipped to [0, 1]. Left / Right are the face's own sides (the body's left is +x), as ARKit names them.
 
-    JawOpen            inner-lip gap of `jaw` over the neutral gap, / (gap at WIDE_OPEN - neutral gap); the gap
+    JawOpen            inner-lip gap of `jaw` over the neutral gap, / (gap at JAW_FULL - neutral gap); the gap
                        as face.py's (inner lips 61-63 to 67-65) but in the face's mid-plane (up and forward)
     JawLeft / Right    sideways shift of the lower-lip centre in `jaw` vs neutral (to the face's left: JawLeft),
                        / the shift that JAW_SIDE rad of jaw rotation about the vertical axis gives
@@ -29,7 +30,8 @@ is clipped to [0, 1]. Left / Right are the face's own sides (the body's left is 
     BrowOuterUp        per side: the two outer brow landmarks (iBUG 17-18 right, 25-26 left) up, / M
     BrowDown           per side: the five brow landmarks down, / M
     EyeBlink           per eye: face.py's blink rule (eyelid closure vs the neutral gap, closures under
-                       BLINK_FROM read as open)
+                       BLINK_FROM read as open); where the model never closes the eyelids past 0.5, procedural
+                       blinks over it (alive.py: about 17 a minute, irregular, some waiting for a closed mouth)
     EyeWide            per eye: eyelid gap opened beyond the neutral gap, full at +EYE_WIDE_FULL of it
     EyeLookIn/Out/Up/Down  per eye, from its joint's yaw / pitch (below), full at EYE_LOOK_FULL rad
 Stay 0 (nothing on the body's landmarks or joints measures them): EyeSquint, JawForward, MouthRollLower/Upper,
@@ -37,10 +39,11 @@ MouthShrugLower/Upper, MouthPress, MouthDimple, CheekPuff, CheekSquint, NoseSnee
 
 Rotations, radians, intrinsic yaw-pitch-roll (R = Ry(yaw) Rx(pitch) Rz(roll)): yaw > 0 turns the face to its
 own left, pitch > 0 tips it down (chin to chest), roll > 0 tilts the top of the head to its right; all 0 for the
-rest pose's upright, forward-facing head.
+speaker's neutral head (alive.py: the mean head orientation of BEAT2's take 2_scott_0_1_1, 15 degrees down and
+12 to the right of the rest pose's upright, forward-facing head).
 HeadYaw/Pitch/Roll: the `head` joint's world orientation relative to the body's facing direction (the pelvis's
 heading about the vertical axis), so turning the whole body is not a head turn but bending the neck or the spine
-is. Left/RightEye*: the eye joint's rotation relative to the head (0 when the motion does not pose the eyes).
+is. Left/RightEye*: the eye joint's rotation relative to the head and to the speaker's neutral eye (2 degrees or less).
 
 Which body drives what: the built-in mannequin's three expressions (mouth open, smile, brows raised; negative
 coefficients reverse them) move the lower lip, the mouth corners and the brows (the brows' field lifts the upper
@@ -60,8 +63,8 @@ from ..body.model import resolve_body
 from ..errors import BodyModelError
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, PARENTS
-from ..retarget.face import (BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, WIDE_OPEN, face_landmarks,
-                             landmark_gap)
+from ..retarget.face import BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, face_landmarks, landmark_gap
+from .alive import JAW_FULL, Blinker, neutral_eye, neutral_head, with_blinks
 
 # Live Link Face's CSV column order and spelling (ARKit's names, capitalised)
 ARKIT_NAMES: tuple[str, ...] = (
@@ -129,7 +132,7 @@ def landmark_weights(body, poses: np.ndarray, expressions: np.ndarray | None = N
     poses = np.asarray(poses, np.float64).reshape(len(poses), -1)
     j = 3 * JOINT_INDEX["jaw"]
     jaw_pose = poses[:, j:j + 3]
-    ref = face_landmarks(body, np.array([[0.0, 0, 0], [WIDE_OPEN, 0, 0], [0, JAW_SIDE, 0]]), None, betas)
+    ref = face_landmarks(body, np.array([[0.0, 0, 0], [JAW_FULL, 0, 0], [0, JAW_SIDE, 0]]), None, betas)
     jaw = face_landmarks(body, jaw_pose, None, betas)
     moved = expressions is not None and np.any(np.asarray(expressions) != 0)
     lm = face_landmarks(body, jaw_pose, expressions, betas) if moved else jaw
@@ -189,20 +192,24 @@ def global_rotations(poses: np.ndarray, joint: str) -> Rotation:
     return rot
 
 
-def head_rotation(poses: np.ndarray) -> np.ndarray:
-    """(T, 3) HeadYaw, HeadPitch, HeadRoll (radians): the head relative to the pelvis's heading (module docstring)."""
+def head_rotation(poses: np.ndarray, neutral: bool = True) -> np.ndarray:
+    """(T, 3) HeadYaw, HeadPitch, HeadRoll (radians): the head relative to the pelvis's heading and (`neutral`) to
+    the speaker's neutral head (module docstring); neutral=False: to the rest pose's upright head."""
     aa = np.asarray(poses, np.float64).reshape(len(poses), -1, 3)
     forward = Rotation.from_rotvec(aa[:, 0]).apply([0.0, 0.0, 1.0])
     heading = np.arctan2(forward[:, 0], forward[:, 2])
     facing = Rotation.from_rotvec(np.stack([np.zeros_like(heading), heading, np.zeros_like(heading)], -1))
-    return _yaw_pitch_roll(facing.inv() * global_rotations(poses, "head"))
+    rot = facing.inv() * global_rotations(poses, "head")
+    return _yaw_pitch_roll(neutral_head(rot) if neutral else rot)
 
 
-def eye_rotations(poses: np.ndarray) -> np.ndarray:
-    """(T, 6) LeftEyeYaw/Pitch/Roll, RightEyeYaw/Pitch/Roll: the SMPL-X eye joints relative to the head."""
+def eye_rotations(poses: np.ndarray, neutral: bool = True) -> np.ndarray:
+    """(T, 6) LeftEyeYaw/Pitch/Roll, RightEyeYaw/Pitch/Roll: the SMPL-X eye joints relative to the head (and, with
+    `neutral`, to the speaker's neutral eyes)."""
     aa = np.asarray(poses, np.float64).reshape(len(poses), -1, 3)
-    return np.concatenate([_yaw_pitch_roll(Rotation.from_rotvec(aa[:, JOINT_INDEX[f"{s}_eye_smplhf"]]))
-                           for s in ("left", "right")], -1)
+    eye = lambda s: Rotation.from_rotvec(aa[:, JOINT_INDEX[f"{s}_eye_smplhf"]])    # noqa: E731
+    return np.concatenate([_yaw_pitch_roll(neutral_eye(eye(s), k) if neutral else eye(s))
+                           for k, s in enumerate(("left", "right"))], -1)
 
 
 def _eye_look(eyes: np.ndarray) -> dict[str, np.ndarray]:
@@ -215,20 +222,31 @@ def _eye_look(eyes: np.ndarray) -> dict[str, np.ndarray]:
     return {k: np.clip(v, 0.0, 1.0) + 0.0 for k, v in out.items()}
 
 
-def arkit_face(seq: MotionSequence, body=None) -> ArkitFace:
+def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Blinker | None = None,
+               neutral: bool = True) -> ArkitFace:
     """The motion's face as ARKit blendshape weights with head and eye rotations (module docstring). `body`: a
-    BodyModel, a model path, or None for $GESTURELSM_SMPLX_MODEL / the built-in mannequin."""
+    BodyModel, a model path, or None for $GESTURELSM_SMPLX_MODEL / the built-in mannequin. `blinks`: procedural
+    blinks where the model does not blink (alive.py), from `blinker` (a stream's, carried over chunks) or a new
+    one seeded 0; False: the eyelids as measured. `neutral`: head and eye angles relative to the speaker's neutral
+    (False: to the rest pose)."""
     body = resolve_body(body)
     if len(body.module.lmk_faces_idx) != 51:
         raise BodyModelError(f"the body model {body.path.name} has no 51 facial landmarks to measure the face on")
     poses = np.asarray(seq.poses, np.float64)
     T = len(poses)
-    eyes = eye_rotations(poses) if T else np.zeros((0, 6))
+    eyes = eye_rotations(poses, neutral) if T else np.zeros((0, 6))
     measured = landmark_weights(body, poses, seq.expressions, seq.betas) if T else {}
     measured.update(_eye_look(eyes))
     weights = np.zeros((T, len(ARKIT_NAMES)))
     for i, name in enumerate(ARKIT_NAMES):
         if name in measured:
             weights[:, i] = measured[name]
-    head = head_rotation(poses) if T else np.zeros((0, 3))
+    if blinks and T:
+        blinker = blinker if blinker is not None else Blinker(int(seq.fps))
+        mouth = weights[:, ARKIT_NAMES.index("JawOpen")]
+        closed = with_blinks(np.maximum(measured["EyeBlinkLeft"], measured["EyeBlinkRight"]), blinker, mouth)
+        for side in ("Left", "Right"):
+            k = ARKIT_NAMES.index(f"EyeBlink{side}")
+            weights[:, k] = np.maximum(weights[:, k], closed)
+    head = head_rotation(poses, neutral) if T else np.zeros((0, 3))
     return ArkitFace(weights, head, eyes, int(seq.fps))

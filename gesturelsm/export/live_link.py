@@ -15,11 +15,19 @@ measures and the rotations' signs).
     face = read_live_link_csv("face.csv", fps=30) # ArkitFace: weights (T, 52), head (T, 3), eyes (T, 6)
 The reader finds columns by name (any capitalisation), so it also reads files whose columns are ordered
 differently; the weights come back in ARKIT_NAMES order.
+
+Live, the same face goes to Unreal's Live Link Face source (the legacy ARKit one; UDP, port 11111) as one packet
+per frame (`live_link_packet`), big-endian: version (uint8) 6; the device id and the subject name, each an int32
+byte length then UTF-8 bytes; frame number (int32), sub-frame (float32), fps numerator and denominator (int32);
+count (uint8) 61; then 61 float32: the 52 blendshapes in Unreal's EARKitBlendShape order (UNREAL_ORDER: JawLeft
+before JawRight and MouthLeft before MouthRight, unlike the CSV), head yaw / pitch / roll, left eye yaw / pitch /
+roll, right eye yaw / pitch / roll (radians, as in the CSV).
 """
 from __future__ import annotations
 
 import csv
 import re
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +38,11 @@ from .arkit import ARKIT_NAMES, EYE_NAMES, HEAD_NAMES, ArkitFace, arkit_face
 
 HEADER: tuple[str, ...] = ("Timecode", "BlendShapeCount") + ARKIT_NAMES + HEAD_NAMES + EYE_NAMES
 BLEND_SHAPE_COUNT = len(ARKIT_NAMES) + len(HEAD_NAMES) + len(EYE_NAMES)           # 61
+# Unreal's EARKitBlendShape order: the CSV's with JawLeft / JawRight and MouthLeft / MouthRight swapped
+UNREAL_ORDER: tuple[str, ...] = tuple({"JawRight": "JawLeft", "JawLeft": "JawRight", "MouthRight": "MouthLeft",
+                                       "MouthLeft": "MouthRight"}.get(n, n) for n in ARKIT_NAMES)
+_UNREAL_INDEX = np.array([ARKIT_NAMES.index(n) for n in UNREAL_ORDER])
+PACKET_VERSION = 6
 _TIMECODE = re.compile(r"^(\d+):(\d\d):(\d\d):(\d+)(?:\.(\d+))?$")
 
 
@@ -109,3 +122,14 @@ def read_live_link_csv(path: str | Path, fps: int = 30) -> ArkitFace:
     n = len(ARKIT_NAMES)
     return ArkitFace(values[:, :n], values[:, n:n + 3], values[:, n + 3:], int(fps),
                      tuple(r[0].strip() for r in rows))
+
+
+def live_link_packet(face: ArkitFace, t: int, frame_number: int, device: str = "gesturelsm",
+                     subject: str = "gesturelsm") -> bytes:
+    """Frame `t` of `face` as one Live Link Face UDP packet (module docstring), numbered `frame_number` at the
+    face's fps (numerator fps, denominator 1)."""
+    values = np.concatenate([face.weights[t][_UNREAL_INDEX], face.head[t], face.eyes[t]])
+    dev, sub = device.encode("utf-8"), subject.encode("utf-8")
+    return (struct.pack(f">Bi{len(dev)}si{len(sub)}s", PACKET_VERSION, len(dev), dev, len(sub), sub)
+            + struct.pack(">ifiiB", int(frame_number), 0.0, int(face.fps), 1, BLEND_SHAPE_COUNT)
+            + struct.pack(f">{BLEND_SHAPE_COUNT}f", *values.astype(np.float64)))

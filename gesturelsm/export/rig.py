@@ -15,18 +15,20 @@ import numpy as np
 
 from ..retarget import Character, CharacterError, Retargeted, retarget_motion
 from ..body.model import resolve_body
-from ..retarget.face import driven_presets, face_weights, morph_weights
+from ..retarget.face import driven_presets, morph_weights
+from .alive import alive_face_weights
 from .bvh import continuous_euler, matrix_to_euler_zxy
 from .glb import FLOAT, GltfBuffer, continuous_quaternions, matrix_to_quaternion_xyzw, write_glb
 
 
 def _face_channels(b: GltfBuffer, gltf: dict, seq, a_time: int, body) -> list[tuple[dict, dict]]:
-    """Morph-weight channels for the VRM presets the character defines (visemes and blink, `retarget.face`), one
+    """Morph-weight channels for the VRM presets the character defines (visemes and blink, `retarget.face`, with the
+    mouth and blinks of `alive.py`), one
     per mesh node that a driven preset binds; no channel when the character defines none of them."""
     presets = driven_presets(gltf)
     if not presets:
         return []
-    weights = face_weights(resolve_body(body), seq.poses, seq.expressions, seq.betas)
+    weights = alive_face_weights(resolve_body(body), seq)
     per_mesh = morph_weights(gltf, {p: weights[p] for p in presets})
     out = []
     for n, node in enumerate(gltf.get("nodes", [])):

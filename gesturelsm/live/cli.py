@@ -3,6 +3,7 @@
     gesturelsm live speech.wav --chunk-ms 200 --out motion.npz            # as fast as possible
     gesturelsm live speech.wav --realtime                                 # chunks arrive at the pace of speech
     gesturelsm live speech.wav --grounding off                            # the decoder's legs, feet not planted
+    gesturelsm live speech.wav --realtime --vmc 127.0.0.1:39539           # to VSeeFace / VNyan / Unity (VMC)
 """
 from __future__ import annotations
 
@@ -13,8 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..audio import load_audio
+from ..errors import GestureError
 from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
+from ..export.engine_stream import EngineStream, parse_address
 from ..features.audio import audio_channels
 from ..motion.sequence import MotionSequence
 from ..pipeline import GesturePipeline
@@ -44,9 +47,10 @@ class LiveRun:
 
 
 def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_ms: float = 200.0,
-             realtime: bool = False) -> LiveRun:
+             realtime: bool = False, engines: EngineStream | None = None) -> LiveRun:
     """Feed `audio` (N,) 16 kHz in chunks of `chunk_ms`; with `realtime` chunk k arrives (and is fed) when its last
-    sample would have been spoken, else all as fast as possible (then latency is compute only)."""
+    sample would have been spoken, else all as fast as possible (then latency is compute only). `engines`: a
+    started EngineStream each committed chunk's frames are pushed to as they come (sent on its steady clock)."""
     n = max(1, int(round(chunk_ms * SAMPLE_RATE / 1000)))
     gen = StreamingGenerator(pipe, config)
     out: list[MotionChunk] = []
@@ -57,8 +61,14 @@ def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_m
         if realtime:
             arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
             time.sleep(max(0.0, arrival - time.perf_counter()))
-        out += gen.feed(chunk, arrival)
-    out += gen.finish()
+        new = gen.feed(chunk, arrival)
+        out += new
+        for c in new if engines is not None else ():
+            engines.push(c.motion)
+    last = gen.finish()
+    out += last
+    for c in last if engines is not None else ():
+        engines.push(c.motion)
     lat = np.array([x for c in out for x in c.latencies])
     return LiveRun(out, lat, len(audio) / SAMPLE_RATE, time.perf_counter() - t0, gen.compute_s)
 
@@ -83,6 +93,10 @@ def add_parser(sub) -> None:
     p.add_argument("--threads", type=from_text, default=1,
                    help="torch threads (more than 1 on a busy 2-core machine made live generation 15x slower)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: shipped)")
+    p.add_argument("--vmc", help="send the stream as VMC protocol bundles to HOST:PORT (VSeeFace, VNyan, Warudo, "
+                   "EVMC4U ...: docs/ENGINES.md), each committed chunk's frames on a steady 30 fps clock")
+    p.add_argument("--livelink", help="send the face as Live Link Face packets to HOST:PORT (Unreal, port 11111)")
+    p.add_argument("--perfect-sync", action="store_true", help="with --vmc: the 52 ARKit blendshapes too")
     p.set_defaults(func=run)
 
 
@@ -99,6 +113,13 @@ def check_arguments(args: argparse.Namespace) -> tuple:
     n_threads = threads(args.threads, p)
     input_file(args.audio, "AUDIO", p)
     out = output_file(args.out, "--out", ".npz", p) if args.out else None
+    for flag in ("--vmc", "--livelink"):
+        value = getattr(args, flag[2:], None)
+        if value:
+            try:
+                parse_address(value, flag)
+            except GestureError as exc:
+                p.append(str(exc))
     refuse(p)
     cfg = LiveConfig(commit=commit, lookahead=lookahead, held=held, steps=settings.steps_for(LiveConfig.method),
                      cfg=settings.cfg, seed=settings.seed, grounding=args.grounding == "on")
@@ -116,13 +137,24 @@ def run(args: argparse.Namespace) -> int:
                                            warm_up=False)   # audio only
     # JIT outside the timing
     audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
-    res = run_file(pipe, audio, cfg, chunk_ms, args.realtime)
+    engines = None
+    if getattr(args, "vmc", None) or getattr(args, "livelink", None):
+        engines = EngineStream(parse_address(args.vmc, "--vmc") if args.vmc else None,
+                               parse_address(args.livelink, "--livelink") if args.livelink else None,
+                               args.perfect_sync).start()
+    try:
+        res = run_file(pipe, audio, cfg, chunk_ms, args.realtime, engines)
+    finally:
+        report = engines.close() if engines is not None else None
     look = (cfg.commit + cfg.lookahead) * 4 / 30
     print(f"{res.audio_seconds:.1f} s of audio in {len(res.latencies)} chunks of {chunk_ms:.0f} ms "
           f"({'real-time pacing' if args.realtime else 'as fast as possible'}); look-ahead <= {look:.2f} s; "
           f"feet on the ground: {args.grounding}")
     print(f"latency median {np.median(res.latencies) * 1000:.0f} ms, p90 {np.percentile(res.latencies, 90) * 1000:.0f}"
           f" ms; real-time factor {res.real_time_factor:.2f}x; {sum(c.motion.num_frames for c in res.chunks)} frames")
+    if report is not None:
+        print(f"sent {report.sent} frames to {', '.join(str(a) for a in (engines.vmc, engines.livelink) if a)}; "
+              f"dropped {report.dropped} late; {report.failed} datagrams not taken by the system")
     if out:
         print(f"wrote {res.motion().save(out)}")
     return 0

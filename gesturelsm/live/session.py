@@ -60,6 +60,10 @@ class LiveSession:
         self._on_publish = on_publish          # called (from the worker thread) after new motion chunks are ready
         self._closed = False
         self._started = time.perf_counter()
+        # the operator's engine stream (relay.py), when this session has it: chunks go on to `sink` as published
+        self.sink = None
+        self.sink_close = None
+        self.engine_note: str | None = None
         # math threads of the worker: `threads`, else the creator's (a new thread would get torch's default)
         self._threads = threads or torch.get_num_threads()
         self._thread = threading.Thread(target=self._work, name="gesturelsm-live", daemon=True)
@@ -114,7 +118,7 @@ class LiveSession:
                 "p90_latency_ms": float(np.percentile(lat, 90) * 1000) if len(lat) else None,
                 "real_time_factor": (g.n_in / SAMPLE_RATE) / g.compute_s if g.compute_s > 0 else None,
                 "frames": g.emitted, "audio_seconds": g.n_in / SAMPLE_RATE, "dropped_chunks": self.dropped,
-                "running": self.running, "error": self.error}
+                "running": self.running, "error": self.error, "engines": self.engine_note}
 
     # ---- worker ----------------------------------------------------------------------------------------------
     def _work(self) -> None:
@@ -150,6 +154,13 @@ class LiveSession:
                     self.dropped += 1
                 self.outbox.append(c)
                 self.latencies.extend(c.latencies)
+        if chunks and self.sink is not None:
+            try:
+                self.sink(chunks)
+            except Exception:                   # the page's stream goes on without the engines
+                log.exception("sending the live stream to the engines failed")
+                self.engine_note = "the stream to this server's engine failed (the server's log has the details)"
+                self.sink = None
         if chunks and self._on_publish:
             self._on_publish()
 
@@ -163,6 +174,8 @@ class LiveSession:
                     self.inbox.get_nowait()
                 except queue.Empty:
                     break
+        if self.sink_close is not None:
+            self.sink_close()
         if self._on_close:
             self._on_close(self)
 
@@ -170,8 +183,10 @@ class LiveSession:
 class LiveManager:
     """Hands out at most `max_sessions` live sessions at once; the rest get LiveBusy."""
 
-    def __init__(self, pipe, max_sessions: int = 2, config: LiveConfig = LiveConfig(), **session_kw):
+    def __init__(self, pipe, max_sessions: int = 2, config: LiveConfig = LiveConfig(), relay=None, **session_kw):
+        """`relay`: the operator's engine addresses (relay.py EngineRelay): one session at a time streams there."""
         self.pipe, self.max_sessions, self.config, self.session_kw = pipe, max_sessions, config, session_kw
+        self.relay = relay
         self._active: set[LiveSession] = set()
         self._lock = threading.Lock()
 
@@ -184,6 +199,12 @@ class LiveManager:
             s = LiveSession(self.pipe, config or self.config, on_close=self._release, on_publish=on_publish,
                             **self.session_kw)
             self._active.add(s)
+        if self.relay is not None:
+            try:
+                self.relay.attach(s)
+            except Exception:                   # the page's stream goes on without the engines
+                log.exception("the live stream could not be sent to the engines")
+                s.engine_note = "the stream to this server's engine could not start (the server's log has why)"
         return s.start()
 
     def _release(self, session: LiveSession) -> None:

@@ -67,13 +67,15 @@ def landmark_gap(lm: np.ndarray, a: list[int], b: list[int], axes: slice = slice
     return np.linalg.norm(lm[..., a, axes] - lm[..., b, axes], axis=-1).mean(-1)
 
 
-def face_weights(body, poses: np.ndarray, expressions: np.ndarray | None = None, betas=None) -> dict[str, np.ndarray]:
+def face_weights(body, poses: np.ndarray, expressions: np.ndarray | None = None, betas=None,
+                 wide_open: float = WIDE_OPEN) -> dict[str, np.ndarray]:
     """{preset: (T,) weight in [0, 1]} for VISEMES and `blink` (module docstring). `body`: a BodyModel with
-    facial landmarks (the mannequin or an SMPL-X file); poses (T, 165)."""
+    facial landmarks (the mannequin or an SMPL-X file); poses (T, 165); `wide_open`: the jaw rotation (radians)
+    that counts as a fully open mouth (export/alive.py's exports use a smaller one, a face capture's scale)."""
     poses = np.asarray(poses, np.float64).reshape(len(poses), -1)
     T = len(poses)
     j = 3 * JOINT_INDEX["jaw"]
-    ref = face_landmarks(body, np.array([[0.0, 0, 0], [WIDE_OPEN, 0, 0]]), None, betas)
+    ref = face_landmarks(body, np.array([[0.0, 0, 0], [wide_open, 0, 0]]), None, betas)
     lm = face_landmarks(body, poses[:, j:j + 3], expressions, betas)
     jaw_only = lm if expressions is None else face_landmarks(body, poses[:, j:j + 3], None, betas)
     gap0, gap_wide = landmark_gap(ref, INNER_UPPER, INNER_LOWER)

@@ -12,7 +12,7 @@ the hips' local translation; `align` (x, y, z, w) turns the character's world in
 and `scale` is its units per metre. A VRM that defines viseme (`aa ih ou ee oh`) or `blink` expressions also moves
 its face: `morphs` lists the morph-target channels its presets bind, [[glTF mesh index, morph target index], ...],
 and each method adds `morph` (frames, len(morphs)), those channels' weights = `retarget.face.morph_weights` of the
-method's `face_weights` (what the exported VRM animates); the player sets them as the influences of every three.js
+method's `alive_face_weights` (what the exported VRM animates); the player sets them as the influences of every three.js
 Mesh of that glTF mesh. A character without these presets gets neither key. The player sets
 `#motion-player[data-character]` to `name`. A file that cannot be used raises gr.Error (`choose`, the upload's
 event: a warning) and the mannequin stays.
@@ -33,9 +33,10 @@ import numpy as np
 from gesturelsm.body.model import resolve_body
 from gesturelsm.errors import GestureError
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
+from gesturelsm.export.alive import alive_face_weights
 from gesturelsm.export.rig import export_rig
 from gesturelsm.retarget import Character, check_usable, load_character, retarget_motion
-from gesturelsm.retarget.face import channel_weights, face_weights, morph_channels, morph_weights
+from gesturelsm.retarget.face import channel_weights, morph_channels, morph_weights
 from gesturelsm.retarget.grounding import leg_problem
 
 log = logging.getLogger(__name__)
@@ -108,10 +109,11 @@ def face_channels(character: Character) -> list[tuple[int, int]]:
     return morph_channels(character.document.gltf) if character.document is not None else []
 
 
-def face_morph(character: Character, channels: list[tuple[int, int]], seq, body) -> np.ndarray:
-    """(frames, len(channels)) float32: the weights of `channels` for `seq`'s jaw and expressions (the export's)."""
+def face_morph(character: Character, channels: list[tuple[int, int]], seq, body, blinker=None) -> np.ndarray:
+    """(frames, len(channels)) float32: the weights of `channels` for `seq`'s jaw and expressions (the export's);
+    `blinker`: a stream's (its blinks carried over chunks), else the whole motion's own."""
     gltf = character.document.gltf
-    per_mesh = morph_weights(gltf, face_weights(body, seq.poses, seq.expressions, seq.betas))
+    per_mesh = morph_weights(gltf, alive_face_weights(body, seq, blinker))
     return channel_weights(per_mesh, channels, seq.num_frames)
 
 

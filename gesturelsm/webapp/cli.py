@@ -75,7 +75,24 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    metavar="local|auto|ray://HOST:PORT",
                    help="where the replicas run: local (start Ray on this machine's cores, the default), auto (the "
                         "cluster `ray start --head` started here) or ray://HOST:PORT")
+    p.add_argument("--vmc", default=_env("GESTURELSM_VMC"), metavar="HOST:PORT",
+                   help="send the Live tab's stream (one at a time) as VMC protocol bundles to HOST:PORT (VSeeFace, "
+                   "VNyan, Warudo, EVMC4U ...: docs/ENGINES.md); visitors cannot change where")
+    p.add_argument("--livelink", default=_env("GESTURELSM_LIVELINK"), metavar="HOST:PORT",
+                   help="send the Live tab stream's face as Live Link Face packets to HOST:PORT (Unreal)")
     return p
+
+
+def engine_relay(args: argparse.Namespace):
+    """The operator's EngineRelay from --vmc / --livelink (None without them); a bad address is a GestureError."""
+    if not (getattr(args, "vmc", None) or getattr(args, "livelink", None)):
+        return None
+    from gesturelsm.export.engine_stream import parse_address   # late, as the service: they load torch
+    from gesturelsm.live.relay import EngineRelay
+
+    vmc = parse_address(args.vmc, "--vmc") if args.vmc else None
+    livelink = parse_address(args.livelink, "--livelink") if args.livelink else None
+    return EngineRelay(vmc, livelink, body=args.model)
 
 
 def build_parser(prog: str = "python -m app") -> argparse.ArgumentParser:
@@ -109,12 +126,13 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency),
                                threads=max(1, args.threads), ahead=not args.no_ahead)
     try:
+        engines = engine_relay(args)
         service = page_service(args, settings)
     except GestureError as exc:                          # one line each
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     try:
-        return _serve(service, args)
+        return _serve(service, args, engines)
     finally:
         if args.replicas:
             service.close()                             # the replicas stop; a joined cluster stays up
@@ -134,7 +152,7 @@ def page_service(args: argparse.Namespace, settings):
     return GestureService.from_settings(settings)
 
 
-def _serve(service, args: argparse.Namespace) -> int:
+def _serve(service, args: argparse.Namespace, engines=None) -> int:
     if not args.no_warmup:
         service.warmup()
     from .ui import build_demo
@@ -143,7 +161,7 @@ def _serve(service, args: argparse.Namespace) -> int:
     signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
     print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
     try:
-        build_demo(service, max(1, args.queue_size)).launch(host=args.host, port=args.port)
+        build_demo(service, max(1, args.queue_size), engines).launch(host=args.host, port=args.port)
     except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
         pass
     return 0

@@ -105,10 +105,11 @@ def _ms(v: float | None) -> str:
 
 def _stats(st: dict) -> str:
     """The line beside #live-latency: p90 latency and real-time factor since the stream started."""
+    note = f" · {st['engines']}" if st.get("engines") else ""        # the operator's --vmc stream (live/relay.py)
     if st["p90_latency_ms"] is None:
-        return ""
+        return note[3:]
     rtf = st["real_time_factor"]
-    return f"p90 {st['p90_latency_ms']:.0f} ms · real-time factor {rtf:.1f}x · {st['frames']} frames"
+    return f"p90 {st['p90_latency_ms']:.0f} ms · real-time factor {rtf:.1f}x · {st['frames']} frames{note}"
 
 
 def on_chunk(manager: LiveManager, chunk, session: LiveSession | None, grounding: bool = True):

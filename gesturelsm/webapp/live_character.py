@@ -23,7 +23,8 @@ SMPL-X's floor is), and each bone's quaternion keeps the sign of its previous fr
 (gesturelsm/retarget/grounding.py `CharacterStreamGrounder`): what the same grounder gives the whole stream at once.
 A VRM with viseme / blink expressions also moves its face: `spec()["morphs"]` lists the morph-target channels
 (character.py `face_channels`, [[glTF mesh, target], ...]; [] for none) and each chunk's `morph` holds their weights
-for the chunk's frames (character.py `face_morph`: per frame, so per chunk is the whole motion's at those frames).
+for the chunk's frames (character.py `face_morph`: per frame, with one Blinker for the stream, so per chunk is the
+whole motion's at those frames).
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from gesturelsm.body.model import resolve_body
+from gesturelsm.export.alive import Blinker
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
@@ -147,6 +149,7 @@ class CharacterStream:
 
     def __init__(self, character: Character, body=None, grounding: bool = True):
         self.character = character
+        self.blinker: Blinker | None = None
         self.skeleton = character.skeleton
         self.order = bone_order(self.skeleton)
         self.body = resolve_body(body)
@@ -180,6 +183,8 @@ class CharacterStream:
         q = continuous_quaternions(np.concatenate([prev[None], q]))[1:]     # signs continue the previous chunk's
         if len(q):
             self.last = q[-1].copy()
-        morph = face_morph(self.character, self.channels, seq, self.body) if self.channels else \
+        if self.blinker is None:
+            self.blinker = Blinker(int(seq.fps))                          # one for the stream: blinks cross chunks
+        morph = face_morph(self.character, self.channels, seq, self.body, self.blinker) if self.channels else \
             np.zeros((len(q), 0), np.float32)
         return q.astype(np.float32), r.root_translation.astype(np.float32), morph

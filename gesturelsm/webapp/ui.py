@@ -319,7 +319,7 @@ def _changes(inputs: list) -> list:
     return events
 
 
-def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
+def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=None) -> Demo:   # engines: --vmc
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
@@ -337,7 +337,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
                 payload, video, summary, table, files, view, show3d, stats, edit = _output_column(service)
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
-            manager = live.LiveManager(service.pipeline, max_sessions=LIVE_STREAMS, threads=settings.threads)
+            manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
             service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes, characters=characters)

@@ -12,7 +12,7 @@ from gesturelsm.export.arkit import EYE_LOOK_FULL, JAW_SIDE
 from gesturelsm.export.live_link import timecode, timecode_frame, write_live_link_csv
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.skeleton import JOINT_INDEX
-from gesturelsm.retarget.face import WIDE_OPEN
+from gesturelsm.export.alive import EYE_NEUTRAL, HEAD_NEUTRAL, JAW_FULL
 
 # the header of a Live Link Face take's CSV, as the app writes it
 LIVE_LINK_HEADER = (
@@ -40,15 +40,27 @@ def _motion(T: int, joints: dict[str, np.ndarray] | None = None, expressions: di
 
 
 def test_neutral_face_gives_no_blendshapes_and_no_rotation(body):
-    face = arkit_face(_motion(2), body)
+    face = arkit_face(_motion(2), body, neutral=False)
     assert face.weights.shape == (2, 52) and face.head.shape == (2, 3) and face.eyes.shape == (2, 6)
     assert face.weights.max() < 0.02
     assert np.abs(face.head).max() < 1e-9 and np.abs(face.eyes).max() < 1e-9
 
 
+def test_the_speakers_neutral_head_and_eyes_read_zero(body):
+    """Angles are relative to the speaker's own neutral (alive.py): the head posed at it reads 0, the rest pose's
+    upright head reads the neutral's inverse (the speaker looks 15 degrees down: upright is 'up')."""
+    head = HEAD_NEUTRAL.as_rotvec()
+    eyes = {"left_eye_smplhf": EYE_NEUTRAL[0].as_rotvec(), "right_eye_smplhf": EYE_NEUTRAL[1].as_rotvec()}
+    face = arkit_face(_motion(2, {"head": head, **eyes}), body)
+    assert np.abs(face.head).max() < 1e-6 and np.abs(face.eyes).max() < 1e-6
+    upright = arkit_face(_motion(1), body)
+    np.testing.assert_allclose(upright.head[0], HEAD_NEUTRAL.inv().as_euler("YXZ"), atol=1e-9)
+    assert upright.head[0, 1] < -0.2
+
+
 def test_jaw_opening_raises_jaw_open_to_one_and_nothing_else(body):
-    angles = np.linspace(0.0, WIDE_OPEN, 8)
-    face = arkit_face(_motion(8, {"jaw": np.stack([angles, 0 * angles, 0 * angles], -1)}), body)
+    angles = np.linspace(0.0, JAW_FULL, 8)
+    face = arkit_face(_motion(8, {"jaw": np.stack([angles, 0 * angles, 0 * angles], -1)}), body, neutral=False)
     jaw_open = face.weight("JawOpen")
     assert jaw_open[0] < 0.02 and jaw_open[-1] == pytest.approx(1.0, abs=0.02)
     assert (np.diff(jaw_open) > 0.05).all(), jaw_open
@@ -90,7 +102,7 @@ def test_head_rotation_sign_and_size_relative_to_the_body_facing(body):
     neck[1], head[1] = [0, 0.2, 0], [0, 0.1, 0]                        # neck and head share the turn
     pelvis[2], head[2] = [0, 1.0, 0], [0, 0.3, 0]                      # whole body turned: only the head counts
     head[3] = Rotation.from_euler("YXZ", [0.3, 0.2, 0.1]).as_rotvec()  # yaw, pitch (down), roll
-    face = arkit_face(_motion(T, {"head": head, "neck": neck, "pelvis": pelvis}), body)
+    face = arkit_face(_motion(T, {"head": head, "neck": neck, "pelvis": pelvis}), body, neutral=False)
     np.testing.assert_allclose(face.head[:3], [[0.3, 0, 0]] * 3, atol=1e-9)
     np.testing.assert_allclose(face.head[3], [0.3, 0.2, 0.1], atol=1e-9)
     nose = Rotation.from_rotvec(head[3]).apply([0.0, 0, 1])            # pitch > 0 looks down, yaw > 0 to +x
@@ -99,7 +111,7 @@ def test_head_rotation_sign_and_size_relative_to_the_body_facing(body):
 
 def test_eye_joints_give_eye_rotations_and_look_weights(body):
     eye = np.array([0.0, 0.2, 0.0])                                    # both eyes turned to the face's left
-    face = arkit_face(_motion(1, {"left_eye_smplhf": eye, "right_eye_smplhf": eye}), body)
+    face = arkit_face(_motion(1, {"left_eye_smplhf": eye, "right_eye_smplhf": eye}), body, neutral=False)
     np.testing.assert_allclose(face.eyes[0], [0.2, 0, 0, 0.2, 0, 0], atol=1e-9)
     assert face.weight("EyeLookOutLeft")[0] == pytest.approx(0.2 / EYE_LOOK_FULL)   # left eye looks outward
     assert face.weight("EyeLookInRight")[0] == pytest.approx(0.2 / EYE_LOOK_FULL)   # right eye towards the nose

@@ -1,6 +1,8 @@
 """`gesturelsm live FILE`: writes the streamed motion (offline frame count) and prints latency; bad input is one line."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import soundfile as sf
 
@@ -52,3 +54,30 @@ def test_live_cli_grounds_causally_by_default_and_off_keeps_the_decoders_legs(sh
     assert whole.note is None
     np.testing.assert_allclose(on.poses, whole.motion.poses, atol=1e-5)
     np.testing.assert_allclose(on.trans, whole.motion.trans, atol=1e-5)
+
+
+def test_live_cli_sends_the_stream_to_a_vmc_and_live_link_receiver(shipped_pipe, tmp_path, capsys):
+    """`live --vmc --livelink`: a loopback receiver gets one VMC bundle (55 HumanBodyBones) and one Live Link Face
+    packet per streamed frame while the speech is generated; a bad address is one line before any work."""
+    from _osc import Receiver, decode_bundle
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(2.0, seed=4), 16000)
+    rx, ll = Receiver(), Receiver()
+    try:
+        assert main(["live", str(wav), "--steps", "1", "--vmc", rx.address, "--livelink", ll.address]) == 0
+        rx.wait_for(60, timeout=10)
+        ll.wait_for(60, timeout=10)
+    finally:
+        rx.close()
+        ll.close()
+    out = capsys.readouterr().out
+    m = re.search(r"sent (\d+) frames to .*; dropped (\d+) late", out)
+    sent, dropped = int(m.group(1)), int(m.group(2))
+    assert sent + dropped == 60 and sent >= 30, out                    # 2 s at 30 fps (a loaded machine drops some)
+    assert len(rx.packets) == sent and len(ll.packets) == sent
+    msgs = decode_bundle(rx.packets[30][1])
+    assert sum(m[0] == "/VMC/Ext/Bone/Pos" for m in msgs) == 55 and msgs[-1][0] == "/VMC/Ext/T"
+    assert ll.packets[0][1][0] == 6                                    # Live Link Face's version byte
+    assert main(["live", str(wav), "--vmc", "127.0.0.1"]) == 2
+    assert "--vmc" in capsys.readouterr().err

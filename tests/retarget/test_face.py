@@ -13,12 +13,13 @@ import pytest
 
 from _rigs import build_rig, gltf_validator_errors, vrm_body_bones, write_gltf
 from gesturelsm.body.model import resolve_body
+from gesturelsm.export.alive import JAW_FULL, alive_face_weights
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_glb
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.skeleton import JOINT_INDEX
 from gesturelsm.retarget import load_character
-from gesturelsm.retarget.face import PRESETS, VISEMES, WIDE_OPEN, face_weights, jaw_open
+from gesturelsm.retarget.face import PRESETS, VISEMES, WIDE_OPEN, face_weights
 from _skinned import write_skinned_glb
 
 
@@ -62,9 +63,10 @@ def test_mouth_opens_with_the_jaw(tmp_path):
         ch = [c for c in anim["channels"] if c["target"]["path"] == "weights"]
         assert [c["target"]["node"] for c in ch] == [face]
         w = accessor_array(gltf, blob, anim["samplers"][ch[0]["sampler"]]["output"])[:, 0]
-        np.testing.assert_allclose(w, face_weights(resolve_body(None), poses)["aa"], atol=1e-6)
+        # the export's face is export/alive.py's: the mouth fully open at JAW_FULL (a face capture's scale)
+        np.testing.assert_allclose(w, face_weights(resolve_body(None), poses, wide_open=JAW_FULL)["aa"], atol=1e-6)
         assert w[0] == 0.0 and w[-1] == 1.0 and np.all(np.diff(w) >= -1e-6)
-        np.testing.assert_allclose(w[jaw_open(poses) >= 1], 1.0, atol=1e-6)        # wide open: all `aa`
+        np.testing.assert_allclose(w[poses[:, 3 * JOINT_INDEX["jaw"]] >= JAW_FULL], 1.0, atol=1e-6)   # all `aa`
         np.testing.assert_allclose(accessor_array(gltf, blob, 1), [[0, 0, 0], [0, 0.1, 0], [0, 0, 0]])  # mesh kept
         report = gltf_validator_errors(tmp_path / f"out{version}.vrm", tmp_path)
         assert report is None or report[0] == 0, report                  # checked where node is installed
@@ -113,7 +115,7 @@ def test_only_the_presets_a_character_defines_get_weights(tmp_path, body):
     rng = np.random.default_rng(1)
     poses, ex = _jaw(np.linspace(0, 0.4, T), rng.normal(size=(T, 100)))
     seq = MotionSequence(poses, np.tile([0, 1.0, 0], (T, 1)), ex)
-    expected = face_weights(body, poses, ex)
+    expected = alive_face_weights(body, seq)                                # what exports show (export/alive.py)
     for version in ("1", "0"):
         path = tmp_path / f"oh_aa{version}.vrm"
         write_skinned_glb(skel, path, vrm_body_bones(), vrm=version, presets=("oh", "aa"))

@@ -166,3 +166,38 @@ def test_the_microphone_streams_grounded_unless_the_option_is_off(shipped_pipe):
         poses[on] = np.concatenate(parts).reshape(-1, 165)
     assert np.array_equal(poses[True][:, KEPT_COLUMNS], poses[False][:, KEPT_COLUMNS])
     assert not np.allclose(poses[True][:, 3:9], poses[False][:, 3:9])
+
+
+def test_the_operators_vmc_address_gets_one_live_stream_and_a_second_visitor_is_told(shipped_pipe, capsys):
+    """`python -m app --vmc` (live/relay.py): the first visitor's Live tab stream goes to the operator's address while
+    they speak (a loopback receiver decodes 55 HumanBodyBones per bundle); a second visitor at the same time streams
+    on their page only, and their stats line says so; a bad address is one line and status 2."""
+    from _osc import Receiver, decode_bundle
+    from gesturelsm.export.engine_stream import parse_address
+    from gesturelsm.live.relay import BUSY_NOTE, EngineRelay
+    from gesturelsm.webapp.cli import build_parser, engine_relay, run_demo
+
+    rx = Receiver()
+    try:
+        relay = engine_relay(build_parser().parse_args(["--vmc", rx.address]))
+        assert isinstance(relay, EngineRelay) and relay.vmc == parse_address(rx.address)
+        mgr = LiveManager(shipped_pipe, max_sessions=2, config=LiveConfig(steps=1), relay=relay)
+        first, second = None, None
+        for ch in mic_chunks(2.0):
+            first, *_ = live.on_chunk(mgr, ch, first)
+            second, _, _, stats2, _ = live.on_chunk(mgr, ch, second)
+        rx.wait_for(30, timeout=20)
+        assert len(rx.packets) >= 30                                    # sent while the visitor speaks
+        _, _, _, stats1, _ = live.on_stop(first)
+        _, _, _, stats2, _ = live.on_stop(second)
+        relay.wait_sent(20)                                              # the sender drains its queue
+    finally:
+        rx.close()
+    assert "this server's engine (VMC)" in stats1 and BUSY_NOTE in stats2
+    assert 30 <= len(rx.packets) <= 60               # 2 s at 30 fps, the first stream only (a loaded machine drops some)
+    msgs = decode_bundle(rx.packets[-1][1])
+    assert sum(m[0] == "/VMC/Ext/Bone/Pos" for m in msgs) == 55
+    assert relay.owner is None and mgr.active == 0
+    assert run_demo(build_parser().parse_args(["--vmc", "127.0.0.1"]), "python -m app") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--vmc" in err[0]

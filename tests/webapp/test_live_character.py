@@ -141,9 +141,10 @@ def test_without_a_character_the_records_are_the_mannequins_byte_for_byte(charac
 
 def test_streamed_face_weights_equal_the_whole_motions(body, motion, tmp_path):
     """A VRM with visemes and blink: each chunk's morph weights are the whole motion's at those frames, the export's
-    `morph_weights(face_weights(...))`, in the channel order the stream's spec lists; the records carry them."""
+    `morph_weights(alive_face_weights(...))` (blinks included), in the channel order the stream's spec lists; the records carry them."""
     from _skinned import face_vrm
-    from gesturelsm.retarget.face import PRESETS, face_weights, morph_weights
+    from gesturelsm.export.alive import alive_face_weights
+    from gesturelsm.retarget.face import PRESETS, morph_weights
 
     vrm = load_character(face_vrm(tmp_path / "face.vrm", vrm="1"))
     gltf = vrm.document.gltf
@@ -158,7 +159,7 @@ def test_streamed_face_weights_equal_the_whole_motions(body, motion, tmp_path):
         got.append(rec.morph)
         a += n
     got = np.concatenate(got)
-    per_mesh = morph_weights(gltf, face_weights(body, motion.poses, motion.expressions, motion.betas))
+    per_mesh = morph_weights(gltf, alive_face_weights(body, motion))
     np.testing.assert_allclose(got, np.stack([per_mesh[m][:, k] for m, k in channels], axis=1), atol=1e-6)
     assert got.max() > 0.1 and np.ptp(got, axis=0).max() > 0.1             # the mouth moves in this motion
 
