@@ -30,6 +30,7 @@ from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
+from .guard import check_motion, finite
 from .skeleton import end_sites, full_poses, joint_names
 
 ROT_CHANNELS = ("Zrotation", "Xrotation", "Yrotation")
@@ -93,6 +94,7 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
     """Write `seq` as BVH (see the module docstring); returns the path. body: BodyModel / path / None."""
     if units not in UNITS:
         raise InputError(f"units={units!r}: use 'cm' or 'm'")
+    check_motion(seq)
     label = joint_names(names)
     body = resolve_body(body)
     scale = UNITS[units]
@@ -128,6 +130,7 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
     write(0, 0)
     lines += ["MOTION", f"Frames: {T}", f"Frame Time: {1.0 / seq.fps:.7f}"]
     data = np.concatenate([root_pos, eul[:, order].reshape(T, -1)], 1)       # (T, 3 + 165)
+    finite(data, "the BVH channels")
     buf = io.StringIO()
     np.savetxt(buf, data, fmt="%.6f", delimiter=" ")
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -34,6 +34,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS
 from ..render.frames import fit_camera
+from .guard import check_motion, finite
 from .skeleton import EXTRA_NAMES, extra_vertex_ids
 
 _X = {n: NUM_JOINTS + i for i, n in enumerate(EXTRA_NAMES)}      # index into [joints | extra]
@@ -116,7 +117,10 @@ def _frame_dict(kp: dict[str, np.ndarray], t: int, W: int, H: int) -> dict:
 def export_keypoints(seq: MotionSequence, path: str | Path, camera=None, size: tuple[int, int] = (512, 512),
                      body=None, style=None) -> Path:
     """Write OpenPose-style 2D keypoints (see the module docstring); returns the file or folder path."""
+    check_motion(seq)
     kp, cam = keypoints_2d(seq, camera, size, body, style)
+    for k, v in kp.items():
+        finite(v, f"the {k.replace('_', ' ')} keypoints")
     W, H = cam.width, cam.height
     path = Path(path)
     frames = [_frame_dict(kp, t, W, H) for t in range(seq.num_frames)]
