@@ -84,7 +84,7 @@ def read_motion_file(path: str | Path) -> MotionData:
     except OSError as exc:
         raise MotionFileError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     if head == b"\x93NUMPY":
-        raise MotionFileError(f"{name}: one .npy array, not a .npz motion file with 'poses' and 'trans' arrays")
+        raise MotionFileError(f"{name}: one array, not a .npz motion file with 'poses' and 'trans' arrays")
     try:
         zf = zipfile.ZipFile(path)
     except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, ValueError, EOFError):
