@@ -39,7 +39,8 @@ class MotionSequence:
         self.poses = np.asarray(self.poses, np.float32).reshape(-1, NUM_JOINTS * 3)
         T = len(self.poses)
         self.trans = np.asarray(self.trans, np.float32).reshape(T, 3)
-        self.expressions = np.asarray(self.expressions, np.float32).reshape(T, -1)
+        expr = np.asarray(self.expressions, np.float32)
+        self.expressions = expr.reshape(T, -1) if T else expr.reshape(0, expr.shape[-1] if expr.ndim == 2 else 0)
         betas = np.zeros(NUM_BETAS, np.float32)
         b = np.asarray(self.betas, np.float32).reshape(-1)[:NUM_BETAS]
         betas[: len(b)] = b
@@ -93,6 +94,8 @@ class MotionSequence:
         .npz to a name without it)."""
         if self.num_frames == 0:
             raise MotionFileError("the motion has no frames; nothing is written")
+        if not np.isfinite(float(self.fps)) or self.fps <= 0:
+            raise MotionFileError(f"the motion's frame rate is {self.fps}; nothing is written")
         for name in ("poses", "trans", "expressions", "betas"):     # the writer's guard: never a NaN in a file
             if not np.isfinite(getattr(self, name)).all():
                 raise MotionFileError(f"the motion's {name} hold NaN or infinite values; nothing is written")
