@@ -89,7 +89,7 @@ def _short_member(p: Path) -> Path:
 
 
 HOSTILE: dict[str, tuple] = {
-    "deflate bomb: 2,000,000 zero frames in 1.3 MB": (_bomb, "2,000,000 frames; the limit is 108,000"),
+    "deflate bomb: 2,000,000 zero frames (1.3 GB) in a 6 MB file": (_bomb, "2,000,000 frames; the limit is 108,000"),
     "header claiming 10^9 frames": (_claims(10**9), "1,000,000,000 frames; the limit is 108,000"),
     "header claiming 108,001 frames": (_claims(108_001), "108,001 frames; the limit is 108,000"),
     "poses a pickled object array": (_members(poses=np.array([object()] * T, dtype=object)), "pickle"),
@@ -139,7 +139,7 @@ HOSTILE: dict[str, tuple] = {
     "one .npy array": (lambda p: np.save(p.with_suffix(".npy"), np.zeros((T, 165))) or
                        p.with_suffix(".npy").rename(p), "one array, not a .npz"),
 }
-BOMBS = ("deflate bomb: 2,000,000 zero frames in 1.3 MB", "header claiming 10^9 frames", "betas claiming 10^8 values",
+BOMBS = ("deflate bomb: 2,000,000 zero frames (1.3 GB) in a 6 MB file", "header claiming 10^9 frames", "betas claiming 10^8 values",
          "words claiming 10^7 words")
 
 ACCEPTED: dict[str, tuple] = {
