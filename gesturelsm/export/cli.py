@@ -97,7 +97,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
         while not folder.exists() and folder != folder.parent:
             folder = folder.parent
         if not folder.is_dir():
-            problems.append(f"--{flag} {path}: {folder} is a file, not a folder")
+            problems.append(f"--{flag} {path}: cannot write there: {folder} is a file, not a folder")
             continue
         try:
             with tempfile.NamedTemporaryFile(dir=folder, prefix=".gesturelsm-probe-"):

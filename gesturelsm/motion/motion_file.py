@@ -141,12 +141,18 @@ class _Reader:
                 version = np.lib.format.read_magic(fh)
                 (np.lib.format.read_array_header_1_0 if version == (1, 0)
                  else np.lib.format.read_array_header_2_0)(fh)
-                raw = fh.read(nbytes)
+                raw = bytearray(nbytes)              # writable, so the arrays are too (no second copy)
+                view, got = memoryview(raw), 0
+                while got < nbytes:
+                    n = fh.readinto(view[got:])
+                    if not n:
+                        break
+                    got += n
         except (ValueError, EOFError, zipfile.BadZipFile, zlib.error, OSError) as exc:
             raise self.fail(f"'{key}' is damaged ({_short(exc)})") from None
-        if len(raw) != nbytes:
+        if got != nbytes:
             raise self.fail(f"'{key}' is cut short: its header states {nbytes} bytes of data, the file holds "
-                            f"{len(raw)}")
+                            f"{got}")
         arr = np.frombuffer(raw, dtype=dtype, count=count)
         return arr.reshape(shape[::-1]).transpose() if fortran else arr.reshape(shape)
 
