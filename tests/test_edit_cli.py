@@ -142,3 +142,15 @@ def test_edit_reuses_the_words_the_motion_was_made_with(files, tiny_assets, tmp_
     assert "transcript with given word timings" in out.out
     edited = MotionSequence.load(tmp_path / "e.npz")
     assert [w for w, _, _ in edited.words] == ["hello", "there"]
+
+
+def test_speech_hours_longer_than_the_motion_is_refused_without_decoding_it(files, tmp_path, capsys, monkeypatch):
+    from _hostile import silent_flac
+    from gesturelsm.pipeline import GesturePipeline
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: pytest.fail("models")))
+    silent_flac(tmp_path / "hours.flac", 3 * 3600.0)
+    code = main(["edit", str(files / "motion.npz"), str(tmp_path / "hours.flac"), "--regenerate", "upper@1-2",
+                 "--no-transcribe", "--out", str(tmp_path / "x.npz")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "hours.flac is more than 60 s longer than the motion (6.00 s)" in err[0]
