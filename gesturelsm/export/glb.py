@@ -47,6 +47,9 @@ def matrix_to_quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     return q.reshape(shape + (4,))
 
 
+CHUNK = 4096                                # frames converted at once by the writers
+
+
 def continuous_quaternions(q: np.ndarray) -> np.ndarray:
     """(T, ..., 4): flip signs so consecutive frames have a non-negative dot product (no long-way slerp)."""
     q = q.copy()
@@ -151,8 +154,12 @@ def _add_animation(b: GltfBuffer, seq: MotionSequence, body, J: np.ndarray,
     T = seq.num_frames
     times = animation_times(T, seq.fps)
     a_time = b.add(times, FLOAT, "SCALAR", minmax=True)
-    R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq, body).reshape(T, NUM_JOINTS, 3))).numpy()
-    quats = continuous_quaternions(matrix_to_quaternion_xyzw(R)).astype(np.float32)    # (T, 55, 4)
+    quats = np.empty((T, NUM_JOINTS, 4), np.float32)
+    for a in range(0, T, CHUNK):               # in chunks of frames: an hour of motion in bounded memory
+        R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq.slice(a, a + CHUNK), body).reshape(
+            -1, NUM_JOINTS, 3))).numpy()
+        quats[a:a + CHUNK] = matrix_to_quaternion_xyzw(R)
+    quats = continuous_quaternions(quats)                                            # (T, 55, 4)
     samplers, channels = [], []
     for j in range(NUM_JOINTS):
         samplers.append({"input": a_time, "output": b.add(np.ascontiguousarray(quats[:, j]), FLOAT, "VEC4"),
