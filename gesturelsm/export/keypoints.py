@@ -123,16 +123,19 @@ def export_keypoints(seq: MotionSequence, path: str | Path, camera=None, size: t
         finite(v, f"the {k.replace('_', ' ')} keypoints")
     W, H = cam.width, cam.height
     path = Path(path)
-    frames = [_frame_dict(kp, t, W, H) for t in range(seq.num_frames)]
-    if path.suffix.lower() == ".json":
+    frames = (json.dumps(_frame_dict(kp, t, W, H), separators=(",", ":")) for t in range(seq.num_frames))
+    if path.suffix.lower() == ".json":        # written frame by frame (an hour of frames never in memory as lists)
         path.parent.mkdir(parents=True, exist_ok=True)
         doc = {"format": "openpose-1.3 per frame", "fps": seq.fps, "canvas_width": W, "canvas_height": H,
                "camera": {"eye": list(cam.eye), "target": list(cam.target), "yfov": cam.yfov,
-                          "intrinsics": cam.intrinsics.tolist()},
-               "frames": frames}
-        path.write_text(json.dumps(doc, separators=(",", ":")))
+                          "intrinsics": cam.intrinsics.tolist()}}
+        with open(path, "w") as fh:
+            fh.write(json.dumps(doc, separators=(",", ":"))[:-1] + ',"frames":[')
+            for t, fr in enumerate(frames):
+                fh.write("," * (t > 0) + fr)
+            fh.write("]}")
         return path
     path.mkdir(parents=True, exist_ok=True)
     for t, fr in enumerate(frames):
-        (path / f"{path.name}_{t:012d}_keypoints.json").write_text(json.dumps(fr, separators=(",", ":")))
+        (path / f"{path.name}_{t:012d}_keypoints.json").write_text(fr)
     return path
