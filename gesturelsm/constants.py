@@ -12,6 +12,10 @@ Progress = Callable[[float, str], None]     # progress callbacks: (fraction done
 # method's sampling, a video of every frame): 5 minutes bounds what one visitor holds on a shared server and still
 # covers a long answer or monologue; the commands and Python take the same limit and raise it when asked.
 MAX_SECONDS = 300.0
+# Longest motion any part of the package reads or makes (motion/motion_file.py refuses longer files from their
+# headers, before reading their data; `generate --max-seconds` and the server's limit cannot be raised past it):
+# one hour, 108,000 frames at 30 fps, about 120 MB of float32 poses, translation and expressions.
+MAX_MOTION_SECONDS = 3600.0
 
 
 def _shipped_assets() -> Path:

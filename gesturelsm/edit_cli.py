@@ -10,20 +10,23 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from .align.textgrid import read_words
-from .audio import load_audio
+from .align.words import Word
+from .audio import AudioTooLongError, load_audio
 from .backends import SPECS, checkpoint_sources
 from .body.model import resolve_body
 from .constants import SAMPLE_RATE
 from .errors import UserError
 from .export import export_bvh, export_glb
 from .export.rig import export_rig
-from .motion.editing import edit_spec, fit_speech, keyframe
+from .motion.editing import EditError, edit_spec, fit_speech, keyframe
 from .motion.regions import GENERATED_REGIONS
 from .motion.sequence import MotionSequence
 from .pipeline import GesturePipeline
@@ -32,6 +35,9 @@ from .settings import DEFAULT_METHOD, Settings
 from .settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, output_file, refuse,
                                  say)
 
+SPEECH_SLACK = 60.0             # seconds of speech beyond the motion decoded at most (to say how far apart they are)
+_FRAME = re.compile(r"[0-9]+")                                 # ASCII digits: str.isdigit() takes "²" and "٣"
+_SECONDS = re.compile(r"\s*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?\s*")   # float() takes "٣.٥"
 # REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
 # gets its own message (outside the speech, unknown region) rather than this syntax's
 _RANGE = re.compile(r"^\s*([^@]+)@\s*(-?[0-9.]+)\s*-\s*(-?[0-9.]+)\s*$")
@@ -89,13 +95,34 @@ def check_arguments(args: argparse.Namespace) -> Checked:
     except UserError as exc:
         p.append(str(exc))
         regenerate = {}
+    for item in args.keyframe:
+        try:
+            keyframe_syntax(item)
+        except UserError as exc:
+            p.append(str(exc))
     files = [input_file(args.motion, "MOTION", p), input_file(args.audio, "AUDIO", p),
              input_file(args.textgrid, "--textgrid", p) if args.textgrid else None,
              input_file(args.rig, "--rig", p) if args.rig else None, output_file(args.out, "--out", ".npz", p),
              output_file(args.bvh, "--bvh", ".bvh", p) if args.bvh else None,
              output_file(args.glb, "--glb", ".glb", p) if args.glb else None]
+    for path, field in ((files[4], "--out"), (files[5], "--bvh"), (files[6], "--glb")):
+        if path is not None:
+            writable(path, field, p)
     refuse(p)
     return Checked(settings, regenerate, *files)
+
+
+def writable(path: Path, field: str, problems: list[str]) -> None:
+    """A file can be made at `path`: its nearest existing folder takes a new file (tried with a temporary file,
+    removed at once: permission bits do not tell for root, /proc or a read-only mount)."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".gesturelsm-probe-"):
+            pass
+    except OSError as exc:
+        problems.append(f"{field} {path}: cannot write in {folder} ({exc.strerror or exc}).")
 
 
 def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
@@ -120,20 +147,30 @@ def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
     return out
 
 
+def keyframe_syntax(item: str) -> tuple[str | int, float]:
+    """'pose.npz:120@4.5' -> ('pose.npz:120', 4.5); '40@6' -> (40, 6.0): frame numbers and times in ASCII digits
+    (a UserError otherwise, before anything is loaded)."""
+    source, sep, when = item.rpartition("@")
+    usage = ("write POSE.npz:FRAME@TIME (or FRAME@TIME for a frame of the motion being edited), e.g. "
+             "pose.npz:120@4.5")
+    if not sep or not source or not _SECONDS.fullmatch(when):
+        raise UserError(f"--keyframe {item!r}: {usage}")
+    t = float(when)
+    if not math.isfinite(t):
+        raise UserError(f"--keyframe {item!r}: {when} is not a time in seconds")
+    if _FRAME.fullmatch(source):
+        return int(source), t
+    if ":" not in source and any(c.isdigit() or c.isnumeric() for c in source):
+        raise UserError(f"--keyframe {item!r}: write the frame number in the digits 0-9; {usage}")
+    frame = source.rpartition(":")[2]
+    if ":" in source and not re.fullmatch(r"\s*-?[0-9]+\s*", frame):
+        raise UserError(f"--keyframe {item!r}: the frame number {frame!r} is not written in the digits 0-9; {usage}")
+    return source, t
+
+
 def parse_keyframes(items: list[str], motion: MotionSequence) -> list:
     """['pose.npz:120@4.5', '40@6'] -> keyframes (a bare FRAME is a frame of `motion`)."""
-    keys = []
-    for item in items:
-        source, sep, when = item.rpartition("@")
-        try:
-            t = float(when)
-        except ValueError:
-            t = None
-        if not sep or not source or t is None:
-            raise UserError(f"--keyframe {item!r}: write POSE.npz:FRAME@TIME (or FRAME@TIME for a frame of the motion "
-                            "being edited), e.g. pose.npz:120@4.5")
-        keys.append(keyframe(t, int(source) if source.isdigit() else source, current=motion))
-    return keys
+    return [keyframe(t, source, current=motion) for source, t in map(keyframe_syntax, items)]
 
 
 def run_edit(args: argparse.Namespace) -> int:
@@ -145,9 +182,16 @@ def run_edit(args: argparse.Namespace) -> int:
     motion = MotionSequence.load(a.motion)
     keys = parse_keyframes(args.keyframe, motion)
     edit_spec(a.regenerate, motion.num_frames, keys, SPECS[args.method].regions, args.method)   # before the models
-    audio = load_audio(a.audio)
+    try:                        # never decode much more speech than an edit of this motion can use
+        audio = load_audio(a.audio, max_seconds=motion.duration + SPEECH_SLACK)
+    except AudioTooLongError:
+        raise EditError(f"{a.audio.name} is more than {SPEECH_SLACK:g} s longer than the motion "
+                        f"({motion.duration:.2f} s): give the speech the motion was made from") from None
     fit_speech(audio, motion.num_frames)                             # the speech is the motion's (or nearly)
     words = read_words(a.textgrid) if a.textgrid else None
+    if words is None and args.text is None and not args.no_transcribe and motion.words:
+        words = [Word(w, s, e) for w, s, e in motion.words if e > s]     # the words it was made with
+        say(0.0, f"using the {len(words)} word timings kept in {a.motion.name} (--text or --textgrid to change them)")
     say(0.0, f"loading the models ({args.method})")
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
     st = a.settings

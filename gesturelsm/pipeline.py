@@ -79,6 +79,14 @@ class Generated:
     warnings: list[str]
 
 
+def with_speech(motion: MotionSequence, speech: "SpeechInput") -> MotionSequence:
+    """`motion` keeping the transcript and word timings it was made from (saved in its npz: `transcript`, `words`,
+    `word_times`; `gesturelsm edit` reuses them); none for audio-only speech."""
+    words = tuple((w.text, float(w.start), float(w.end)) for w in speech.words or ())
+    transcript = speech.transcript or (" ".join(w for w, _, _ in words) or None)
+    return replace(motion, transcript=transcript, words=words)
+
+
 def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
            body=None) -> tuple[MotionSequence, str | None]:
     """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
@@ -287,6 +295,7 @@ class GesturePipeline:
                     made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
                 if made.motion is not None:
                     made.motion, note = plan.settings.post.apply(made.motion.slice(0, T), body)
+                    made.motion = with_speech(made.motion, speech)
                     made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
             except Exception as exc:  # noqa: BLE001 (the caller reports it with the methods that were made)
                 if not keep_going:
@@ -360,7 +369,7 @@ class GesturePipeline:
         t0 = time.perf_counter()
         gen, note = replace(post, grounding=post.grounding and "lower" in ask.regions).apply(
             splice(motion, out.motion, out.start, ask.regions), body)
-        merged = apply_edit(motion, gen, ask)
+        merged = with_speech(apply_edit(motion, gen, ask), speech)
         if progress:
             progress(1.0, f"{method}: edited {ask.describe()}")
         return GenerationResult(merged, method, int(steps), float(cfg), int(seed),
@@ -382,5 +391,5 @@ class GesturePipeline:
         return prepared, warnings + prepared.warnings
 
 
-__all__ = ["GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
+__all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
            "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

@@ -14,9 +14,9 @@ from pathlib import Path
 from .align.textgrid import read_words
 from .audio import load_audio
 from .backends import SPECS, checkpoint_sources
-from .constants import SAMPLE_RATE
+from .constants import MAX_MOTION_SECONDS, SAMPLE_RATE
 from .export.rig import export_rig
-from .pipeline import GenerationResult, GesturePipeline
+from .pipeline import GenerationResult, GesturePipeline, with_speech
 from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
 from .settings.arguments import (add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
@@ -58,7 +58,7 @@ def check_arguments(args: argparse.Namespace) -> Checked:
     """Every argument, all problems at once (InputError), before anything is loaded."""
     p: list[str] = []
     settings = cli_settings(args, [args.method], p)
-    max_seconds = positive(args.max_seconds, "--max-seconds", p)
+    max_seconds = positive(args.max_seconds, "--max-seconds", p, hi=MAX_MOTION_SECONDS)   # motion_file.py's limit
     audio = input_file(args.audio, "AUDIO", p)
     textgrid = input_file(args.textgrid, "--textgrid", p) if args.textgrid else None
     rig = input_file(args.rig, "--rig", p) if args.rig else None
@@ -87,6 +87,7 @@ def run_generate(args: argparse.Namespace) -> int:
     res = pipe.generate(speech, steps=a.settings.steps_for(args.method), cfg=a.settings.cfg, seed=a.settings.seed,
                         method=args.method, progress=say)
     motion, note = a.settings.post.apply(res.motion)
+    motion = with_speech(motion, speech)                          # kept in the npz: `edit` reuses the words
     path = motion.save(a.out)
     end_to_end = time.perf_counter() - t1
     if rig is not None:

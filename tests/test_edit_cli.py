@@ -97,3 +97,60 @@ def test_a_motion_that_is_not_the_speechs_length_or_not_a_motion(files, tiny_ass
                      str(tiny_assets), "--no-transcribe", "--out", str(tmp_path / "x.npz")])
         err = capsys.readouterr().err
         assert code == 2 and message in err, err
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--regenerate", "upper@0-1" + "0" * 308], "lies outside the speech (0-6.00 s)"),          # 1e308 s: no overflow
+    (["--regenerate", "upper@99999999999999999999-1" + "0" * 400], "is not a number of seconds"),   # inf
+    (["--regenerate", "upper@1-3", "--keyframe", "²@2"], "write the frame number in the digits 0-9"),
+    (["--regenerate", "upper@1-3", "--keyframe", "٣@2"], "write the frame number in the digits 0-9"),
+    (["--regenerate", "upper@1-3", "--keyframe", "40@٢"], "write POSE.npz:FRAME@TIME"),
+    (["--regenerate", "upper@1-3", "--keyframe", "pose.npz:²@2"], "the frame number '²' is not written in the digits"),
+    (["--regenerate", "upper@1-3", "--keyframe", "40@1e999"], "is not a time in seconds"),
+    (["--regenerate", "upper@1-3", "--keyframe", "99999999999999999999999@2"], "frame 99999999999999999999999 is not"),
+    (["--regenerate", "upper@1-3", "--out", "/proc/x.npz"], "--out /proc/x.npz: cannot write in /proc"),
+    (["--regenerate", "upper@1-3", "--bvh", "/proc/self/x.bvh"], "--bvh /proc/self/x.bvh: cannot write in"),
+])
+def test_crafted_arguments_are_refused_before_any_model_loads(files, tmp_path, capsys, monkeypatch, extra, message):
+    """Issue 53: each a line and status 2, and no model is loaded for any of them (a model load would fail the
+    test: the refusal comes from the arguments, the motion and the speech alone)."""
+    from gesturelsm.pipeline import GesturePipeline
+
+    def forbidden(*a, **k):
+        raise AssertionError("the models were loaded before the arguments were refused")
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(forbidden))
+    argv = ["edit", str(files / "motion.npz"), str(files / "speech.wav"), "--no-transcribe"]
+    code = main(argv + (["--out", str(tmp_path / "x.npz")] if "--out" not in extra else []) + extra)
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("[")]
+    assert code == 2 and len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "x.npz").exists() and "Traceback" not in err[0]
+
+
+def test_edit_reuses_the_words_the_motion_was_made_with(files, tiny_assets, tmp_path, capsys):
+    """A motion that keeps its transcript and word timings (as generate writes them) is edited with them when no
+    --text, --textgrid or --no-transcribe is given: nothing is transcribed again, and the edit keeps them."""
+    seq = MotionSequence.load(files / "motion.npz")
+    from dataclasses import replace
+
+    seq = replace(seq, transcript="hello there", words=(("hello", 0.5, 1.0), ("there", 1.2, 1.8)))
+    seq.save(tmp_path / "worded.npz")
+    assert main(["edit", str(tmp_path / "worded.npz"), str(files / "speech.wav"), "--regenerate", "upper@2-3",
+                 "--checkpoints", str(tiny_assets), "--steps", "2", "--out", str(tmp_path / "e.npz")]) == 0
+    out = capsys.readouterr()
+    assert "using the 2 word timings kept in worded.npz" in out.err + out.out
+    assert "transcript with given word timings" in out.out
+    edited = MotionSequence.load(tmp_path / "e.npz")
+    assert [w for w, _, _ in edited.words] == ["hello", "there"]
+
+
+def test_speech_hours_longer_than_the_motion_is_refused_without_decoding_it(files, tmp_path, capsys, monkeypatch):
+    from _hostile import silent_flac
+    from gesturelsm.pipeline import GesturePipeline
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: pytest.fail("models")))
+    silent_flac(tmp_path / "hours.flac", 3 * 3600.0)
+    code = main(["edit", str(files / "motion.npz"), str(tmp_path / "hours.flac"), "--regenerate", "upper@1-2",
+                 "--no-transcribe", "--out", str(tmp_path / "x.npz")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "hours.flac is more than 60 s longer than the motion (6.00 s)" in err[0]

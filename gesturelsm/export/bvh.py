@@ -30,6 +30,8 @@ from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
+from .glb import CHUNK
+from .guard import check_motion, finite
 from .skeleton import end_sites, full_poses, joint_names
 
 ROT_CHANNELS = ("Zrotation", "Xrotation", "Yrotation")
@@ -93,6 +95,7 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
     """Write `seq` as BVH (see the module docstring); returns the path. body: BodyModel / path / None."""
     if units not in UNITS:
         raise InputError(f"units={units!r}: use 'cm' or 'm'")
+    check_motion(seq)
     label = joint_names(names)
     body = resolve_body(body)
     scale = UNITS[units]
@@ -100,9 +103,6 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
     J = body.rest_joints(seq.betas).astype(np.float64)                       # (55, 3) metres
     ends = end_sites(body, seq.betas)
     T = seq.num_frames
-    R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq, body).reshape(T, NUM_JOINTS, 3))).numpy()
-    eul = np.degrees(continuous_euler(matrix_to_euler_zxy(R)))              # (T, 55, 3)
-    root_pos = (seq.trans.astype(np.float64) + J[0]) * scale                # (T, 3)
 
     lines = ["HIERARCHY"]
     order: list[int] = []                                                    # joints in file (DFS) order
@@ -127,9 +127,19 @@ def export_bvh(seq: MotionSequence, path: str | Path, body=None, units: str = "c
 
     write(0, 0)
     lines += ["MOTION", f"Frames: {T}", f"Frame Time: {1.0 / seq.fps:.7f}"]
-    data = np.concatenate([root_pos, eul[:, order].reshape(T, -1)], 1)       # (T, 3 + 165)
-    buf = io.StringIO()
-    np.savetxt(buf, data, fmt="%.6f", delimiter=" ")
+    chunks, prev = [], None
+    for a in range(0, T, CHUNK):               # in chunks of frames, each continuous with the one before
+        part = seq.slice(a, a + CHUNK)
+        R = axis_angle_to_matrix(torch.from_numpy(full_poses(part, body).reshape(-1, NUM_JOINTS, 3))).numpy()
+        e = matrix_to_euler_zxy(R)
+        e = continuous_euler(e if prev is None else np.concatenate([prev, e]))[0 if prev is None else 1:]
+        prev = e[-1:]
+        root_pos = (part.trans.astype(np.float64) + J[0]) * scale          # (t, 3)
+        data = np.concatenate([root_pos, np.degrees(e)[:, order].reshape(len(e), -1)], 1)   # (t, 3 + 165)
+        finite(data, "the BVH channels")
+        buf = io.StringIO()
+        np.savetxt(buf, data, fmt="%.6f", delimiter=" ")
+        chunks.append(buf.getvalue())
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines) + "\n" + buf.getvalue())
+    path.write_text("\n".join(lines) + "\n" + "".join(chunks))
     return path

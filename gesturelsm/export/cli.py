@@ -10,6 +10,8 @@ Face CSV), or a clean BEAT2 npz.
 from __future__ import annotations
 
 import argparse
+import tempfile
+import time
 from pathlib import Path
 
 from ..body.model import resolve_body
@@ -52,31 +54,58 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --arkit, --npz")
     if arkit and Path(arkit).suffix.lower() != ".csv":
         raise UserError(f"--arkit {arkit}: use a .csv file name (the Live Link Face CSV)")
+    if args.keypoints and args.style not in STYLES:
+        raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
+    size = parse_size(args.size) if args.keypoints else None
     if not Path(args.motion).exists():
         raise UserError(f"motion file not found: {args.motion}")
-    seq = MotionSequence.load(args.motion)
+    _check_outputs(args)                                   # every output can be written, before any work
+    seq = MotionSequence.load(args.motion)                 # the one guarded reader: one line for a bad file
     if getattr(args, "rig", None):
         return _run_rig(args, seq)
     body = None
     if args.bvh or args.glb or args.keypoints or arkit:
         body = resolve_body(args.model)
-    done = []
-    if args.npz:
-        done.append(export_npz(seq, args.npz))
-    if args.bvh:
-        done.append(export_bvh(seq, args.bvh, body=body, units=args.units, names=args.names))
-    if args.glb:
-        done.append(export_glb(seq, args.glb, body=body, names=args.names))
-    if args.keypoints:
-        if args.style not in STYLES:
-            raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
-        done.append(export_keypoints(seq, args.keypoints, size=parse_size(args.size), body=body,
-                                     style=STYLES[args.style]))
-    if arkit:
-        done.append(export_arkit(seq, arkit, body=body))
-    for p in done:
-        print(f"wrote {p}")
+    jobs = [(flag, write) for flag, write in (
+        ("--npz", args.npz and (lambda: export_npz(seq, args.npz))),
+        ("--bvh", args.bvh and (lambda: export_bvh(seq, args.bvh, body=body, units=args.units, names=args.names))),
+        ("--glb", args.glb and (lambda: export_glb(seq, args.glb, body=body, names=args.names))),
+        ("--keypoints", args.keypoints and (lambda: export_keypoints(seq, args.keypoints, size=size, body=body,
+                                                                     style=STYLES[args.style]))),
+        ("--arkit", arkit and (lambda: export_arkit(seq, arkit, body=body)))) if write]
+    t0 = time.perf_counter()
+    for i, (flag, write) in enumerate(jobs):
+        if len(jobs) > 1:           # several formats of a long take take a while: say which one is being written
+            print(f"[{i + 1}/{len(jobs)}] {flag[2:]}: writing {seq.num_frames} frames ...", flush=True)
+        print(f"wrote {write()}" + (f" ({time.perf_counter() - t0:.1f} s)" if len(jobs) > 1 else ""), flush=True)
     return 0
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Each output path can be written (a file made and removed in its nearest existing folder), all problems at
+    once, before the motion is read or a body model loaded."""
+    problems = []
+    for flag in ("npz", "bvh", "glb", "keypoints", "arkit"):
+        value = getattr(args, flag, None)
+        if not value:
+            continue
+        path = Path(value)
+        folder = path if flag == "keypoints" and path.suffix.lower() != ".json" else path.parent
+        if path.is_dir() and folder is not path:
+            problems.append(f"--{flag} {path} is a folder; give a file name")
+            continue
+        while not folder.exists() and folder != folder.parent:
+            folder = folder.parent
+        if not folder.is_dir():
+            problems.append(f"--{flag} {path}: cannot write there: {folder} is a file, not a folder")
+            continue
+        try:
+            with tempfile.NamedTemporaryFile(dir=folder, prefix=".gesturelsm-probe-"):
+                pass
+        except OSError as exc:
+            problems.append(f"--{flag} {path}: cannot write in {folder} ({exc.strerror or exc})")
+    if problems:
+        raise UserError("; ".join(problems))
 
 
 def _run_rig(args: argparse.Namespace, seq: MotionSequence) -> int:

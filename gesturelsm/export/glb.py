@@ -30,6 +30,7 @@ from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
+from .guard import animation_times, check_motion, finite
 from .skeleton import full_poses, joint_names, rest_pose
 
 FLOAT, UBYTE, USHORT, UINT = 5126, 5121, 5123, 5125
@@ -44,6 +45,9 @@ def matrix_to_quaternion_xyzw(R: np.ndarray) -> np.ndarray:
     q = Rotation.from_matrix(np.asarray(R, np.float64).reshape(-1, 3, 3)).as_quat()   # x, y, z, w
     q *= np.where(q[:, 3:] < 0, -1.0, 1.0)
     return q.reshape(shape + (4,))
+
+
+CHUNK = 4096                                # frames converted at once by the writers
 
 
 def continuous_quaternions(q: np.ndarray) -> np.ndarray:
@@ -87,6 +91,8 @@ class GltfBuffer:
     def add(self, data: np.ndarray, ctype: int, atype: str, target: int | None = None,
             minmax: bool = False, normalized: bool = False) -> int:
         data = np.ascontiguousarray(data)
+        if ctype == FLOAT:
+            finite(data, "the animation's values")                  # a NaN in a GLB plays as a broken model
         while len(self.blob) % 4:
             self.blob.append(0)
         view = {"buffer": 0, "byteOffset": len(self.blob), "byteLength": data.nbytes}
@@ -146,10 +152,14 @@ def _add_animation(b: GltfBuffer, seq: MotionSequence, body, J: np.ndarray,
     """Samplers and channels at seq.fps: a rotation per joint, the pelvis translation (rest pelvis J[0] + trans)
     and the used expressions' morph weights."""
     T = seq.num_frames
-    times = (np.arange(T) / seq.fps).astype(np.float32)
+    times = animation_times(T, seq.fps)
     a_time = b.add(times, FLOAT, "SCALAR", minmax=True)
-    R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq, body).reshape(T, NUM_JOINTS, 3))).numpy()
-    quats = continuous_quaternions(matrix_to_quaternion_xyzw(R)).astype(np.float32)    # (T, 55, 4)
+    quats = np.empty((T, NUM_JOINTS, 4), np.float32)
+    for a in range(0, T, CHUNK):               # in chunks of frames: an hour of motion in bounded memory
+        R = axis_angle_to_matrix(torch.from_numpy(full_poses(seq.slice(a, a + CHUNK), body).reshape(
+            -1, NUM_JOINTS, 3))).numpy()
+        quats[a:a + CHUNK] = matrix_to_quaternion_xyzw(R)
+    quats = continuous_quaternions(quats)                                            # (T, 55, 4)
     samplers, channels = [], []
     for j in range(NUM_JOINTS):
         samplers.append({"input": a_time, "output": b.add(np.ascontiguousarray(quats[:, j]), FLOAT, "VEC4"),
@@ -197,6 +207,7 @@ def write_glb(path: Path, gltf: dict, blob: bytearray) -> None:
 def export_glb(seq: MotionSequence, path: str | Path, body=None, names: str = "animator",
                max_expressions: int = 10, color: tuple[float, float, float] = (0.78, 0.69, 0.60)) -> Path:
     """Write `seq` as an animated skinned GLB (see the module docstring); returns the path."""
+    check_motion(seq)
     label = joint_names(names)
     body = resolve_body(body)
     path = Path(path)

@@ -34,6 +34,7 @@ from ..body.model import resolve_body
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS
 from ..render.frames import fit_camera
+from .guard import check_motion, finite
 from .skeleton import EXTRA_NAMES, extra_vertex_ids
 
 _X = {n: NUM_JOINTS + i for i, n in enumerate(EXTRA_NAMES)}      # index into [joints | extra]
@@ -116,19 +117,25 @@ def _frame_dict(kp: dict[str, np.ndarray], t: int, W: int, H: int) -> dict:
 def export_keypoints(seq: MotionSequence, path: str | Path, camera=None, size: tuple[int, int] = (512, 512),
                      body=None, style=None) -> Path:
     """Write OpenPose-style 2D keypoints (see the module docstring); returns the file or folder path."""
+    check_motion(seq)
     kp, cam = keypoints_2d(seq, camera, size, body, style)
+    for k, v in kp.items():
+        finite(v, f"the {k.replace('_', ' ')} keypoints")
     W, H = cam.width, cam.height
     path = Path(path)
-    frames = [_frame_dict(kp, t, W, H) for t in range(seq.num_frames)]
-    if path.suffix.lower() == ".json":
+    frames = (json.dumps(_frame_dict(kp, t, W, H), separators=(",", ":")) for t in range(seq.num_frames))
+    if path.suffix.lower() == ".json":        # written frame by frame (an hour of frames never in memory as lists)
         path.parent.mkdir(parents=True, exist_ok=True)
         doc = {"format": "openpose-1.3 per frame", "fps": seq.fps, "canvas_width": W, "canvas_height": H,
                "camera": {"eye": list(cam.eye), "target": list(cam.target), "yfov": cam.yfov,
-                          "intrinsics": cam.intrinsics.tolist()},
-               "frames": frames}
-        path.write_text(json.dumps(doc, separators=(",", ":")))
+                          "intrinsics": cam.intrinsics.tolist()}}
+        with open(path, "w") as fh:
+            fh.write(json.dumps(doc, separators=(",", ":"))[:-1] + ',"frames":[')
+            for t, fr in enumerate(frames):
+                fh.write("," * (t > 0) + fr)
+            fh.write("]}")
         return path
     path.mkdir(parents=True, exist_ok=True)
     for t, fr in enumerate(frames):
-        (path / f"{path.name}_{t:012d}_keypoints.json").write_text(json.dumps(fr, separators=(",", ":")))
+        (path / f"{path.name}_{t:012d}_keypoints.json").write_text(fr)
     return path

@@ -35,6 +35,7 @@ import numpy as np
 from ..errors import InputError, UserError
 from ..motion.sequence import MotionSequence
 from .arkit import ARKIT_NAMES, EYE_NAMES, HEAD_NAMES, ArkitFace, arkit_face
+from .guard import check_motion, check_rate
 
 HEADER: tuple[str, ...] = ("Timecode", "BlendShapeCount") + ARKIT_NAMES + HEAD_NAMES + EYE_NAMES
 BLEND_SHAPE_COUNT = len(ARKIT_NAMES) + len(HEAD_NAMES) + len(EYE_NAMES)           # 61
@@ -72,6 +73,9 @@ def write_live_link_csv(face: ArkitFace, path: str | Path) -> Path:
     values = np.concatenate([face.weights, face.head, face.eyes], 1)
     if not np.isfinite(values).all():
         raise InputError("the face has NaN or infinite values")
+    if len(values) == 0:
+        raise InputError("the face has no frames; nothing is written")
+    check_rate(face.fps, "the face")
     lines = [",".join(HEADER)]
     for t, row in enumerate(values):
         lines.append(f"{timecode(t, face.fps)},{BLEND_SHAPE_COUNT}," + ",".join(f"{x + 0.0:.6f}" for x in row))
@@ -87,6 +91,7 @@ def export_arkit(seq: MotionSequence, path: str | Path, body=None) -> Path:
     """Measure the motion's face as ARKit blendshapes (`arkit.arkit_face`) and write the Live Link Face CSV."""
     if Path(path).suffix.lower() != ".csv":
         raise UserError(f"{path}: use a .csv file name for the Live Link Face CSV")
+    check_motion(seq)
     return write_live_link_csv(arkit_face(seq, body), path)
 
 

@@ -51,6 +51,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..motion.skeleton import NUM_JOINTS
+from .guard import check_rate, finite
 
 MAGIC = b"GLSM"
 VERSION = 1                                     # a record without a character section
@@ -101,6 +102,9 @@ def encode(record: MotionRecord) -> bytes:
         raise ValueError(f"{record.kind} rotations must be (frames, joints, {CHANNELS[record.kind]}), got {rot.shape}")
     if root.shape != (T, 3) or expr.ndim != 2 or expr.shape[0] != T:
         raise ValueError(f"root must be ({T}, 3) and expressions ({T}, E), got {root.shape} and {expr.shape}")
+    for what, values in (("rotations", rot), ("root", root), ("expressions", expr)):
+        finite(values, f"the motion record's {what}")
+    check_rate(record.fps, "the motion record")
     meta = json.dumps(record.meta, separators=(",", ":")).encode() if record.meta else b""
     section, bones = b"", []
     if record.bone_rotations is not None:
@@ -111,6 +115,8 @@ def encode(record: MotionRecord) -> bytes:
         morph = np.zeros((T, 0), "<f4") if record.morph is None else np.asarray(record.morph, "<f4")
         if morph.ndim != 2 or morph.shape[0] != T:
             raise ValueError(f"morph weights must be ({T}, channels), got {morph.shape}")
+        for what, values in (("bone rotations", brot), ("bone root", broot), ("morph weights", morph)):
+            finite(values, f"the motion record's {what}")
         section, bones = SECTION.pack(brot.shape[1], morph.shape[1]), [brot.tobytes(), broot.tobytes(), morph.tobytes()]
     elif record.morph is not None:
         raise ValueError("morph weights need the character's bone rotations (a version 2 record)")

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
+from .guard import check_motion, finite
 
 
 def export_npz(seq: MotionSequence, path: str | Path) -> Path:
@@ -41,10 +42,8 @@ def npz_bytes(seq: MotionSequence) -> bytes:
 
 
 def _check(seq: MotionSequence) -> None:
-    if seq.num_frames == 0:
-        raise InputError("the motion has no frames")
+    check_motion(seq)
     if seq.fps != FPS:
         raise InputError(f"the motion is at {seq.fps} fps; BEAT2 files are {FPS} fps")
-    for name in ("poses", "trans", "expressions", "betas"):
-        if not np.isfinite(getattr(seq, name)).all():
-            raise InputError(f"the motion's {name} contain NaN or infinite values")
+    if seq.words:
+        finite(np.array([(a, b) for _, a, b in seq.words]), "the motion's word times")

@@ -19,6 +19,7 @@ from ..retarget.face import driven_presets, morph_weights
 from .alive import alive_face_weights
 from .bvh import continuous_euler, matrix_to_euler_zxy
 from .glb import FLOAT, GltfBuffer, continuous_quaternions, matrix_to_quaternion_xyzw, write_glb
+from .guard import animation_times, check_motion, check_rate, finite
 
 
 def _face_channels(b: GltfBuffer, gltf: dict, seq, a_time: int, body) -> list[tuple[dict, dict]]:
@@ -46,6 +47,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
     translation and, for a VRM with viseme (`aa`, `ih`, `ou`, `ee`, `oh`) or `blink` expressions, their morph
     targets' weights from the generated face (`retarget.face`). `result`: the motion retargeted already, else
     retargeted here with its feet planted on the character's legs unless `grounding` is off. Returns the path."""
+    check_motion(seq)
     if character.document is None:
         raise CharacterError(f"{character.name}: a BVH skeleton has no mesh; export it with --bvh")
     doc = character.document
@@ -59,7 +61,7 @@ def export_rig_glb(seq, character: Character, path: str | Path, body=None,
     gltf = copy.deepcopy(doc.gltf)
     b = GltfBuffer.after(gltf, doc.blob)   # the character's own data first
     T = r.num_frames
-    a_time = b.add((np.arange(T) / r.fps).astype(np.float32), FLOAT, "SCALAR", minmax=True)
+    a_time = b.add(animation_times(T, r.fps, "the retargeted motion"), FLOAT, "SCALAR", minmax=True)
     quats = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation)).astype(np.float32)
     samplers, channels = [], []
 
@@ -89,7 +91,9 @@ def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
     """The character's skeleton below (and including) its hips as BVH, in the character's own axes and
     units: rest frames aligned with its world, so each joint's rotation is Δ_parent^-1 Δ_joint (ZXY Euler,
     continuous); the root's position is the hips' world position. `result` and `grounding` as `export_rig_glb`."""
+    check_motion(seq)
     r = result if result is not None else retarget_motion(seq, character, body, grounding=grounding)
+    check_rate(r.fps, "the retargeted motion")
     skel = r.skeleton
     rest = skel.world()[:, :3, 3]
     root = r.root
@@ -123,6 +127,7 @@ def export_rig_bvh(seq, character: Character, path: str | Path, body=None,
     write(root, 0)
     T = r.num_frames
     data = np.concatenate([r.positions[:, root], eul[:, order].reshape(T, -1)], 1)
+    finite(data, "the retargeted motion's channels")
     lines += ["MOTION", f"Frames: {T}", f"Frame Time: {1.0 / r.fps:.7f}"]
     body_text = "\n".join(" ".join(f"{x:.6f}" for x in row) for row in data)
     path = Path(path)

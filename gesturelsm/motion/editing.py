@@ -16,6 +16,7 @@ and face are not pinned (the pose's stance need not fit the kept legs).
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping, Sequence
@@ -108,11 +109,12 @@ def _checked_ranges(region: str, ranges: Iterable, duration: float) -> tuple[tup
             raise EditError(f"the range {a:g}-{b:g} s of {region} is not a number of seconds")
         if b < a:
             raise EditError(f"the range {a:g}-{b:g} s of {region} is reversed: the end must come after the start")
+        # in seconds first: a time like 1e308 s is outside the speech, and is never turned into a frame number
+        if a < 0 or b * FPS > round(duration * FPS) + 0.5:
+            raise EditError(f"the range {a:g}-{b:g} s of {region} lies outside the speech (0-{duration:.2f} s)")
         if _frame(b) <= _frame(a):
             raise EditError(f"the range {a:g}-{b:g} s of {region} is empty: give a range of at least one frame "
                             f"({1 / FPS:.3f} s)")
-        if a < 0 or _frame(b) > round(duration * FPS):
-            raise EditError(f"the range {a:g}-{b:g} s of {region} lies outside the speech (0-{duration:.2f} s)")
         out.append((a, b))
     merged: list[tuple[float, float]] = []
     for a, b in sorted(out):
@@ -211,7 +213,7 @@ def _frame_of(motion: MotionSequence, f, name: str) -> np.ndarray:
 
 def _pose_from_file(text: str) -> tuple[np.ndarray, str]:
     path, sep, frame = text.rpartition(":")
-    if not sep or not frame.strip().lstrip("-").isdigit():
+    if not sep or not re.fullmatch(r"\s*-?[0-9]+\s*", frame):       # ASCII digits (str.isdigit takes "²", "٣")
         raise EditError(f"keyframe pose {text!r}: give a motion file and a frame number as FILE.npz:FRAME")
     try:
         motion = MotionSequence.load(path)

@@ -1,7 +1,10 @@
 """`MotionSequence`: one SMPL-X motion clip in BEAT2's layout, and its 433-d feature encoding.
 
 BEAT2 npz keys: `poses` (T, 165) axis-angle of the 55 joints (radians), `trans` (T, 3) metres y-up,
-`expressions` (T, 100) FLAME coefficients, `betas` (300,), `model`, `gender`, `mocap_frame_rate` (30).
+`expressions` (T, 100) FLAME coefficients, `betas` (300,), `model`, `gender`, `mocap_frame_rate` (30); and, when
+the motion was made from speech, what it was made with: `transcript` (0-d unicode), `words` (N,) unicode and
+`word_times` (N, 2) float32 seconds (start, end). BEAT2's readers (EMAGE, the SMPL-X Blender add-on) read the keys
+they know and leave these. Files are read by motion_file.py only (header first, no pickles, limits).
 """
 from __future__ import annotations
 
@@ -13,6 +16,7 @@ import torch
 
 from ..constants import FPS
 from ..errors import MotionFileError
+from .motion_file import read_motion_file
 from .regions import EXPR_OFFSET, FEATURE_DIM, NUM_EXPRESSIONS, ROT_DIM, TRANS_OFFSET
 from .rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
 from .skeleton import MIRROR_PERM, NUM_JOINTS
@@ -28,16 +32,20 @@ class MotionSequence:
     expressions: np.ndarray                # (T, 100) float32
     betas: np.ndarray = field(default_factory=lambda: np.zeros(NUM_BETAS, np.float32))  # (300,)
     fps: int = FPS
+    transcript: str | None = None          # the speech's transcript the motion was made with, when known
+    words: tuple = ()                      # ((word, start_s, end_s), ...): its words' timings, when known
 
     def __post_init__(self) -> None:
         self.poses = np.asarray(self.poses, np.float32).reshape(-1, NUM_JOINTS * 3)
         T = len(self.poses)
         self.trans = np.asarray(self.trans, np.float32).reshape(T, 3)
-        self.expressions = np.asarray(self.expressions, np.float32).reshape(T, -1)
+        expr = np.asarray(self.expressions, np.float32)
+        self.expressions = expr.reshape(T, -1) if T else expr.reshape(0, expr.shape[-1] if expr.ndim == 2 else 0)
         betas = np.zeros(NUM_BETAS, np.float32)
         b = np.asarray(self.betas, np.float32).reshape(-1)[:NUM_BETAS]
         betas[: len(b)] = b
         self.betas = betas
+        self.words = tuple((str(w), float(a), float(b)) for w, a, b in self.words)
 
     # ---- basics -----------------------------------------------------------------------------------
     @property
@@ -53,56 +61,44 @@ class MotionSequence:
 
     def slice(self, start: int, stop: int) -> "MotionSequence":
         return replace(self, poses=self.poses[start:stop], trans=self.trans[start:stop],
-                       expressions=self.expressions[start:stop])
+                       expressions=self.expressions[start:stop], transcript=None, words=())   # other speech
 
     # ---- file I/O ---------------------------------------------------------------------------------
     @classmethod
     def load(cls, path: str | Path) -> "MotionSequence":
-        path = Path(path)
-        try:
-            data = np.load(path, allow_pickle=False)
-        except FileNotFoundError:
-            raise MotionFileError(f"{path}: file not found") from None
-        except ValueError:  # not numpy's format at all (numpy's own message would suggest loading pickles)
-            raise MotionFileError(f"{path}: not a .npz motion file (a BEAT2-layout .npz with 'poses' and 'trans' "
-                                  "arrays, as `gesturelsm generate` writes)") from None
-        except Exception as exc:  # zip/npz corruption
-            raise MotionFileError(f"{path}: not a readable .npz motion file ({exc})") from None
-        if not isinstance(data, np.lib.npyio.NpzFile):  # a single .npy array
-            raise MotionFileError(f"{path}: one array, not a .npz motion file with 'poses' and 'trans' arrays")
-        with data:
-            for key in ("poses", "trans"):
-                if key not in data.files:
-                    raise MotionFileError(f"{path}: missing array '{key}' (has: {', '.join(data.files)})")
-            poses = data["poses"]
-            if poses.ndim != 2 or poses.shape[1] != NUM_JOINTS * 3:
-                raise MotionFileError(f"{path}: 'poses' has shape {poses.shape}, expected (T, 165) "
-                                      "axis-angle of the 55 SMPL-X joints")
-            T = poses.shape[0]
-            trans = data["trans"]
-            if trans.shape != (T, 3):
-                raise MotionFileError(f"{path}: 'trans' has shape {trans.shape}, expected ({T}, 3)")
-            expr = data["expressions"] if "expressions" in data.files else np.zeros((T, NUM_EXPRESSIONS))
-            if expr.ndim != 2 or expr.shape[0] != T:
-                raise MotionFileError(f"{path}: 'expressions' has shape {expr.shape}, expected ({T}, 100)")
-            if expr.shape[1] < NUM_EXPRESSIONS:  # e.g. 50-coefficient files: pad with zeros
-                expr = np.pad(expr, ((0, 0), (0, NUM_EXPRESSIONS - expr.shape[1])))
-            betas = data["betas"] if "betas" in data.files else np.zeros(NUM_BETAS)
-            fps = int(data["mocap_frame_rate"]) if "mocap_frame_rate" in data.files else FPS
-            if not np.isfinite(poses).all() or not np.isfinite(trans).all():
-                raise MotionFileError(f"{path}: contains NaN or infinite values")
-        return cls(poses, trans, expr[:, :NUM_EXPRESSIONS], betas, fps)
+        """A motion file, checked with bounded memory and resampled to 30 fps (motion_file.py: what is taken);
+        MotionFileError, one line, for anything else."""
+        d = read_motion_file(path)
+        return cls(d.poses, d.trans, d.expressions, d.betas, FPS, d.transcript, d.words)
 
     def npz_arrays(self) -> dict[str, np.ndarray]:
         """The arrays of a BEAT2-compatible npz, by key (export/npz.py documents the layout)."""
         return dict(poses=self.poses.astype(np.float32), trans=self.trans.astype(np.float32),
                     expressions=self.expressions.astype(np.float32), betas=self.betas.astype(np.float32),
                     model=np.array("smplx2020"), gender=np.array("neutral"),
-                    mocap_frame_rate=np.array(self.fps, dtype=np.int32))
+                    mocap_frame_rate=np.array(self.fps, dtype=np.int32), **self.speech_arrays())
+
+    def speech_arrays(self) -> dict[str, np.ndarray]:
+        """`transcript`, `words`, `word_times` when the motion keeps what it was made from (else nothing): plain
+        unicode and float32 arrays, read without pickles."""
+        out = {}
+        if self.transcript:
+            out["transcript"] = np.array(self.transcript, dtype=str)
+        if self.words:
+            out["words"] = np.array([w for w, _, _ in self.words], dtype=str)
+            out["word_times"] = np.array([(a, b) for _, a, b in self.words], np.float32).reshape(-1, 2)
+        return out
 
     def save(self, path: str | Path) -> Path:
         """Write BEAT2-compatible npz (what the EMAGE Blender add-on reads); returns the file written (numpy adds
         .npz to a name without it)."""
+        if self.num_frames == 0:
+            raise MotionFileError("the motion has no frames; nothing is written")
+        if not np.isfinite(float(self.fps)) or self.fps <= 0:
+            raise MotionFileError(f"the motion's frame rate is {self.fps}; nothing is written")
+        for name in ("poses", "trans", "expressions", "betas"):     # the writer's guard: never a NaN in a file
+            if not np.isfinite(getattr(self, name)).all():
+                raise MotionFileError(f"the motion's {name} hold NaN or infinite values; nothing is written")
         path = Path(path)
         if not path.name.endswith(".npz"):
             path = path.with_name(path.name + ".npz")

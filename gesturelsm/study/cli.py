@@ -17,12 +17,12 @@ from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..cluster import add_cluster_argument, connect
-from ..errors import UserError
+from ..errors import GestureError, UserError
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from ..settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, input_folder,
                                   output_folder, refuse)
 from ..settings.values import from_text, real_number, whole_number
-from .batch import make_study
+from .batch import find_audio, make_study
 from .design import MODES, Design
 
 MAX_RATERS = 10_000
@@ -69,7 +69,14 @@ def check_arguments(args: argparse.Namespace):
     size = whole_number(args.size, "--size", 128, 1024, p)
     if size is not None and size % 16:
         p.append(f"--size must be a multiple of 16 from 128 to 1024 (got {size}).")
-    input_folder(args.audio_dir, "--audio-dir", p)
+    if input_folder(args.audio_dir, "--audio-dir", p) is not None:
+        try:
+            find_audio(args.audio_dir)
+        except GestureError as exc:
+            p.append(f"--audio-dir: {exc}")
+    if args.design == "pairwise" and len(set(args.methods or ())) < 2:      # before Ray starts (docs/CLUSTER.md)
+        p.append(f"a pairwise study needs at least two methods rendered for the same speech (got --methods "
+                 f"{' '.join(args.methods or ()) or 'none'}); add one, or use --design {MODES[-1]}")
     output_folder(args.out, "--out", p)
     if args.rig:
         input_file(args.rig, "--rig", p)

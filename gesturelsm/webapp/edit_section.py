@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import gradio as gr
 
-from gesturelsm.backends import label
+from gesturelsm.backends import SPECS, label
 from gesturelsm.errors import GestureError, InputError
 from gesturelsm.motion.regions import GENERATED_REGIONS
 from gesturelsm.serve.editing import editable
@@ -53,7 +53,10 @@ def component() -> EditControls:
     with gr.Group(visible=False, elem_id="edit-box") as box:
         gr.Markdown("**Edit the motion.** " + HELP)
         with gr.Row():
-            method = gr.Dropdown([], label="Motion", elem_id="edit-method", interactive=True)
+            # every method that can edit, from the start: an API client that ran /generate_motion never runs the
+            # private event that narrows them to the shown motions (the handler refuses one that is not shown)
+            method = gr.Dropdown([(label(m), m) for m, s in SPECS.items() if s.inpainting], value=None,
+                                 label="Motion", elem_id="edit-method", interactive=True)
             start = gr.Number(label="From (s)", minimum=0, precision=2, elem_id="edit-start")
             end = gr.Number(label="To (s)", minimum=0, precision=2, elem_id="edit-end")
             seed = gr.Number(value=1, precision=0, minimum=0, label="Seed", elem_id="edit-seed")

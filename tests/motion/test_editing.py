@@ -117,3 +117,11 @@ def test_an_edit_spec_is_frozen():
     assert isinstance(spec, EditSpec)
     with pytest.raises(AttributeError):
         spec.num_frames = 5
+
+
+def test_ranges_far_outside_the_speech_are_refused_without_overflow():
+    """1e308 s passes isfinite; 1e308 * 30 frames is inf: the range is refused in seconds (the page and the API
+    call edit_spec too)."""
+    for rng in ((0.0, 1e308), (1e308, 1e308 * 1.5), (0.0, float(10**300))):
+        with pytest.raises(EditError, match="lies outside the speech|not a number of seconds"):
+            edit_spec({"upper": [rng]}, 90)

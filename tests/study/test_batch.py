@@ -102,7 +102,7 @@ def test_batch_errors_are_clear(study_assets, tmp_path, capsys):
     d.mkdir()
     sf.write(d / "x.wav", np.zeros(16000, np.float32), 16000)
     assert main(["batch", "--audio-dir", str(d), "--out", str(tmp_path / "o"), "--methods", "gesturelsm",
-                 "--checkpoints", str(study_assets)]) == 2
+                 "--design", "rating", "--checkpoints", str(study_assets)]) == 2
     assert "x.wav" in capsys.readouterr().err
     assert main(["batch", "--audio-dir", str(d), "--out", str(tmp_path / "o"), "--methods", "ground_truth",
                  "--checkpoints", str(study_assets)]) == 2
@@ -200,7 +200,7 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
     sf.write(tmp_path / "a" / "s.wav", np.zeros(16000, np.float32), 16000)
     with pytest.raises(Stop):
         main(["batch", "--audio-dir", str(tmp_path / "a"), "--methods", "gesturelsm", "--out", str(tmp_path / "o"),
-              "--raters", "1", *flag])
+              "--raters", "1", "--design", "rating", *flag])
     assert [p.settings.post.grounding for p in plans] == [want]
     assert json.loads((tmp_path / "o" / "study.json").read_text())["grounding"] is want
 
@@ -245,3 +245,26 @@ def test_a_rerun_with_other_settings_is_refused_and_the_key_describes_the_videos
         return {r["video"] for r in _rows(folder / "key" / "conditions.csv") if r["method"] == method}
     assert not named(out, "gesturelsm") & named(other, "gesturelsm")
     assert named(out, "ddim") == named(other, "ddim")
+
+
+def test_batch_refuses_before_loading_models_or_starting_ray(monkeypatch, tmp_path, capsys):
+    """A pairwise study of one method, or a folder without speech, is refused from the arguments: no model is
+    loaded and no cluster is joined (docs/CLUSTER.md: refusals come before any work)."""
+    from gesturelsm.cli import main
+    from gesturelsm.pipeline import GesturePipeline
+    from gesturelsm.study import cli as study_cli
+
+    def forbidden(*a, **k):
+        raise AssertionError("work started before the arguments were checked")
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(forbidden))
+    monkeypatch.setattr(study_cli, "connect", forbidden)
+    (tmp_path / "a").mkdir()
+    sf.write(tmp_path / "a" / "s.wav", np.zeros(16000, np.float32), 16000)
+    assert main(["batch", "--audio-dir", str(tmp_path / "a"), "--methods", "gesturelsm", "--out",
+                 str(tmp_path / "o"), "--cluster", "local"]) == 2
+    assert "a pairwise study needs at least two methods" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert main(["batch", "--audio-dir", str(tmp_path / "empty"), "--methods", "gesturelsm", "ddim", "--out",
+                 str(tmp_path / "o"), "--cluster", "local"]) == 2
+    assert "no audio files" in capsys.readouterr().err
