@@ -49,7 +49,7 @@ from gesturelsm.metrics.feet import feet_stats  # noqa: E402
 from gesturelsm.motion import MotionSequence  # noqa: E402
 from gesturelsm.pipeline import finish  # noqa: E402
 
-BEAT2 = ROOT.parent / "shared" / "data" / "beat2"
+BEAT2 = Path(os.environ.get("GESTURELSM_SHARED") or ROOT.parent / "shared") / "data" / "beat2"
 TAKE = "2_scott_0_1_1"
 PARAGRAPH = ("so the question people keep asking me is whether any of this actually works outside the lab and my "
              "honest answer is that it depends on what you are willing to measure. we started with a small group "

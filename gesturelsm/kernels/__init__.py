@@ -27,13 +27,13 @@ the null condition's keys, traced graphs) until a weight changes.
 """
 from __future__ import annotations
 
-from .choice import PATHS, Choice, choices, forced, forget, probe_seconds, taken
+from .choice import PATHS, Choice, choices, decide, forced, forget, probe_seconds, taken, told
 from .ops import (WeightsCache, bucket, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, conv_add_available,
                   fast_path, linear, onednn_enabled, onednn_linear_available)
 from .swap import FastConv1d, FastLinear, FastLinearGELU, LinearGELU, accelerate, faster_version_of
 from .trace import traced_or_eager
 
 __all__ = ["PATHS", "Choice", "FastConv1d", "FastLinear", "FastLinearGELU", "LinearGELU", "WeightsCache",
-           "accelerate", "bucket", "channels_last_1d", "choices", "conv1d_as_2d", "conv1d_as_2d_add_",
+           "accelerate", "bucket", "channels_last_1d", "choices", "conv1d_as_2d", "conv1d_as_2d_add_", "decide",
            "conv_add_available", "fast_path", "faster_version_of", "forced", "forget", "linear", "onednn_enabled",
-           "onednn_linear_available", "probe_seconds", "taken", "traced_or_eager"]
+           "onednn_linear_available", "probe_seconds", "taken", "told", "traced_or_eager"]
