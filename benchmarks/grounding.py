@@ -234,7 +234,8 @@ def table(runs: list[dict], real: tuple[dict, dict], cost: dict) -> str:
                      f"{r['before_stats']['foot_skate']:.1f} -> {r['after_stats']['foot_skate']:.1f} cm/s, drift "
                      f"{r['before_stats']['drift_per_min']:.2f} -> {r['after_stats']['drift_per_min']:.2f} m/min, range "
                      f"{r['before_stats']['root_range']:.2f} -> {r['after_stats']['root_range']:.2f} m, bob "
-                     f"{r['before_stats']['bob']:.1f} -> {r['after_stats']['bob']:.1f} cm; "
+                     f"{r['before_stats']['bob']:.1f} -> {r['after_stats']['bob']:.1f} cm, knee "
+                     f"{r['before_stats']['knee_flexion']:.1f} -> {r['after_stats']['knee_flexion']:.1f}°; "
                      f"{', '.join(missed) or 'all bars met'}{'; ' + r['note'] if r['note'] else ''}")
     lines += ["", f"Cost on one core: {cost['per_minute']:.3f} s per 60 s of motion, wall clock ({cost['cpu_per_minute']:.3f} "
               f"s of CPU time); median over {cost['takes']} takes of the median of {cost['repeats']} runs each; "
