@@ -160,3 +160,21 @@ def test_a_cached_trace_is_recorded_only_once_it_pays_off(measuring, monkeypatch
             assert len(recorded) == (1 if i >= 3 else 0)
     assert [c.break_even() for c in kernels.choices() if c.path == "trace"] == [3]
     assert not math.isnan(kernels.choices()[0].ratio)
+
+
+def test_choices_nested_in_a_long_measurement_count_against_the_budget(measuring, monkeypatch, fake_clock):
+    """A trace's warm-up runs the module, whose products ask for their own choices: once the measurement in
+    progress has used the budget, they take the default instead of being measured inside it."""
+    monkeypatch.setenv("GESTURELSM_KERNELS_BUDGET", "1")
+    inner = []
+
+    def outer_pair():
+        def default():
+            fake_clock[0] += 2.0                                          # a long first call
+            inner.append(kernels.taken("linear", ("inner",), pair))
+        return default, (lambda: None)
+
+    monkeypatch.setattr(choice, "compare", FakeCompare(2.0, 1.0))
+    assert kernels.taken("trace", ("trunk",), outer_pair)
+    assert inner == [False]
+    assert [c.key for c in kernels.choices()] == ["trace trunk"]          # the product was not measured

@@ -91,6 +91,7 @@ _spent = [0.0]                                          # wall seconds spent mea
 _depth = [0]                                            # measurements in progress (nested ones run in warm-ups)
 _calls: dict[tuple[int, str, Hashable], int] = {}       # calls made at a cached choice that has to pay off first
 _started: list[float] = []                              # when this process first asked for a choice
+_outer: list[float] = [0.0]                             # when the measurement in progress (depth 1) began
 _told: list[str] = []                                   # the line said when measuring began (once per process)
 
 
@@ -219,7 +220,7 @@ def _decide(threads: int, path: str, key: Hashable, pair: Pair) -> Choice | None
         choice = Choice(path, text, stored["taken"], float(stored["ratio"]), "cache",
                         once=float(stored.get("once", 0.0)), saving=float(stored.get("saving", 0.0)))
     else:
-        if _spent[0] >= budget():
+        if spent() >= budget():
             return None                           # no time left this time: the default, measured later
         _tell()
         choice = _measure(path, text, pair)
@@ -248,6 +249,8 @@ def _measure(path: str, text: str, pair: Pair) -> Choice:
     """Time both sides; a side that fails (a private op refusing an unusual input) means: the default, for this
     process only ("failed" is not stored)."""
     start = time.perf_counter()
+    if _depth[0] == 0:
+        _outer[0] = start
     _depth[0] += 1
     try:
         measured = compare(*pair())
@@ -272,6 +275,11 @@ def choices() -> list[Choice]:
 def told() -> str | None:
     """The line this process printed when it began measuring, or None."""
     return _told[0] if _told else None
+
+
+def spent() -> float:
+    """Wall seconds this process has spent measuring so far, the measurement in progress included."""
+    return _spent[0] + (time.perf_counter() - _outer[0] if _depth[0] > 0 else 0.0)
 
 
 def probe_seconds() -> float:
