@@ -178,3 +178,14 @@ def test_choices_nested_in_a_long_measurement_count_against_the_budget(measuring
     assert kernels.taken("trace", ("trunk",), outer_pair)
     assert inner == [False]
     assert [c.key for c in kernels.choices()] == ["trace trunk"]          # the product was not measured
+
+
+@pytest.mark.parametrize("entry", [{"taken": True, "ratio": 2.0, "once": "a lot"},
+                                   {"taken": True, "ratio": 2.0, "once": -1.0, "saving": 0.1},
+                                   {"taken": True, "ratio": 2.0, "saving": True}])
+def test_a_damaged_one_time_cost_reads_as_no_entry(measuring, monkeypatch, entry):
+    measuring.write_text(json.dumps({"version": 1, "machines": {cache.machine_key(torch.get_num_threads()): {
+        "linear a": entry}}}))
+    fake = FakeCompare(1.0, 2.0)
+    monkeypatch.setattr(choice, "compare", fake)
+    assert not kernels.taken("linear", ("a",), pair) and fake.calls == 1          # measured again
