@@ -31,7 +31,7 @@ class FakeCompare:
     def __init__(self, default: float, fast: float):
         self.times, self.calls = (default, fast), 0
 
-    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS):
+    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS, limit: float = float("inf")):
         self.calls += 1
         default_fn(), fast_fn()                         # both must run on the real tensors
         return self.times

@@ -21,7 +21,7 @@ class FakeCompare:
     def __init__(self, default: float, fast: float, once: float = 0.0, cost: float = 0.0, clock=None):
         self.times, self.calls, self.cost, self.clock = (default, fast, once), 0, cost, clock
 
-    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS):
+    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS, limit: float = float("inf")):
         self.calls += 1
         default_fn(), fast_fn()
         if self.clock is not None:
@@ -189,3 +189,36 @@ def test_a_damaged_one_time_cost_reads_as_no_entry(measuring, monkeypatch, entry
     fake = FakeCompare(1.0, 2.0)
     monkeypatch.setattr(choice, "compare", fake)
     assert not kernels.taken("linear", ("a",), pair) and fake.calls == 1          # measured again
+
+
+def test_a_measurement_that_would_not_fit_the_time_left_is_deferred(monkeypatch, fake_clock):
+    """compare projects its cost from the default's first call: 1 s a call cannot be measured in 5 s (8 calls at
+    least), so the fast side is never run (no trace recorded); with 9.5 s the rounds are cut to fit (8 s left after
+    the warm-up calls, 2 s a round projected from the default's call: 4 rounds instead of 7)."""
+    monkeypatch.setattr(choice, "clock", lambda: fake_clock[0])
+    ran = []
+
+    def side(name, cost):
+        def call():
+            ran.append(name)
+            fake_clock[0] += cost
+        return call
+
+    with pytest.raises(choice.Deferred):
+        choice.compare(side("default", 1.0), side("fast", 0.5), limit=5.0)
+    assert ran == ["default"]
+    ran.clear()
+    t_default, t_fast, _ = choice.compare(side("default", 1.0), side("fast", 0.5), limit=9.5)
+    assert (t_default, t_fast) == (1.0, 0.5)
+    assert ran.count("default") == 1 + 4 and ran.count("fast") == 1 + 4     # warm-up + the rounds that fit
+
+
+def test_a_deferred_measurement_takes_the_default_and_is_not_kept(measuring, monkeypatch):
+    def deferring(*a, **k):
+        raise choice.Deferred
+
+    monkeypatch.setattr(choice, "compare", deferring)
+    assert not kernels.taken("linear", ("a",), pair)
+    assert kernels.choices() == [] and not measuring.exists()
+    monkeypatch.setattr(choice, "compare", FakeCompare(2.0, 1.0))
+    assert kernels.taken("linear", ("a",), pair)                             # asked again later: measured

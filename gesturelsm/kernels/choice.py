@@ -54,6 +54,7 @@ PATHS = {
 }
 MARGIN = 1.05        # taken when default time / fast time >= MARGIN: a tie keeps the default
 REPEATS = 7          # timed rounds per side (medians), after one warm-up call each
+MIN_REPEATS = 3      # ... at least this many when the time left to measure is short
 MIN_ROUND_S = 2e-4   # a round repeats a short call until it lasts about this long (timer and call overhead)
 BUDGET_S = 1.0       # seconds a process may spend measuring at once (GESTURELSM_KERNELS_BUDGET) ...
 SHARE = 0.1          # ... plus this share of the wall time since its first choice
@@ -100,19 +101,32 @@ def clock() -> float:
     return time.thread_time() if torch.get_num_threads() == 1 else time.perf_counter()
 
 
-def compare(default: Callable[[], object], fast: Callable[[], object],
-            repeats: int = REPEATS) -> tuple[float, float, float]:
+class Deferred(Exception):
+    """A measurement that would not fit in the time left to measure: the default this time, measured later."""
+
+
+def compare(default: Callable[[], object], fast: Callable[[], object], repeats: int = REPEATS,
+            limit: float = math.inf) -> tuple[float, float, float]:
     """Median seconds per call of default() and fast(), after one warm-up call each (first touches, lazy
     weights, nested choices), and the fast side's one-time cost: how much more its first call took beyond its
     median than the default's first call beyond its own (0 at least). Rounds alternate which side goes first, so
-    drift hits both alike."""
+    drift hits both alike. `limit`: wall seconds the measurement may take; one projected to take longer (from the
+    default's first call) raises Deferred before the fast side runs, and the rounds are cut to fit (MIN_REPEATS
+    at least)."""
+    wall0 = time.perf_counter()
     t0 = clock()
     default()
     once = clock() - t0
+    wall_once = time.perf_counter() - wall0
+    if wall_once * (2 + 2 * MIN_REPEATS) > limit:
+        raise Deferred
     t1 = clock()
     fast()
     first_fast = clock() - t1
     n = max(1, min(64, math.ceil(MIN_ROUND_S / max(once, 1e-7))))
+    left = limit - (time.perf_counter() - wall0)
+    if math.isfinite(left):
+        repeats = max(MIN_REPEATS, min(repeats, int(left / max(2 * n * wall_once, 1e-9))))
     times: dict[int, list[float]] = {0: [], 1: []}
     for r in range(repeats):
         for side in ((0, 1) if r % 2 == 0 else (1, 0)):
@@ -224,6 +238,8 @@ def _decide(threads: int, path: str, key: Hashable, pair: Pair) -> Choice | None
             return None                           # no time left this time: the default, measured later
         _tell()
         choice = _measure(path, text, pair)
+        if choice is None:
+            return None                           # would not fit in the time left: measured later
         if choice.source == "measured":
             entry: dict = {"taken": choice.taken, "ratio": round(choice.ratio, 4)}
             if choice.once > 0:
@@ -245,15 +261,17 @@ def _tell() -> None:
     print(line, file=sys.stderr, flush=True)
 
 
-def _measure(path: str, text: str, pair: Pair) -> Choice:
-    """Time both sides; a side that fails (a private op refusing an unusual input) means: the default, for this
-    process only ("failed" is not stored)."""
+def _measure(path: str, text: str, pair: Pair) -> Choice | None:
+    """Time both sides, within the time left to measure (None: it would not fit); a side that fails (a private op
+    refusing an unusual input) means: the default, for this process only ("failed" is not stored)."""
     start = time.perf_counter()
     if _depth[0] == 0:
         _outer[0] = start
     _depth[0] += 1
     try:
-        measured = compare(*pair())
+        measured = compare(*pair(), limit=max(0.0, budget() - spent()))
+    except Deferred:
+        return None
     except Exception:  # noqa: BLE001 - the default path is always a correct answer
         return Choice(path, text, False, math.nan, "failed", time.perf_counter() - start)
     finally:
