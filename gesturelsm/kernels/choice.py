@@ -15,14 +15,16 @@ processes on a shared machine then hardly move it), wall time otherwise.
 First use on a machine: measuring is bounded so that it never holds a request up for long. A process may spend
 BUDGET_S seconds plus SHARE of its running time on it (GESTURELSM_KERNELS_BUDGET sets BUDGET_S; 0 measures
 nothing); a shape it has no time for takes the default and is measured by a later call or process, so the cache
-fills over the first runs. The first measurement of a process says so in one line on stderr.
+fills over the first runs. A measurement projected (from the default's first call) not to fit in the time left is
+deferred before the fast side runs (no trace is recorded for it), and its rounds are cut to fit. The first
+measurement of a process says so in one line on stderr.
 
 One-shot processes: a fast path has one-time costs (recording a trace, reordering weights, oneDNN generating its
 kernels) that a long-lived process pays once and a one-shot command pays every time. The measurement keeps them
 (`once`, the fast side's first call beyond its steady time and beyond the default's first call) with the time a
 call saves; a process that reads a choice from the cache takes the fast path only once the calls it has made at
-that shape would have paid for its one-time cost (ski rental: a short process stays on the default, a long one
-switches early), so a one-shot command does not pay for paths it cannot use enough.
+that shape would have saved its one-time cost (ski rental: a short process stays on the default, a long one switches
+and gains), so a one-shot command pays at most about that cost again for a path it cannot use enough.
 
 GESTURELSM_KERNELS forces the choice instead (nothing is measured or read from disk): `all` takes every path
 where it is available, `none` none, a comma list (`linear,trace`) those named. Tests set it, so they do not
