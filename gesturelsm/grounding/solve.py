@@ -39,7 +39,7 @@ class GroundingSettings:
     height_seconds: float = 0.3                               # smoothing of the root's height correction
     bob: float = 0.6                # the root height's ups and downs are scaled by this (1: as the legs have them)
     reach: float = REACH                                      # a planted leg is stretched at most this much
-    knee_seconds: float = 0.2                                # smoothing of each leg's hip-to-ankle distance
+    knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight` (else height_seconds)
     straight: bool = False          # True: the root as high as the straightest planted leg asks, knees as the
                                     # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
     heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)
@@ -105,7 +105,8 @@ def leg_lengths(rig: LegRig, pose: Posed, settings: GroundingSettings, fps: int 
     out = np.empty((len(pose.p), len(rig.legs)))
     for f, leg in enumerate(rig.legs):
         d = np.linalg.norm(pose.p[:, leg.ankle] - pose.p[:, leg.hip], axis=-1)
-        out[:, f] = np.minimum(smooth(d, settings.knee_seconds if settings.straight else settings.height_seconds, fps), sum(rig.lengths(leg)) * (1 - 1e-6))
+        seconds = settings.knee_seconds if settings.straight else settings.height_seconds
+        out[:, f] = np.minimum(smooth(d, seconds, fps), sum(rig.lengths(leg)) * (1 - 1e-6))
     return out
 
 
@@ -142,14 +143,17 @@ def height_shift(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.nd
     highest planted foot lands with its leg as it was and a lower one bends its knee), smoothed over
     `height_seconds`, its ups and downs around their median scaled by `bob` (the body bobs less: the knees bend a
     little more at the tops and straighten a little at the bottoms), kept softly under where the planted legs reach
-    when stretched to `reach`."""
+    when stretched to `reach`. With `settings.straight`: where the straightest planted leg puts it instead (the
+    others stretch, up to `reach` or as far as they were, then lift their heels by up to `heel`), so no knee bends
+    more than the motion had it."""
     root = pose.p[:, rig.parents.index(-1), 1]
     natural = root + smooth(reachable(rig, pose, plans, lengths, not settings.straight), settings.height_seconds, fps)
     middle = float(np.median(natural))
     target = middle + settings.bob * (natural - middle) - root
     full = np.array([settings.reach * sum(rig.lengths(leg)) for leg in rig.legs])
     rise = min(heel_rise(rig, leg, settings.heel) for leg in rig.legs) if settings.straight else 0.0
-    return soft_min(target, reachable(rig, pose, plans, np.maximum(full, lengths), rise=rise), SOFT_CAP)
+    longest = np.maximum(full, lengths) if settings.straight else np.broadcast_to(full, lengths.shape)
+    return soft_min(target, reachable(rig, pose, plans, longest, rise=rise), SOFT_CAP)
 
 
 def heel_rise(rig: LegRig, leg, angle: float) -> float:
@@ -160,11 +164,11 @@ def heel_rise(rig: LegRig, leg, angle: float) -> float:
 
 
 def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray, reach: np.ndarray,
-            weight: np.ndarray, limit: float, seconds: float = 0.0, fps: int = FPS) -> tuple[np.ndarray, np.ndarray]:
+            limit: float, seconds: float = 0.0, fps: int = FPS) -> tuple[np.ndarray, np.ndarray]:
     """The foot's ankle target (T, 3) and world rotation (T, 3, 3) with its heel lifted about the toe joint (which
     stays where it was) as far as needed for the leg to reach it from `hip` (T, 3) with `reach` (T,) from hip to
-    ankle, at most `limit` radians, by as much as the foot is planted (`weight` (T,)): a leg held straight lets
-    its foot rise on its ball instead of bending the other knee or floating."""
+    ankle, at most `limit` radians, the angle smoothed over `seconds`: a leg held straight lets its foot rise on
+    its ball instead of bending the other knee or floating."""
     toe = ankle + (R @ rig.toe_offset(leg))
     v = ankle - toe                                                     # toe to ankle
     up = np.broadcast_to(np.array([0.0, 1.0, 0.0]), v.shape)
@@ -250,7 +254,7 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     for f, leg in enumerate(rig.legs if settings.straight else ()):
         longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
         pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
-                                       plans[f].weight, settings.heel, settings.heel_seconds, fps)
+                                       settings.heel, settings.heel_seconds, fps)
     out = local.copy()
     for f, leg in enumerate(rig.legs):
         sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],
