@@ -57,7 +57,7 @@ def _table(threads: int, repeats: int) -> None:
             exact = F.linear(x.double(), w.double(), b.double())
             err = [((y.double() - exact).abs().max() / exact.abs().max()).item()
                    for y in (F.linear(x, w, b), linear(x, w, b))]
-            ta, tb = compare(lambda: F.linear(x, w, b), lambda: linear(x, w, b), repeats)
+            ta, tb, _ = compare(lambda: F.linear(x, w, b), lambda: linear(x, w, b), repeats)
             fl = 2 * m * k * n / 1e9
             print(f"| linear {m}x{k} -> {n} | {fl / ta:.0f} | {fl / tb:.0f} | {ta / tb:.2f}x | {err[0]:.1e} / {err[1]:.1e} |")
         for ci, co, length, stride, pad in CONVS:
@@ -66,7 +66,7 @@ def _table(threads: int, repeats: int) -> None:
             exact = F.conv1d(x.double(), w.double(), b.double(), stride, pad)
             err = [((y.double() - exact).abs().max() / exact.abs().max()).item()
                    for y in (F.conv1d(x, w, b, stride, pad), conv1d_as_2d(x2, w2, b, stride, pad)[:, :, 0])]
-            ta, tb = compare(lambda: F.conv1d(x, w, b, stride, pad), lambda: conv1d_as_2d(x2, w2, b, stride, pad),
+            ta, tb, _ = compare(lambda: F.conv1d(x, w, b, stride, pad), lambda: conv1d_as_2d(x2, w2, b, stride, pad),
                              repeats)
             fl = 2 * exact.shape[-1] * co * ci * 15 / 1e9
             print(f"| conv k15 {ci} -> {co}, length {length}, stride {stride} | {fl / ta:.0f} | {fl / tb:.0f} | "

@@ -31,7 +31,7 @@ class FakeCompare:
     def __init__(self, default: float, fast: float):
         self.times, self.calls = (default, fast), 0
 
-    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS):
+    def __call__(self, default_fn, fast_fn, repeats: int = choice.REPEATS, limit: float = float("inf")):
         self.calls += 1
         default_fn(), fast_fn()                         # both must run on the real tensors
         return self.times
@@ -107,8 +107,9 @@ def test_compare_alternates_sides_and_takes_medians(monkeypatch):
         return run
 
     monkeypatch.setattr(choice, "clock", lambda: now[0])
-    t_default, t_fast = choice.compare(call("default"), call("fast"), repeats=7)
+    t_default, t_fast, once = choice.compare(call("default"), call("fast"), repeats=7)
     assert (t_default, t_fast) == (pytest.approx(2.0), pytest.approx(1.0))
+    assert once == pytest.approx((5.0 - 1.0) - (5.0 - 2.0))          # the fast side's first call, beyond the default's
     rounds = [tuple(order[i:i + 2]) for i in range(2, len(order), 2)]      # after the two warm-up calls
     assert rounds == [("default", "fast"), ("fast", "default")] * 3 + [("default", "fast")]
 

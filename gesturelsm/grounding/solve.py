@@ -23,7 +23,7 @@ from .contacts import ContactParams, detect_contacts
 from .drift import DriftParams, remove_drift, smooth
 from .ik import REACH, two_bone
 from .rig import LegRig, Posed, forward
-from .rotations import slerp
+from .rotations import about, normalize, slerp
 from .steps import StepParams, plan_steps
 from .targets import FootPlan, TargetParams, correction, plan_foot
 
@@ -39,7 +39,11 @@ class GroundingSettings:
     height_seconds: float = 0.3                               # smoothing of the root's height correction
     bob: float = 0.6                # the root height's ups and downs are scaled by this (1: as the legs have them)
     reach: float = REACH                                      # a planted leg is stretched at most this much
-    knee_seconds: float = 0.1                                # smoothing of each leg's hip-to-ankle distance
+    knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight` (else height_seconds)
+    straight: bool = False          # True: the root as high as the straightest planted leg asks, knees as the
+                                    # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
+    heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)
+    heel_seconds: float = 0.15      # smoothing of the heel's lift
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
 
 
@@ -92,6 +96,7 @@ def stance_problem(rig: LegRig, pose: Posed, settings: GroundingSettings) -> str
 
 SOFT_MIN = 0.005                    # m: how soft the minimum over the planted feet is
 SOFT_CAP = 0.003                    # m: how softly the smoothed height is kept under the reachable one
+SOFT_MAX = 0.001                    # m: how soft the maximum over the planted feet is (the straightest leg)
 
 
 def leg_lengths(rig: LegRig, pose: Posed, settings: GroundingSettings, fps: int = FPS) -> np.ndarray:
@@ -100,25 +105,34 @@ def leg_lengths(rig: LegRig, pose: Posed, settings: GroundingSettings, fps: int 
     out = np.empty((len(pose.p), len(rig.legs)))
     for f, leg in enumerate(rig.legs):
         d = np.linalg.norm(pose.p[:, leg.ankle] - pose.p[:, leg.hip], axis=-1)
-        out[:, f] = np.minimum(smooth(d, settings.height_seconds, fps), sum(rig.lengths(leg)) * (1 - 1e-6))
+        seconds = settings.knee_seconds if settings.straight else settings.height_seconds
+        out[:, f] = np.minimum(smooth(d, seconds, fps), sum(rig.lengths(leg)) * (1 - 1e-6))
     return out
 
 
-def reachable(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray) -> np.ndarray:
-    """(T,) the most the root's height may rise while every planted leg still reaches its plant with at most
-    `lengths` (T, 2) from hip to ankle: a soft minimum over the feet, a foot easing into or out of a plant holding
-    the height by as much as it is planted (landing and lifting change it smoothly); interpolated where no foot is
-    planted."""
+def reachable(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.ndarray, every: bool = True,
+              rise: float = 0.0) -> np.ndarray:
+    """(T,) the root's height change at which the planted legs reach their plants with `lengths` (T, 2) from hip
+    to ankle. `every`: the most it may rise while every planted leg still reaches (a soft minimum over the feet);
+    else the height the straightest-held planted leg asks for (a soft maximum: no planted leg then bends its knee
+    more than `lengths` has it, the others stretch towards theirs). A foot easing into or out of a plant holds the
+    height by as much as it is planted (landing and lifting change it smoothly); interpolated where no foot is
+    planted. `rise` (m): the plants' ankles as much higher (a heel lifted off the floor)."""
     T = len(lengths)
     w = np.stack([plan.weight for plan in plans], 1)                       # (T, 2)
     s = np.empty((T, len(plans)))
     for f, (leg, plan) in enumerate(zip(rig.legs, plans)):
         hip, plant = pose.p[:, leg.hip], plan.plant
         dh = np.linalg.norm((plant - hip)[:, [0, 2]], axis=-1)
-        s[:, f] = plant[:, 1] - hip[:, 1] + np.sqrt(np.maximum(lengths[:, f] ** 2 - dh ** 2, 0.0))
-    s = w * s + (1 - w) * s.max(1, keepdims=True)          # a foot lifting lets go of the height gradually
-    m = s.min(1)
-    dy = m - SOFT_MIN * np.log(np.exp(-(s - m[:, None]) / SOFT_MIN).sum(1))
+        s[:, f] = plant[:, 1] + rise - hip[:, 1] + np.sqrt(np.maximum(lengths[:, f] ** 2 - dh ** 2, 0.0))
+    if every:
+        s = w * s + (1 - w) * s.max(1, keepdims=True)      # a foot lifting lets go of the height gradually
+        m = s.min(1)
+        dy = m - SOFT_MIN * np.log(np.exp(-(s - m[:, None]) / SOFT_MIN).sum(1))
+    else:
+        s = w * s + (1 - w) * s.min(1, keepdims=True)
+        m = s.max(1)
+        dy = m + SOFT_MAX * np.log(np.exp((s - m[:, None]) / SOFT_MAX).mean(1))     # never above the highest
     ok = w.max(1) > 1e-3
     return np.interp(np.arange(T), np.flatnonzero(ok), dy[ok])
 
@@ -129,13 +143,47 @@ def height_shift(rig: LegRig, pose: Posed, plans: list[FootPlan], lengths: np.nd
     highest planted foot lands with its leg as it was and a lower one bends its knee), smoothed over
     `height_seconds`, its ups and downs around their median scaled by `bob` (the body bobs less: the knees bend a
     little more at the tops and straighten a little at the bottoms), kept softly under where the planted legs reach
-    when stretched to `reach`."""
+    when stretched to `reach`. With `settings.straight`: where the straightest planted leg puts it instead (the
+    others stretch, up to `reach` or as far as they were, then lift their heels by up to `heel`), so no knee bends
+    more than the motion had it."""
     root = pose.p[:, rig.parents.index(-1), 1]
-    natural = root + smooth(reachable(rig, pose, plans, lengths), settings.height_seconds, fps)
+    natural = root + smooth(reachable(rig, pose, plans, lengths, not settings.straight), settings.height_seconds, fps)
     middle = float(np.median(natural))
     target = middle + settings.bob * (natural - middle) - root
     full = np.array([settings.reach * sum(rig.lengths(leg)) for leg in rig.legs])
-    return soft_min(target, reachable(rig, pose, plans, np.broadcast_to(full, lengths.shape)), SOFT_CAP)
+    rise = min(heel_rise(rig, leg, settings.heel) for leg in rig.legs) if settings.straight else 0.0
+    longest = np.maximum(full, lengths) if settings.straight else np.broadcast_to(full, lengths.shape)
+    return soft_min(target, reachable(rig, pose, plans, longest, rise=rise), SOFT_CAP)
+
+
+def heel_rise(rig: LegRig, leg, angle: float) -> float:
+    """How much higher (m) a level foot's ankle is with its heel lifted by `angle` about the toe joint."""
+    v = -rig.toe_offset(leg)                                   # toe to ankle
+    h, y = float(np.hypot(v[0], v[2])), float(v[1])
+    return max(0.0, h * np.sin(angle) + y * np.cos(angle) - y)
+
+
+def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray, reach: np.ndarray,
+            limit: float, seconds: float = 0.0, fps: int = FPS) -> tuple[np.ndarray, np.ndarray]:
+    """The foot's ankle target (T, 3) and world rotation (T, 3, 3) with its heel lifted about the toe joint (which
+    stays where it was) as far as needed for the leg to reach it from `hip` (T, 3) with `reach` (T,) from hip to
+    ankle, at most `limit` radians, the angle smoothed over `seconds`: a leg held straight lets its foot rise on
+    its ball instead of bending the other knee or floating."""
+    toe = ankle + (R @ rig.toe_offset(leg))
+    v = ankle - toe                                                     # toe to ankle
+    up = np.broadcast_to(np.array([0.0, 1.0, 0.0]), v.shape)
+    k = normalize(np.cross(v, up))                                      # turning v about k lifts the ankle
+    u = np.cross(k, v)
+    d = hip - toe
+    a, b = (d * v).sum(-1), (d * u).sum(-1)
+    C = ((d * d).sum(-1) + (v * v).sum(-1) - reach ** 2) / 2
+    r = np.maximum(np.hypot(a, b), 1e-12)
+    far = np.linalg.norm(hip - ankle, axis=-1) > reach
+    alpha = np.arctan2(b, a) - np.arccos(np.clip(C / r, -1.0, 1.0))
+    alpha = np.where(far, np.clip(alpha, 0.0, limit), 0.0)
+    alpha = np.clip(smooth(alpha, seconds, fps), 0.0, limit)
+    out = toe + v * np.cos(alpha)[:, None] + u * np.sin(alpha)[:, None]
+    return out, about(k, alpha) @ R
 
 
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
@@ -203,6 +251,10 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     pose.p[:, list(rig.chain), 1] += dy[:, None]
     feet = measure_feet(rig, pose, settings.floor, fps)
     pos, rot = leg_targets(rig, feet, plans, settings, R_ankle)
+    for f, leg in enumerate(rig.legs if settings.straight else ()):
+        longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
+        pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
+                                       settings.heel, settings.heel_seconds, fps)
     out = local.copy()
     for f, leg in enumerate(rig.legs):
         sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],

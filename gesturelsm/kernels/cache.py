@@ -69,7 +69,9 @@ def machine_key(threads: int) -> str:
 
 
 def read(path: Path | None) -> dict[str, dict[str, dict]]:
-    """{machine key: {choice key: {"taken": bool, "ratio": float}}} from the file; {} for anything unreadable."""
+    """{machine key: {choice key: {"taken": bool, "ratio": float[, "once": s, "saving": s]}}} from the file (once:
+    the fast path's one-time cost, saving: what a call saves; choice.py); {} for anything unreadable, and an entry
+    that does not read as one is left out."""
     if path is None:
         return {}
     try:
@@ -85,9 +87,13 @@ def read(path: Path | None) -> dict[str, dict[str, dict]]:
     return out
 
 
+def _number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
 def _valid(entry) -> bool:
-    return (isinstance(entry, dict) and isinstance(entry.get("taken"), bool)
-            and isinstance(entry.get("ratio"), (int, float)) and not isinstance(entry.get("ratio"), bool))
+    return (isinstance(entry, dict) and isinstance(entry.get("taken"), bool) and _number(entry.get("ratio"))
+            and all(_number(entry[k]) and entry[k] >= 0 for k in ("once", "saving") if k in entry))
 
 
 def write(path: Path | None, machine: str, choices: dict[str, dict]) -> None:

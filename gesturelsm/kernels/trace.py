@@ -13,13 +13,14 @@ from typing import Callable
 import torch
 import torch.nn as nn
 
-from .choice import taken
+from .choice import decide
 
 
 def traced_or_eager(module: nn.Module, args: tuple[torch.Tensor, ...], name: str) -> Callable[..., torch.Tensor]:
     """`module` itself or its trace for inputs of these shapes, whichever was measured faster (`name` and the
     shapes key the choice). Made once per shape by the caller and kept; a module the tracer cannot record runs as
-    it is."""
+    it is. A trace chosen by another process (read from the cache) is recorded only once this process has called
+    it often enough to pay for the recording (choice.Choice.break_even); until then the module runs as it is."""
     made: list[Callable[..., torch.Tensor]] = []
 
     def record() -> Callable[..., torch.Tensor]:
@@ -28,9 +29,20 @@ def traced_or_eager(module: nn.Module, args: tuple[torch.Tensor, ...], name: str
         return made[0]
 
     key = (name, *(tuple(a.shape) for a in args))
-    if taken("trace", key, lambda: ((lambda: module(*args)), (lambda: record()(*args)))):
+    got = decide("trace", key, lambda: ((lambda: module(*args)), (lambda: record()(*args))))
+    if got is None or not got.taken:
+        return module
+    need = got.break_even()
+    if need == 0:
         return record()
-    return module
+    calls = [0]
+
+    def run(*a: torch.Tensor) -> torch.Tensor:                  # read from the cache: recorded once it pays off
+        if calls[0] >= need:
+            return record()(*a)
+        calls[0] += 1
+        return module(*a)
+    return run
 
 
 def _trace(module: nn.Module, args: tuple[torch.Tensor, ...]) -> Callable[..., torch.Tensor]:
