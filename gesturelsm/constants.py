@@ -12,6 +12,13 @@ Progress = Callable[[float, str], None]     # progress callbacks: (fraction done
 # method's sampling, a video of every frame): 5 minutes bounds what one visitor holds on a shared server and still
 # covers a long answer or monologue; the commands and Python take the same limit and raise it when asked.
 MAX_SECONDS = 300.0
+# The smoothing of finished motion (motion/postprocess.py), here so that the settings need no torch to name them.
+SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}     # frames at 30 fps
+# The default of the app, `gesturelsm generate` and the study batch. "light" because the tokenizers' decoders still
+# add some frame-to-frame jitter the speaker does not have (the real held-out motion's round trip: jerk 27 -> 36
+# m/s^3); on the shipped GestureLSM (8 steps, held-out speech) it takes jerk from 34 to 27 (the speaker: 30) and
+# leaves the raised share, wrist height and speed unchanged (assets/MODEL_CARD.md). "off" gives the raw decoder output.
+DEFAULT_SMOOTHING = "light"
 
 
 def _shipped_assets() -> Path:

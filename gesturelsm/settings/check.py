@@ -11,13 +11,15 @@ named as the entry point shows them (`PAGE`: "Steps", `CLI`: "--steps").
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from ..backends import SPECS, MethodSpec, method_spec
+from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
-from ..motion.postprocess import SMOOTHING_WINDOWS
 from .defaults import DEFAULTS, SEED_MAX, Limits, PostProcess, Settings
 from .values import method_list, number_list, one_of, real_number, switch, whole_number
+
+if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings
+    from ..backends import MethodSpec
 
 
 class _Missing:
@@ -76,6 +78,8 @@ def _given(value: Any, default: Any) -> Any:
 def steps_per_method(asked: Asked, methods: Sequence[str]) -> dict[str, tuple[Any, str]]:
     """{method: (value as sent, name of the setting that gave it)} for the chosen methods that have a spec; methods
     whose setting was not sent are left out (they run their default)."""
+    from ..backends import SPECS
+
     out = {}
     for m in methods:
         if m not in SPECS:
@@ -95,6 +99,8 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
     """Steps per method, each within its spec's bound and the entry point's cap for its setting. A value is checked
     once against the widest bound of the methods it drives (type, emptiness, below 1), then against each method's
     own, naming the method when the bounds differ."""
+    from ..backends import SPECS, method_spec
+
     groups: dict[tuple[str, str], list[str]] = {}
     values: dict[tuple[str, str], Any] = {}
     for m, (value, setting) in steps_per_method(asked, methods).items():
@@ -120,6 +126,8 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
 
 def cfg_bound(methods: Sequence[str]) -> float:
     """The largest CFG scale every chosen method accepts."""
+    from ..backends import SPECS
+
     return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
 
 
