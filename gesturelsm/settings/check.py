@@ -131,6 +131,20 @@ def cfg_bound(methods: Sequence[str]) -> float:
     return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
 
 
+def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
+    """A seed: a whole number from 0 to SEED_MAX, never rounded."""
+    return whole_number(value, names.seed, 0, SEED_MAX, problems)
+
+
+def checked_seed(value: Any, names: Names = PAGE) -> int:
+    """A seed sent alone (the page's Edit), checked as the settings' seed is: the int, or an InputError."""
+    p: list[str] = []
+    seed = seed_problems(value, names, p)
+    if p:
+        raise InputError("\n".join(p))
+    return seed
+
+
 def check_post(asked: Asked, names: Names, problems: list[str]) -> PostProcess | None:
     n = len(problems)
     in_place = switch(_given(asked.stand_in_place, DEFAULTS.post.stand_in_place), names.stand_in_place, problems)
@@ -147,7 +161,7 @@ def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = L
     methods = method_list(_given(asked.methods, list(default_methods)), list(available), p, names.methods)
     steps = check_steps(asked, methods or [], limits, names, p)
     cfg = real_number(_given(asked.cfg, DEFAULTS.cfg), names.cfg, 0.0, cfg_bound(methods or []), p)
-    seed = whole_number(_given(asked.seed, DEFAULTS.seed), names.seed, 0, SEED_MAX, p)
+    seed = seed_problems(_given(asked.seed, DEFAULTS.seed), names, p)
     post = check_post(asked, names, p)
     transcribe = switch(_given(asked.transcribe, DEFAULTS.transcribe), names.transcribe, p)
     if p:
@@ -192,4 +206,4 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_method_settings", "check_post",
-           "check_steps", "checked", "grid_problems", "settings_problems", "steps_per_method"]
+           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems", "steps_per_method"]
