@@ -21,7 +21,9 @@ from .train import GenTrainConfig, train_generator
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder")
+    p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder",
+                       description="Train a speech-to-latent generator for one sampling method (GestureLSM's "
+                                   "shortcut flow or a baseline) over frozen tokenizers, on a BEAT2-layout folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
     p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
     p.add_argument("--method", default="gesturelsm", choices=list(METHODS), help="the sampling method it is trained for")
@@ -46,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8,
                    help="without a split file: the first fraction of each take is training, the rest held out")
-    p.add_argument("--speakers", nargs="*")
+    p.add_argument("--speakers", nargs="*", help="speaker ids or names to train on (e.g. 2 scott; default: all)")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda | cuda:N; several processes (torchrun): "

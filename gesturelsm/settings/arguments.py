@@ -57,7 +57,8 @@ def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
 def add_post_flags(p: argparse.ArgumentParser) -> None:
     """--smoothing, --stand-in-place and --grounding: the post-processing of every motion (`PostProcess`)."""
     p.add_argument("--smoothing", default=DEFAULTS.post.smoothing, choices=list(SMOOTHING_WINDOWS),
-                   help="post-processing (motion/postprocess.py); 'off' writes the raw model output "
+                   help="smoothing of the finished motion (a Savitzky-Golay filter over 0 / 5 / 9 / 15 frames); "
+                        "'off' writes the raw model output "
                         f"(default: {DEFAULTS.post.smoothing})")
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     add_grounding_flag(p)
