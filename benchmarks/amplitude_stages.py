@@ -5,10 +5,10 @@
 Held-out speech: the last 20 % of 2_scott_0_1_1 (the shipped models trained on its first 80 %) and the
 audio-only takes 2_scott_0_2_2, 2_scott_0_3_3, audio-only and with their MFA transcripts. Statistics
 (gesturelsm/metrics/amplitude.py, wrists relative to the pelvis, y up, metres) pooled over clips x seeds,
-in brackets the ratio to the speaker's whole take (the held-out 20 % alone is a calmer stretch: 14.7 % raised); replay guard = median distance of 1 s upper-body
-windows to the nearest training window, over the same for the speaker's held-out motion. Generated motion is
-post-processed as the app does by default (--smoothing, default light: a 5-frame Savitzky-Golay filter, see
-motion/postprocess.py); the jerk before it is shown in brackets ("raw").
+in brackets the ratio to the speaker's whole take (the held-out 20 % alone is a calmer stretch: 14.7 % raised); replay
+guard = median distance of 1 s upper-body windows to the nearest training window, over the same for the speaker's
+held-out motion. Generated motion is post-processed as the app does by default (--smoothing, default light: a 5-frame
+Savitzky-Golay filter, see motion/postprocess.py); the jerk before it is shown in brackets ("raw").
 
 Stages (--stages, any of):
   speaker     the speaker: held-out 20 % and training 80 %

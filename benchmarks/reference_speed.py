@@ -5,10 +5,10 @@
 
 Paper-size models with random weights (the released files are not needed for timing): the authors'
 GestureLSM / GestureMF classes built from their configs_new/*.yaml, their state dict converted into ours,
-outputs checked equal first (max abs difference <= 1e-4, or the script stops). Timed (median of interleaved repeats): one denoiser step with the CFG pair for a
-128-frame window, and one clip (speech encoder + sampler) for shortcut 2 / 8 steps (CFG 2) and MeanFlow
-1 step; then our real-time factor for 60 s of synthetic speech (features, all windows, RVQ decoding at
-paper size, 6D -> axis-angle). Without --reference-code only our side is measured.
+outputs checked equal first (max abs difference <= 1e-4, or the script stops). Timed (median of interleaved repeats):
+one denoiser step with the CFG pair for a 128-frame window, and one clip (speech encoder + sampler) for shortcut 2 / 8
+steps (CFG 2) and MeanFlow 1 step; then our real-time factor for 60 s of synthetic speech (features, all windows, RVQ
+decoding at paper size, 6D -> axis-angle). Without --reference-code only our side is measured.
 """
 from __future__ import annotations
 
@@ -85,7 +85,8 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
             if kind == "shortcut":
                 ta, tb = [], []
                 for _ in range(repeats):  # interleaved
-                    ta.append(_timed(ref_step, 1)); tb.append(_timed(our_step, 1))
+                    ta.append(_timed(ref_step, 1))
+                    tb.append(_timed(our_step, 1))
                 rows.append(("denoiser step, CFG pair, 128 frames", statistics.median(ta), statistics.median(tb)))
             for n in steps_list:
                 theirs.num_inference_steps = n

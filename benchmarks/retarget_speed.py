@@ -7,8 +7,9 @@ absent). Characters: cryptovoxels.vrm (../shared, VRM 0.x, 43 humanoid bones of 
 from the SMPL-X rest pose (all 52 body and finger bones; an A-pose Z-up centimetre rig without fingers). Times
 are the retargeting alone (SMPL-X forward kinematics + solving + local rotations), median of the repeats, after
 one warm-up run, and beside them the grounding of the result on the character's own legs (retarget/grounding.py:
-contacts, plants, two-bone IK, the legs' local rotations again); loading the character and writing files are not included. Wall seconds depend on what else
-runs on the machine; CPU seconds (this process's) much less, so both are printed. Compare rows of one run.
+contacts, plants, two-bone IK, the legs' local rotations again); loading the character and writing files are not
+included. Wall seconds depend on what else runs on the machine; CPU seconds (this process's) much less, so both are
+printed. Compare rows of one run.
 """
 from __future__ import annotations
 

@@ -131,7 +131,7 @@ class GesturePipeline:
     def warm_up(self) -> None:
         """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
         (~3 s) are not counted in the first request's feature time."""
-        TextEmbedder.shared().available  # noqa: B018 (loads the model)
+        TextEmbedder.shared().available  # loads the model
         audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
 
     @property
@@ -288,7 +288,7 @@ class GesturePipeline:
                 if made.motion is not None:
                     made.motion, note = plan.settings.post.apply(made.motion.slice(0, T), body)
                     made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
-            except Exception as exc:  # noqa: BLE001 (the caller reports it with the methods that were made)
+            except Exception as exc:  # the caller reports it with the methods that were made
                 if not keep_going:
                     raise
                 made = Made(m, None, error=exc)

@@ -1,7 +1,8 @@
 """The before/after picture of docs/EDITING.md: the real BEAT2 take's own motion, and the same take with its upper
 body and hands regenerated over 8-11 s by the shipped GestureLSM (seed 1) with a keyframe at 9.5 s posed as the
-take's frame 408 (both hands raised, at 13.6 s). Top: the mannequin at four times, before (input) and after (edited); bottom: the right elbow's
-bend and the right wrist's height over time, before and after, with the range and the keyframe marked.
+take's frame 408 (both hands raised, at 13.6 s). Top: the mannequin at four times, before (input) and after (edited);
+bottom: the right elbow's bend and the right wrist's height over time, before and after, with the range
+and the keyframe marked.
 
     .venv/bin/python scripts/edit_picture.py [--out docs/editing.png]
 """

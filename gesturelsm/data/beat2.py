@@ -23,7 +23,7 @@ import torch
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, AudioError, load_audio
 from ..errors import DatasetError
-from ..motion.sequence import FPS, MotionFileError, MotionSequence
+from ..motion.sequence import FPS, MotionSequence
 from .windows import window_starts
 
 CACHE_VERSION = 1

@@ -10,9 +10,9 @@ Quirks (all deliberate here, see docs/AUTHORS-CODE.md):
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.
 Ours is faster than the reference code for the same function (benchmarks/reference_speed.py): loaded for inference,
 its linear layers run through oneDNN (kernels.accelerate); the hidden layers' GELU is declared with its product
-(kernels.LinearGELU) so it fuses into it; the speech keys/values of the cross-attention are computed once per clip, with the
-query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`);
-the null condition's are kept; rotary tables are cached; attention is fused.
+(kernels.LinearGELU) so it fuses into it; the speech keys/values of the cross-attention are computed once per clip, with
+the query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`); the
+null condition's are kept; rotary tables are cached; attention is fused.
 """
 from __future__ import annotations
 

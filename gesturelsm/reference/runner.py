@@ -1,10 +1,10 @@
 """Run converted authors' models on any length of speech, in the shared window loop (`flows.windows`).
 
 Windows of 128 frames (4.27 s) advance by 112 frames; each window's seed is the last 4 latent frames of
-the previous one, and the overlap keeps the previous window's latents, as in the reference. Unlike the reference (first seed taken from a ground-truth file,
-trailing frames dropped, 63 s cap), the first seed is *neutral*: the RVQ encoding of the speaker's mean
-pose standing still; the audio is padded to whole windows and the output cut to the speech's length.
-Face: the released configs generate none, so jaw and expressions stay neutral (identity jaw, zeros).
+the previous one, and the overlap keeps the previous window's latents, as in the reference. Unlike the reference (first
+seed taken from a ground-truth file, trailing frames dropped, 63 s cap), the first seed is *neutral*: the RVQ encoding
+of the speaker's mean pose standing still; the audio is padded to whole windows and the output cut to the speech's
+length. Face: the released configs generate none, so jaw and expressions stay neutral (identity jaw, zeros).
 """
 from __future__ import annotations
 
@@ -42,13 +42,15 @@ class ReferenceBundle:
     def normalise(self, region: str, x: torch.Tensor) -> torch.Tensor:
         m, s = self.stats["mean"][_cols(region)], self.stats["std"][_cols(region)]
         if region == "lower":
-            m = torch.cat([m, self.stats["trans_mean"]]); s = torch.cat([s, self.stats["trans_std"]])
+            m = torch.cat([m, self.stats["trans_mean"]])
+            s = torch.cat([s, self.stats["trans_std"]])
         return (x - m) / s
 
     def denormalise(self, region: str, z: torch.Tensor) -> torch.Tensor:
         m, s = self.stats["mean"][_cols(region)], self.stats["std"][_cols(region)]
         if region == "lower":
-            m = torch.cat([m, self.stats["trans_mean"]]); s = torch.cat([s, self.stats["trans_std"]])
+            m = torch.cat([m, self.stats["trans_mean"]])
+            s = torch.cat([s, self.stats["trans_std"]])
         return z * s + m
 
     def neutral_seed(self, frames: int = 4) -> torch.Tensor:

@@ -289,7 +289,6 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     P, G = _smplx_fk(seq, source)
     delta = _solve_deltas(skel, setup.plan, P, G)
     pos = rest_rooted(setup, delta)
-    hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
     feet = [f for f in FEET if f in skel.bones]
     smplx_low = (P[:, [JOINT_INDEX[f] for f in feet], 1] + np.asarray(seq.trans, np.float64)[:, 1:2]).min(1)

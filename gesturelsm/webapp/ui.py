@@ -60,8 +60,9 @@ SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with yo
 *Feet on the ground* (on by default) plants each foot where it lands (leg IK), keeps the body from drifting away and
 puts it on the floor, for every method and ground truth, without touching the upper body; *stand in place* removes
 horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
-Timings: features, alignment and transcription are computed once and shared by all methods; the real-time factor is seconds of
-speech per second of generation (alignment, transcription and rendering excluded, as in the paper); the last row is the whole
+Timings: features, alignment and transcription are computed once and shared by all methods; the real-time factor is
+seconds of speech per second of generation (alignment, transcription and rendering excluded, as in the paper); the last
+row is the whole
 request, upload to video."""
 
 

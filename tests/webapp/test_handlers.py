@@ -12,7 +12,7 @@ from gesturelsm.webapp.ui import _Handlers, build_demo
 
 
 def inputs(wav, seed: int, grounding: bool = True) -> tuple:
-    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
+    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
     return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding)
 
 

@@ -17,8 +17,8 @@ from gesturelsm.retarget.grounding import CharacterStreamGrounder
 from gesturelsm.retarget.solve import prepare
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order  # noqa: E402
-from gesturelsm.webapp.live_character import CharacterStream  # noqa: E402
+from gesturelsm.webapp.character import bone_order
+from gesturelsm.webapp.live_character import CharacterStream
 
 CHUNKS = (20, 20, 7, 33, 20, 1, 19)
 
