@@ -183,7 +183,8 @@ def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, me
     line("real, training 80 % and its mirror image", train)
     line("neutral first-window seed", model.neutral_seed.cpu())
     held = [c for c in data.clips if c.motion is not None]
-    line("real, held-out 20 %", torch.cat([encode_regions(pipe.tokenizers, c.motion.to_features()) for c in held], 1) / std)
+    line("real, held-out 20 %",
+         torch.cat([encode_regions(pipe.tokenizers, c.motion.to_features()) for c in held], 1) / std)
     for method in methods:
         for n in steps:
             for text in (False, True):
@@ -218,7 +219,8 @@ def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
     for c in data.clips:
         sp = pipe.prepare_speech(c.audio, 16000, words=c.words if text else None)
         for k in seeds:
-            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames, steps, cfg, k)
+            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames, steps, cfg,
+                                   k)
             z = lat / std
             z = mu + (z - mu) * sd / z.std(dim=(1, 2), keepdim=True)                # each region at training spread
             feats = join_regions(decode_latents(pipe.tokenizers, z * std, sp.num_frames))

@@ -55,7 +55,8 @@ PARAGRAPH = ("so the question people keep asking me is whether any of this actua
              "the third day the numbers looked completely different, calmer and more regular, and that told us the "
              "first two days were mostly people performing for the equipment rather than living their lives.")
 MEASURES = (("foot_skate", "skate cm/s", "{:.1f}"), ("contact_share", "contact", "{:.2f}"),
-            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"), ("bob", "bob cm", "{:.1f}"),
+            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"), ("bob", "bob cm",
+                                                                                              "{:.1f}"),
             ("penetration", "pen. p99 cm", "{:.1f}"), ("leg_jerk", "leg jerk m/s³", "{:.1f}"),
             ("raised_share", "raised", "{:.3f}"), ("height_p95", "wrist p95 m", "{:.3f}"),
             ("wrist_speed", "wrist m/s", "{:.3f}"))
@@ -115,7 +116,8 @@ def recordings() -> list[tuple[str, np.ndarray, list | None]]:
 
     out = []
     for name in ("2_scott_0_2_2", "2_scott_0_3_3"):
-        out.append((name, load_audio(BEAT2 / "wave16k" / f"{name}.wav"), read_words(BEAT2 / "textgrid" / f"{name}.TextGrid")))
+        out.append((name, load_audio(BEAT2 / "wave16k" / f"{name}.wav"),
+                    read_words(BEAT2 / "textgrid" / f"{name}.TextGrid")))
     audio = load_audio(BEAT2 / "wave16k" / f"{TAKE}.wav")
     n = len(MotionSequence.load(BEAT2 / "smplxflame_30" / f"{TAKE}.npz").poses)
     start = int(0.8 * n)                                            # the held-out 20 % of the motion take

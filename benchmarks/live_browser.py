@@ -149,7 +149,8 @@ def run(args) -> dict:
         left = sum(t.name == "gesturelsm-live" and t.is_alive() for t in threading.enumerate())
     finally:
         demo.close()
-    return {"config": config, "end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu, "load": (load0, os.getloadavg()),
+    return {"config": config, "end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu,
+            "load": (load0, os.getloadavg()),
             "left": left}
 
 
@@ -174,7 +175,8 @@ def report(r: dict, seconds: float) -> None:
         ("frames drawn (data-frames)", str(e["frames"])),
         ("draws per second, median of 1-s samples", f"{statistics.median(fps):.0f}" if fps else "-"),
         ("chunks out of order (gaps)", str(e["gaps"])),
-        ("at the end, s behind the speech: audio at the server", f"{e['spoken'] - e['server_audio'] - e['server_audio_age']:.2f}"),
+        ("at the end, s behind the speech: audio at the server",
+         f"{e['spoken'] - e['server_audio'] - e['server_audio_age']:.2f}"),
         ("at the end, s behind the speech: motion in the browser", f"{e['spoken'] - e['received'] / 30:.2f}"),
         ("at the end, s behind the speech: motion on screen", f"{e['spoken'] - e['on_screen']:.2f}"),
         ("CPU share, server process (cores)", f"{r['cpu'] / r['wall']:.2f}"),

@@ -196,7 +196,8 @@ def per_draw(prof: dict | None) -> str:
 
 HEADER = ["speech", "methods", "page", "body", "click -> first body moving (s), median (range)",
           "click -> all moving (s)", "frames drawn in the first 2 s", "click -> payload in the page (s)"]
-FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)", "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
+FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)",
+        "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
         "again, new seed -> playing (s)", "again while the mp4 renders -> playing (s) (runs where it still rendered)"]
 
 
@@ -209,7 +210,8 @@ def row(dur: float, n: int, page: str, body: str, runs: list[dict], quick: bool)
              f"{med('drawn2'):.0f}", f"{payload:.2f}"]
     if not quick:
         busy = sum(x["rendering"] for x in runs)
-        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]), f"{med('scrub'):.0f}", f"{med('again'):.2f}",
+        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]),
+                  f"{med('scrub'):.0f}", f"{med('again'):.2f}",
                   f"{med('again_rendering'):.2f} ({busy}/{len(runs)})"]
     return "| " + " | ".join(cells) + " |"
 

@@ -92,7 +92,8 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
                 theirs.num_inference_steps = n
                 torch.manual_seed(1)
                 ref_out = theirs(cond)
-                our_out = ours.sample(audio, words, seed, ref_out["init_noise"][:, :, 0], steps=n, cfg_scale=theirs.guidance_scale)
+                our_out = ours.sample(audio, words, seed, ref_out["init_noise"][:, :, 0], steps=n,
+                                      cfg_scale=theirs.guidance_scale)
                 diff = (ref_out['latents'][:, :, 0] - our_out).abs().max().item()
                 print(f"{kind} {n} steps: clip max |ours - theirs| = {diff:.2e}")
                 _check_equal(diff, f"{kind} {n}-step clip")
@@ -100,8 +101,10 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
                 ta, tb = [], []
                 for _ in range(repeats):
                     ta.append(_timed(lambda: theirs(cond), 1))
-                    tb.append(_timed(lambda: ours.sample(audio, words, seed, noise, steps=n, cfg_scale=theirs.guidance_scale), 1))
-                rows.append((f"clip: {kind} {n} step(s), CFG {theirs.guidance_scale:g}", statistics.median(ta), statistics.median(tb)))
+                    tb.append(_timed(lambda: ours.sample(audio, words, seed, noise, steps=n,
+                                                         cfg_scale=theirs.guidance_scale), 1))
+                rows.append((f"clip: {kind} {n} step(s), CFG {theirs.guidance_scale:g}", statistics.median(ta),
+                             statistics.median(tb)))
     return rows
 
 

@@ -117,7 +117,8 @@ def request_table(args) -> None:
     for dur, rs in runs.items():
         cols.append((f"{dur:.0f} s, first", rs[0]))
         if len(rs) > 1:
-            cols.append((f"{dur:.0f} s, median of {len(rs) - 1} after", {k: median(x[k] for x in rs[1:]) for k in rs[1]}))
+            cols.append((f"{dur:.0f} s, median of {len(rs) - 1} after",
+                         {k: median(x[k] for x in rs[1:]) for k in rs[1]}))
     keys = list(dict.fromkeys(k for _, c in cols for k in c))
     print("| stage (s) | " + " | ".join(n for n, _ in cols) + " |\n|---|" + "---|" * len(cols))
     for k in keys:

@@ -114,7 +114,8 @@ def memory(data: Path) -> str:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
-    ap.add_argument("--beam-size", type=int, default=BEAM_SIZE, help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
+    ap.add_argument("--beam-size", type=int, default=BEAM_SIZE,
+                    help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not (args.data / "textgrid").is_dir():

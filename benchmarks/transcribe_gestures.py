@@ -62,7 +62,8 @@ def main() -> int:
     for name, speech in inputs.items():
         stats = [gesture_stats(body, pipe.generate(speech, steps=8, cfg=2.0, seed=s).motion) for s in range(args.seeds)]
         rows[name] = np.mean(stats, 0)
-    rows["speaker (BEAT2 motion)"] = gesture_stats(body, MotionSequence.load(args.data / "smplxflame_30" / f"{TAKE}.npz"))
+    rows["speaker (BEAT2 motion)"] = gesture_stats(body,
+                                                   MotionSequence.load(args.data / "smplxflame_30" / f"{TAKE}.npz"))
     for name, (share, p95, speed) in rows.items():
         print(f"| {name} | {100 * share:.1f} % | {p95:.3f} | {speed:.3f} |")
     a, m = rows["automatic transcript"], rows["MFA transcript"]

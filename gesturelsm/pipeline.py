@@ -323,7 +323,8 @@ class GesturePipeline:
         out = self.backends[method].generate(speech, steps, cfg, seed, prog)
         if progress:
             progress(1.0, f"{method}: done")
-        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **out.timings},
+        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed),
+                                {**speech.timings, **out.timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
 
     # ---- editing -----------------------------------------------------------------------------------------

@@ -61,7 +61,8 @@ def main() -> None:
             ax = fig.add_subplot(grid[row, col])
             ax.imshow(img)
             ax.set_xticks([]), ax.set_yticks([])
-            ax.set_title(f"{name}, {t:.1f} s" + (" (keyframe)" if t == KEY_TIME and name == "after" else ""), fontsize=10)
+            ax.set_title(f"{name}, {t:.1f} s" + (" (keyframe)" if t == KEY_TIME and name == "after" else ""),
+                         fontsize=10)
     ax = fig.add_subplot(grid[2, :])
     jb, ja = body.joints(before.poses, before.trans), body.joints(after.poses, after.trans)
     t = np.arange(before.num_frames) / 30

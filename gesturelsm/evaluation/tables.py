@@ -24,7 +24,8 @@ def eval_markdown(rep: dict) -> str:
     if gt:
         cells = ["ground truth", "-", "-", *["-" for _ in ex], _f(gt["bc"]), _f(gt["diversity"], "{:.2f}"), "-",
                  *(["-"] if rep.get("face_vertices") else []), _f(gt["jitter"], "{:.1f}"),
-                 _f(gt["foot_skate"], "{:.1f}"), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
+                 _f(gt["foot_skate"],
+                    "{:.1f}"), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
         lines.append("| " + " | ".join(cells) + " |")
     for r in rep["rows"]:
         h = r.get("heldout")

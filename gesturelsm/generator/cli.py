@@ -25,8 +25,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description="Train a speech-to-latent generator for one sampling method (GestureLSM's "
                                    "shortcut flow or a baseline) over frozen tokenizers, on a BEAT2-layout folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
-    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
-    p.add_argument("--method", default="gesturelsm", choices=list(METHODS), help="the sampling method it is trained for")
+    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"),
+                   help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
+    p.add_argument("--method", default="gesturelsm", choices=list(METHODS),
+                   help="the sampling method it is trained for")
     p.add_argument("--preset", default="small", help="tiny | small (shipped) | paper")
     p.add_argument("--out", default="runs/generator", help="run folder")
     p.add_argument("--steps", type=int, default=4000, help="training steps")

@@ -85,7 +85,8 @@ class Denoiser(nn.Module):
         self.emb_mlp = nn.Sequential(nn.Linear(C, C), nn.GELU(), nn.Linear(C, C))
         self.seed_proj = nn.Linear(R * c.seed_latents * D, C)
         self.merge = nn.Linear(2 * C, C)
-        self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn, c.drop_path) for _ in range(c.cross_layers))
+        self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn,
+                                              c.drop_path) for _ in range(c.cross_layers))
         self.st = nn.ModuleList(STBlock(C, c.heads, c.ffn, c.drop_path) for _ in range(c.st_layers))
         self.speech_in = nn.Sequential(nn.LayerNorm(c.cond_dim), nn.Linear(c.cond_dim, C)) if c.speech_add else None
         self.out_norm = nn.LayerNorm(C)

@@ -72,7 +72,8 @@ def edit_weights(original: MotionSequence, generated: MotionSequence, spec: Edit
         n_out = _ramp_frames(float(angle[max(lo, hi - RAMP_MAX):hi].max()), budget, hi - lo)
         w[lo:hi] = 1.0
         w[lo:lo + n_in] = 0.5 * (1 - np.cos(np.pi * np.arange(1, n_in + 1) / (n_in + 1)))
-        w[hi - n_out:hi] = np.minimum(w[hi - n_out:hi], 0.5 * (1 - np.cos(np.pi * np.arange(n_out, 0, -1) / (n_out + 1))))
+        w[hi - n_out:hi] = np.minimum(w[hi - n_out:hi],
+                                      0.5 * (1 - np.cos(np.pi * np.arange(n_out, 0, -1) / (n_out + 1))))
     return w
 
 

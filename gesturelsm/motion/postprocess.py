@@ -67,4 +67,5 @@ def postprocess(seq: MotionSequence, in_place: bool = False, smoothing: str = "o
     return smooth(seq, smoothing) if smoothing != "off" else seq
 
 
-__all__ = ["DEFAULT_SMOOTHING", "SMOOTHING_WINDOWS", "check_smoothing", "fit_length", "postprocess", "smooth", "stand_in_place"]
+__all__ = ["DEFAULT_SMOOTHING", "SMOOTHING_WINDOWS", "check_smoothing", "fit_length", "postprocess", "smooth",
+           "stand_in_place"]

@@ -41,7 +41,8 @@ def import_reference(src: str | Path, out: str | Path, heads: int = 4) -> list[P
     hint = "from the authors' release: Google Drive / huggingface.co/pliu23/GestureLSM"
     rvqs = {r: rvq_from_state(load_state(_require(src, f"net_300000_{r}.pth", hint), ("net",))) for r in REGIONS}
     check_region_dims(rvqs)
-    stats = {k: load_npy(_require(src, f, "the reference repository's mean_std/ folder")) for k, f in STAT_FILES.items()}
+    stats = {k: load_npy(_require(src, f,
+                                  "the reference repository's mean_std/ folder")) for k, f in STAT_FILES.items()}
     if stats["mean"].shape != (330,) or stats["trans_mean"].shape != (3,):
         raise ReferenceFileError("statistics must be 330 (6D pose) and 3 (translation velocity) values")
     w2i, _ = load_vocab(_require(src, "vocab.pkl", "weights/vocab.pkl of the release"))

@@ -79,14 +79,17 @@ class ReferenceBundle:
         """(1, N, 3 * code_dim) generator latents -> motion (jaw, eyes, face neutral)."""
         parts, d = {}, self.rvqs["upper"].cfg.code_dim
         for i, r in enumerate(REGIONS):
-            parts[r] = self.denormalise(r, self.rvqs[r].decode(latents[..., i * d:(i + 1) * d] * LATENT_SCALE))[0, :num_frames]
+            parts[r] = self.denormalise(r,
+                                        self.rvqs[r].decode(latents[...,
+                                                                    i * d:(i + 1) * d] * LATENT_SCALE))[0, :num_frames]
         parts["face"] = torch.zeros(num_frames, 106)
         parts["face"][:, [0, 4]] = 1.0                                 # identity 6D jaw, zero expressions
         return MotionSequence.from_features(join_regions(parts))
 
 
 @torch.no_grad()
-def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2index: dict[str, int], audio: np.ndarray,
+def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2index: dict[str, int],
+                       audio: np.ndarray,
                        num_frames: int, words: list | None, steps: int, cfg_scale: float, seed: int,
                        progress: Progress | None = None, held: Held | None = None
                        ) -> tuple[torch.Tensor, MotionSequence | None]:

@@ -79,7 +79,8 @@ def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, proble
                  and given[SPECS[m].steps_setting] is not MISSING}
     asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
                   cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
-                  stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing", MISSING),
+                  stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing",
+                                                                                             MISSING),
                   transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
                   grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
     settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
@@ -173,5 +174,6 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text", "input_file",
+__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text",
+           "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

@@ -45,7 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                        description="Encode and decode a BEAT2-layout folder's held-out motion with trained "
                                    "tokenizers and report the reconstruction error per region.")
     e.add_argument("--data", required=True, help="BEAT2-layout folder")
-    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"), help="folder with <region>.safetensors (default: shipped)")
+    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"),
+                   help="folder with <region>.safetensors (default: shipped)")
     e.add_argument("--train-fraction", type=float, default=0.8,
                    help="without a split file: the first fraction of each take is training, the rest held out")
     e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")

@@ -24,7 +24,8 @@ def pad_to_multiple(x: torch.Tensor, m: int) -> tuple[torch.Tensor, int]:
 
 
 @torch.no_grad()
-def reconstruct(model: RVQVAE, raw_region: torch.Tensor, num_layers: int | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+def reconstruct(model: RVQVAE, raw_region: torch.Tensor, num_layers: int | None = None) -> tuple[torch.Tensor,
+                                                                                                 torch.Tensor]:
     """Raw region features (T, C) -> (reconstruction (T, C) raw, codes (T/4, L)) through all or k layers."""
     model.eval()
     x, T = pad_to_multiple(model.normalizer.normalize(raw_region), model.config.downsample)

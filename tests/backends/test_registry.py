@@ -21,7 +21,8 @@ from gesturelsm.pipeline import GesturePipeline
 def test_registry_lists_ours_then_the_authors_methods_with_their_specs():
     assert list(SPECS) == ["gesturelsm", "rectified_flow", "ddim", "gesturelsm_authors", "meanflow_authors",
                            "diffusion_authors"]
-    assert [k for k, f in SPECS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors", "diffusion_authors"]
+    assert [k for k, f in SPECS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors",
+                                                           "diffusion_authors"]
     assert (SPECS["gesturelsm"].default_steps, SPECS["ddim"].default_steps, SPECS["gesturelsm_authors"].default_steps,
             SPECS["meanflow_authors"].default_steps, SPECS["diffusion_authors"].default_steps) == (8, 20, 2, 1, 20)
     assert "face" in SPECS["gesturelsm"].regions and "face" not in SPECS["meanflow_authors"].regions
