@@ -156,7 +156,8 @@ def decay(pipe, data, seeds: list[int], cfg: float, window: int = 128) -> None:
                     up = (wrist_heights(data.joints(res.motion)) > RAISED_M).any(1)     # (T,) a wrist raised
                     first.append(up[:window]), after.append(up[window:])
         f, a = np.concatenate(first), np.concatenate(after)
-        print(f"| {name} | {100 * f.mean():.1f} % | {100 * a.mean():.1f} % | {100 * np.concatenate([f, a]).mean():.1f} % |")
+        both = np.concatenate([f, a])
+        print(f"| {name} | {100 * f.mean():.1f} % | {100 * a.mean():.1f} % | {100 * both.mean():.1f} % |")
 
 
 def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, methods: list[str]) -> None:
@@ -219,8 +220,8 @@ def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
     for c in data.clips:
         sp = pipe.prepare_speech(c.audio, 16000, words=c.words if text else None)
         for k in seeds:
-            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames, steps, cfg,
-                                   k)
+            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames,
+                                   steps, cfg, k)
             z = lat / std
             z = mu + (z - mu) * sd / z.std(dim=(1, 2), keepdim=True)                # each region at training spread
             feats = join_regions(decode_latents(pipe.tokenizers, z * std, sp.num_frames))

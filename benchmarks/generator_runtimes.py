@@ -162,7 +162,8 @@ def main() -> None:
     print("|---|---|---|---|---|")
     base = med["torch default"]
     for k in fns:
-        print(f"| {k} | {med[k]:.2f} | {base / med[k]:.2f}x | {setup[k]:.2f} | {rel(outs[k], outs['torch default']):.1e} |")
+        err = rel(outs[k], outs['torch default'])
+        print(f"| {k} | {med[k]:.2f} | {base / med[k]:.2f}x | {setup[k]:.2f} | {err:.1e} |")
 
 
 if __name__ == "__main__":

@@ -110,8 +110,9 @@ def main() -> None:
     for name, wall, cpu, err in rows:
         med = {k: 1e3 * statistics.median(v) for k, v in wall.items()}
         mc = {k: 1e3 * statistics.median(v) for k, v in cpu.items()}
-        print(f"| {name} | {med['default']:.1f} | {med['accelerated']:.1f} | {med['default'] / med['accelerated']:.2f}x "
-              f"| {mc['default']:.1f} | {mc['accelerated']:.1f} | {mc['default'] / mc['accelerated']:.2f}x | {err:.1e} |")
+        print(f"| {name} | {med['default']:.1f} | {med['accelerated']:.1f} "
+              f"| {med['default'] / med['accelerated']:.2f}x | {mc['default']:.1f} | {mc['accelerated']:.1f} "
+              f"| {mc['default'] / mc['accelerated']:.2f}x | {err:.1e} |")
 
 
 if __name__ == "__main__":

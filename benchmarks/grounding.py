@@ -55,8 +55,8 @@ PARAGRAPH = ("so the question people keep asking me is whether any of this actua
              "the third day the numbers looked completely different, calmer and more regular, and that told us the "
              "first two days were mostly people performing for the equipment rather than living their lives.")
 MEASURES = (("foot_skate", "skate cm/s", "{:.1f}"), ("contact_share", "contact", "{:.2f}"),
-            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"), ("bob", "bob cm",
-                                                                                              "{:.1f}"),
+            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"),
+            ("bob", "bob cm", "{:.1f}"),
             ("penetration", "pen. p99 cm", "{:.1f}"), ("leg_jerk", "leg jerk m/s³", "{:.1f}"),
             ("raised_share", "raised", "{:.3f}"), ("height_p95", "wrist p95 m", "{:.3f}"),
             ("wrist_speed", "wrist m/s", "{:.3f}"))
@@ -216,11 +216,13 @@ def table(runs: list[dict], real: tuple[dict, dict], cost: dict) -> str:
         missed = bars(real[0], r["before_stats"], r["after_stats"])
         lines.append(f"- {r['recording']} ({r['seconds']:.1f} s), {r['method']}: skate "
                      f"{r['before_stats']['foot_skate']:.1f} -> {r['after_stats']['foot_skate']:.1f} cm/s, drift "
-                     f"{r['before_stats']['drift_per_min']:.2f} -> {r['after_stats']['drift_per_min']:.2f} m/min, range "
+                     f"{r['before_stats']['drift_per_min']:.2f} -> {r['after_stats']['drift_per_min']:.2f} m/min, "
+                     "range "
                      f"{r['before_stats']['root_range']:.2f} -> {r['after_stats']['root_range']:.2f} m, bob "
                      f"{r['before_stats']['bob']:.1f} -> {r['after_stats']['bob']:.1f} cm; "
                      f"{', '.join(missed) or 'all bars met'}{'; ' + r['note'] if r['note'] else ''}")
-    lines += ["", f"Cost on one core: {cost['per_minute']:.3f} s per 60 s of motion, wall clock ({cost['cpu_per_minute']:.3f} "
+    lines += ["", f"Cost on one core: {cost['per_minute']:.3f} s per 60 s of motion, wall clock "
+              f"({cost['cpu_per_minute']:.3f} "
               f"s of CPU time); median over {cost['takes']} takes of the median of {cost['repeats']} runs each; "
               f"{cost['cpu']}, load average {cost['load']:.1f} when measured."]
     return "\n".join(lines)

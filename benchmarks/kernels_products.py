@@ -59,7 +59,8 @@ def _table(threads: int, repeats: int) -> None:
                    for y in (F.linear(x, w, b), linear(x, w, b))]
             ta, tb = compare(lambda: F.linear(x, w, b), lambda: linear(x, w, b), repeats)
             fl = 2 * m * k * n / 1e9
-            print(f"| linear {m}x{k} -> {n} | {fl / ta:.0f} | {fl / tb:.0f} | {ta / tb:.2f}x | {err[0]:.1e} / {err[1]:.1e} |")
+            print(f"| linear {m}x{k} -> {n} | {fl / ta:.0f} | {fl / tb:.0f} | {ta / tb:.2f}x "
+                  f"| {err[0]:.1e} / {err[1]:.1e} |")
         for ci, co, length, stride, pad in CONVS:
             x, w, b = torch.randn(1, ci, length, generator=g), torch.randn(co, ci, 15, generator=g), torch.randn(co)
             x2, w2 = channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last)

@@ -72,7 +72,8 @@ def accuracy(data: Path, beam_size: int) -> list[str]:
             rows.append(f"{lead} {s.mean_ms:.0f} | {s.p90_ms:.0f} | {100 * s.within_100ms:.0f} % |{tail}")
     for name, es in pooled.items():
         s = onset_stats(np.concatenate(es))
-        lead = f"| all three | {tot[1]} | {tot[0]} ({100 * tot[0] / tot[1]:.1f} %) |" if name == "whisper" else "| | | |"
+        lead = (f"| all three | {tot[1]} | {tot[0]} ({100 * tot[0] / tot[1]:.1f} %) |" if name == "whisper"
+                else "| | | |")
         rows.append(f"{lead} {name} | {s.mean_ms:.0f} | {s.p90_ms:.0f} | {100 * s.within_100ms:.0f} % | | | |")
     return rows
 

@@ -49,7 +49,8 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=30.0)
     args = ap.parse_args()
     load_model()
-    print("| audio | seconds | Whisper's fallback: wall s, words | transcribe's rule: wall s, words | verdict | same words |")
+    print("| audio | seconds | Whisper's fallback: wall s, words | transcribe's rule: wall s, words | verdict "
+          "| same words |")
     print("|---|---|---|---|---|---|")
     for name, y in sounds(args.seconds).items():
         a = time.perf_counter()

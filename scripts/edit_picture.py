@@ -80,7 +80,8 @@ def main() -> None:
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left", ncol=2)
     fig.suptitle(f"BEAT2 {TAKE}: upper body and hands regenerated over {A:g}-{B:g} s (GestureLSM, seed {SEED}), "
-                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}\neverything else is the take's own motion, "
+                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}\n"
+                 "everything else is the take's own motion, "
                  "bit for bit", fontsize=10)
     fig.tight_layout()
     fig.savefig(args.out)

@@ -82,7 +82,8 @@ class Beat2Dataset:
             else:
                 spk_names.add(str(s).lower())
         names = sorted({p.stem for p in self.motion_dir.glob("*.npz")} if self.motion_dir.is_dir() else set())
-        audio_only = sorted({p.stem for p in self.wave_dir.glob("*.wav")} - set(names)) if self.wave_dir.is_dir() else []
+        waves = {p.stem for p in self.wave_dir.glob("*.wav")} if self.wave_dir.is_dir() else set()
+        audio_only = sorted(waves - set(names))
 
         def keep(name: str) -> bool:
             if speakers is not None:

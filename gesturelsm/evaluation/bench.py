@@ -181,7 +181,8 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
                                                                                    / table[(p, "gesturelsm", 8)])
         if (p, "gesturelsm", 1) in by and (p, "gesturelsm", 8) in by:
             ratios[f"{p}: GestureLSM 8 / 1 steps (AITS)"] = by[(p, "gesturelsm", 8)] / by[(p, "gesturelsm", 1)]
-    rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, torch {torch.__version__}"
+    rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, "
+                      f"torch {torch.__version__}"
            + (f", {torch.cuda.get_device_name()}" if torch.device(device).type == "cuda" else ""),
            "threads": torch.get_num_threads(), "device": str(device), "hardware": hardware, "repeats": repeats,
            "clip_frames": clip_frames, "clip_seconds": clip_frames / FPS, "rows": rows, "ratios": ratios}

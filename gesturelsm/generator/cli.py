@@ -41,7 +41,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="gesturelsm only: training-time distribution of t")
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
     p.add_argument("--seed-noise", type=float, default=0.0,
-                   help="std of noise on the real seed latents in training (the rollout seeds windows with generated ones)")
+                   help="std of noise on the real seed latents in training (the rollout seeds windows with "
+                        "generated ones)")
     p.add_argument("--augment", nargs="+", default=[], choices=list(KINDS), metavar="KIND",
                    help="add precomputed speech variants of each training take (off by default): tempo = speech "
                         "x0.9 / x1.1 as fast with the motion time-warped alike; pitch = +-2 semitones; "

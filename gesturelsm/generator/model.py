@@ -166,7 +166,8 @@ class _Trunk(nn.Module):
 
     def __init__(self, den: Denoiser, per_block: int):
         super().__init__()
-        self.cross, self.st, self.out_norm, self.out, self.per_block = den.cross, den.st, den.out_norm, den.out, per_block
+        self.cross, self.st, self.out_norm, self.out = den.cross, den.st, den.out_norm, den.out
+        self.per_block = per_block
 
     def forward(self, h: torch.Tensor, *kv: torch.Tensor) -> torch.Tensor:
         B, R, tt, C = h.shape

@@ -137,9 +137,10 @@ def rvq_from_state(state: dict[str, torch.Tensor]) -> ReferenceRVQ:
                         width=state["encoder.model.0.weight"].shape[0],
                         code_dim=cb.shape[1], num_codes=cb.shape[0], num_quantizers=len(qs),
                         down=sum(1 for k in state if re.fullmatch(r"encoder\.model\.\d+\.0\.weight", k)))
-        codes = torch.stack([torch.nn.functional.linear(state[f"quantizer.layers.{q}.codebook"],
-                                                        state[f"quantizer.layers.{q}.embedding_proj.weight"],
-                                                        state[f"quantizer.layers.{q}.embedding_proj.bias"]) for q in qs])
+        layer = "quantizer.layers.{}.".format
+        codes = torch.stack([torch.nn.functional.linear(state[layer(q) + "codebook"],
+                                                        state[layer(q) + "embedding_proj.weight"],
+                                                        state[layer(q) + "embedding_proj.bias"]) for q in qs])
     except KeyError as exc:
         raise ReferenceFileError(f"RVQ-VAE weights lack {exc}") from None
     model = ReferenceRVQ(cfg)

@@ -119,8 +119,8 @@ class SelfAttention(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, n, D)
         B, n, D = x.shape
-        q, k, v = linear(x, self.in_proj_weight, self.in_proj_bias).reshape(B, n, 3, self.heads,
-                                                                            -1).permute(2, 0, 3, 1, 4)
+        qkv = linear(x, self.in_proj_weight, self.in_proj_bias).reshape(B, n, 3, self.heads, -1)
+        q, k, v = qkv.permute(2, 0, 3, 1, 4)
         return self.out_proj(F.scaled_dot_product_attention(q, k, v).transpose(1, 2).reshape(B, n, D))
 
 

@@ -79,9 +79,8 @@ class ReferenceBundle:
         """(1, N, 3 * code_dim) generator latents -> motion (jaw, eyes, face neutral)."""
         parts, d = {}, self.rvqs["upper"].cfg.code_dim
         for i, r in enumerate(REGIONS):
-            parts[r] = self.denormalise(r,
-                                        self.rvqs[r].decode(latents[...,
-                                                                    i * d:(i + 1) * d] * LATENT_SCALE))[0, :num_frames]
+            decoded = self.rvqs[r].decode(latents[..., i * d:(i + 1) * d] * LATENT_SCALE)
+            parts[r] = self.denormalise(r, decoded)[0, :num_frames]
         parts["face"] = torch.zeros(num_frames, 106)
         parts["face"][:, [0, 4]] = 1.0                                 # identity 6D jaw, zero expressions
         return MotionSequence.from_features(join_regions(parts))

@@ -63,7 +63,8 @@ def load_state(path: str | Path, keys: tuple[str, ...]) -> dict[str, torch.Tenso
     try:
         obj = load_tensors(path)
     except Exception as exc:
-        raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({str(exc).splitlines()[0]})") from None
+        why = str(exc).splitlines()[0]
+        raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({why})") from None
     if isinstance(obj, dict):
         for k in keys:
             if isinstance(obj.get(k), dict):

@@ -79,8 +79,8 @@ def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, proble
                  and given[SPECS[m].steps_setting] is not MISSING}
     asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
                   cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
-                  stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing",
-                                                                                             MISSING),
+                  stand_in_place=getattr(args, "stand_in_place", MISSING),
+                  smoothing=getattr(args, "smoothing", MISSING),
                   transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
                   grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
     settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)

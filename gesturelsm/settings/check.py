@@ -206,4 +206,5 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_method_settings", "check_post",
-           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems", "steps_per_method"]
+           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems",
+           "steps_per_method"]

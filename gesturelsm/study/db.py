@@ -275,4 +275,5 @@ def all_answers(engine: Engine) -> list[dict]:
 
 
 __all__ = ["RequestRefused", "RaterState", "all_answers", "answered_trials", "claim_identity", "default_url",
-           "has_tables", "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting", "writing"]
+           "has_tables", "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting",
+           "writing"]

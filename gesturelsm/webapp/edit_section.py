@@ -106,7 +106,8 @@ class EditHandlers:
         self.h.mark_newest(request, prev)
         files, glb = self.h.download_files(prev)
         return (_resumed(motion_player.payload(self.h.service, prev, character)), prev.table, prev.summary, prev,
-                str(prev.video) if prev.video else None, files or None, gr.update(interactive=prev.previous is not None))
+                str(prev.video) if prev.video else None, files or None,
+                gr.update(interactive=prev.previous is not None))
 
 
 def _resumed(payload: dict | None) -> dict | None:

@@ -109,4 +109,6 @@ def test_checkpoints_setting_puts_the_authors_beside_the_shipped_models(ckpt_dir
     """`--checkpoints`: nothing, the shipped models; an import-reference folder, those beside them; else exactly it."""
     assert checkpoint_sources(None) == [ASSETS]
     assert checkpoint_sources(ckpt_dir) == [ASSETS, ckpt_dir]
-    assert checkpoint_sources(str(ASSETS)) == [ASSETS] and checkpoint_sources(ckpt_dir / "reference_rvq.safetensors") == [ckpt_dir / "reference_rvq.safetensors"]
+    assert checkpoint_sources(str(ASSETS)) == [ASSETS]
+    rvq = ckpt_dir / "reference_rvq.safetensors"
+    assert checkpoint_sources(rvq) == [rvq]

@@ -1,5 +1,6 @@
 """The page's chained events (gesturelsm/webapp/ui.py _Handlers): the video renders in a pool of its own beside
-generation, and a video for a request that a newer request of the same page replaced is not rendered, or is stopped mid-way."""
+generation, and a video for a request that a newer request of the same page replaced is not rendered, or is stopped
+mid-way."""
 from __future__ import annotations
 
 import threading
