@@ -13,7 +13,6 @@ from scipy.spatial.transform import Rotation
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, bvh_positions, vrm_body_bones, write_gltf
 from _standing import other_legs, segments, standing, stepping, swaying
-from gesturelsm.body.model import resolve_body
 from gesturelsm.cli import main
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_bvh, export_rig_glb
@@ -23,11 +22,6 @@ from gesturelsm.retarget.grounding import leg_problem
 
 LEGS = ("left_hip", "left_knee", "left_ankle", "left_foot", "right_hip", "right_knee", "right_ankle", "right_foot")
 UNITS = {"vrm": 1.0, "glb": 100.0}
-
-
-@pytest.fixture(scope="module")
-def body():
-    return resolve_body(None)
 
 
 @pytest.fixture(scope="module")
