@@ -28,6 +28,8 @@ Stages (--stages, any of):
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 from pathlib import Path
 
@@ -37,7 +39,6 @@ import torch
 from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 
 REPO = Path(__file__).resolve().parents[1]
-BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "decay", "interval", "latents", "respread")
 
 
@@ -230,5 +231,5 @@ def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
 
 
 if __name__ == "__main__":
-    torch.set_num_threads(1)
+    set_threads(1)
     main()

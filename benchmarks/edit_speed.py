@@ -18,6 +18,8 @@ medians over the rounds.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import platform
 import statistics
@@ -31,7 +33,7 @@ import torch
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tests"))
-WAV = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 EDIT_SECONDS = 2.0
 
 
@@ -135,7 +137,7 @@ def main() -> None:
     ap.add_argument("--methods", nargs="+", default=None, help="only these (default: every method that can edit)")
     ap.add_argument("--page", action="store_true", help="time the page's edit in headless Chromium instead")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.page:
         t = measure_page(args.rounds)
         print(f"the page, 10 s of speech, GestureLSM, upper + hands over 2-4 s; {cpu_name()}; {len(t)} rounds\n")

@@ -17,6 +17,8 @@ ONNX has no complex numbers: the export writes the rotary rotation in real arith
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import contextlib
 import io
@@ -105,7 +107,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--rounds", type=int, default=60)
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from gesturelsm.evaluation.timing import hardware_name
     from gesturelsm.features.audio import audio_channels
     from gesturelsm.flows.base import guided

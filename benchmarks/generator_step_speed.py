@@ -14,6 +14,8 @@ Speech: the real BEAT2 take 2_scott_0_2_2 (from ../shared) when present, else a 
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import statistics
 import time
@@ -23,7 +25,7 @@ import numpy as np
 import torch
 
 REPO = Path(__file__).resolve().parents[1]
-WAV = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 CKPT = REPO / "assets" / "generator" / "gesturelsm.safetensors"
 
 
@@ -58,7 +60,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--steps", type=int, nargs="+", default=[1, 4, 8])
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from gesturelsm.evaluation.timing import hardware_name
     from gesturelsm.features.audio import audio_channels
     from gesturelsm.flows.base import guided

@@ -26,6 +26,8 @@ character's units (metres for a VRM / glTF).
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import os
 import sys
@@ -46,7 +48,6 @@ from gesturelsm.metrics.feet import feet_stats  # noqa: E402
 from gesturelsm.motion import MotionSequence  # noqa: E402
 from gesturelsm.pipeline import finish  # noqa: E402
 
-BEAT2 = ROOT.parent / "shared" / "data" / "beat2"
 TAKE = "2_scott_0_1_1"
 PARAGRAPH = ("so the question people keep asking me is whether any of this actually works outside the lab and my "
              "honest answer is that it depends on what you are willing to measure. we started with a small group "
@@ -266,12 +267,11 @@ def main() -> int:
     ap.add_argument("--rig", default=None, help="measure on this character's own joints (.vrm / .glb / .gltf / .bvh): "
                     "the motions retargeted onto it, after = grounded again on its own legs")
     args = ap.parse_args()
-    import torch
 
     from gesturelsm.backends import checkpoint_sources
     from gesturelsm.pipeline import GesturePipeline
 
-    torch.set_num_threads(1)
+    set_threads(1)
     if not (BEAT2 / "smplxflame_30" / f"{TAKE}.npz").exists():
         print(f"{BEAT2} is absent: the held-out speech and the real take live in ../shared", file=sys.stderr)
         return 2

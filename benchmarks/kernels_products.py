@@ -10,6 +10,8 @@ not bought with precision. Medians of interleaved repeats, timed as the kernels'
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import contextlib
 import os
 
@@ -40,7 +42,7 @@ def env(values: dict[str, str]):
 
 def products_table(threads: int, repeats: int = 9) -> None:
     """Print the table (oneDNN forced for kernels.linear while it runs)."""
-    torch.set_num_threads(threads)
+    set_threads(threads)
     with env({"GESTURELSM_KERNELS": "all"}):
         _table(threads, repeats)
 

@@ -20,6 +20,8 @@ is chosen in the page's Character upload first, so the stream is on it). Reporte
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import dataclasses
 import os
@@ -38,7 +40,6 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 TAKE = BEAT2 / "wave16k" / "2_scott_0_1_1.wav"
 FAKE_MIC = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream"]
 PAGE_STATE = """() => { const e = document.querySelector('#live-player'), live = window.gesturelsmPlayer.live,
@@ -96,7 +97,6 @@ def self_cpu_s() -> float:
 
 
 def run(args) -> dict:
-    import torch
     from playwright.sync_api import sync_playwright
 
     from app.screenshot import CHROMIUM_ARGS
@@ -104,7 +104,7 @@ def run(args) -> dict:
     from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
-    torch.set_num_threads(1)
+    set_threads(1)
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
     wav = mic_wav(Path(args.wav), args.seconds, args.start, work / "mic48k.wav")

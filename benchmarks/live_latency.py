@@ -44,6 +44,8 @@ over the streams. E.g. `--skip-paced --skip-quality --pooled 6 --cfg 2` for the 
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import os
 import sys
@@ -51,11 +53,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "benchmarks"))           # _live_sessions.py
-BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 
 
 def rss_mb() -> float:
@@ -332,7 +332,7 @@ def main() -> None:
     ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
                     ".glb, .gltf, .bvh): the latency with and without it")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from dataclasses import replace
 
     from gesturelsm.audio import load_audio

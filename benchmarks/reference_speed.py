@@ -12,6 +12,8 @@ decoding at paper size, 6D -> axis-angle). Without --reference-code only our sid
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import os
 import pickle
@@ -137,7 +139,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seconds", type=float, default=60.0)
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     print(f"torch {torch.__version__}, {args.threads} thread(s), median of {args.repeats}")
     if args.reference_code:
         rows = compare(args.reference_code, args.repeats)

@@ -13,6 +13,8 @@ printed. Compare rows of one run.
 """
 from __future__ import annotations
 
+from _harness import SHARED
+
 import sys
 import time
 from pathlib import Path
@@ -30,7 +32,6 @@ from gesturelsm.retarget import SourceBody, load_character, retarget  # noqa: E4
 from gesturelsm.retarget.grounding import ground_retargeted  # noqa: E402
 from gesturelsm.retarget.solve import prepare  # noqa: E402
 
-SHARED = REPO.parent / "shared"
 VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"
 
 

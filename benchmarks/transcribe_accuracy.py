@@ -12,6 +12,8 @@ The machine is shared: wall-clock seconds include waiting for the CPU; CPU secon
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import difflib
 import json
@@ -114,7 +116,7 @@ def memory(data: Path) -> str:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
+    ap.add_argument("--data", type=Path, default=BEAT2)
     ap.add_argument("--beam-size", type=int, default=BEAM_SIZE,
                     help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
