@@ -48,8 +48,9 @@ def set_threads(n: int) -> int:
 
 @dataclass(frozen=True)
 class Timing:
-    """Wall seconds of each timed run, with their median and minimum."""
+    """Wall seconds of each timed run, with their median and minimum; this process's CPU seconds of each run."""
     runs: tuple[float, ...]
+    cpu: tuple[float, ...] = ()
 
     @property
     def median(self) -> float:
@@ -59,17 +60,23 @@ class Timing:
     def min(self) -> float:
         return min(self.runs)
 
+    @property
+    def cpu_median(self) -> float:
+        return statistics.median(self.cpu)
+
 
 def timed(fn: Callable[[], object], repeats: int = 3, warmup: int = 0) -> Timing:
-    """`fn` run `warmup` times untimed, then `repeats` times, each timed with the wall clock (perf_counter)."""
+    """`fn` run `warmup` times untimed, then `repeats` times, each timed with the wall clock (perf_counter) and this
+    process's CPU clock."""
     for _ in range(warmup):
         fn()
-    runs = []
+    runs, cpu = [], []
     for _ in range(max(1, repeats)):
-        t0 = time.perf_counter()
+        w, c = time.perf_counter(), time.process_time()
         fn()
-        runs.append(time.perf_counter() - t0)
-    return Timing(tuple(runs))
+        runs.append(time.perf_counter() - w)
+        cpu.append(time.process_time() - c)
+    return Timing(tuple(runs), tuple(cpu))
 
 
 class Rows:

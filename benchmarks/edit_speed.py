@@ -19,6 +19,7 @@ medians over the rounds.
 from __future__ import annotations
 
 from _harness import BEAT2, set_threads
+from _harness import timed as harness_timed
 
 import argparse
 import platform
@@ -59,9 +60,7 @@ def load_speech(seconds: float):
 
 
 def timed(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
+    return harness_timed(fn, 1).median
 
 
 def measure(pipe, speech, method: str, rounds: int) -> dict:

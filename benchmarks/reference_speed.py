@@ -12,7 +12,7 @@ decoding at paper size, 6D -> axis-angle). Without --reference-code only our sid
 """
 from __future__ import annotations
 
-from _harness import set_threads
+from _harness import set_threads, timed
 
 import argparse
 import os
@@ -20,7 +20,6 @@ import pickle
 import statistics
 import sys
 import tempfile
-import time
 import types
 
 import numpy as np
@@ -28,12 +27,7 @@ import torch
 
 
 def _timed(fn, repeats: int) -> float:
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
+    return timed(fn, repeats).median
 
 
 def _check_equal(diff: float, what: str, tol: float = 1e-4) -> None:
