@@ -12,13 +12,13 @@ import os
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
-import argparse  # noqa: E402
-import subprocess  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import subprocess
+import tempfile
+import time
+from pathlib import Path
 
-from gesturelsm.audio import load_audio  # noqa: E402
+from gesturelsm.audio import load_audio
 
 # Varied sentences, none repeated within 30 s: Whisper re-decodes a 30 s window whose text compresses too well
 # (a repeated sentence) at five more temperatures, so 60 s of one repeated sentence takes ~21 s to

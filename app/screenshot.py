@@ -9,9 +9,9 @@ import os
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
-import argparse  # noqa: E402
-import json  # noqa: E402
-import time  # noqa: E402
+import argparse
+import json
+import time
 
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run", "--disable-background-networking",
                  "--disable-component-update", "--disable-sync", "--autoplay-policy=no-user-gesture-required",
@@ -19,8 +19,8 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-quic", "--no-first-run
 
 
 def show_video(page, timeout_ms: float = 300000) -> None:
-    """Wait until the page says the server's mp4 is ready, open its accordion (the page keeps it closed, gesturelsm/webapp/ui.py),
-    and wait for the <video> element."""
+    """Wait until the page says the server's mp4 is ready, open its accordion (the page keeps it closed,
+    gesturelsm/webapp/ui.py), and wait for the <video> element."""
     page.wait_for_function("() => (document.querySelector('#summary') || {}).innerText?.includes('Video ready')",
                            timeout=timeout_ms)
     if page.locator("#video-box").count() and not page.locator("#video").count():

@@ -2,13 +2,14 @@
 random motion of the same length (its expressions move too, so face measurements have something to read)."""
 from __future__ import annotations
 
-from pathlib import Path
+from _harness import BEAT2, set_threads
+
 
 import numpy as np
 
 from gesturelsm.motion import MotionSequence
 
-TAKE = Path(__file__).resolve().parents[2] / "shared" / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+TAKE = BEAT2 / "smplxflame_30" / "2_scott_0_1_1.npz"
 
 
 def looped_motion(seconds: float, amplitude: float = 0.1) -> tuple[MotionSequence, str]:
@@ -30,12 +31,11 @@ def length_args(description: str):
     """--seconds (default 60), --repeats (5) and --threads (1, applied to torch) of the per-length benchmarks."""
     import argparse
 
-    import torch
 
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     return args

@@ -12,6 +12,8 @@ middle, and punctuation / capitals added.
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import sys
 import time
@@ -123,7 +125,7 @@ def _shift(words: list[Word], at: float, dt: float) -> list[Word]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
+    ap.add_argument("--data", type=Path, default=BEAT2)
     ap.add_argument("--robustness", action="store_true", help="also run the damaged-input table")
     args = ap.parse_args()
     if not (args.data / "textgrid").is_dir():

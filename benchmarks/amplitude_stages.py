@@ -5,10 +5,10 @@
 Held-out speech: the last 20 % of 2_scott_0_1_1 (the shipped models trained on its first 80 %) and the
 audio-only takes 2_scott_0_2_2, 2_scott_0_3_3, audio-only and with their MFA transcripts. Statistics
 (gesturelsm/metrics/amplitude.py, wrists relative to the pelvis, y up, metres) pooled over clips x seeds,
-in brackets the ratio to the speaker's whole take (the held-out 20 % alone is a calmer stretch: 14.7 % raised); replay guard = median distance of 1 s upper-body
-windows to the nearest training window, over the same for the speaker's held-out motion. Generated motion is
-post-processed as the app does by default (--smoothing, default light: a 5-frame Savitzky-Golay filter, see
-motion/postprocess.py); the jerk before it is shown in brackets ("raw").
+in brackets the ratio to the speaker's whole take (the held-out 20 % alone is a calmer stretch: 14.7 % raised); replay
+guard = median distance of 1 s upper-body windows to the nearest training window, over the same for the speaker's
+held-out motion. Generated motion is post-processed as the app does by default (--smoothing, default light: a 5-frame
+Savitzky-Golay filter, see motion/postprocess.py); the jerk before it is shown in brackets ("raw").
 
 Stages (--stages, any of):
   speaker     the speaker: held-out 20 % and training 80 %
@@ -28,6 +28,8 @@ Stages (--stages, any of):
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 from pathlib import Path
 
@@ -37,7 +39,6 @@ import torch
 from gesturelsm.motion.postprocess import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 
 REPO = Path(__file__).resolve().parents[1]
-BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 STAGES = ("speaker", "tokenizer", "methods", "cfg", "seed", "decay", "interval", "latents", "respread")
 
 
@@ -156,7 +157,8 @@ def decay(pipe, data, seeds: list[int], cfg: float, window: int = 128) -> None:
                     up = (wrist_heights(data.joints(res.motion)) > RAISED_M).any(1)     # (T,) a wrist raised
                     first.append(up[:window]), after.append(up[window:])
         f, a = np.concatenate(first), np.concatenate(after)
-        print(f"| {name} | {100 * f.mean():.1f} % | {100 * a.mean():.1f} % | {100 * np.concatenate([f, a]).mean():.1f} % |")
+        both = np.concatenate([f, a])
+        print(f"| {name} | {100 * f.mean():.1f} % | {100 * a.mean():.1f} % | {100 * both.mean():.1f} % |")
 
 
 def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, methods: list[str]) -> None:
@@ -183,7 +185,8 @@ def latent_spread(pipe, data, seeds: list[int], steps: list[int], cfg: float, me
     line("real, training 80 % and its mirror image", train)
     line("neutral first-window seed", model.neutral_seed.cpu())
     held = [c for c in data.clips if c.motion is not None]
-    line("real, held-out 20 %", torch.cat([encode_regions(pipe.tokenizers, c.motion.to_features()) for c in held], 1) / std)
+    line("real, held-out 20 %",
+         torch.cat([encode_regions(pipe.tokenizers, c.motion.to_features()) for c in held], 1) / std)
     for method in methods:
         for n in steps:
             for text in (False, True):
@@ -218,7 +221,8 @@ def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
     for c in data.clips:
         sp = pipe.prepare_speech(c.audio, 16000, words=c.words if text else None)
         for k in seeds:
-            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames, steps, cfg, k)
+            lat = generate_latents(model, sp.channels, sp.word_features, sp.has_word, text, sp.num_frames,
+                                   steps, cfg, k)
             z = lat / std
             z = mu + (z - mu) * sd / z.std(dim=(1, 2), keepdim=True)                # each region at training spread
             feats = join_regions(decode_latents(pipe.tokenizers, z * std, sp.num_frames))
@@ -227,5 +231,5 @@ def respread(pipe, data, seeds: list[int], steps: int, cfg: float, text: bool):
 
 
 if __name__ == "__main__":
-    torch.set_num_threads(1)
+    set_threads(1)
     main()

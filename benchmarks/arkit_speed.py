@@ -12,12 +12,12 @@ of one run).
 """
 from __future__ import annotations
 
+from _harness import timed as harness_timed
+
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
@@ -29,14 +29,8 @@ from _motion import length_args, looped_motion  # noqa: E402
 
 
 def timed(fn, repeats: int) -> tuple[float, float]:
-    fn()
-    wall, cpu = [], []
-    for _ in range(repeats):
-        w, c = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(time.perf_counter() - w)
-        cpu.append(time.process_time() - c)
-    return float(np.median(wall)), float(np.median(cpu))
+    t = harness_timed(fn, repeats, warmup=1)
+    return t.median, t.cpu_median
 
 
 def main() -> None:

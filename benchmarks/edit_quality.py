@@ -14,6 +14,8 @@ Needs ../shared (the BEAT2 sample) and the shipped checkpoints.
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import sys
 from pathlib import Path
@@ -22,7 +24,6 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 TAKE, SECONDS = "2_scott_0_1_1", 20
 RANGES = [(0.0, 2.0), (3.0, 5.0), (8.0, 11.0), (10.1, 12.3), (17.0, 20.0)]
 KEY_FRAMES = (408, 900, 1400)

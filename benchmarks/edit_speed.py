@@ -18,6 +18,9 @@ medians over the rounds.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+from _harness import timed as harness_timed
+
 import argparse
 import platform
 import statistics
@@ -31,7 +34,7 @@ import torch
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tests"))
-WAV = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 EDIT_SECONDS = 2.0
 
 
@@ -57,9 +60,7 @@ def load_speech(seconds: float):
 
 
 def timed(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
+    return harness_timed(fn, 1).median
 
 
 def measure(pipe, speech, method: str, rounds: int) -> dict:
@@ -135,7 +136,7 @@ def main() -> None:
     ap.add_argument("--methods", nargs="+", default=None, help="only these (default: every method that can edit)")
     ap.add_argument("--page", action="store_true", help="time the page's edit in headless Chromium instead")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     if args.page:
         t = measure_page(args.rounds)
         print(f"the page, 10 s of speech, GestureLSM, upper + hands over 2-4 s; {cpu_name()}; {len(t)} rounds\n")

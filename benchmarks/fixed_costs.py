@@ -10,13 +10,14 @@ tokenizers, 6D -> axis-angle. Speech: BEAT2 2_scott_0_2_2 from ../shared.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import statistics
-from pathlib import Path
 
 import torch
 
-WAV = Path(__file__).resolve().parents[2] / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 
 
 def main() -> None:
@@ -25,7 +26,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--device", default="cpu", help="cpu, cuda or cuda:N")
     args = ap.parse_args()
-    torch.set_num_threads(2)
+    set_threads(2)
     from gesturelsm.audio import load_audio
     from gesturelsm.evaluation.timing import check_device, cpu_model, hardware_name, timed
     from gesturelsm.features.audio import audio_channels

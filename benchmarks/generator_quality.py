@@ -32,12 +32,13 @@ command does not make: BC against foreign speech, and window seams.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 
 from gesturelsm.align.words import Word
 from gesturelsm.body import load_body_model
@@ -51,7 +52,6 @@ from gesturelsm.motion.regions import REGIONS
 from gesturelsm.pipeline import GesturePipeline
 
 REPO = Path(__file__).resolve().parents[1]
-BEAT2 = REPO.parent / "shared" / "data" / "beat2"
 UPPER = list(REGIONS["upper"].joints)
 Seams = dict[str, list[tuple[float, float, float, float]]]
 
@@ -240,5 +240,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    torch.set_num_threads(2)
+    set_threads(2)
     main()

@@ -17,6 +17,8 @@ ONNX has no complex numbers: the export writes the rotary rotation in real arith
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import contextlib
 import io
@@ -105,7 +107,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--rounds", type=int, default=60)
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from gesturelsm.evaluation.timing import hardware_name
     from gesturelsm.features.audio import audio_channels
     from gesturelsm.flows.base import guided
@@ -162,7 +164,8 @@ def main() -> None:
     print("|---|---|---|---|---|")
     base = med["torch default"]
     for k in fns:
-        print(f"| {k} | {med[k]:.2f} | {base / med[k]:.2f}x | {setup[k]:.2f} | {rel(outs[k], outs['torch default']):.1e} |")
+        err = rel(outs[k], outs['torch default'])
+        print(f"| {k} | {med[k]:.2f} | {base / med[k]:.2f}x | {setup[k]:.2f} | {err:.1e} |")
 
 
 if __name__ == "__main__":

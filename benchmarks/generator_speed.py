@@ -11,13 +11,14 @@ the plot and the end-to-end timing use `gesturelsm bench --data ... --out DIR`.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 from pathlib import Path
 
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
-WAV = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 
 
 def main() -> None:
@@ -29,7 +30,7 @@ def main() -> None:
     ap.add_argument("--presets", nargs="+", default=["shipped", "paper"])
     ap.add_argument("--device", default="cpu", help="cpu, cuda or cuda:N")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from gesturelsm.evaluation.bench import run_bench
     from gesturelsm.evaluation.timing import check_device
     from gesturelsm.evaluation.tables import bench_markdown

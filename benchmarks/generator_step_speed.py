@@ -14,6 +14,8 @@ Speech: the real BEAT2 take 2_scott_0_2_2 (from ../shared) when present, else a 
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import statistics
 import time
@@ -23,7 +25,7 @@ import numpy as np
 import torch
 
 REPO = Path(__file__).resolve().parents[1]
-WAV = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 CKPT = REPO / "assets" / "generator" / "gesturelsm.safetensors"
 
 
@@ -58,7 +60,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--steps", type=int, nargs="+", default=[1, 4, 8])
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from gesturelsm.evaluation.timing import hardware_name
     from gesturelsm.features.audio import audio_channels
     from gesturelsm.flows.base import guided
@@ -110,8 +112,9 @@ def main() -> None:
     for name, wall, cpu, err in rows:
         med = {k: 1e3 * statistics.median(v) for k, v in wall.items()}
         mc = {k: 1e3 * statistics.median(v) for k, v in cpu.items()}
-        print(f"| {name} | {med['default']:.1f} | {med['accelerated']:.1f} | {med['default'] / med['accelerated']:.2f}x "
-              f"| {mc['default']:.1f} | {mc['accelerated']:.1f} | {mc['default'] / mc['accelerated']:.2f}x | {err:.1e} |")
+        print(f"| {name} | {med['default']:.1f} | {med['accelerated']:.1f} "
+              f"| {med['default'] / med['accelerated']:.2f}x | {mc['default']:.1f} | {mc['accelerated']:.1f} "
+              f"| {mc['default'] / mc['accelerated']:.2f}x | {err:.1e} |")
 
 
 if __name__ == "__main__":

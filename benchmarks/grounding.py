@@ -28,6 +28,8 @@ character's units (metres for a VRM / glTF).
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import os
 import sys
@@ -49,7 +51,6 @@ from gesturelsm.metrics.feet import feet_stats  # noqa: E402
 from gesturelsm.motion import MotionSequence  # noqa: E402
 from gesturelsm.pipeline import finish  # noqa: E402
 
-BEAT2 = Path(os.environ.get("GESTURELSM_SHARED") or ROOT.parent / "shared") / "data" / "beat2"
 TAKE = "2_scott_0_1_1"
 PARAGRAPH = ("so the question people keep asking me is whether any of this actually works outside the lab and my "
              "honest answer is that it depends on what you are willing to measure. we started with a small group "
@@ -58,7 +59,8 @@ PARAGRAPH = ("so the question people keep asking me is whether any of this actua
              "the third day the numbers looked completely different, calmer and more regular, and that told us the "
              "first two days were mostly people performing for the equipment rather than living their lives.")
 MEASURES = (("foot_skate", "skate cm/s", "{:.1f}"), ("contact_share", "contact", "{:.2f}"),
-            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"), ("bob", "bob cm", "{:.1f}"),
+            ("drift_per_min", "drift m/min", "{:.2f}"), ("root_range", "range m", "{:.2f}"),
+            ("bob", "bob cm", "{:.1f}"),
             ("penetration", "pen. p99 cm", "{:.1f}"), ("leg_jerk", "leg jerk m/s³", "{:.1f}"),
             ("raised_share", "raised", "{:.3f}"), ("height_p95", "wrist p95 m", "{:.3f}"),
             ("wrist_speed", "wrist m/s", "{:.3f}"), ("knee_flexion", "knee °", "{:.1f}"))
@@ -132,7 +134,8 @@ def recordings() -> list[tuple[str, np.ndarray, list | None]]:
 
     out = []
     for name in ("2_scott_0_2_2", "2_scott_0_3_3"):
-        out.append((name, load_audio(BEAT2 / "wave16k" / f"{name}.wav"), read_words(BEAT2 / "textgrid" / f"{name}.TextGrid")))
+        out.append((name, load_audio(BEAT2 / "wave16k" / f"{name}.wav"),
+                    read_words(BEAT2 / "textgrid" / f"{name}.TextGrid")))
     audio = load_audio(BEAT2 / "wave16k" / f"{TAKE}.wav")
     n = len(MotionSequence.load(BEAT2 / "smplxflame_30" / f"{TAKE}.npz").poses)
     start = int(0.8 * n)                                            # the held-out 20 % of the motion take
@@ -232,12 +235,14 @@ def table(runs: list[dict], real: tuple[dict, dict], cost: dict) -> str:
         missed = bars(real[0], r["before_stats"], r["after_stats"])
         lines.append(f"- {r['recording']} ({r['seconds']:.1f} s), {r['method']}: skate "
                      f"{r['before_stats']['foot_skate']:.1f} -> {r['after_stats']['foot_skate']:.1f} cm/s, drift "
-                     f"{r['before_stats']['drift_per_min']:.2f} -> {r['after_stats']['drift_per_min']:.2f} m/min, range "
+                     f"{r['before_stats']['drift_per_min']:.2f} -> {r['after_stats']['drift_per_min']:.2f} m/min, "
+                     "range "
                      f"{r['before_stats']['root_range']:.2f} -> {r['after_stats']['root_range']:.2f} m, bob "
                      f"{r['before_stats']['bob']:.1f} -> {r['after_stats']['bob']:.1f} cm, knee "
                      f"{r['before_stats']['knee_flexion']:.1f} -> {r['after_stats']['knee_flexion']:.1f}°; "
                      f"{', '.join(missed) or 'all bars met'}{'; ' + r['note'] if r['note'] else ''}")
-    lines += ["", f"Cost on one core: {cost['per_minute']:.3f} s per 60 s of motion, wall clock ({cost['cpu_per_minute']:.3f} "
+    lines += ["", f"Cost on one core: {cost['per_minute']:.3f} s per 60 s of motion, wall clock "
+              f"({cost['cpu_per_minute']:.3f} "
               f"s of CPU time); median over {cost['takes']} takes of the median of {cost['repeats']} runs each; "
               f"{cost['cpu']}, load average {cost['load']:.1f} when measured."]
     return "\n".join(lines)
@@ -283,7 +288,6 @@ def main() -> int:
     ap.add_argument("--straight", action="store_true", help="ground with GroundingSettings(straight=True): the knees "
                     "as straight as the motion had them")
     args = ap.parse_args()
-    import torch
 
     if args.straight:
         from gesturelsm.grounding import GroundingSettings
@@ -293,7 +297,7 @@ def main() -> int:
     from gesturelsm.backends import checkpoint_sources
     from gesturelsm.pipeline import GesturePipeline
 
-    torch.set_num_threads(1)
+    set_threads(1)
     if not (BEAT2 / "smplxflame_30" / f"{TAKE}.npz").exists():
         print(f"{BEAT2} is absent: the held-out speech and the real take live in ../shared", file=sys.stderr)
         return 2

@@ -24,6 +24,8 @@ what the generator says the file must get, or when its peak is more than 1 GB ab
 """
 from __future__ import annotations
 
+from _harness import CHARACTERS
+
 import argparse
 import json
 import os
@@ -42,7 +44,7 @@ sys.path.insert(0, str(REPO / "tests"))
 
 from _hostile_characters import Crafted, character_cases  # noqa: E402  (declarations: no gesturelsm, no torch)
 
-VRM = REPO.parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
+VRM = CHARACTERS / "cryptovoxels.vrm"
 ENTRIES = ("export", "render", "page")
 OVER_CONTROL_MB = 1024
 TIMEOUT_S = 900

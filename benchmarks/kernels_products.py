@@ -10,6 +10,8 @@ not bought with precision. Medians of interleaved repeats, timed as the kernels'
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import contextlib
 import os
 
@@ -40,7 +42,7 @@ def env(values: dict[str, str]):
 
 def products_table(threads: int, repeats: int = 9) -> None:
     """Print the table (oneDNN forced for kernels.linear while it runs)."""
-    torch.set_num_threads(threads)
+    set_threads(threads)
     with env({"GESTURELSM_KERNELS": "all"}):
         _table(threads, repeats)
 
@@ -59,7 +61,8 @@ def _table(threads: int, repeats: int) -> None:
                    for y in (F.linear(x, w, b), linear(x, w, b))]
             ta, tb, _ = compare(lambda: F.linear(x, w, b), lambda: linear(x, w, b), repeats)
             fl = 2 * m * k * n / 1e9
-            print(f"| linear {m}x{k} -> {n} | {fl / ta:.0f} | {fl / tb:.0f} | {ta / tb:.2f}x | {err[0]:.1e} / {err[1]:.1e} |")
+            print(f"| linear {m}x{k} -> {n} | {fl / ta:.0f} | {fl / tb:.0f} | {ta / tb:.2f}x "
+                  f"| {err[0]:.1e} / {err[1]:.1e} |")
         for ci, co, length, stride, pad in CONVS:
             x, w, b = torch.randn(1, ci, length, generator=g), torch.randn(co, ci, 15, generator=g), torch.randn(co)
             x2, w2 = channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last)

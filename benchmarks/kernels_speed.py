@@ -18,6 +18,8 @@ Speech: the real BEAT2 take 2_scott_0_2_2 repeated to --seconds (from ../shared)
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import os
 import statistics
@@ -130,7 +132,7 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--products", action="store_true", help="also the paper-size products table (part 3)")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     name, flags = cpu_identity()
     isa = [f for f in ("avx2", "avx512f", "avx512_bf16", "amx_tile") if f in flags.split()]
     with tempfile.TemporaryDirectory() as tmp, env({"GESTURELSM_KERNELS_CACHE": str(Path(tmp) / "kernels.json")}):

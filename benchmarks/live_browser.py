@@ -20,6 +20,8 @@ is chosen in the page's Character upload first, so the stream is on it). Reporte
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import dataclasses
 import os
@@ -34,11 +36,10 @@ from pathlib import Path
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 TAKE = BEAT2 / "wave16k" / "2_scott_0_1_1.wav"
 FAKE_MIC = ["--use-fake-ui-for-media-stream", "--use-fake-device-for-media-stream"]
 PAGE_STATE = """() => { const e = document.querySelector('#live-player'), live = window.gesturelsmPlayer.live,
@@ -96,7 +97,6 @@ def self_cpu_s() -> float:
 
 
 def run(args) -> dict:
-    import torch
     from playwright.sync_api import sync_playwright
 
     from app.screenshot import CHROMIUM_ARGS
@@ -104,7 +104,7 @@ def run(args) -> dict:
     from gesturelsm.serve.config import ServiceSettings
     from gesturelsm.serve.service import GestureService
 
-    torch.set_num_threads(1)
+    set_threads(1)
     work = Path(args.workdir)
     work.mkdir(parents=True, exist_ok=True)
     wav = mic_wav(Path(args.wav), args.seconds, args.start, work / "mic48k.wav")
@@ -149,7 +149,8 @@ def run(args) -> dict:
         left = sum(t.name == "gesturelsm-live" and t.is_alive() for t in threading.enumerate())
     finally:
         demo.close()
-    return {"config": config, "end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu, "load": (load0, os.getloadavg()),
+    return {"config": config, "end": end, "samples": samples, "wall": wall, "cpu": cpu, "bcpu": bcpu,
+            "load": (load0, os.getloadavg()),
             "left": left}
 
 
@@ -174,7 +175,8 @@ def report(r: dict, seconds: float) -> None:
         ("frames drawn (data-frames)", str(e["frames"])),
         ("draws per second, median of 1-s samples", f"{statistics.median(fps):.0f}" if fps else "-"),
         ("chunks out of order (gaps)", str(e["gaps"])),
-        ("at the end, s behind the speech: audio at the server", f"{e['spoken'] - e['server_audio'] - e['server_audio_age']:.2f}"),
+        ("at the end, s behind the speech: audio at the server",
+         f"{e['spoken'] - e['server_audio'] - e['server_audio_age']:.2f}"),
         ("at the end, s behind the speech: motion in the browser", f"{e['spoken'] - e['received'] / 30:.2f}"),
         ("at the end, s behind the speech: motion on screen", f"{e['spoken'] - e['on_screen']:.2f}"),
         ("CPU share, server process (cores)", f"{r['cpu'] / r['wall']:.2f}"),

@@ -17,16 +17,16 @@ real-time factor and frames behind at the end.
 
 Paced run: a real take (../shared) looped to --seconds, fed in --chunk-ms chunks at the pace of speech (chunk k
 arrives when its last sample would have been spoken; the page's microphone sends 50 ms). Latency of a chunk = when
-the motion of all its frames is available - its arrival. CPU share = process CPU time / wall time (1.0 = one core busy). Memory: resident set size
-sampled each chunk (first minute vs the end). Drift: motion frames available vs audio frames arrived at the end.
-Each motion chunk is also made into the live socket's message (gesturelsm/webapp/live.py `payload`: the page
-player's record); with --character PATH the same chunk is made a second time with the character section (retargeted
-onto the character, gesturelsm/webapp/live_character.py), in the same run, so the two latencies (chunk available +
-its message built) differ only by the character's cost. Every stream of a run (before and after; with --grounding
-on off each grounded, feet on the ground causally: gesturelsm/grounding/causal.py, and not) is fed the same chunks in
-one loop in an order that rotates chunk by chunk, each stream's latency leaving out the others' work in the same
-step, so their latencies come from the same minutes of the same machine; the grounder's own time per motion chunk is
-timed around it.
+the motion of all its frames is available - its arrival. CPU share = process CPU time / wall time (1.0 = one core busy).
+Memory: resident set size sampled each chunk (first minute vs the end). Drift: motion frames available vs audio frames
+arrived at the end. Each motion chunk is also made into the live socket's message (gesturelsm/webapp/live.py `payload`:
+the page player's record); with --character PATH the same chunk is made a second time with the character section
+(retargeted onto the character, gesturelsm/webapp/live_character.py), in the same run, so the two latencies (chunk
+available + its message built) differ only by the character's cost. Every stream of a run (before and after; with
+--grounding on off each grounded, feet on the ground causally: gesturelsm/grounding/causal.py, and not) is fed the same
+chunks in one loop in an order that rotates chunk by chunk, each stream's latency leaving out the others' work in the
+same step, so their latencies come from the same minutes of the same machine; the grounder's own time per motion chunk
+is timed around it.
 
 Feet (--feet): the two held-out audio-only takes streamed as fast as possible with grounding on and off (same seed),
 measured as metrics/feet.py measures every method (foot skate, contact share, root drift and range, bob, floor
@@ -44,6 +44,8 @@ over the streams. E.g. `--skip-paced --skip-quality --pooled 6 --cfg 2` for the 
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import os
 import sys
@@ -51,11 +53,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "benchmarks"))           # _live_sessions.py
-BEAT2 = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared")) / "data" / "beat2"
 
 
 def rss_mb() -> float:
@@ -88,8 +88,8 @@ def messages(character: str | None, grounding: bool = True):
 
 
 def live_stream(pipe, cfg, character: str | None) -> dict:
-    """One paced stream's generator (its setting, grounded or not), its message builders and what it measured; the grounder's
-    time per chunk is recorded around its `push`."""
+    """One paced stream's generator (its setting, grounded or not), its message builders and what it measured; the
+    grounder's time per chunk is recorded around its `push`."""
     from gesturelsm.live import StreamingGenerator
 
     gen = StreamingGenerator(pipe, cfg)
@@ -332,7 +332,7 @@ def main() -> None:
     ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
                     ".glb, .gltf, .bvh): the latency with and without it")
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     from dataclasses import replace
 
     from gesturelsm.audio import load_audio

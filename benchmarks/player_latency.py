@@ -3,9 +3,10 @@ click on "Generate" -> the first body moves (`#motion-player[data-state=playing]
 every animation frame) and all bodies move (`data-bodies` = the number of methods; a page without that attribute
 moves them all at once), the motion frames drawn in the first 2 s after that, click -> the payload in the page (the
 player's own mark), the player's frame rate while the server renders the mp4 and the speech plays (up to 10 s),
-click -> mp4 (--quick stops before these); without --quick also the frame rate after (server idle), the audio-motion offset when scrubbing, and
-generating again with another seed on the same page (the bodies are replaced), once after the video and once while
-it renders. Shipped checkpoints, eSpeak NG speech (as app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384.
+click -> mp4 (--quick stops before these); without --quick also the frame rate after (server idle), the audio-motion
+offset when scrubbing, and generating again with another seed on the same page (the bodies are replaced), once after the
+video and once while it renders. Shipped checkpoints, eSpeak NG speech (as app/measure.py), audio only, steps 8, DDIM
+20, CFG 2, tiles 384.
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--think-s 3] [--repeat 3]
                                                   [--vs /path/to/other/checkout] [--quick] [--character avatar.vrm]
@@ -30,15 +31,15 @@ import os
 os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
 os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
 
-import sys  # noqa: E402
-import argparse  # noqa: E402
-import contextlib  # noqa: E402
-import json  # noqa: E402
-import re  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-from statistics import median  # noqa: E402
-from pathlib import Path  # noqa: E402
+import sys
+import argparse
+import contextlib
+import json
+import re
+import tempfile
+import time
+from statistics import median
+from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))                  # app/measure.py lives in the checkout, not the wheel
@@ -195,7 +196,8 @@ def per_draw(prof: dict | None) -> str:
 
 HEADER = ["speech", "methods", "page", "body", "click -> first body moving (s), median (range)",
           "click -> all moving (s)", "frames drawn in the first 2 s", "click -> payload in the page (s)"]
-FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)", "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
+FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)",
+        "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
         "again, new seed -> playing (s)", "again while the mp4 renders -> playing (s) (runs where it still rendered)"]
 
 
@@ -208,7 +210,8 @@ def row(dur: float, n: int, page: str, body: str, runs: list[dict], quick: bool)
              f"{med('drawn2'):.0f}", f"{payload:.2f}"]
     if not quick:
         busy = sum(x["rendering"] for x in runs)
-        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]), f"{med('scrub'):.0f}", f"{med('again'):.2f}",
+        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]),
+                  f"{med('scrub'):.0f}", f"{med('again'):.2f}",
                   f"{med('again_rendering'):.2f} ({busy}/{len(runs)})"]
     return "| " + " | ".join(cells) + " |"
 

@@ -7,6 +7,8 @@ classifier-free-guidance pair, for a 128-frame window.
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import statistics
 
@@ -30,7 +32,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     torch.manual_seed(0)
     cfg = GeneratorConfig()
     g = ReferenceGenerator(cfg).eval()

@@ -5,12 +5,14 @@
 
 Paper-size models with random weights (the released files are not needed for timing): the authors'
 GestureLSM / GestureMF classes built from their configs_new/*.yaml, their state dict converted into ours,
-outputs checked equal first (max abs difference <= 1e-4, or the script stops). Timed (median of interleaved repeats): one denoiser step with the CFG pair for a
-128-frame window, and one clip (speech encoder + sampler) for shortcut 2 / 8 steps (CFG 2) and MeanFlow
-1 step; then our real-time factor for 60 s of synthetic speech (features, all windows, RVQ decoding at
-paper size, 6D -> axis-angle). Without --reference-code only our side is measured.
+outputs checked equal first (max abs difference <= 1e-4, or the script stops). Timed (median of interleaved repeats):
+one denoiser step with the CFG pair for a 128-frame window, and one clip (speech encoder + sampler) for shortcut 2 / 8
+steps (CFG 2) and MeanFlow 1 step; then our real-time factor for 60 s of synthetic speech (features, all windows, RVQ
+decoding at paper size, 6D -> axis-angle). Without --reference-code only our side is measured.
 """
 from __future__ import annotations
+
+from _harness import set_threads, timed
 
 import argparse
 import os
@@ -18,7 +20,6 @@ import pickle
 import statistics
 import sys
 import tempfile
-import time
 import types
 
 import numpy as np
@@ -26,12 +27,7 @@ import torch
 
 
 def _timed(fn, repeats: int) -> float:
-    ts = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return statistics.median(ts)
+    return timed(fn, repeats).median
 
 
 def _check_equal(diff: float, what: str, tol: float = 1e-4) -> None:
@@ -85,13 +81,15 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
             if kind == "shortcut":
                 ta, tb = [], []
                 for _ in range(repeats):  # interleaved
-                    ta.append(_timed(ref_step, 1)); tb.append(_timed(our_step, 1))
+                    ta.append(_timed(ref_step, 1))
+                    tb.append(_timed(our_step, 1))
                 rows.append(("denoiser step, CFG pair, 128 frames", statistics.median(ta), statistics.median(tb)))
             for n in steps_list:
                 theirs.num_inference_steps = n
                 torch.manual_seed(1)
                 ref_out = theirs(cond)
-                our_out = ours.sample(audio, words, seed, ref_out["init_noise"][:, :, 0], steps=n, cfg_scale=theirs.guidance_scale)
+                our_out = ours.sample(audio, words, seed, ref_out["init_noise"][:, :, 0], steps=n,
+                                      cfg_scale=theirs.guidance_scale)
                 diff = (ref_out['latents'][:, :, 0] - our_out).abs().max().item()
                 print(f"{kind} {n} steps: clip max |ours - theirs| = {diff:.2e}")
                 _check_equal(diff, f"{kind} {n}-step clip")
@@ -99,8 +97,10 @@ def compare(code: str, repeats: int) -> list[tuple[str, float, float]]:
                 ta, tb = [], []
                 for _ in range(repeats):
                     ta.append(_timed(lambda: theirs(cond), 1))
-                    tb.append(_timed(lambda: ours.sample(audio, words, seed, noise, steps=n, cfg_scale=theirs.guidance_scale), 1))
-                rows.append((f"clip: {kind} {n} step(s), CFG {theirs.guidance_scale:g}", statistics.median(ta), statistics.median(tb)))
+                    tb.append(_timed(lambda: ours.sample(audio, words, seed, noise, steps=n,
+                                                         cfg_scale=theirs.guidance_scale), 1))
+                rows.append((f"clip: {kind} {n} step(s), CFG {theirs.guidance_scale:g}", statistics.median(ta),
+                             statistics.median(tb)))
     return rows
 
 
@@ -133,7 +133,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--seconds", type=float, default=60.0)
     args = ap.parse_args()
-    torch.set_num_threads(args.threads)
+    set_threads(args.threads)
     print(f"torch {torch.__version__}, {args.threads} thread(s), median of {args.repeats}")
     if args.reference_code:
         rows = compare(args.reference_code, args.repeats)

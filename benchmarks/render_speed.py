@@ -20,6 +20,8 @@ skinning and its materials; `gesturelsm render --rig`), beside the mannequin's i
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import os
 import statistics
@@ -30,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = REPO.parent / "shared" / "data" / "beat2"
+SHARED = BEAT2
 TAKE = "2_scott_0_1_1"
 SMPLX_V = 10475
 

@@ -7,10 +7,13 @@ absent). Characters: cryptovoxels.vrm (../shared, VRM 0.x, 43 humanoid bones of 
 from the SMPL-X rest pose (all 52 body and finger bones; an A-pose Z-up centimetre rig without fingers). Times
 are the retargeting alone (SMPL-X forward kinematics + solving + local rotations), median of the repeats, after
 one warm-up run, and beside them the grounding of the result on the character's own legs (retarget/grounding.py:
-contacts, plants, two-bone IK, the legs' local rotations again); loading the character and writing files are not included. Wall seconds depend on what else
-runs on the machine; CPU seconds (this process's) much less, so both are printed. Compare rows of one run.
+contacts, plants, two-bone IK, the legs' local rotations again); loading the character and writing files are not
+included. Wall seconds depend on what else runs on the machine; CPU seconds (this process's) much less, so both are
+printed. Compare rows of one run.
 """
 from __future__ import annotations
+
+from _harness import SHARED
 
 import sys
 import time
@@ -29,7 +32,6 @@ from gesturelsm.retarget import SourceBody, load_character, retarget  # noqa: E4
 from gesturelsm.retarget.grounding import ground_retargeted  # noqa: E402
 from gesturelsm.retarget.solve import prepare  # noqa: E402
 
-SHARED = REPO.parent / "shared"
 VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"
 
 

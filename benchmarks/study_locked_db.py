@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from study_load import make_study  # noqa: E402
+from study_load import make_study
 
 
 def request(port: int, method: str, path: str, body: dict | None = None, headers: dict | None = None) -> dict:

@@ -13,6 +13,8 @@ average before and after is printed). With `--out`, the sweep's table and plot a
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import os
 import statistics
@@ -24,7 +26,7 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-SHARED = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+SHARED = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 EXAMPLE = REPO / "gesturelsm" / "webapp" / "examples" / "weekend.wav"
 
 
@@ -58,7 +60,7 @@ def main() -> int:
     from gesturelsm.pipeline import GesturePipeline
 
     if args.threads:
-        torch.set_num_threads(args.threads)
+        set_threads(args.threads)
     audio, name = clip(args.seconds)
     pipe = GesturePipeline.from_pretrained()
     grid = SweepGrid(tuple(args.methods or pipe.methods), tuple(args.steps), tuple(args.cfg), args.seeds)

@@ -21,6 +21,8 @@ window: audio features, speech encoder, sampling (all steps), decoding, groundin
 """
 from __future__ import annotations
 
+from _harness import set_threads
+
 import argparse
 import functools
 import os
@@ -117,7 +119,8 @@ def request_table(args) -> None:
     for dur, rs in runs.items():
         cols.append((f"{dur:.0f} s, first", rs[0]))
         if len(rs) > 1:
-            cols.append((f"{dur:.0f} s, median of {len(rs) - 1} after", {k: median(x[k] for x in rs[1:]) for k in rs[1]}))
+            cols.append((f"{dur:.0f} s, median of {len(rs) - 1} after",
+                         {k: median(x[k] for x in rs[1:]) for k in rs[1]}))
     keys = list(dict.fromkeys(k for _, c in cols for k in c))
     print("| stage (s) | " + " | ".join(n for n, _ in cols) + " |\n|---|" + "---|" * len(cols))
     for k in keys:
@@ -126,7 +129,6 @@ def request_table(args) -> None:
 
 
 def live_table(args) -> None:
-    import torch
 
     from live_latency import BEAT2, settings
     from gesturelsm.audio import load_audio
@@ -137,7 +139,7 @@ def live_table(args) -> None:
     from gesturelsm.live import stream as S
     from gesturelsm.pipeline import GesturePipeline
 
-    torch.set_num_threads(1)
+    set_threads(1)
     pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"])
     body = resolve_body(None)
     y = load_audio(BEAT2 / "wave16k" / "2_scott_0_2_2.wav")[:int(args.live_seconds * 16000)]
@@ -186,7 +188,6 @@ def schedule_table(args) -> None:
     all three at once in threads of one math thread each: when the first is ready and when all are."""
     from concurrent.futures import ThreadPoolExecutor
 
-    import torch
 
     from live_latency import BEAT2
     from gesturelsm.audio import load_audio
@@ -198,7 +199,7 @@ def schedule_table(args) -> None:
     steps = {"gesturelsm": 8, "rectified_flow": 8, "ddim": 20}
 
     def one(m: str, threads: int, t0: float) -> float:
-        torch.set_num_threads(threads)
+        set_threads(threads)
         pipe.generate(sp, steps=steps[m], method=m)
         return time.perf_counter() - t0
 

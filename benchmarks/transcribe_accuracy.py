@@ -12,6 +12,8 @@ The machine is shared: wall-clock seconds include waiting for the CPU; CPU secon
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import difflib
 import json
@@ -72,7 +74,8 @@ def accuracy(data: Path, beam_size: int) -> list[str]:
             rows.append(f"{lead} {s.mean_ms:.0f} | {s.p90_ms:.0f} | {100 * s.within_100ms:.0f} % |{tail}")
     for name, es in pooled.items():
         s = onset_stats(np.concatenate(es))
-        lead = f"| all three | {tot[1]} | {tot[0]} ({100 * tot[0] / tot[1]:.1f} %) |" if name == "whisper" else "| | | |"
+        lead = (f"| all three | {tot[1]} | {tot[0]} ({100 * tot[0] / tot[1]:.1f} %) |" if name == "whisper"
+                else "| | | |")
         rows.append(f"{lead} {name} | {s.mean_ms:.0f} | {s.p90_ms:.0f} | {100 * s.within_100ms:.0f} % | | | |")
     return rows
 
@@ -113,8 +116,9 @@ def memory(data: Path) -> str:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
-    ap.add_argument("--beam-size", type=int, default=BEAM_SIZE, help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
+    ap.add_argument("--data", type=Path, default=BEAT2)
+    ap.add_argument("--beam-size", type=int, default=BEAM_SIZE,
+                    help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not (args.data / "textgrid").is_dir():

@@ -10,12 +10,13 @@ pelvis, mean wrist speed (m/s, both wrists, 30 fps). Means over seeds.
 """
 from __future__ import annotations
 
+from _harness import BEAT2, set_threads
+
 import argparse
 import sys
 from pathlib import Path
 
 import numpy as np
-import torch
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
@@ -41,13 +42,13 @@ def gesture_stats(body, seq: MotionSequence) -> np.ndarray:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "beat2")
+    ap.add_argument("--data", type=Path, default=BEAT2)
     ap.add_argument("--seeds", type=int, default=3)
     args = ap.parse_args()
     if not (args.data / "smplxflame_30" / f"{TAKE}.npz").is_file():
         print(f"no BEAT2 take {TAKE} with motion at {args.data}", file=sys.stderr)
         return 2
-    torch.set_num_threads(1)
+    set_threads(1)
     body = load_body_model()
     pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"])
     y = load_audio(args.data / "wave16k" / f"{TAKE}.wav")
@@ -62,7 +63,8 @@ def main() -> int:
     for name, speech in inputs.items():
         stats = [gesture_stats(body, pipe.generate(speech, steps=8, cfg=2.0, seed=s).motion) for s in range(args.seeds)]
         rows[name] = np.mean(stats, 0)
-    rows["speaker (BEAT2 motion)"] = gesture_stats(body, MotionSequence.load(args.data / "smplxflame_30" / f"{TAKE}.npz"))
+    rows["speaker (BEAT2 motion)"] = gesture_stats(body,
+                                                   MotionSequence.load(args.data / "smplxflame_30" / f"{TAKE}.npz"))
     for name, (share, p95, speed) in rows.items():
         print(f"| {name} | {100 * share:.1f} % | {p95:.3f} | {speed:.3f} |")
     a, m = rows["automatic transcript"], rows["MFA transcript"]

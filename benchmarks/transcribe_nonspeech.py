@@ -9,6 +9,8 @@ wall seconds; the machine may be shared, so compare rows of one run.
 """
 from __future__ import annotations
 
+from _harness import BEAT2
+
 import argparse
 import sys
 import time
@@ -24,7 +26,7 @@ from gesturelsm.asr.transcribe import FALLBACK_TEMPERATURES, recognize  # noqa: 
 from gesturelsm.audio import load_audio  # noqa: E402
 from gesturelsm.constants import SAMPLE_RATE as SR  # noqa: E402
 
-TAKE = REPO.parent / "shared" / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+TAKE = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 
 
 def sounds(seconds: float) -> dict[str, np.ndarray]:
@@ -49,7 +51,8 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=30.0)
     args = ap.parse_args()
     load_model()
-    print("| audio | seconds | Whisper's fallback: wall s, words | transcribe's rule: wall s, words | verdict | same words |")
+    print("| audio | seconds | Whisper's fallback: wall s, words | transcribe's rule: wall s, words | verdict "
+          "| same words |")
     print("|---|---|---|---|---|---|")
     for name, y in sounds(args.seconds).items():
         a = time.perf_counter()

@@ -139,7 +139,7 @@ class GesturePipeline:
     def warm_up(self) -> None:
         """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
         (~3 s) are not counted in the first request's feature time."""
-        TextEmbedder.shared().available  # noqa: B018 (loads the model)
+        TextEmbedder.shared().available  # loads the model
         audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
 
     @property
@@ -297,7 +297,7 @@ class GesturePipeline:
                     made.motion, note = plan.settings.post.apply(made.motion.slice(0, T), body)
                     made.motion = with_speech(made.motion, speech)
                     made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
-            except Exception as exc:  # noqa: BLE001 (the caller reports it with the methods that were made)
+            except Exception as exc:  # the caller reports it with the methods that were made
                 if not keep_going:
                     raise
                 made = Made(m, None, error=exc)
@@ -332,7 +332,8 @@ class GesturePipeline:
         out = self.backends[method].generate(speech, steps, cfg, seed, prog)
         if progress:
             progress(1.0, f"{method}: done")
-        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed), {**speech.timings, **out.timings},
+        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed),
+                                {**speech.timings, **out.timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
 
     # ---- editing -----------------------------------------------------------------------------------------

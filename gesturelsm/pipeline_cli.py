@@ -23,8 +23,19 @@ from .settings.arguments import (add_max_seconds_flag, add_post_flags, add_setti
                                  output_file, positive, refuse, say)
 
 
+GENERATE = """`gesturelsm generate`: speech -> one method's motion as a BEAT2-layout npz (SMPL-X, 30 fps).
+
+    gesturelsm generate speech.wav --out out.npz                        # transcribed, GestureLSM, 8 steps
+    gesturelsm generate speech.wav --text "hello there" --seed 3 --out out.npz
+    gesturelsm generate speech.wav --method ddim --ddim-steps 40 --smoothing off --out ddim.npz
+    gesturelsm generate speech.wav --out out.npz --rig avatar.vrm      # also out.vrm: the motion on your character
+
+Then `gesturelsm render out.npz --audio speech.wav --out out.mp4` shows it."""
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    g = sub.add_parser("generate", help="generate SMPL-X gestures for a speech file")
+    g = sub.add_parser("generate", help="generate SMPL-X gestures for a speech file", description=GENERATE,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("audio", help="speech file (wav, flac, mp3, ogg, m4a ...)")
     src = g.add_mutually_exclusive_group()
     src.add_argument("--text", help="transcript; word timings are aligned automatically")

@@ -1,7 +1,8 @@
 """The before/after picture of docs/EDITING.md: the real BEAT2 take's own motion, and the same take with its upper
 body and hands regenerated over 8-11 s by the shipped GestureLSM (seed 1) with a keyframe at 9.5 s posed as the
-take's frame 408 (both hands raised, at 13.6 s). Top: the mannequin at four times, before (input) and after (edited); bottom: the right elbow's
-bend and the right wrist's height over time, before and after, with the range and the keyframe marked.
+take's frame 408 (both hands raised, at 13.6 s). Top: the mannequin at four times, before (input) and after (edited);
+bottom: the right elbow's bend and the right wrist's height over time, before and after, with the range
+and the keyframe marked.
 
     .venv/bin/python scripts/edit_picture.py [--out docs/editing.png]
 """
@@ -60,7 +61,8 @@ def main() -> None:
             ax = fig.add_subplot(grid[row, col])
             ax.imshow(img)
             ax.set_xticks([]), ax.set_yticks([])
-            ax.set_title(f"{name}, {t:.1f} s" + (" (keyframe)" if t == KEY_TIME and name == "after" else ""), fontsize=10)
+            ax.set_title(f"{name}, {t:.1f} s" + (" (keyframe)" if t == KEY_TIME and name == "after" else ""),
+                         fontsize=10)
     ax = fig.add_subplot(grid[2, :])
     jb, ja = body.joints(before.poses, before.trans), body.joints(after.poses, after.trans)
     t = np.arange(before.num_frames) / 30
@@ -78,7 +80,8 @@ def main() -> None:
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper left", ncol=2)
     fig.suptitle(f"BEAT2 {TAKE}: upper body and hands regenerated over {A:g}-{B:g} s (GestureLSM, seed {SEED}), "
-                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}\neverything else is the take's own motion, "
+                 f"keyframe at {KEY_TIME:g} s = the take's frame {KEY_FRAME}\n"
+                 "everything else is the take's own motion, "
                  "bit for bit", fontsize=10)
     fig.tight_layout()
     fig.savefig(args.out)

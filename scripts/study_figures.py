@@ -1,6 +1,6 @@
 """The figures of docs/STUDY.md: a trial page (docs/study_trial.png) of a real study made by `gesturelsm batch`
-from the shipped checkpoints and two of gesturelsm/webapp/examples' speech files, shot in headless Chromium; and the results
-plot (docs/study_results.png) of that study answered by simulated raters (Bradley-Terry preferences with
+from the shipped checkpoints and two of gesturelsm/webapp/examples' speech files, shot in headless Chromium; and the
+results plot (docs/study_results.png) of that study answered by simulated raters (Bradley-Terry preferences with
 strengths --strengths, a few raters answering at random), analysed by `gesturelsm study results`.
 
     .venv/bin/python scripts/study_figures.py [--work /tmp/study-figures] [--raters 24]

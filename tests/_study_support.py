@@ -1,5 +1,5 @@
-"""Helpers for tests/study: a study folder made the way `gesturelsm batch` makes one (same key, mismatch videos, design and links), but
-with short synthetic videos instead of rendered ones, so server and browser tests take seconds."""
+"""Helpers for tests/study: a study folder made the way `gesturelsm batch` makes one (same key, mismatch videos, design
+and links), but with short synthetic videos instead of rendered ones, so server and browser tests take seconds."""
 from __future__ import annotations
 
 from pathlib import Path

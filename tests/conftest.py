@@ -55,6 +55,15 @@ def body():
 
 
 @pytest.fixture(scope="session")
+def espeak() -> None:
+    """eSpeak NG (the aligner's synthesiser and the speech the recognition tests make), or the test is skipped."""
+    from gesturelsm.align import tts
+
+    if not tts.available():
+        pytest.skip("eSpeak NG is not installed (apt-get install espeak-ng)")
+
+
+@pytest.fixture(scope="session")
 def real_motion(beat2_root: Path):
     from gesturelsm.motion import MotionSequence
 

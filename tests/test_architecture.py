@@ -24,7 +24,7 @@ FLOORS: list[set[str]] = [
                                                                # the floor (leg IK on a body's or a rig's skeleton)
     {"data"},                                                  # datasets (BEAT2 layout, TextGrids via align)
     {"retarget"},                                              # motion onto characters (their skeletons and meshes)
-    {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin or a character)
+    {"tokenizer", "render"},                                   # RVQ-VAEs; offscreen video (the mannequin, a character)
     {"generator", "export", "reference"},                      # the denoisers (ours; the authors', reference/);
                                                                # BVH / GLB / keypoints (render's camera)
     {"backends"},                                              # every method (ours, the authors') behind one call,
@@ -260,7 +260,8 @@ def test_an_upward_import_is_caught(tmp_path):
 
 @pytest.mark.parametrize("module, part", [("gesturelsm.render.frames", "render"), ("gesturelsm", ""),
                                           ("gesturelsm.pipeline", "pipeline"),
-                                          ("gesturelsm.serve.limits", "serve"), ("gesturelsm.audio.containers", "audio"),
+                                          ("gesturelsm.serve.limits", "serve"),
+                                          ("gesturelsm.audio.containers", "audio"),
                                           ("gesturelsm.serve.service", "serve"), ("gesturelsm.serve", "serve")])
 def test_part_of(module, part):
     assert part_of(module) == part

@@ -15,7 +15,8 @@ from gesturelsm.pipeline import GesturePipeline
 
 @pytest.fixture
 def places(tmp_path, monkeypatch):
-    """{wav}: speech, {folder}: a folder, {file}: a plain file, {tmp}: a fresh folder; loading a model fails the test."""
+    """{wav}: speech, {folder}: a folder, {file}: a plain file, {tmp}: a fresh folder; loading a model fails the
+    test."""
     sf.write(tmp_path / "s.wav", speech_like(1.0), 16000)
     (tmp_path / "folder").mkdir()
     (tmp_path / "file.txt").write_text("not a folder")

@@ -72,4 +72,5 @@ def test_a_keyframe_is_reached_by_the_held_latents_and_exactly_after_pinning(rea
     assert got.max() < 10, got.round(1)
     final = pipe.edit(motion, speech, {"upper": [(A, B)], "hands": [(A, B)]}, keyframes=[(KEY_TIME, (take, KEY_FRAME))],
                       seed=1).motion
-    assert np.degrees(joint_angles(_joints(final.poses, "upper")[f:f + 1], key.pose.reshape(1, 55, 3)[:, up])).max() < 1e-3
+    assert np.degrees(joint_angles(_joints(final.poses, "upper")[f:f + 1],
+                                   key.pose.reshape(1, 55, 3)[:, up])).max() < 1e-3

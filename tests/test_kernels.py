@@ -12,7 +12,8 @@ from torch.profiler import profile
 from gesturelsm.kernels import (WeightsCache, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, conv_add_available,
                                 linear, onednn_linear_available, ops)
 
-needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no working oneDNN linear op")
+needs_onednn = pytest.mark.skipif(not onednn_linear_available(),
+                                  reason="this PyTorch build has no working oneDNN linear op")
 needs_conv_add = pytest.mark.skipif(not conv_add_available(),
                                     reason="this PyTorch build has no oneDNN in-place convolution op")
 
@@ -138,7 +139,8 @@ def test_conv_add_in_place_equals_out_plus_conv(monkeypatch, onednn):
     want = out + F.conv1d(x, w, b, 3, 7)
     target = channels_last_1d(out)
     with torch.no_grad():
-        got = conv1d_as_2d_add_(target, channels_last_1d(x), w[:, :, None].contiguous(memory_format=torch.channels_last),
+        got = conv1d_as_2d_add_(target, channels_last_1d(x),
+                                w[:, :, None].contiguous(memory_format=torch.channels_last),
                                 b, 3, 7)
     assert got.data_ptr() == target.data_ptr()                    # written into the given tensor
     assert close(target[:, :, 0], want)

@@ -15,7 +15,8 @@ from torch.profiler import profile
 from gesturelsm import kernels
 from gesturelsm.kernels import FastConv1d, accelerate, cache, choice, linear, onednn_linear_available, traced_or_eager
 
-needs_onednn = pytest.mark.skipif(not onednn_linear_available(), reason="this PyTorch build has no working oneDNN linear op")
+needs_onednn = pytest.mark.skipif(not onednn_linear_available(),
+                                  reason="this PyTorch build has no working oneDNN linear op")
 ONEDNN_OP = "mkldnn::_linear_pointwise"
 
 

@@ -58,3 +58,46 @@ def test_gesturelsm_serve_has_the_flags_of_python_m_app():
 
     assert flags(serve) == flags(app_parser()) and ("--port", 7860, int) in flags(serve)
     assert serve.prog == "gesturelsm serve" and serve.description.startswith("`gesturelsm serve`: start the web demo")
+
+
+def _requirements_txt() -> dict:
+    from packaging.requirements import Requirement
+
+    lines = (line.split("#")[0].strip() for line in (REPO / "requirements.txt").read_text().splitlines())
+    return {r.name.lower(): r for r in map(Requirement, filter(None, lines))}
+
+
+def _declared() -> tuple[list, dict]:
+    import tomllib
+
+    from packaging.requirements import Requirement
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    extras = {k: [Requirement(s) for s in v] for k, v in project["optional-dependencies"].items()}
+    return [Requirement(s) for s in project["dependencies"]], extras
+
+
+def test_the_declared_dependencies_are_requirements_txt():
+    """`pip install gesturelsm[demo,cluster,study,dev]` asks for what `make setup` installs, by the same names and
+    versions (torch by version: scripts/setup.sh installs its CPU build); nothing declared that make setup lacks."""
+    pinned = _requirements_txt()
+    core, extras = _declared()
+    assert set(extras) == {"demo", "cluster", "study", "dev"}
+    declared = {}
+    for r in core + [r for group in extras.values() for r in group if r.name != "gesturelsm"]:
+        assert r.name.lower() not in declared, f"{r.name} declared twice"
+        declared[r.name.lower()] = r
+    assert sorted(declared) == sorted(pinned)
+    for name, r in declared.items():
+        want = pinned[name]
+        spec = str(want.specifier).replace("+cpu", "") if name == "torch" else str(want.specifier)
+        assert (str(r.specifier), r.extras) == (spec, want.extras), name
+    assert str(pinned["torch"].specifier) == "==2.13.0+cpu"                    # the CPU build, never CUDA
+    assert {r.name: r.extras for r in extras["dev"] if r.name == "gesturelsm"} == {
+        "gesturelsm": {"demo", "cluster", "study"}}                          # [dev] is everything
+    assert not {"gradio", "ray", "sqlalchemy", "playwright"} & {r.name.lower() for r in core}   # optional, not core
+
+
+def test_setup_installs_requirements_txt_and_the_cpu_torch():
+    setup = (REPO / "scripts" / "setup.sh").read_text()
+    assert '-r requirements.txt' in setup and '"torch==2.13.0+cpu"' in setup

@@ -42,6 +42,6 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     sf.write(tmp_path / "speech.wav", speech_like(2.0, seed=1), 16000)
     monkeypatch.chdir(tmp_path)
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)            # noqa: S102 - the README's own example
+    exec(compile(code, "README.md", "exec"), scope)            # the README's own example
     res = scope["res"]
     assert res.motion.num_frames == 60 and np.isfinite(res.motion.poses).all()

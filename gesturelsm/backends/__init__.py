@@ -123,7 +123,8 @@ def checkpoint_sources(path: str | Path | None) -> list[Path]:
     if path is None or str(path) == "":
         return [ASSETS]
     p = Path(path)
-    if p.is_dir() and (p / RVQ_FILE).is_file() and not any(b.checkpoint(p).is_file() for b in BACKENDS.values() if isinstance(b, Ours)):
+    ours = [b for b in BACKENDS.values() if isinstance(b, Ours)]
+    if p.is_dir() and (p / RVQ_FILE).is_file() and not any(b.checkpoint(p).is_file() for b in ours):
         return [ASSETS, p]
     return [p]
 

@@ -85,5 +85,6 @@ def middle_latent(z: torch.Tensor) -> torch.Tensor:
     return z[0, z.shape[1] // 2]
 
 
-__all__ = ["DECODE_CONTEXT", "EditOutput", "KEY_REACH", "STATIC_FRAMES", "decoded_span", "held_latents", "middle_latent",
+__all__ = ["DECODE_CONTEXT", "EditOutput", "KEY_REACH", "STATIC_FRAMES", "decoded_span", "held_latents",
+           "middle_latent",
            "static_clip"]

@@ -37,7 +37,8 @@ class FlowBackend:
 
     def __init__(self, spec: MethodSpec, model: GestureGenerator, tokenizers: dict[str, RVQVAE]):
         if tuple(model.config.regions) != tuple(tokenizers):
-            raise CheckpointError(f"generator regions {model.config.regions} do not match tokenizers {tuple(tokenizers)}")
+            raise CheckpointError(f"generator regions {model.config.regions} do not match tokenizers "
+                                  f"{tuple(tokenizers)}")
         self.spec, self.model, self.tokenizers = spec, model, tokenizers
 
     @torch.no_grad()

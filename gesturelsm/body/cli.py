@@ -16,10 +16,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("body", help="build or check the SMPL-X body model",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="body_command", metavar="ACTION", required=True)
-    b = sub.add_parser("build", help="rebuild the built-in mannequin npz")
+    b = sub.add_parser("build", help="rebuild the built-in mannequin npz",
+                       description="Rebuild the built-in mannequin body model (an SMPL-X-layout npz made from "
+                                   "primitives, no licensed data) and write it.")
     b.add_argument("--out", type=Path, default=None, help="output file (default: assets/body/SMPLX_MANNEQUIN.npz)")
     b.set_defaults(func=run_build)
-    c = sub.add_parser("check", help="load a body model file and print what it contains")
+    c = sub.add_parser("check", help="load a body model file and print what it contains",
+                       description="Load a body model file as every command would and print what it contains "
+                                   "(vertices, faces, joints, height, pelvis height in the rest pose).")
     c.add_argument("--model", default=None, help="SMPL-X npz or a folder holding SMPLX_NEUTRAL_2020.npz")
     c.set_defaults(func=run_check)
 

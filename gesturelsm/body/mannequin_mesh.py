@@ -67,17 +67,15 @@ def sweep(name: str, centres: np.ndarray, u: np.ndarray, v: np.ndarray, radii: n
 
     # rounded caps: extra stations that shrink like a quarter ellipse towards a pole
     phis = np.linspace(0.0, np.pi / 2, cap_rings + 1)[1:-1]
-    rows_c, rows_scale, rows_s, rows_k = [], [], [], []
+    stations = []                                            # (centre, scale, arc length, centre index) per ring
     if cap_start > 0:
-        for phi in phis[::-1]:
-            rows_c.append(centres[0] - t[0] * cap_start * np.sin(phi))
-            rows_scale.append(np.cos(phi)); rows_s.append(s[0] - cap_start * np.sin(phi)); rows_k.append(0)
-    for k in range(K):
-        rows_c.append(centres[k]); rows_scale.append(1.0); rows_s.append(s[k]); rows_k.append(k)
+        stations += [(centres[0] - t[0] * cap_start * np.sin(phi), np.cos(phi), s[0] - cap_start * np.sin(phi), 0)
+                     for phi in phis[::-1]]
+    stations += [(centres[k], 1.0, s[k], k) for k in range(K)]
     if cap_end > 0:
-        for phi in phis:
-            rows_c.append(centres[-1] + t[-1] * cap_end * np.sin(phi))
-            rows_scale.append(np.cos(phi)); rows_s.append(s[-1] + cap_end * np.sin(phi)); rows_k.append(K - 1)
+        stations += [(centres[-1] + t[-1] * cap_end * np.sin(phi), np.cos(phi), s[-1] + cap_end * np.sin(phi), K - 1)
+                     for phi in phis]
+    rows_c, rows_scale, rows_s, rows_k = zip(*stations)
     kk = np.array(rows_k)
     C = np.array(rows_c)                                     # (R, 3)
     scale = np.array(rows_scale)[:, None]                    # (R, 1)
@@ -96,18 +94,22 @@ def sweep(name: str, centres: np.ndarray, u: np.ndarray, v: np.ndarray, radii: n
     for r in range(R - 1):
         a, b = ids[r], ids[r + 1]
         a1, b1 = np.roll(a, -1), np.roll(b, -1)
-        faces.append(np.stack([a, a1, b1], 1)); faces.append(np.stack([a, b1, b], 1))
+        faces += [np.stack([a, a1, b1], 1), np.stack([a, b1, b], 1)]
     ps = pe = -1
     if cap_start >= 0:
         start_pole = centres[0] - t[0] * cap_start
         ps = len(np.concatenate(verts))
-        verts.append(start_pole[None]); axis_pts.append(start_pole[None]); s_all.append(np.array([s[0] - cap_start]))
+        verts.append(start_pole[None])
+        axis_pts.append(start_pole[None])
+        s_all.append(np.array([s[0] - cap_start]))
         a = ids[0]
         faces.append(np.stack([np.full(n, ps), np.roll(a, -1), a], 1))
     if cap_end >= 0:
         end_pole = centres[-1] + t[-1] * cap_end
         pe = len(np.concatenate(verts))
-        verts.append(end_pole[None]); axis_pts.append(end_pole[None]); s_all.append(np.array([s[-1] + cap_end]))
+        verts.append(end_pole[None])
+        axis_pts.append(end_pole[None])
+        s_all.append(np.array([s[-1] + cap_end]))
         b = ids[-1]
         faces.append(np.stack([np.full(n, pe), b, np.roll(b, -1)], 1))
     part = Part(name, np.concatenate(verts), np.concatenate(faces).astype(np.int64),
@@ -115,7 +117,7 @@ def sweep(name: str, centres: np.ndarray, u: np.ndarray, v: np.ndarray, radii: n
     first = len(phis) if cap_start > 0 else 0
     for k in range(K):  # rings at the given stations, for joint regressors
         part.rings[f"station{k}"] = ids[first + k]
-    part.rings["start_pole"] = np.array([ps]); part.rings["end_pole"] = np.array([pe])
+    part.rings.update(start_pole=np.array([ps]), end_pole=np.array([pe]))
     part.rings["first"], part.rings["last"] = ids[0], ids[-1]
     return part
 
@@ -156,7 +158,8 @@ def star_blob(name: str, centre: np.ndarray, radius_fn, n_lat: int, n_lon: int) 
     for i in range(n_lat - 1):
         a, b = ids[i], ids[i + 1]
         a1, b1 = np.roll(a, -1), np.roll(b, -1)
-        faces.append(np.stack([a, b, b1], 1)); faces.append(np.stack([a, b1, a1], 1))
+        faces.append(np.stack([a, b, b1], 1))
+        faces.append(np.stack([a, b1, a1], 1))
     top, bot = n_lat * n_lon, n_lat * n_lon + 1
     faces.append(np.stack([np.full(n_lon, top), ids[0], np.roll(ids[0], -1)], 1))
     faces.append(np.stack([np.full(n_lon, bot), np.roll(ids[-1], -1), ids[-1]], 1))

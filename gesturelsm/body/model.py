@@ -7,10 +7,10 @@ searched for SMPLX_NEUTRAL_2020.npz / SMPLX_NEUTRAL.npz (also in a `smplx/` subf
 Both kinds of file go through the same code: `smplx.SMPLX(path, use_pca=False, ...)`, the class that
 `smplx.create` dispatches to. We call it directly because `smplx.create` picks the class from the file
 *name* (the part before the first '_'), so it would refuse a user's file named e.g. `model.npz`; the
-shipped mannequin is named `SMPLX_MANNEQUIN.npz` so that `smplx.create(path)` loads it too (tested). smplx 0.1.28 hard-codes SMPL-X's extra-joint vertex
-ids (up to 9929) and does not accept a `vertex_ids` argument for SMPL-X, so for a file that carries its own
-(`vertex_id_names` / `vertex_id_values`, as the mannequin does) the module's `vertex_joint_selector` is
-replaced by one built from them.
+shipped mannequin is named `SMPLX_MANNEQUIN.npz` so that `smplx.create(path)` loads it too (tested). smplx 0.1.28
+hard-codes SMPL-X's extra-joint vertex ids (up to 9929) and does not accept a `vertex_ids` argument for SMPL-X, so for a
+file that carries its own (`vertex_id_names` / `vertex_id_values`, as the mannequin does) the module's
+`vertex_joint_selector` is replaced by one built from them.
 
 Hand poses: BEAT2 was fitted with MoSh++, whose body model (human_body_prior) uses hand rotations as they
 are, relative to the flat open hand. So `flat_hand_mean=True` is the default: poses are absolute.

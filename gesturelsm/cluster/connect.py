@@ -43,7 +43,8 @@ def package_fingerprint() -> str:
     when they run the same code on the same models."""
     h = hashlib.sha256()
     for tag, root, files in (("package", PACKAGE, PACKAGE.rglob("*.py")),
-                             ("assets", ASSETS, (p for p in ASSETS.rglob("*") if p.suffix in (".safetensors", ".npz")))):
+                             ("assets", ASSETS,
+                              (p for p in ASSETS.rglob("*") if p.suffix in (".safetensors", ".npz")))):
         for p in sorted(files):
             h.update(f"{tag}/{p.relative_to(root).as_posix()}\0".encode())
             h.update(p.read_bytes())

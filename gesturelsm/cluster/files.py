@@ -2,10 +2,11 @@
 
 Workers share no disk with the machine that starts the work: a checkpoint folder, a body model or a character file
 given on the command line goes to them by value; the package's own assets/ (shipped checkpoints, the mannequin) do
-not travel, every worker has them (`connect.check_workers` makes sure they are the same). `Files.of(path, ship=True)` reads the files once on the driver;
-on a worker `.local()` writes them once per machine under <tmp>/gesturelsm-files/<content hash>/ (a folder renamed
-into place when complete, so concurrent workers never see half a copy) and returns the path there. Not shipped
-(`ship=False`, a run in this process), nothing is read and `.local()` is the original path.
+not travel, every worker has them (`connect.check_workers` makes sure they are the same). `Files.of(path, ship=True)`
+reads the files once on the driver; on a worker `.local()` writes them once per machine under
+<tmp>/gesturelsm-files/<content hash>/ (a folder renamed into place when complete, so concurrent workers never see half
+a copy) and returns the path there. Not shipped (`ship=False`, a run in this process), nothing is read
+and `.local()` is the original path.
 
 `write_atomic(path, data)` is how the driver writes every result: a temporary name beside it, then a rename.
 """

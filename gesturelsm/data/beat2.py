@@ -23,7 +23,7 @@ import torch
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, AudioError, load_audio
 from ..errors import DatasetError
-from ..motion.sequence import FPS, MotionFileError, MotionSequence
+from ..motion.sequence import FPS, MotionSequence
 from .windows import window_starts
 
 CACHE_VERSION = 1
@@ -82,7 +82,8 @@ class Beat2Dataset:
             else:
                 spk_names.add(str(s).lower())
         names = sorted({p.stem for p in self.motion_dir.glob("*.npz")} if self.motion_dir.is_dir() else set())
-        audio_only = sorted({p.stem for p in self.wave_dir.glob("*.wav")} - set(names)) if self.wave_dir.is_dir() else []
+        waves = {p.stem for p in self.wave_dir.glob("*.wav")} if self.wave_dir.is_dir() else set()
+        audio_only = sorted(waves - set(names))
 
         def keep(name: str) -> bool:
             if speakers is not None:

@@ -8,9 +8,11 @@ from .beat2 import Beat2Dataset
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("data", help="inspect a BEAT2-layout dataset folder")
+    p = sub.add_parser("data", help="inspect a BEAT2-layout dataset folder", description=__doc__)
     s = p.add_subparsers(dest="data_command", metavar="ACTION", required=True)
-    info = s.add_parser("info", help="list takes, durations, transcripts and splits")
+    info = s.add_parser("info", help="list takes, durations, transcripts and splits",
+                        description="Check a BEAT2-layout folder and list its takes: frames, seconds of motion and "
+                                    "of audio, transcript words, and each take's split.")
     info.add_argument("root", help="BEAT2-layout folder (smplxflame_30/, wave16k/, textgrid/)")
     info.add_argument("--speakers", nargs="*", help="speaker ids or names to keep (e.g. 2 scott)")
     info.set_defaults(func=run_info)

@@ -40,7 +40,8 @@ def split_features(root, train_fraction: float = 0.8, speakers=None, cache_dir=N
         tr.append(f[:cut])
         ho.append(f[cut:])
     pct = round(100 * train_fraction)
-    return Split(tr, ho, list(ds.names), list(ds.names), f"first {pct}% of each take trains, last {100 - pct}% held out")
+    return Split(tr, ho, list(ds.names), list(ds.names),
+                 f"first {pct}% of each take trains, last {100 - pct}% held out")
 
 
 class WindowSampler:

@@ -126,14 +126,16 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
               log: Log | None = None, long_presets: tuple[str, ...] = ("shipped", "paper")) -> dict:
     """-> JSON-ready report. `end_to_end`: {"audio": path, "text": str | None, "out": mp4 path} or None."""
     log = log or (lambda m: None)
-    shipped = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(checkpoints), device=device, methods=methods)
+    shipped = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(checkpoints), device=device,
+                                              methods=methods)
     pipes = {"shipped": shipped}
     if "paper" in presets:
         pipes["paper"] = paper_pipeline(shipped, device)
     pipes = {k: v for k, v in pipes.items() if k in presets}
     clip_frames = next((g.config.window_frames for g in shipped.generators.values()), ReferenceConfig().frames)
     lengths = {"clip": clip_frames / FPS, "10s": 10.0, **({"long": long_seconds} if long_seconds else {})}
-    shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE, transcribe=False)  # warm-up: lazy imports, first calls
+    shipped.prepare_speech(speech_clip(2.0, speech), SAMPLE_RATE,
+                           transcribe=False)  # warm-up: lazy imports, first calls
     inputs = {k: shipped.prepare_speech(speech_clip(s, speech), SAMPLE_RATE, transcribe=False)   # audio-only inputs
               for k, s in lengths.items()}
     plan = [(p, m, s) for p, pipe in pipes.items() for m in pipe.methods for s in steps]
@@ -179,7 +181,8 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
                                                                                    / table[(p, "gesturelsm", 8)])
         if (p, "gesturelsm", 1) in by and (p, "gesturelsm", 8) in by:
             ratios[f"{p}: GestureLSM 8 / 1 steps (AITS)"] = by[(p, "gesturelsm", 8)] / by[(p, "gesturelsm", 1)]
-    rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, torch {torch.__version__}"
+    rep = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}, "
+                      f"torch {torch.__version__}"
            + (f", {torch.cuda.get_device_name()}" if torch.device(device).type == "cuda" else ""),
            "threads": torch.get_num_threads(), "device": str(device), "hardware": hardware, "repeats": repeats,
            "clip_frames": clip_frames, "clip_seconds": clip_frames / FPS, "rows": rows, "ratios": ratios}

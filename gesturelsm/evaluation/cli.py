@@ -60,10 +60,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench", help="speed / memory on this machine: per step, AITS, RTF, end to end; plot",
                        description="Time GestureLSM at several step counts against rectified flow and DDIM, shipped "
                                    "and paper-size, in one run.")
-    b.add_argument("--checkpoints", default=None)
+    b.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
     b.add_argument("--presets", nargs="+", default=["shipped", "paper"], choices=["shipped", "paper"],
                    help="model sizes to time: the shipped checkpoints and the paper's size")
-    b.add_argument("--methods", nargs="+", default=None)
+    b.add_argument("--methods", nargs="+", default=None, help="default: every generator found")
     b.add_argument("--steps", nargs="+", default=[1, 2, 4, 8, 20], help="sampling step counts (default: 1 2 4 8 20)")
     b.add_argument("--cfg", type=from_text, default=DEFAULT_CFG, help=f"CFG scale (default: {DEFAULT_CFG:g})")
     b.add_argument("--repeats", type=from_text, default=3, help="timed runs per setting (default: 3)")

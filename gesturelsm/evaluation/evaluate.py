@@ -1,6 +1,7 @@
 """Paper-style evaluation of generators on held-out clips: FGD, BC beside ground truth's BC, L1 diversity,
 face error, jitter, feet and root (metrics/feet.py: foot skate, contact share, drift, range, bob, floor
-penetration, leg jerk), wrist amplitude (metrics/amplitude.py) and generation time, for every (method, steps, CFG) of a plan.
+penetration, leg jerk), wrist amplitude (metrics/amplitude.py) and generation time, for every (method, steps,
+CFG) of a plan.
 
     clips, policy = heldout_clips("../shared/data/beat2")
     report = evaluate(GesturePipeline.from_pretrained(), clips, plan_grid(["gesturelsm"], [1, 2, 4, 8], [2.0]))

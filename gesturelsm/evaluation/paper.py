@@ -17,7 +17,8 @@ STEPS = {1: (6.235, 0.647, 13.23, 0.015), 2: (4.988, 0.680, 13.39, 0.018), 4: (4
          8: (4.088, 0.714, 13.24, 0.039), 20: (4.040, 0.730, 13.49, 0.076)}
 
 # Table 4c: generator type -> (FGD, Div, AITS); the paper does not state the baselines' step counts
-MODEL_TYPE = {"ddim": (4.131, 13.06, 2.942), "rectified_flow": (4.724, 13.21, 0.074), "gesturelsm": (4.088, 13.24, 0.039)}
+MODEL_TYPE = {"ddim": (4.131, 13.06, 2.942), "rectified_flow": (4.724, 13.21, 0.074),
+              "gesturelsm": (4.088, 13.24, 0.039)}
 
 # Table 4b: time sampling -> (FGD, BC, Div)
 TIME_SAMPLING = {"uniform": (5.051, 0.721, 13.56), "beta(2, 1.2)": (4.088, 0.714, 13.24)}

@@ -97,7 +97,8 @@ def check_grid(pipe, grid: SweepGrid, seconds: float, limits: SweepLimits = Swee
         problems.append(f"{n} combinations of method, steps and CFG; a sweep takes at most {limits.max_cells}.")
     work = n * grid.seeds * seconds
     if n and grid.seeds >= 1 and work > limits.max_work:
-        problems.append(f"{n} combinations x {grid.seeds} seed(s) x {seconds:.1f} s of speech = {work:.0f} s of motion; "
+        problems.append(f"{n} combinations x {grid.seeds} seed(s) x {seconds:.1f} s of speech = {work:.0f} s of "
+                        "motion; "
                         f"a sweep makes at most {limits.max_work:g} s (fewer settings, seeds or a shorter clip).")
     if problems:
         raise InputError("\n".join(problems))

@@ -50,7 +50,8 @@ def markdown_text(result: SweepResult) -> str:
             f"{SEED_SPREAD.label} ({SEED_SPREAD.unit})"]
     lines = [f"Sweep on {result.speech_seconds:.1f} s of speech ({result.text_mode}); {g.seeds} seed(s) per setting, "
              f"mean ± standard deviation over seeds; generation time is sampling + decoding (features shared); "
-             f"feet on the ground {'on' if result.grounding else 'off'}; whole sweep {result.seconds:.1f} s.", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+             f"feet on the ground {'on' if result.grounding else 'off'}; whole sweep {result.seconds:.1f} s.", "",
+             "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in result.rows():
         lines.append("| " + " | ".join([label(r["method"]), str(r["steps"]), f"{r['cfg']:g}", _cell(r, "time"),
                                         *(_cell(r, s.key) for s in STATISTICS),

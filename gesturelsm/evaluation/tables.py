@@ -39,7 +39,8 @@ def eval_markdown(rep: dict) -> str:
     if gt:
         cells = ["ground truth", "-", "-", *["-" for _ in ex], _f(gt["bc"]), _f(gt["diversity"], "{:.2f}"), "-",
                  *(["-"] if rep.get("face_vertices") else []), _f(gt["jitter"], "{:.1f}"),
-                 _f(gt["foot_skate"], "{:.1f}"), "-", "-", f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
+                 _f(gt["foot_skate"], "{:.1f}"), "-", "-",
+                 f"- / {paper.GROUND_TRUTH['bc']} / {paper.GROUND_TRUTH['diversity']} / -"]
         lines.append("| " + " | ".join(cells) + " |")
     for r in rep["rows"]:
         h = r.get("heldout")
@@ -50,7 +51,8 @@ def eval_markdown(rep: dict) -> str:
         ptxt += " *" if p and p.get("note") else ""
         cells = [label(r["method"]), str(r["steps"]), f"{r['cfg']:g}",
                  *[_f(h.get(e), "{:.4g}") for e in ex],
-                 f"{_f(h['bc'])} ({_f(gt.get('bc'))})", f"{_f(h['diversity'], '{:.2f}')} ({_f(gt.get('diversity'), '{:.2f}')})",
+                 f"{_f(h['bc'])} ({_f(gt.get('bc'))})",
+                 f"{_f(h['diversity'], '{:.2f}')} ({_f(gt.get('diversity'), '{:.2f}')})",
                  _f(h["expr_mse"], "{:.3f}"), *([_f(h["vertex_mse"], "{:.3g}")] if rep.get("face_vertices") else []),
                  f"{_f(h['jitter'], '{:.1f}')} ({_f(gt.get('jitter'), '{:.1f}')})",
                  f"{_f(h['foot_skate'], '{:.1f}')} ({_f(gt.get('foot_skate'), '{:.1f}')})",
@@ -60,17 +62,20 @@ def eval_markdown(rep: dict) -> str:
     if ao:
         names = [c["name"] for c in rep["clips"] if not c["ground_truth"]]
         lines += ["", f"Audio-only takes ({', '.join(names)}): no ground-truth motion, so BC and diversity only.", "",
-                  "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate cm/s |", "|---|---|---|---|---|---|---|"]
+                  "| method | steps | CFG | BC | Div | jitter m/s³ | foot skate cm/s |",
+                  "|---|---|---|---|---|---|---|"]
         for r in ao:
             a = r["audio_only"]
             lines.append(f"| {label(r['method'])} | {r['steps']} | {r['cfg']:g} | {_f(a['bc'])} | "
-                         f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | {_f(a['foot_skate'], '{:.1f}')} |")
+                         f"{_f(a['diversity'], '{:.2f}')} | {_f(a['jitter'], '{:.1f}')} | "
+                         f"{_f(a['foot_skate'], '{:.1f}')} |")
     lines += amplitude_lines(rep)
     lines += feet_lines(rep)
     lines += genea_lines(rep)
     lines += ["", "FGD_k / FGD_g: Frechet distances of training-free kinetic / geometric joint features, z-scored by "
-              "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is better. Div: metres, L1 over "
-              "55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, AITS on an A100; * the paper's "
+              "the ground truth's spread (lower is better; not on the paper's scale). BC: closer to ground truth is "
+              "better. Div: metres, L1 over 55 joints x 3 axes. Paper: BEAT2 speaker 2 test set, EMAGE-AE FGD x 1e-1, "
+              "AITS on an A100; * the paper's "
               "diffusion / rectified-flow rows (its Table 4c) do not state their steps, shown at 20 (DDIM's steps in "
               "the reference code)."]
     return "\n".join(lines)
@@ -89,7 +94,8 @@ def amplitude_lines(rep: dict) -> list[str]:
 
     out = ["", "Wrist amplitude (raised: a wrist above pelvis + 0.25 m; p95 wrist height above the pelvis, m; mean "
            "wrist speed, m/s; hand spread, m; means over clips x seeds):", "",
-           "| method | steps | CFG | held-out: raised | p95 | speed | spread | audio-only: raised | p95 | speed | spread |",
+           "| method | steps | CFG | held-out: raised | p95 | speed | spread "
+           "| audio-only: raised | p95 | speed | spread |",
            "|" + "---|" * 11, f"| ground truth | - | - | {cells(gt)} | - | - | - | - |"]
     for r in rep["rows"]:
         out.append(f"| {label(r['method'])} | {r['steps']} | {r['cfg']:g} | {cells(r.get('heldout'))} "
@@ -147,8 +153,10 @@ def bench_markdown(rep: dict) -> str:
     e2e = rep.get("end_to_end")
     if e2e:
         lines += ["", f"End to end (upload to video), {e2e['seconds_of_speech']:.1f} s of speech, "
-                  f"{e2e['method']} {e2e['steps']} steps: " + ", ".join(f"{k} {v:.2f} s" for k, v in e2e["stages"].items())
-                  + f"; total {e2e['total']:.2f} s (first request after start: {e2e.get('first_request_total', float('nan')):.2f} s)."]
+                  f"{e2e['method']} {e2e['steps']} steps: "
+                  + ", ".join(f"{k} {v:.2f} s" for k, v in e2e["stages"].items())
+                  + f"; total {e2e['total']:.2f} s (first request after start: "
+                    f"{e2e.get('first_request_total', float('nan')):.2f} s)."]
     if rep.get("process_peak_rss_mb"):
         lines += ["", f"Peak MB: extra resident memory during one 60 s generation (models loaded); whole process peak "
                       f"RSS {rep['process_peak_rss_mb']:.0f} MB."]

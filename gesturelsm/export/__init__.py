@@ -18,4 +18,5 @@ from .npz import export_npz, npz_bytes
 from .skeleton import ANIMATOR_NAMES
 
 __all__ = ["ANIMATOR_NAMES", "ARKIT_NAMES", "ArkitFace", "arkit_face", "export_arkit", "export_bvh", "export_glb",
-           "export_keypoints", "export_npz", "keypoints_2d", "npz_bytes", "keypoints_3d", "read_glb", "read_live_link_csv"]
+           "export_keypoints", "export_npz", "keypoints_2d", "npz_bytes", "keypoints_3d", "read_glb",
+           "read_live_link_csv"]

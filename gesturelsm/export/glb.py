@@ -28,6 +28,7 @@ import torch
 from ..body.model import resolve_body
 from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
+from ..motion.rotations import matrix_to_quaternion_xyzw
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
 from .guard import animation_times, check_motion, finite
@@ -36,15 +37,6 @@ from .skeleton import full_poses, joint_names, rest_pose
 FLOAT, UBYTE, USHORT, UINT = 5126, 5121, 5123, 5125
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 
-
-def matrix_to_quaternion_xyzw(R: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) -> (..., 4) unit quaternions (x, y, z, w), w >= 0."""
-    from scipy.spatial.transform import Rotation
-
-    shape = R.shape[:-2]
-    q = Rotation.from_matrix(np.asarray(R, np.float64).reshape(-1, 3, 3)).as_quat()   # x, y, z, w
-    q *= np.where(q[:, 3:] < 0, -1.0, 1.0)
-    return q.reshape(shape + (4,))
 
 
 CHUNK = 4096                                # frames converted at once by the writers

@@ -169,5 +169,6 @@ def decode(data: bytes, source: str = "motion data") -> MotionRecord:
                         morph=morph)
 
 
-__all__ = ["AXIS_ANGLE", "CHARACTER_VERSION", "HEADER", "SECTION", "MAGIC", "MotionFormatError", "MotionRecord", "QUATERNION", "VERSION", "decode",
+__all__ = ["AXIS_ANGLE", "CHARACTER_VERSION", "HEADER", "SECTION", "MAGIC", "MotionFormatError", "MotionRecord",
+           "QUATERNION", "VERSION", "decode",
            "encode"]

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..body.model import resolve_body
 from ..constants import FPS
+from ..motion.rotations import axis_angle_to_quaternion_xyzw as axis_angle_to_quaternion
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
@@ -54,17 +55,6 @@ def motion_arrays(seq: MotionSequence, body) -> dict[str, np.ndarray]:
     expr = seq.expressions[:, used].astype(np.float32) if used else np.zeros((T, 0), np.float32)
     return {"rotations": quats, "root": root, "expressions": expr}
 
-
-def axis_angle_to_quaternion(aa: np.ndarray) -> np.ndarray:
-    """(..., 3) axis-angle -> (..., 4) unit quaternions x, y, z, w with w >= 0 (the rotation of
-    `glb.matrix_to_quaternion_xyzw(axis_angle_to_matrix(aa))`, without building matrices)."""
-    aa = np.asarray(aa, np.float64)
-    angle = np.linalg.norm(aa, axis=-1, keepdims=True)                                     # (..., 1)
-    half = 0.5 * angle
-    # sin(a/2)/a -> 1/2 as a -> 0 (Taylor: 1/2 - a^2/48)
-    k = np.where(angle > 1e-6, np.sin(half) / np.maximum(angle, 1e-12), 0.5 - angle ** 2 / 48.0)
-    q = np.concatenate([aa * k, np.cos(half)], -1)
-    return q * np.where(q[..., 3:] < 0, -1.0, 1.0)
 
 
 def _continuous(q: np.ndarray) -> np.ndarray:

@@ -56,7 +56,8 @@ def log_mel(y: np.ndarray, sr: int = SR, hop: int = ONSET_HOP) -> np.ndarray:
     80), with the STFT done by torch (multi-threaded; librosa's is a third of the feature time on long audio)."""
     import librosa
 
-    spec = torch.stft(torch.from_numpy(np.ascontiguousarray(y, np.float32)), N_FFT, hop, window=torch.hann_window(N_FFT),
+    spec = torch.stft(torch.from_numpy(np.ascontiguousarray(y, np.float32)), N_FFT, hop,
+                      window=torch.hann_window(N_FFT),
                       center=True, pad_mode="constant", return_complex=True)
     spec = spec.real.square() + spec.imag.square()                  # |X|^2 without the sqrt of abs(): 3x faster
     return librosa.power_to_db((_mel_basis(sr) @ spec).numpy())

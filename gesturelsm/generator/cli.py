@@ -21,10 +21,14 @@ from .train import GenTrainConfig, train_generator
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder")
+    p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder",
+                       description="Train a speech-to-latent generator for one sampling method (GestureLSM's "
+                                   "shortcut flow or a baseline) over frozen tokenizers, on a BEAT2-layout folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
-    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"), help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
-    p.add_argument("--method", default="gesturelsm", choices=list(METHODS), help="the sampling method it is trained for")
+    p.add_argument("--tokenizers", default=str(ASSETS / "tokenizer"),
+                   help="folder of frozen <region>.safetensors (default: the shipped assets/tokenizer)")
+    p.add_argument("--method", default="gesturelsm", choices=list(METHODS),
+                   help="the sampling method it is trained for")
     p.add_argument("--preset", default="small", help="tiny | small (shipped) | paper")
     p.add_argument("--out", default="runs/generator", help="run folder")
     p.add_argument("--steps", type=int, default=4000, help="training steps")
@@ -37,7 +41,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="gesturelsm only: training-time distribution of t")
     p.add_argument("--ema-teacher", action="store_true", help="shortcut targets from the EMA network")
     p.add_argument("--seed-noise", type=float, default=0.0,
-                   help="std of noise on the real seed latents in training (the rollout seeds windows with generated ones)")
+                   help="std of noise on the real seed latents in training (the rollout seeds windows with "
+                        "generated ones)")
     p.add_argument("--augment", nargs="+", default=[], choices=list(KINDS), metavar="KIND",
                    help="add precomputed speech variants of each training take (off by default): tempo = speech "
                         "x0.9 / x1.1 as fast with the motion time-warped alike; pitch = +-2 semitones; "
@@ -46,7 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="override fields of the preset's GeneratorConfig, e.g. --set speech_add=true st_layers=6")
     p.add_argument("--train-fraction", type=float, default=0.8,
                    help="without a split file: the first fraction of each take is training, the rest held out")
-    p.add_argument("--speakers", nargs="*")
+    p.add_argument("--speakers", nargs="*", help="speaker ids or names to train on (e.g. 2 scott; default: all)")
     p.add_argument("--no-text", action="store_true", help="ignore transcripts (audio-only model)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the training run")
     p.add_argument("--device", default="auto", help="auto | cpu | cuda | cuda:N; several processes (torchrun): "

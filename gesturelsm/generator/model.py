@@ -85,7 +85,8 @@ class Denoiser(nn.Module):
         self.emb_mlp = nn.Sequential(nn.Linear(C, C), nn.GELU(), nn.Linear(C, C))
         self.seed_proj = nn.Linear(R * c.seed_latents * D, C)
         self.merge = nn.Linear(2 * C, C)
-        self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn, c.drop_path) for _ in range(c.cross_layers))
+        self.cross = nn.ModuleList(CrossBlock(C, c.cond_dim, c.heads, c.ffn,
+                                              c.drop_path) for _ in range(c.cross_layers))
         self.st = nn.ModuleList(STBlock(C, c.heads, c.ffn, c.drop_path) for _ in range(c.st_layers))
         self.speech_in = nn.Sequential(nn.LayerNorm(c.cond_dim), nn.Linear(c.cond_dim, C)) if c.speech_add else None
         self.out_norm = nn.LayerNorm(C)
@@ -165,7 +166,8 @@ class _Trunk(nn.Module):
 
     def __init__(self, den: Denoiser, per_block: int):
         super().__init__()
-        self.cross, self.st, self.out_norm, self.out, self.per_block = den.cross, den.st, den.out_norm, den.out, per_block
+        self.cross, self.st, self.out_norm, self.out = den.cross, den.st, den.out_norm, den.out
+        self.per_block = per_block
 
     def forward(self, h: torch.Tensor, *kv: torch.Tensor) -> torch.Tensor:
         B, R, tt, C = h.shape

@@ -67,7 +67,8 @@ def latent_stats(tokenizers: dict[str, RVQVAE], takes: list[TakeTensors], cfg: G
 
 
 def _build_model(takes: list[TakeTensors], tokenizers: dict[str, RVQVAE], tc: GenTrainConfig, method,
-                 config: GeneratorConfig | None) -> tuple[GeneratorConfig, GestureGenerator, torch.Tensor, torch.Tensor]:
+                 config: GeneratorConfig | None) -> tuple[GeneratorConfig, GestureGenerator, torch.Tensor,
+                                                          torch.Tensor]:
     """The generator for `tc`'s method on the tokenizers' latents, with its latent std and neutral seed set."""
     base = config or PRESETS[tc.preset]
     cfg = GeneratorConfig(**{**asdict(base), "latent_dim": next(iter(tokenizers.values())).config.code_dim,
@@ -147,7 +148,8 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
             log(f"resumed {out_path.name} at step {step}")
     net = model
     if world > 1:
-        net = torch.nn.parallel.DistributedDataParallel(model, device_ids=[device.index] if device.type == "cuda" else None)
+        net = torch.nn.parallel.DistributedDataParallel(model,
+                                                        device_ids=[device.index] if device.type == "cuda" else None)
     g = torch.Generator(device=device).manual_seed(tc.seed * 7919 + rank * 104729 + step)
     bar = tqdm(total=tc.steps, initial=step, desc=f"train {tc.method}", disable=rank != 0, dynamic_ncols=True,
                mininterval=2)

@@ -16,7 +16,7 @@ The layers, for reuse (live mode grounds chunk by chunk; a character's skeleton 
 
 | layer | module | offline | causal |
 |---|---|---|---|
-| skeleton: parents, rest joints, legs, sole heights; FK of the leg chains | rig.py `LegRig`, `forward`, `smplx_rig` | - | - |
+| skeleton: parents, rest joints, legs, sole heights; legs' FK | rig.py `LegRig`, `forward`, `smplx_rig` | - | - |
 | contacts from height and speed, hysteresis | contacts.py | `detect_contacts` (T, F) | `ContactDetector.step` |
 | drift out of the root's horizontal path | drift.py | `remove_drift` (zero phase) | `DriftRemover.run` (chunks) |
 | two-bone leg IK, per frame, batched | ik.py `two_bone` | same | same |

@@ -192,7 +192,8 @@ def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
     return m - soft * np.log(np.exp(-(a - m) / soft) + np.exp(-(b - m) / soft))
 
 
-def leg_targets(rig: LegRig, feet: Feet, plans: list[FootPlan], settings: GroundingSettings, R_ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def leg_targets(rig: LegRig, feet: Feet, plans: list[FootPlan], settings: GroundingSettings,
+                R_ankle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Ankle positions (T, 2, 3) and ankle world rotations (T, 2, 3, 3) the feet go to (targets.py): held by the
     plants, else their own path corrected (easing out of and into the plants, the height rising as the foot's own
     does, lifted at least by the plan's arc when it travels); never so low that the ankle or the toe joint is below

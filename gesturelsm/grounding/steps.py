@@ -68,7 +68,8 @@ def plan_steps(spot: np.ndarray, hip: np.ndarray, contacts: np.ndarray,
     """(T, F) contacts with steps, for a whole take: spot and hip (T, F, 2), contacts (T, F) bool."""
     planner = StepPlanner(contacts.shape[1], params)
     rows = [planner._step(s, h, c) for s, h, c in zip(np.asarray(spot, np.float64).tolist(),
-                                                    np.asarray(hip, np.float64).tolist(), np.asarray(contacts, bool).tolist())]
+                                                    np.asarray(hip, np.float64).tolist(),
+                                                    np.asarray(contacts, bool).tolist())]
     return np.array(rows, bool).reshape(contacts.shape)
 
 

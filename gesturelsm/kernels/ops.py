@@ -49,7 +49,7 @@ def _available(name: str, check) -> bool:
     if name not in _state:
         try:
             _state[name] = bool(check())
-        except Exception:  # noqa: BLE001 - any failure of a private op means: use the public one
+        except Exception:  # any failure of a private op means: use the public one
             _state[name] = False
     return _state[name] and onednn_enabled()
 
@@ -140,7 +140,7 @@ def _scripted_linear() -> Callable | None:
     if not _SCRIPTED:
         try:
             _SCRIPTED.append(torch.jit.script(_onednn_linear_script))
-        except Exception:  # noqa: BLE001 - TorchScript needs the source and a matching op schema
+        except Exception:  # TorchScript needs the source and a matching op schema
             _SCRIPTED.append(None)
     return _SCRIPTED[0]
 

@@ -75,10 +75,11 @@ def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_m
 
 def add_parser(sub) -> None:
     p = sub.add_parser("live", help="stream a speech file through the live generator (as if from a microphone)",
-                       formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("audio", help="speech file (any common format and rate)")
     p.add_argument("--chunk-ms", type=from_text, default=200.0, help="audio chunk size")
-    p.add_argument("--realtime", action="store_true", help="feed chunks at the pace of speech (else as fast as possible)")
+    p.add_argument("--realtime", action="store_true",
+                   help="feed chunks at the pace of speech (else as fast as possible)")
     p.add_argument("--out", default=None, help="write the streamed motion as BEAT2 npz")
     p.add_argument("--steps", type=from_text, default=LiveConfig.steps, help="sampler steps per window")
     p.add_argument("--cfg", type=from_text, default=LiveConfig.cfg, help="classifier-free guidance scale")

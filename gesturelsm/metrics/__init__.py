@@ -7,7 +7,8 @@
 | L1 diversity | diversity.py | metres, summed over 55 joints x 3 axes |
 | face error | face.py | expression MSE; vertex MSE m^2 |
 | jitter | physics.py | m/s^3 |
-| feet and root: foot skate, contact share, root drift and range, bob, floor penetration, leg jerk | feet.py | cm/s, 0..1, m, cm, m/s^3 |
+| feet and root: foot skate, contact share, root drift and range, bob, floor penetration, leg jerk | feet.py | cm/s,
+0..1, m, cm, m/s^3 |
 | speech response: beat timing, loudness following | speech_response.py | gain over time-shifted speech, z |
 """
 from .beat import audio_beats, beat_consistency, motion_beats

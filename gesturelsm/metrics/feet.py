@@ -3,13 +3,19 @@
 
 | measure | definition | unit |
 |---|---|---|
-| foot skate | mean horizontal speed of the ankles and feet (joints 7, 8, 10, 11) over the frames where that joint is within `CONTACT_M` (5 cm) of the floor; the floor is the 5th percentile over the take of the lowest of the four joints; speed between frame t-1 and t, contact judged at t | cm/s |
+| foot skate | mean horizontal speed of the ankles and feet (joints 7, 8, 10, 11) over the frames where that joint is
+within `CONTACT_M` (5 cm) of the floor; the floor is the 5th percentile over the take of the lowest of the four joints;
+speed between frame t-1 and t, contact judged at t | cm/s |
 | contact share | share of (frames x those four joints) within 5 cm of the floor | 0..1 |
-| root drift | horizontal distance of the pelvis between the first and the last frame; also per minute of motion | m, m/min |
-| root range | largest horizontal extent of the pelvis path (its diameter: the widest spread along any horizontal direction) | m |
+| root drift | horizontal distance of the pelvis between the first and the last frame; also per minute of motion | m,
+m/min |
+| root range | largest horizontal extent of the pelvis path (its diameter: the widest spread along any horizontal
+direction) | m |
 | bob | standard deviation of the pelvis height | cm |
-| floor penetration | 99th percentile over frames of how far the lowest of the four joints is below the floor (0 when above) | cm |
-| leg jerk | mean jerk (third difference of position) of the hips, knees, ankles and feet (1, 2, 4, 5, 7, 8, 10, 11), as `physics.jitter` | m/s^3 |
+| floor penetration | 99th percentile over frames of how far the lowest of the four joints is below the floor (0 when
+above) | cm |
+| leg jerk | mean jerk (third difference of position) of the hips, knees, ankles and feet (1, 2, 4, 5, 7, 8, 10, 11), as
+`physics.jitter` | m/s^3 |
 
 The floor is the take's own (a motion shifted up or down measures the same). The speaker's real take
 (BEAT2 2_scott_0_1_1 on the shipped mannequin) measures foot skate 6.4 cm/s, contact share 0.59, drift 0.15 m in

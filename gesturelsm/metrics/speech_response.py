@@ -100,7 +100,8 @@ def _corr(x: np.ndarray, y: np.ndarray) -> float:
     return float((x * y).sum() / max(np.sqrt((x * x).sum() * (y * y).sum()), 1e-12))
 
 
-def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = SAMPLE_RATE, fps: int = FPS, smooth_s: float = 1.0,
+def energy_following(joints: np.ndarray, audio: np.ndarray, sr: int = SAMPLE_RATE, fps: int = FPS,
+                     smooth_s: float = 1.0,
                      min_shift: float = LOUDNESS_MIN_SHIFT, step: float = 0.25,
                      joint_ids: tuple[int, ...] = UPPER) -> ShiftTest:
     """Pearson correlation of upper-body speed with speech loudness, both averaged over `smooth_s`, vs the same with

@@ -156,8 +156,8 @@ def _checked_keys(spec: EditSpec, keyframes: Sequence[Keyframe], duration: float
             raise EditError(f"the keyframe at {k.time:g} s lies outside the speech (0-{duration:.2f} s)")
         near = spec.frames("upper")[max(0, k.frame - KEY_SPACING):k.frame + KEY_SPACING + 1]
         if len(near) < 2 * KEY_SPACING + 1 or not near.all():
-            raise EditError(f"the keyframe at {k.time:g} s needs the upper body regenerated from {KEY_SPACING / FPS:.1f}"
-                            f" s before it to {KEY_SPACING / FPS:.1f} s after it (e.g. upper "
+            raise EditError(f"the keyframe at {k.time:g} s needs the upper body regenerated from "
+                            f"{KEY_SPACING / FPS:.1f} s before it to {KEY_SPACING / FPS:.1f} s after it (e.g. upper "
                             f"{max(0.0, k.time - 1):.1f}-{min(duration, k.time + 1):.1f} s)")
     for a, b in zip(keys, keys[1:]):
         if b.frame - a.frame < KEY_SPACING:

@@ -25,20 +25,11 @@ import torch
 from ..constants import FPS
 from .editing import KEY_SPACING, EditSpec
 from .regions import REGIONS
-from .rotations import axis_angle_to_matrix, geodesic_angle, matrix_to_axis_angle
+from .rotations import axis_angle_to_matrix, geodesic_angle, matrix_to_axis_angle, slerp_axis_angle
 from .sequence import MotionSequence
 
 RAMP_MIN, RAMP_MAX = 6, 30        # frames a crossing at a range's end lasts (0.2-1 s)
 RAMP_SPEED_SHARE = 0.5            # of the input's 99th-percentile joint speed the crossing may add at its steepest
-
-
-def slerp_axis_angle(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """(..., 3) axis-angle rotations a, b and weights w broadcastable to (...) -> a exp(w log(a^T b)), in float64."""
-    Ra = axis_angle_to_matrix(torch.from_numpy(np.asarray(a, np.float64)))
-    Rb = axis_angle_to_matrix(torch.from_numpy(np.asarray(b, np.float64)))
-    delta = matrix_to_axis_angle(Ra.transpose(-1, -2) @ Rb)                     # (..., 3) from a to b
-    step = axis_angle_to_matrix(delta * torch.from_numpy(np.asarray(w, np.float64))[..., None])
-    return matrix_to_axis_angle(Ra @ step).numpy()
 
 
 def joint_angles(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -72,7 +63,8 @@ def edit_weights(original: MotionSequence, generated: MotionSequence, spec: Edit
         n_out = _ramp_frames(float(angle[max(lo, hi - RAMP_MAX):hi].max()), budget, hi - lo)
         w[lo:hi] = 1.0
         w[lo:lo + n_in] = 0.5 * (1 - np.cos(np.pi * np.arange(1, n_in + 1) / (n_in + 1)))
-        w[hi - n_out:hi] = np.minimum(w[hi - n_out:hi], 0.5 * (1 - np.cos(np.pi * np.arange(n_out, 0, -1) / (n_out + 1))))
+        w[hi - n_out:hi] = np.minimum(w[hi - n_out:hi],
+                                      0.5 * (1 - np.cos(np.pi * np.arange(n_out, 0, -1) / (n_out + 1))))
     return w
 
 

@@ -15,17 +15,10 @@ import numpy as np
 import torch
 from scipy.signal import savgol_filter
 
+from ..constants import DEFAULT_SMOOTHING, SMOOTHING_WINDOWS
 from ..errors import InputError
 from .rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
 from .sequence import MotionSequence
-
-SMOOTHING_WINDOWS = {"off": 0, "light": 5, "medium": 9, "strong": 15}     # frames at 30 fps
-# The default of the app, `gesturelsm generate` and the study batch. "light" because the tokenizers' decoders still
-# add some frame-to-frame jitter the speaker does not have (the real held-out motion's round trip: jerk 27 -> 36
-# m/s^3); on the shipped GestureLSM (8 steps, held-out
-# speech) it takes jerk from 34 to 27 (the speaker: 30) and leaves the raised share, wrist height and speed unchanged
-# (assets/MODEL_CARD.md). "off" gives the raw decoder output.
-DEFAULT_SMOOTHING = "light"
 
 
 def stand_in_place(seq: MotionSequence) -> MotionSequence:
@@ -74,4 +67,5 @@ def postprocess(seq: MotionSequence, in_place: bool = False, smoothing: str = "o
     return smooth(seq, smoothing) if smoothing != "off" else seq
 
 
-__all__ = ["DEFAULT_SMOOTHING", "SMOOTHING_WINDOWS", "check_smoothing", "fit_length", "postprocess", "smooth", "stand_in_place"]
+__all__ = ["DEFAULT_SMOOTHING", "SMOOTHING_WINDOWS", "check_smoothing", "fit_length", "postprocess", "smooth",
+           "stand_in_place"]

@@ -7,13 +7,15 @@ from .importer import import_reference
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("import-reference", help="convert the authors' released GestureLSM files (safely) to our checkpoints",
+    p = sub.add_parser("import-reference",
+                       help="convert the authors' released GestureLSM files (safely) to our checkpoints",
                        description="Reads shortcut_reflow.bin / new_540_diffusion.bin / meanflow.pth, "
                                    "net_300000_{upper,hands,lower}.pth, vocab.pkl and mean_std/*.npy under DIR "
                                    "without executing pickled code, and writes safetensors checkpoints.")
     p.add_argument("dir", help="folder with the released files (searched recursively)")
     p.add_argument("--out", required=True, help="output checkpoint folder (use it with --checkpoints)")
-    p.add_argument("--heads", type=int, default=4, help="attention heads (not stored in the weights; 4 in every release)")
+    p.add_argument("--heads", type=int, default=4,
+                   help="attention heads (not stored in the weights; 4 in every release)")
     p.set_defaults(func=run)
 
 

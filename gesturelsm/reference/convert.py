@@ -63,7 +63,8 @@ _RENAMES: tuple[tuple[str, str | None], ...] = (
 # reference buffers the forward pass reads but the port recomputes: key pattern -> rotary width (C = latent width)
 _ROTARY: tuple[tuple[str, Callable[[int, int], int]], ...] = (
     (r"denoiser\.rel_pos\.inv_freq", lambda C, heads: C),
-    (r"denoiser\.mytimmblocks\.\d+\.spatial_temporal_attn\.(temporal|spatial)_pos\.inv_freq", lambda C, heads: C // heads),
+    (r"denoiser\.mytimmblocks\.\d+\.spatial_temporal_attn\.(temporal|spatial)_pos\.inv_freq",
+     lambda C, heads: C // heads),
 )
 
 
@@ -132,12 +133,14 @@ def rvq_from_state(state: dict[str, torch.Tensor]) -> ReferenceRVQ:
     try:
         qs = sorted({int(k.split(".")[2]) for k in state if k.startswith("quantizer.layers.")})
         cb = state["quantizer.layers.0.codebook"]
-        cfg = RVQConfig(input_dim=state["encoder.model.0.weight"].shape[1], width=state["encoder.model.0.weight"].shape[0],
+        cfg = RVQConfig(input_dim=state["encoder.model.0.weight"].shape[1],
+                        width=state["encoder.model.0.weight"].shape[0],
                         code_dim=cb.shape[1], num_codes=cb.shape[0], num_quantizers=len(qs),
                         down=sum(1 for k in state if re.fullmatch(r"encoder\.model\.\d+\.0\.weight", k)))
-        codes = torch.stack([torch.nn.functional.linear(state[f"quantizer.layers.{q}.codebook"],
-                                                        state[f"quantizer.layers.{q}.embedding_proj.weight"],
-                                                        state[f"quantizer.layers.{q}.embedding_proj.bias"]) for q in qs])
+        layer = "quantizer.layers.{}.".format
+        codes = torch.stack([torch.nn.functional.linear(state[layer(q) + "codebook"],
+                                                        state[layer(q) + "embedding_proj.weight"],
+                                                        state[layer(q) + "embedding_proj.bias"]) for q in qs])
     except KeyError as exc:
         raise ReferenceFileError(f"RVQ-VAE weights lack {exc}") from None
     model = ReferenceRVQ(cfg)

@@ -10,9 +10,9 @@ Quirks (all deliberate here, see docs/AUTHORS-CODE.md):
 - the time embedding adds the step-size embedding (through a bias-free linear) *before* its MLP.
 Ours is faster than the reference code for the same function (benchmarks/reference_speed.py): loaded for inference,
 its linear layers run through oneDNN (kernels.accelerate); the hidden layers' GELU is declared with its product
-(kernels.LinearGELU) so it fuses into it; the speech keys/values of the cross-attention are computed once per clip, with the
-query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`);
-the null condition's are kept; rotary tables are cached; attention is fused.
+(kernels.LinearGELU) so it fuses into it; the speech keys/values of the cross-attention are computed once per clip, with
+the query and output projections folded into them when the sampler evaluates more than once (`CrossBlock.context`); the
+null condition's are kept; rotary tables are cached; attention is fused.
 """
 from __future__ import annotations
 
@@ -119,7 +119,8 @@ class SelfAttention(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:  # (B, n, D)
         B, n, D = x.shape
-        q, k, v = linear(x, self.in_proj_weight, self.in_proj_bias).reshape(B, n, 3, self.heads, -1).permute(2, 0, 3, 1, 4)
+        qkv = linear(x, self.in_proj_weight, self.in_proj_bias).reshape(B, n, 3, self.heads, -1)
+        q, k, v = qkv.permute(2, 0, 3, 1, 4)
         return self.out_proj(F.scaled_dot_product_attention(q, k, v).transpose(1, 2).reshape(B, n, D))
 
 

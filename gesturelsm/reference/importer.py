@@ -37,11 +37,13 @@ def import_reference(src: str | Path, out: str | Path, heads: int = 4) -> list[P
         raise ReferenceFileError(f"not a folder: {src}")
     gens = {m: p for m, f in GENERATOR_FILES.items() if (p := _find(src, f)) is not None}
     if not gens:
-        raise ReferenceFileError(f"no released generator under {src}: expected one of {sorted(GENERATOR_FILES.values())}")
+        raise ReferenceFileError(f"no released generator under {src}: expected one of "
+                                 f"{sorted(GENERATOR_FILES.values())}")
     hint = "from the authors' release: Google Drive / huggingface.co/pliu23/GestureLSM"
     rvqs = {r: rvq_from_state(load_state(_require(src, f"net_300000_{r}.pth", hint), ("net",))) for r in REGIONS}
     check_region_dims(rvqs)
-    stats = {k: load_npy(_require(src, f, "the reference repository's mean_std/ folder")) for k, f in STAT_FILES.items()}
+    stats = {k: load_npy(_require(src, f, "the reference repository's mean_std/ folder"))
+             for k, f in STAT_FILES.items()}
     if stats["mean"].shape != (330,) or stats["trans_mean"].shape != (3,):
         raise ReferenceFileError("statistics must be 330 (6D pose) and 3 (translation velocity) values")
     w2i, _ = load_vocab(_require(src, "vocab.pkl", "weights/vocab.pkl of the release"))
@@ -49,6 +51,7 @@ def import_reference(src: str | Path, out: str | Path, heads: int = 4) -> list[P
     for method, path in gens.items():
         model = generator_from_state(load_state(path, GENERATOR_KEYS), method, heads)
         if max(w2i.values(), default=0) >= model.cfg.vocab_size:
-            raise ReferenceFileError(f"vocab.pkl has indices beyond the {model.cfg.vocab_size} embeddings of {path.name}")
+            raise ReferenceFileError(f"vocab.pkl has indices beyond the {model.cfg.vocab_size} embeddings of "
+                                     f"{path.name}")
         written.append(save_generator(out / f"reference_{method}.safetensors", model, w2i, path.name))
     return written

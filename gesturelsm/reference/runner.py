@@ -1,10 +1,10 @@
 """Run converted authors' models on any length of speech, in the shared window loop (`flows.windows`).
 
 Windows of 128 frames (4.27 s) advance by 112 frames; each window's seed is the last 4 latent frames of
-the previous one, and the overlap keeps the previous window's latents, as in the reference. Unlike the reference (first seed taken from a ground-truth file,
-trailing frames dropped, 63 s cap), the first seed is *neutral*: the RVQ encoding of the speaker's mean
-pose standing still; the audio is padded to whole windows and the output cut to the speech's length.
-Face: the released configs generate none, so jaw and expressions stay neutral (identity jaw, zeros).
+the previous one, and the overlap keeps the previous window's latents, as in the reference. Unlike the reference (first
+seed taken from a ground-truth file, trailing frames dropped, 63 s cap), the first seed is *neutral*: the RVQ encoding
+of the speaker's mean pose standing still; the audio is padded to whole windows and the output cut to the speech's
+length. Face: the released configs generate none, so jaw and expressions stay neutral (identity jaw, zeros).
 """
 from __future__ import annotations
 
@@ -42,13 +42,15 @@ class ReferenceBundle:
     def normalise(self, region: str, x: torch.Tensor) -> torch.Tensor:
         m, s = self.stats["mean"][_cols(region)], self.stats["std"][_cols(region)]
         if region == "lower":
-            m = torch.cat([m, self.stats["trans_mean"]]); s = torch.cat([s, self.stats["trans_std"]])
+            m = torch.cat([m, self.stats["trans_mean"]])
+            s = torch.cat([s, self.stats["trans_std"]])
         return (x - m) / s
 
     def denormalise(self, region: str, z: torch.Tensor) -> torch.Tensor:
         m, s = self.stats["mean"][_cols(region)], self.stats["std"][_cols(region)]
         if region == "lower":
-            m = torch.cat([m, self.stats["trans_mean"]]); s = torch.cat([s, self.stats["trans_std"]])
+            m = torch.cat([m, self.stats["trans_mean"]])
+            s = torch.cat([s, self.stats["trans_std"]])
         return z * s + m
 
     def neutral_seed(self, frames: int = 4) -> torch.Tensor:
@@ -77,14 +79,16 @@ class ReferenceBundle:
         """(1, N, 3 * code_dim) generator latents -> motion (jaw, eyes, face neutral)."""
         parts, d = {}, self.rvqs["upper"].cfg.code_dim
         for i, r in enumerate(REGIONS):
-            parts[r] = self.denormalise(r, self.rvqs[r].decode(latents[..., i * d:(i + 1) * d] * LATENT_SCALE))[0, :num_frames]
+            decoded = self.rvqs[r].decode(latents[..., i * d:(i + 1) * d] * LATENT_SCALE)
+            parts[r] = self.denormalise(r, decoded)[0, :num_frames]
         parts["face"] = torch.zeros(num_frames, 106)
         parts["face"][:, [0, 4]] = 1.0                                 # identity 6D jaw, zero expressions
         return MotionSequence.from_features(join_regions(parts))
 
 
 @torch.no_grad()
-def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2index: dict[str, int], audio: np.ndarray,
+def generate_reference(bundle: ReferenceBundle, model: ReferenceGenerator, word2index: dict[str, int],
+                       audio: np.ndarray,
                        num_frames: int, words: list | None, steps: int, cfg_scale: float, seed: int,
                        progress: Progress | None = None, held: Held | None = None
                        ) -> tuple[torch.Tensor, MotionSequence | None]:

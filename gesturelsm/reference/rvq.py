@@ -38,7 +38,8 @@ class ResStack(nn.Module):
 def _encoder(c: RVQConfig) -> nn.Sequential:
     layers: list[nn.Module] = [nn.Conv1d(c.input_dim, c.width, 3, 1, 1), nn.ReLU()]
     for _ in range(c.down):
-        layers.append(nn.Sequential(nn.Conv1d(c.width, c.width, 4, 2, 1), ResStack(c.width, c.depth, c.dilation_growth)))
+        layers.append(nn.Sequential(nn.Conv1d(c.width, c.width, 4, 2, 1),
+                                    ResStack(c.width, c.depth, c.dilation_growth)))
     layers.append(nn.Conv1d(c.width, c.code_dim, 3, 1, 1))
     return nn.Sequential(*layers)
 

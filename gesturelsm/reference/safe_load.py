@@ -45,7 +45,7 @@ def load_vocab(path: str | Path) -> tuple[dict[str, int], np.ndarray | None]:
         obj = PlainDataUnpickler(io.BytesIO(path.read_bytes()), stand_ins).load()
     except FileNotFoundError:
         raise ReferenceFileError(f"vocabulary file not found: {path}") from None
-    except Exception as exc:  # noqa: BLE001 - any failure of an untrusted file is a refusal
+    except Exception as exc:  # any failure of an untrusted file is a refusal
         raise ReferenceFileError(f"{path}: refused: not a plain vocabulary pickle ({exc})") from None
     w2i = getattr(obj, "word2index", None)
     if not isinstance(w2i, dict) or not all(isinstance(k, str) and isinstance(v, int) for k, v in w2i.items()):
@@ -62,8 +62,9 @@ def load_state(path: str | Path, keys: tuple[str, ...]) -> dict[str, torch.Tenso
         raise ReferenceFileError(f"file not found: {path}")
     try:
         obj = load_tensors(path)
-    except Exception as exc:  # noqa: BLE001
-        raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({str(exc).splitlines()[0]})") from None
+    except Exception as exc:
+        why = str(exc).splitlines()[0]
+        raise ReferenceFileError(f"{path}: refused: needs more than tensors to load ({why})") from None
     if isinstance(obj, dict):
         for k in keys:
             if isinstance(obj.get(k), dict):

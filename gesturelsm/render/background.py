@@ -1,14 +1,14 @@
 """Render the page's mp4 in its own low-priority process, so that generation, live streams and a browser on the same
 machine come first.
 
-Why a process, not a niced thread: Linux's autogroup scheduling (on by default: /proc/sys/kernel/sched_autogroup_enabled)
-first shares the CPU fairly between sessions (a terminal, a desktop app, a browser launched detached) and applies a
-thread's niceness only inside its session. A browser playing the page on the same machine is a session of its own,
-so a render thread niced inside the server would still take the server's whole share of the CPU from it
-(docs/WEBAPP.md has the frame rates). So the render runs as `python -m gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command)
-in a new session, i.e. its own autogroup, which lowers its autogroup's and its own priority before it renders; its
-GL threads and ffmpeg inherit both. Where autogroups do not exist (other kernels, other systems) the
-process is still niced.
+Why a process, not a niced thread: Linux's autogroup scheduling (on by default:
+/proc/sys/kernel/sched_autogroup_enabled) first shares the CPU fairly between sessions (a terminal, a desktop app, a
+browser launched detached) and applies a thread's niceness only inside its session. A browser playing the page on the
+same machine is a session of its own, so a render thread niced inside the server would still take the server's whole
+share of the CPU from it (docs/WEBAPP.md has the frame rates). So the render runs as `python -m
+gesturelsm.render.background --nice N render ...` (the `gesturelsm render` command) in a new session, i.e. its own
+autogroup, which lowers its autogroup's and its own priority before it renders; its GL threads and ffmpeg inherit both.
+Where autogroups do not exist (other kernels, other systems) the process is still niced.
 
     render_apart([seq_a, seq_b], audio_16k, "out/gestures.mp4", labels=["A", "B"], size=(384, 384),
                  body_path=body.path, gen_seconds=[0.4, None], progress=cb, nice=19)

@@ -32,10 +32,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--size", default="512x512", help="one body's tile, WIDTHxHEIGHT (default 512x512)")
     p.add_argument("--style", default="default", help="default | plain | dark | upper (hips up, larger face) "
                    "(default: default)")
-    p.add_argument("--background", help="background colour, e.g. '#ffffff'")
+    p.add_argument("--background", help="background colour, e.g. '#ffffff' (default: the --style's own)")
     p.add_argument("--floor", choices=["grid", "plain", "none"], help="floor look (default grid)")
     p.add_argument("--supersample", type=int, choices=[1, 2, 3], help="antialiasing: render k x larger and "
-                   "average down (2 = smoother edges, ~3x slower)")
+                   "average down (2 = smoother edges, ~3x slower) (default: 1, no antialiasing)")
     p.add_argument("--model", help="SMPL-X npz (default: $GESTURELSM_SMPLX_MODEL or the built-in mannequin)")
     p.add_argument("--rig", help="your character (.vrm / .glb / .gltf): its own mesh is drawn, posed by the motion "
                    "(retargeted), instead of the mannequin; a .bvh skeleton has no mesh and keeps the mannequin")

@@ -14,7 +14,7 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
-from ..body.model import resolve_body
+from ..body.model import resolve_body   # noqa: F401 (re-exported: gesturelsm.render.resolve_body)
 from ..errors import InputError
 from ..motion.sequence import FPS, MotionSequence
 from .camera import Camera

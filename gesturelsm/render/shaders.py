@@ -1,9 +1,9 @@
 """Our replacement for pyrender's `mesh.vert` / `mesh.frag`: Lambert + Blinn-Phong instead of PBR.
 
 Why: on Mesa's llvmpipe, pyrender's PBR fragment shader (GGX specular, Fresnel, shadow-map branches per
-light) is most of the cost of a body frame (docs/BENCHMARKS.md, "Why the code is built this way"). This shader keeps what the look needs: diffuse from each directional light (base / pi * radiance,
-as pyrender's PBR diffuse, so light intensities mean the same), a soft Blinn-Phong highlight that fades
-with roughness, ambient, and two texture uses:
+light) is most of the cost of a body frame (docs/BENCHMARKS.md, "Why the code is built this way"). This shader keeps
+what the look needs: diffuse from each directional light (base / pi * radiance, as pyrender's PBR diffuse, so light
+intensities mean the same), a soft Blinn-Phong highlight that fades with roughness, ambient, and two texture uses:
 * `emissiveTexture` is added *after* gamma encoding, i.e. shown exactly as stored (sRGB): the unlit floor;
 * `baseColorTexture` alpha (times the factor's alpha) is the output alpha: the contact-shadow decal; with a
   factor alpha of 1 a texel of alpha < 0.5 is discarded instead (a character's cut-out, glTF's MASK).

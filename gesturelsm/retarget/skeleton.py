@@ -12,20 +12,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..motion.rotations import quaternion_xyzw_to_matrix as quat_xyzw_to_matrix  # noqa: F401 (gltf.py imports it here)
 from .errors import CharacterError
 from .limits import MAX_SKELETON_DEPTH
 from .names import REQUIRED
 
-
-def quat_xyzw_to_matrix(q) -> np.ndarray:
-    """(..., 4) quaternions (x, y, z, w), normalised first -> (..., 3, 3)."""
-    q = np.asarray(q, np.float64)
-    q = q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12)
-    x, y, z, w = np.moveaxis(q, -1, 0)
-    return np.stack([
-        1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1).reshape(q.shape[:-1] + (3, 3))
 
 
 def trs_matrix(t, R, s) -> np.ndarray:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..motion.rotations import axis_angle_to_matrix_np
 from ..motion.skeleton import JOINT_INDEX, NUM_JOINTS, PARENTS
 from .errors import CharacterError
 from .skeleton import Skeleton, world_rotation
@@ -127,15 +128,6 @@ def _leg(x: np.ndarray, idx: dict[str, int]) -> float:
     return float(np.mean(legs))
 
 
-def _rodrigues(aa: np.ndarray) -> np.ndarray:
-    """(..., 3) axis-angle -> (..., 3, 3) rotation matrices."""
-    angle = np.linalg.norm(aa, axis=-1)[..., None, None]
-    k = aa / np.maximum(angle[..., 0], 1e-12)
-    K = np.zeros(aa.shape[:-1] + (3, 3))
-    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
-    K = K - np.swapaxes(K, -1, -2)
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * (K @ K)
-
 
 def joint_depths(parents) -> np.ndarray:
     """Each joint's number of ancestors (parents[i] < i, -1 for a root)."""
@@ -153,7 +145,7 @@ def _smplx_fk(seq, src: SourceBody) -> tuple[np.ndarray, np.ndarray]:
     """SMPL-X's posed joints (T, 55, 3) (pelvis at its rest place) and world rotations (T, 55, 3, 3): one level
     of the tree at a time, in numpy (a stream's chunk of 20 frames costs well under a millisecond)."""
     T = seq.num_frames
-    R = _rodrigues((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
+    R = axis_angle_to_matrix_np((np.asarray(seq.poses, np.float64) + src.pose_mean).reshape(T, NUM_JOINTS, 3))
     rest = src.rest_joints
     par = np.asarray(PARENTS)
     G, P = np.empty((T, NUM_JOINTS, 3, 3)), np.empty((T, NUM_JOINTS, 3))
@@ -289,7 +281,6 @@ def retarget(seq, skel: Skeleton, source: SourceBody, ground: Ground | None = No
     P, G = _smplx_fk(seq, source)
     delta = _solve_deltas(skel, setup.plan, P, G)
     pos = rest_rooted(setup, delta)
-    hips = skel.bones["pelvis"]
     pelvis = P[:, 0] + np.asarray(seq.trans, np.float64)               # SMPL-X's pelvis in its world
     feet = [f for f in FEET if f in skel.bones]
     smplx_low = (P[:, [JOINT_INDEX[f] for f in feet], 1] + np.asarray(seq.trans, np.float64)[:, 1:2]).min(1)

@@ -133,7 +133,7 @@ class Ahead:
         except Cancelled:                          # only a run no click has taken is cancelled
             failed = True
             log.info("motion made ahead was cancelled after %d method(s)", len(run.made))
-        except Exception:                          # noqa: BLE001 (a bug: logged; the click generates for itself)
+        except Exception:                          # a bug: logged; the click generates for itself
             log.exception("making motion ahead failed")
             failed = True
         finally:

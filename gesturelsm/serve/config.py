@@ -22,7 +22,8 @@ class ServiceSettings:
     concurrency: int = 1                    # requests generated at the same time (the rest queue)
     max_steps: int = 32                     # the page's steps slider stops here (and at the methods' max_steps)
     max_ddim_steps: int = 100               # the page's DDIM steps slider stops here
-    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced (render/background.py)
+    render_nice: int = 19                   # the mp4 renders in a process of its own this much niced
+                                            # (render/background.py)
     threads: int = 1                        # math threads per request and live stream (a step is fastest on 1 of 2
                                             # cores, and a browser on the same machine keeps the other)
     ahead: bool = True                      # make the motion of the page's settings before the click (serve/ahead.py)

@@ -18,6 +18,7 @@ from ..backends import GROUND_TRUTH, label
 from ..constants import Progress
 from ..errors import InputError
 from ..motion.regions import GENERATED_REGIONS
+from ..settings.check import checked_seed
 from .request import Result
 
 EDITED = ", edited"          # appended once to an edited motion's label (player and video)
@@ -54,7 +55,7 @@ def _checked(pipeline, result: Result | None, method: str, start, end, regions, 
     if method not in able:
         names = ", ".join(label(m) for m in able) or "none of the shown ones"
         raise InputError(f"Choose a shown motion to edit; the methods that can edit: {names}.")
-    a, b, s = _number(start), _number(end), _number(seed)
+    a, b = _number(start), _number(end)
     if a is None or b is None:
         raise InputError("Give the time range to regenerate: its start and end in seconds.")
     regions = [regions] if isinstance(regions, str) else list(regions or ())
@@ -64,9 +65,7 @@ def _checked(pipeline, result: Result | None, method: str, start, end, regions, 
         raise InputError(f"Unknown body region {unknown[0]!r}; the regions are {', '.join(GENERATED_REGIONS)}.")
     if not chosen:
         raise InputError("Choose at least one body region to regenerate (upper, hands, lower, face).")
-    if s is None or s != int(s) or not 0 <= s < 2**63:
-        raise InputError(f"The seed must be a whole number from 0 (got {seed}).")
-    return chosen, a, b, int(s)
+    return chosen, a, b, checked_seed(seed)        # the settings' validator: its bounds and its message
 
 
 def edit_result(pipeline, result: Result | None, method: str, start, end, regions: Sequence[str], seed,

@@ -57,7 +57,8 @@ def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
 def add_post_flags(p: argparse.ArgumentParser) -> None:
     """--smoothing, --stand-in-place and --grounding: the post-processing of every motion (`PostProcess`)."""
     p.add_argument("--smoothing", default=DEFAULTS.post.smoothing, choices=list(SMOOTHING_WINDOWS),
-                   help="post-processing (motion/postprocess.py); 'off' writes the raw model output "
+                   help="smoothing of the finished motion (a Savitzky-Golay filter over 0 / 5 / 9 / 15 frames); "
+                        "'off' writes the raw model output "
                         f"(default: {DEFAULTS.post.smoothing})")
     p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
     add_grounding_flag(p)
@@ -78,7 +79,8 @@ def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, proble
                  and given[SPECS[m].steps_setting] is not MISSING}
     asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
                   cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
-                  stand_in_place=getattr(args, "stand_in_place", MISSING), smoothing=getattr(args, "smoothing", MISSING),
+                  stand_in_place=getattr(args, "stand_in_place", MISSING),
+                  smoothing=getattr(args, "smoothing", MISSING),
                   transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
                   grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
     settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
@@ -172,5 +174,6 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text", "input_file",
+__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text",
+           "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

@@ -11,13 +11,15 @@ named as the entry point shows them (`PAGE`: "Steps", `CLI`: "--steps").
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from ..backends import SPECS, MethodSpec, method_spec
+from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
-from ..motion.postprocess import SMOOTHING_WINDOWS
 from .defaults import DEFAULTS, SEED_MAX, Limits, PostProcess, Settings
 from .values import method_list, number_list, one_of, real_number, switch, whole_number
+
+if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings
+    from ..backends import MethodSpec
 
 
 class _Missing:
@@ -76,6 +78,8 @@ def _given(value: Any, default: Any) -> Any:
 def steps_per_method(asked: Asked, methods: Sequence[str]) -> dict[str, tuple[Any, str]]:
     """{method: (value as sent, name of the setting that gave it)} for the chosen methods that have a spec; methods
     whose setting was not sent are left out (they run their default)."""
+    from ..backends import SPECS
+
     out = {}
     for m in methods:
         if m not in SPECS:
@@ -95,6 +99,8 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
     """Steps per method, each within its spec's bound and the entry point's cap for its setting. A value is checked
     once against the widest bound of the methods it drives (type, emptiness, below 1), then against each method's
     own, naming the method when the bounds differ."""
+    from ..backends import SPECS, method_spec
+
     groups: dict[tuple[str, str], list[str]] = {}
     values: dict[tuple[str, str], Any] = {}
     for m, (value, setting) in steps_per_method(asked, methods).items():
@@ -120,7 +126,23 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
 
 def cfg_bound(methods: Sequence[str]) -> float:
     """The largest CFG scale every chosen method accepts."""
+    from ..backends import SPECS
+
     return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
+
+
+def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
+    """A seed: a whole number from 0 to SEED_MAX, never rounded."""
+    return whole_number(value, names.seed, 0, SEED_MAX, problems)
+
+
+def checked_seed(value: Any, names: Names = PAGE) -> int:
+    """A seed sent alone (the page's Edit), checked as the settings' seed is: the int, or an InputError."""
+    p: list[str] = []
+    seed = seed_problems(value, names, p)
+    if p:
+        raise InputError("\n".join(p))
+    return seed
 
 
 def check_post(asked: Asked, names: Names, problems: list[str]) -> PostProcess | None:
@@ -139,7 +161,7 @@ def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = L
     methods = method_list(_given(asked.methods, list(default_methods)), list(available), p, names.methods)
     steps = check_steps(asked, methods or [], limits, names, p)
     cfg = real_number(_given(asked.cfg, DEFAULTS.cfg), names.cfg, 0.0, cfg_bound(methods or []), p)
-    seed = whole_number(_given(asked.seed, DEFAULTS.seed), names.seed, 0, SEED_MAX, p)
+    seed = seed_problems(_given(asked.seed, DEFAULTS.seed), names, p)
     post = check_post(asked, names, p)
     transcribe = switch(_given(asked.transcribe, DEFAULTS.transcribe), names.transcribe, p)
     if p:
@@ -184,4 +206,5 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_method_settings", "check_post",
-           "check_steps", "checked", "grid_problems", "settings_problems", "steps_per_method"]
+           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems",
+           "steps_per_method"]

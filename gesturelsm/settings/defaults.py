@@ -10,13 +10,13 @@ A method missing from `steps` runs its spec's default steps (`gesturelsm.backend
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
-from ..backends import GROUND_TRUTH, MethodSpec, method_spec
-from ..constants import MAX_SECONDS
-from ..grounding import ground_motion
-from ..motion.postprocess import DEFAULT_SMOOTHING, postprocess
-from ..motion.sequence import MotionSequence
+from ..constants import DEFAULT_SMOOTHING, MAX_SECONDS
+
+if TYPE_CHECKING:           # the settings load no torch: the methods' registry and the motion code on first use
+    from ..backends import MethodSpec
+    from ..motion.sequence import MotionSequence
 
 DEFAULT_METHOD = "gesturelsm"        # the method a command runs when none is named
 DEFAULT_CFG = 2.0                    # the paper's guidance scale
@@ -36,6 +36,9 @@ class PostProcess:
     def apply(self, motion: MotionSequence, body=None) -> tuple[MotionSequence, str | None]:
         """The motion post-processed (grounded on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL), and why
         grounding had to leave it as it was, when it had to (one sentence)."""
+        from ..grounding import ground_motion
+        from ..motion.postprocess import postprocess
+
         motion = postprocess(motion, self.stand_in_place, self.smoothing)
         if not self.grounding:
             return motion, None
@@ -54,11 +57,15 @@ class Settings:
     transcribe: bool = True              # recognise the speech when neither a transcript nor word timings are given
 
     def steps_for(self, method: str) -> int:
+        from ..backends import method_spec
+
         return int(self.steps.get(method, method_spec(method).default_steps))
 
     @property
     def generators(self) -> list[str]:
         """The chosen methods that generate (ground truth is looked up, not generated)."""
+        from ..backends import GROUND_TRUTH
+
         return [m for m in dict.fromkeys(self.methods) if m != GROUND_TRUTH]
 
 

@@ -138,7 +138,7 @@ def _sqlite_engine(url: str, path: Path, create: bool, busy_timeout: float) -> E
     engine = create_engine(url, creator=connect)
 
     @event.listens_for(engine, "connect")
-    def _pragmas(conn, _record):            # noqa: ANN001 (DBAPI connection)
+    def _pragmas(conn, _record):            # DBAPI connection
         conn.isolation_level = None          # the driver issues no BEGIN / COMMIT of its own
         cur = conn.cursor()
         cur.execute("PRAGMA journal_mode=WAL")
@@ -146,7 +146,7 @@ def _sqlite_engine(url: str, path: Path, create: bool, busy_timeout: float) -> E
         cur.close()
 
     @event.listens_for(engine, "begin")
-    def _begin(conn):                        # noqa: ANN001
+    def _begin(conn):
         opts = conn.get_execution_options()
         conn.exec_driver_sql(f"PRAGMA busy_timeout = {int(1000 * opts.get('lock_wait', busy_timeout))}")
         conn.exec_driver_sql("BEGIN IMMEDIATE" if opts.get("write") else "BEGIN")
@@ -275,4 +275,5 @@ def all_answers(engine: Engine) -> list[dict]:
 
 
 __all__ = ["RequestRefused", "RaterState", "all_answers", "answered_trials", "claim_identity", "default_url",
-           "has_tables", "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting", "writing"]
+           "has_tables", "open_db", "open_session", "record", "show", "shown_trial", "sqlite_file", "waiting",
+           "writing"]

@@ -261,5 +261,6 @@ def _atomic_write(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
-__all__ = ["Conditions", "Design", "MODES", "QUESTIONS", "appropriateness_trials", "SCALES", "SCALE_QUESTIONS", "Rater", "Trial", "base_url", "invite", "read_conditions", "read_design",
+__all__ = ["Conditions", "Design", "MODES", "QUESTIONS", "appropriateness_trials", "SCALES", "SCALE_QUESTIONS",
+           "Rater", "Trial", "base_url", "invite", "read_conditions", "read_design",
            "read_raters", "rater_trials", "real_trials", "write_design"]

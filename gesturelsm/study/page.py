@@ -136,7 +136,9 @@ $("prefer-none").onclick = () => submit({choice: "none"});
 $("rating-form").onsubmit = (ev) => {
   ev.preventDefault();
   const ratings = {};
-  for (const s of current.scales) ratings[s.name] = Number(document.querySelector(`input[name="${s.name}"]:checked`).value);
+  for (const s of current.scales) {
+    ratings[s.name] = Number(document.querySelector(`input[name="${s.name}"]:checked`).value);
+  }
   submit({ratings});
 };
 

@@ -94,7 +94,7 @@ def _api(handler):
             return await handler(request)
         except GestureError as exc:                    # a refusal: its status (400 when it names none)
             return JSONResponse({"error": str(exc)}, status_code=getattr(exc, "status", 400))
-        except Exception:                              # noqa: BLE001 (a bug: the page still gets a message)
+        except Exception:                              # a bug: the page still gets a message
             traceback.print_exc(file=sys.stderr)
             return JSONResponse({"error": "the study server failed on this request; please try again, or tell "
                                           "the study's organiser"}, status_code=500)
@@ -179,10 +179,10 @@ class VideoResponse(FileResponse):
     """A video file with its size and type only: no Last-Modified and no ETag (set_stat_headers), and an If-Range
     (which could only name a validator never sent) is ignored, so a Range request always gets its range."""
 
-    def set_stat_headers(self, stat_result) -> None:       # noqa: ANN001 (os.stat_result)
+    def set_stat_headers(self, stat_result) -> None:       # os.stat_result
         self.headers.setdefault("content-length", str(stat_result.st_size))
 
-    async def __call__(self, scope, receive, send) -> None:  # noqa: ANN001 (ASGI)
+    async def __call__(self, scope, receive, send) -> None:  # ASGI
         scope = dict(scope, headers=[(k, v) for k, v in scope.get("headers", []) if k.lower() != b"if-range"])
         await super().__call__(scope, receive, send)
 

@@ -19,7 +19,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("study", help="serve a web user study, invite raters, analyse the answers",
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="study_command", metavar="ACTION", required=True)
-    s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>")
+    s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>",
+                       description="Host the study of a `gesturelsm batch` folder: each rater's page at "
+                                   "/r/<token>, answers stored as they are given.")
     s.add_argument("study_dir", help="folder made by `gesturelsm batch`")
     s.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; 0.0.0.0 opens it)")
     s.add_argument("--port", type=int, default=8600, help="port to listen on")
@@ -36,8 +38,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    "https://study.example.org): links are printed in full and key/links.csv gains a url column "
                    "(remembered for later invites; default: the address given before, else link paths only)")
     i.set_defaults(func=run_invite)
-    r = sub.add_parser("results", help="unblind, apply the attention rule, write STUDY_DIR/results/")
-    r.add_argument("study_dir")
+    r = sub.add_parser("results", help="unblind, apply the attention rule, write STUDY_DIR/results/",
+                       description="Unblind the answers, leave out raters who fail the attention rule, and write "
+                                   "the tables (CSV, markdown) and plots (PNG) to STUDY_DIR/results/.")
+    r.add_argument("study_dir", help="folder made by `gesturelsm batch`")
     r.add_argument("--db", help="SQLAlchemy database URL (default: sqlite in STUDY_DIR/responses.sqlite)")
     r.add_argument("--out", help="output folder (default STUDY_DIR/results)")
     r.add_argument("--mismatch-pass", type=float, default=1.0,

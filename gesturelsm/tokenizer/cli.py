@@ -15,7 +15,9 @@ from .train import TrainConfig, train_region, tune_decoder
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train-tokenizer", help="train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder")
+    p = sub.add_parser("train-tokenizer", help="train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder",
+                       description="Train one RVQ-VAE motion tokenizer per body region on a BEAT2-layout folder's "
+                                   "training share; checkpoints and resume state go to the run folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder (smplxflame_30/ ...)")
     p.add_argument("--out", default="runs/tokenizer", help="run folder (checkpoints, resume state)")
     p.add_argument("--regions", nargs="+", default=list(GENERATED_REGIONS), choices=list(GENERATED_REGIONS),
@@ -39,9 +41,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="with --decoder-only: weight of the L1 loss on the second difference (jitter), default 2")
     p.set_defaults(func=run_train)
 
-    e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers")
+    e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers",
+                       description="Encode and decode a BEAT2-layout folder's held-out motion with trained "
+                                   "tokenizers and report the reconstruction error per region.")
     e.add_argument("--data", required=True, help="BEAT2-layout folder")
-    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"), help="folder with <region>.safetensors (default: shipped)")
+    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"),
+                   help="folder with <region>.safetensors (default: shipped)")
     e.add_argument("--train-fraction", type=float, default=0.8,
                    help="without a split file: the first fraction of each take is training, the rest held out")
     e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")

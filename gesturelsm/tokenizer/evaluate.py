@@ -24,7 +24,8 @@ def pad_to_multiple(x: torch.Tensor, m: int) -> tuple[torch.Tensor, int]:
 
 
 @torch.no_grad()
-def reconstruct(model: RVQVAE, raw_region: torch.Tensor, num_layers: int | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+def reconstruct(model: RVQVAE, raw_region: torch.Tensor, num_layers: int | None = None) -> tuple[torch.Tensor,
+                                                                                                 torch.Tensor]:
     """Raw region features (T, C) -> (reconstruction (T, C) raw, codes (T/4, L)) through all or k layers."""
     model.eval()
     x, T = pad_to_multiple(model.normalizer.normalize(raw_region), model.config.downsample)
@@ -128,7 +129,8 @@ def format_report(rep: dict) -> str:
              "|---|---|---|---|---|---|"]
     for name, r in rep["regions"].items():
         f = r["full"]
-        other = (f"expr L1 {f['expr_l1']:.3f}" if "expr_l1" in f else "") + (f"root {f['root_mm']:.1f} mm" if "root_mm" in f else "")
+        other = ((f"expr L1 {f['expr_l1']:.3f}" if "expr_l1" in f else "")
+                 + (f"root {f['root_mm']:.1f} mm" if "root_mm" in f else ""))
         use = " ".join(f"{u:.2f}" for u in r["codebook_usage"])
         lines.append(f"| {name} | {f['rot_deg']:.2f} | {f['pos_mm']:.1f} | {f['jitter']:.2f} / {f['jitter_gt']:.2f} | "
                      f"{other or '-'} | {use} (of {r['codebook_size']}) |")

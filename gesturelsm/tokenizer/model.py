@@ -165,7 +165,8 @@ class RVQVAE(nn.Module):
         weights = {k: v for k, v in tensors.items() if not k.startswith("norm.")}
         missing, unexpected = model.load_state_dict(weights, strict=False)
         if unexpected or [m for m in missing if not _is_training_buffer(m)]:
-            raise CheckpointError(f"{path}: weights do not match the config (missing {missing}, unexpected {unexpected})")
+            raise CheckpointError(f"{path}: weights do not match the config (missing {missing}, "
+                                  f"unexpected {unexpected})")
         for layer in model.rvq.layers:  # a shipped (inference-only) file has no EMA state
             layer.initted.fill_(True)
         return accelerate(model.eval())

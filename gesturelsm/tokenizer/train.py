@@ -133,7 +133,8 @@ def tune_decoder(model: RVQVAE, split: Split, cfg: TrainConfig, accel_weight: fl
     heldout = [h for h in split.heldout if h.shape[0] >= 8]
     model.eval()                                   # encoder and quantizer: no dropout, no EMA updates
     if heldout:
-        log(f"[{model.region}] decoder tuning: held-out rotation error {reconstruction_error(model, heldout):.2f} deg at start")
+        error = reconstruction_error(model, heldout)
+        log(f"[{model.region}] decoder tuning: held-out rotation error {error:.2f} deg at start")
     for step in range(1, cfg.steps + 1):
         lr = cosine_lr(cfg, step)
         for g in opt.param_groups:

@@ -20,6 +20,7 @@ from gesturelsm.serve.editing import editable
 from gesturelsm.serve.request import Result
 
 from .player import component as motion_player
+from .raw_inputs import pass_through
 
 DEFAULT_REGIONS = ["upper", "hands"]
 DEFAULT_SECONDS = 2.0              # the range first offered after Generate: this long, from 40 % into the speech
@@ -59,7 +60,7 @@ def component() -> EditControls:
                                  label="Motion", elem_id="edit-method", interactive=True)
             start = gr.Number(label="From (s)", minimum=0, precision=2, elem_id="edit-start")
             end = gr.Number(label="To (s)", minimum=0, precision=2, elem_id="edit-end")
-            seed = gr.Number(value=1, precision=0, minimum=0, label="Seed", elem_id="edit-seed")
+            seed = pass_through(gr.Number(value=1, precision=0, minimum=0, label="Seed", elem_id="edit-seed"))
         with gr.Row():
             here = (gr.Button("From: the player's time", size="sm", elem_id="edit-start-here"),
                     gr.Button("To: the player's time", size="sm", elem_id="edit-end-here"))
@@ -108,7 +109,8 @@ class EditHandlers:
         self.h.mark_newest(request, prev)
         files, glb = self.h.download_files(prev)
         return (_resumed(motion_player.payload(self.h.service, prev, character)), prev.table, prev.summary, prev,
-                str(prev.video) if prev.video else None, files or None, gr.update(interactive=prev.previous is not None))
+                str(prev.video) if prev.video else None, files or None,
+                gr.update(interactive=prev.previous is not None))
 
 
 def _resumed(payload: dict | None) -> dict | None:

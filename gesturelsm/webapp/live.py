@@ -207,7 +207,8 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
         state = gr.State(None, delete_callback=_delete)
         grounding = gr.Checkbox(True, label=GROUNDING_LABEL, elem_id="live-grounding")
         mic = gr.Audio(sources=["microphone"], streaming=True, type="numpy", label="microphone", elem_id="live-mic",
-                       waveform_options=gr.WaveformOptions(show_recording_waveform=False))   # its drawing stalls the page
+                       # no waveform: its drawing stalls the page
+                       waveform_options=gr.WaveformOptions(show_recording_waveform=False))
         with gr.Row():
             latency = gr.Textbox(label="median latency (ms)", elem_id="live-latency", interactive=False)
             stats = gr.Textbox(label="since the stream started", elem_id="live-stats", interactive=False)

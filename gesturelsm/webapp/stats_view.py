@@ -78,7 +78,8 @@ def to_html(table: StatsTable | None) -> str:
     body = [_row(label, method, st) for label, method, st in table.rows]
     if table.reference is not None:
         body.append(_row("speaker (reference)", "speaker", table.reference.statistics, table.reference.source))
-    note = (f"Motion statistics on the mannequin, computed in {table.seconds:.2f} s after the motion was shown; hover a "
+    note = (f"Motion statistics on the mannequin, computed in {table.seconds:.2f} s after the motion was shown; "
+            "hover a "
             "heading for what it measures and which way is better. " +
             (f"Speaker row: {html.escape(table.reference.source)}." if table.reference else
              "No speaker row: assets/speaker_stats.json is missing (scripts/speaker_stats.py writes it)."))

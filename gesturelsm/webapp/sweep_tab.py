@@ -144,7 +144,8 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                     "`gesturelsm sweep` (docs/SWEEP.md).")
         with gr.Row():
             with gr.Column(scale=1):
-                audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech", elem_id="sweep-speech")
+                audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech",
+                                 elem_id="sweep-speech")
                 text = gr.Textbox(label="Transcript (optional: recognised automatically without it, as for Generate)",
                                   lines=2, elem_id="sweep-text")
                 auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
@@ -169,12 +170,14 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                 plot = gr.Image(type="filepath", label="Statistic vs generation time", elem_id="sweep-plot",
                                 interactive=False)
                 with gr.Row():
-                    pick = gr.Dropdown([], label="Open one motion of the sweep in the player above", elem_id="sweep-cell")
+                    pick = gr.Dropdown([], label="Open one motion of the sweep in the player above",
+                                       elem_id="sweep-cell")
                     show = gr.Button("Open in player", elem_id="sweep-open", size="sm")
                 files = gr.File(label="Sweep table and plot (CSV, markdown, JSON, PNG)", file_count="multiple",
                                 elem_id="sweep-files")
         state, payload = gr.State(), gr.JSON(visible=False)
-        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text], [table, plot, files, pick, state],
+        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text],
+                  [table, plot, files, pick, state],
                        api_name="sweep", concurrency_limit=service.settings.concurrency, concurrency_id="generation")
         cancel.click(h.cancel, None, status, queue=False, api_visibility="private")
         run.click(lambda: "", None, status, queue=False, api_visibility="private")

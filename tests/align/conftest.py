@@ -23,12 +23,6 @@ class Clip:
     onsets: np.ndarray       # (W,) seconds: where each word starts in `audio`
 
 
-@pytest.fixture(scope="session")
-def espeak() -> None:
-    if not tts.available():
-        pytest.skip("eSpeak NG is not installed (apt-get install espeak-ng)")
-
-
 def _to_16k(y: np.ndarray, sr: int) -> np.ndarray:
     from gesturelsm.audio import resample
 

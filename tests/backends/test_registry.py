@@ -21,7 +21,8 @@ from gesturelsm.pipeline import GesturePipeline
 def test_registry_lists_ours_then_the_authors_methods_with_their_specs():
     assert list(SPECS) == ["gesturelsm", "rectified_flow", "ddim", "gesturelsm_authors", "meanflow_authors",
                            "diffusion_authors"]
-    assert [k for k, f in SPECS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors", "diffusion_authors"]
+    assert [k for k, f in SPECS.items() if f.imported] == ["gesturelsm_authors", "meanflow_authors",
+                                                           "diffusion_authors"]
     assert (SPECS["gesturelsm"].default_steps, SPECS["ddim"].default_steps, SPECS["gesturelsm_authors"].default_steps,
             SPECS["meanflow_authors"].default_steps, SPECS["diffusion_authors"].default_steps) == (8, 20, 2, 1, 20)
     assert "face" in SPECS["gesturelsm"].regions and "face" not in SPECS["meanflow_authors"].regions
@@ -108,4 +109,6 @@ def test_checkpoints_setting_puts_the_authors_beside_the_shipped_models(ckpt_dir
     """`--checkpoints`: nothing, the shipped models; an import-reference folder, those beside them; else exactly it."""
     assert checkpoint_sources(None) == [ASSETS]
     assert checkpoint_sources(ckpt_dir) == [ASSETS, ckpt_dir]
-    assert checkpoint_sources(str(ASSETS)) == [ASSETS] and checkpoint_sources(ckpt_dir / "reference_rvq.safetensors") == [ckpt_dir / "reference_rvq.safetensors"]
+    assert checkpoint_sources(str(ASSETS)) == [ASSETS]
+    rvq = ckpt_dir / "reference_rvq.safetensors"
+    assert checkpoint_sources(rvq) == [rvq]

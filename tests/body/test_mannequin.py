@@ -1,7 +1,6 @@
 """The built-in mannequin: SMPL-X compatibility, skinning invariants, designed joints, face and blend shapes."""
 from __future__ import annotations
 
-import shutil
 
 import numpy as np
 import pytest

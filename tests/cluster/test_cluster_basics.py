@@ -20,7 +20,8 @@ import _cluster_support as units
 @pytest.mark.parametrize("text, kind, host, port", [
     ("local", "local", None, None), ("AUTO", "auto", None, None), (" auto ", "auto", None, None),
     ("ray://head:10001", "client", "head", 10001), ("ray://10.0.0.5", "client", "10.0.0.5", 10001),
-    ("ray://[::1]:2345/", "client", "::1", 2345), ("ray://lab-gpu.example.org:443", "client", "lab-gpu.example.org", 443)])
+    ("ray://[::1]:2345/", "client", "::1", 2345),
+    ("ray://lab-gpu.example.org:443", "client", "lab-gpu.example.org", 443)])
 def test_cluster_values(text, kind, host, port):
     a = parse_cluster(text)
     assert (a.kind, a.host, a.port) == (kind, host, port)

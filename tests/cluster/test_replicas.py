@@ -88,7 +88,10 @@ def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tin
     with served(replicated) as url:
         jobs = [gradio_client(url).submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
                                           "off", 256, False, api_name="/generate") for seed in seeds]
-        time.sleep(2.0)                                             # both replicas are busy with a request
+        deadline = time.monotonic() + 600                           # bounds a replica that never starts its call
+        while not all(any(scratch.glob(f"replica-{pid}-*/call-*")) for pid in pids):    # both working on a request
+            assert time.monotonic() < deadline, "the two replicas never both had a request"
+            time.sleep(0.01)
         os.kill(pids[0], signal.SIGKILL)
         answers = [j.result(timeout=900) for j in jobs]
     motions = []

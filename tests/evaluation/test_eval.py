@@ -71,7 +71,8 @@ def test_eval_cli_on_tiny_checkpoints(eval_assets, tiny_beat2, tmp_path):
         assert r["heldout"]["fgd_k"] > 0 and 0 <= r["heldout"]["bc"] <= 1 and r["audio_only"]["diversity"] > 0
         assert r["heldout"]["vertex_mse"] > 0
     md = (out / "eval.md").read_text()
-    assert "face vertex MSE" in md and "| ground truth |" in md and "| GestureLSM | 1 | 2 |" in md and "Audio-only takes" in md
+    assert "face vertex MSE" in md and "| ground truth |" in md
+    assert "| GestureLSM | 1 | 2 |" in md and "Audio-only takes" in md
     assert "Wrist amplitude" in md and "| GestureLSM | 2 | 2 | " in md
     assert "4.988" in md                                            # the paper's 2-step FGD beside ours
     # feet and root (metrics/feet.py) for ground truth and every row, the ground truth's from its own joints

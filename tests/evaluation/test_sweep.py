@@ -54,7 +54,8 @@ def test_sweep_cli_writes_one_row_per_cell_and_a_plot(cli_run):
     rep = json.loads((cli_run / "sweep.json").read_text())
     assert len(rep["runs"]) == 8 and {r["seed"] for r in rep["runs"]} == {0, 1}
     for row in rep["rows"]:                       # the table's means and spreads are those of the runs
-        runs = [r for r in rep["runs"] if (r["method"], r["steps"], r["cfg"]) == (row["method"], row["steps"], row["cfg"])]
+        key = (row["method"], row["steps"], row["cfg"])
+        runs = [r for r in rep["runs"] if (r["method"], r["steps"], r["cfg"]) == key]
         for k in ("time", "wrist_speed", "diversity"):
             v = [r[k] for r in runs]
             assert row[k] == pytest.approx(np.mean(v)) and row[f"{k}_std"] == pytest.approx(np.std(v))

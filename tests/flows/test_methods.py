@@ -12,7 +12,8 @@ from _support import assert_close_rel
 def exact_velocity(x1: torch.Tensor):
     """The true velocity field of the straight path to a single data point x1: (x1 - x_t) / (1 - t)."""
     def f(x, t, d, drop):
-        return (x1.repeat(x.shape[0] // x1.shape[0], *[1] * (x.ndim - 1)) - x) / (1 - t).clamp_min(1e-6).reshape(-1, *[1] * (x.ndim - 1))
+        ones = [1] * (x.ndim - 1)
+        return (x1.repeat(x.shape[0] // x1.shape[0], *ones) - x) / (1 - t).clamp_min(1e-6).reshape(-1, *ones)
     return f
 
 

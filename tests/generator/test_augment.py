@@ -1,6 +1,6 @@
 """Speech augmentation for generator training (`gesturelsm train --augment`): off by default with the training
-tensors and batches exactly those of training without it; a tempo variant scales audio and motion by the same factor and keeps
-speech events on their gestures; pitch and gain variants change the speech features and not the motion."""
+tensors and batches exactly those of training without it; a tempo variant scales audio and motion by the same factor and
+keeps speech events on their gestures; pitch and gain variants change the speech features and not the motion."""
 from __future__ import annotations
 
 import argparse

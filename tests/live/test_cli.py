@@ -1,4 +1,5 @@
-"""`gesturelsm live FILE`: writes the streamed motion (offline frame count) and prints latency; bad input is one line."""
+"""`gesturelsm live FILE`: writes the streamed motion (offline frame count) and prints latency; bad input is one
+line."""
 from __future__ import annotations
 
 import re

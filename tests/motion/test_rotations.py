@@ -66,8 +66,8 @@ def test_6d_decode_orthonormalises_noisy_input():
 
 def test_geodesic_angle_equals_rotation_angle():
     aa = random_axis_angle(300)
-    I = torch.eye(3, dtype=torch.float64).expand(300, 3, 3)
-    assert torch.allclose(R.geodesic_angle(I, R.axis_angle_to_matrix(aa)), aa.norm(dim=-1), atol=1e-9)
+    eye = torch.eye(3, dtype=torch.float64).expand(300, 3, 3)
+    assert torch.allclose(R.geodesic_angle(eye, R.axis_angle_to_matrix(aa)), aa.norm(dim=-1), atol=1e-9)
 
 
 def test_real_poses_round_trip(real_motion):

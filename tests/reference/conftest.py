@@ -25,7 +25,8 @@ def ckpt_dir(tmp_path_factory) -> Path:
     for m in rvqs.values():
         m.codes.normal_()
     rng = np.random.default_rng(0)
-    stats = {"mean": rng.normal(size=330) * 0.1, "std": np.full(330, 0.2), "trans_mean": np.zeros(3), "trans_std": np.ones(3)}
+    stats = {"mean": rng.normal(size=330) * 0.1, "std": np.full(330, 0.2), "trans_mean": np.zeros(3),
+             "trans_std": np.ones(3)}
     save_rvqs(d / "reference_rvq.safetensors", rvqs, stats, "test")
     state = load_state(FIX / "generator.bin", ("model_state",))
     for method in ("shortcut", "meanflow"):

@@ -74,7 +74,8 @@ def test_guidance_keys_follow_the_null_condition(steps):
     speech = torch.randn(1, SMALL.seq_len, SMALL.regions * SMALL.latent_dim)
     with torch.no_grad():
         guided_kv(den, speech, 2.0, steps)               # keeps the null condition's keys
-        for change in (lambda: den.null_cond.normal_(), lambda: den.load_state_dict(ReferenceDenoiser(SMALL).state_dict())):
+        for change in (lambda: den.null_cond.normal_(),
+                       lambda: den.load_state_dict(ReferenceDenoiser(SMALL).state_dict())):
             change()
             kv = guided_kv(den, speech, 2.0, steps)
             want = den.speech_kv(torch.cat([speech, den.null_cond[None]]), fold=steps > 1)

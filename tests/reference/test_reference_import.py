@@ -126,11 +126,15 @@ def _to_reference_names(ours: dict[str, torch.Tensor]) -> dict[str, torch.Tensor
            "speech.wav.{}.down.conv.": "modality_encoder.WavEncoder.feat_extractor.{}.downsample.0.",
            "speech.wav.{}.down.bn.": "modality_encoder.WavEncoder.feat_extractor.{}.downsample.1."}
     flat = {"speech.word_embedding.": "modality_encoder.text_pre_encoder_body.",
-            "speech.word_proj.": "modality_encoder.text_encoder_body.", "speech.mix.": "modality_encoder.mix_audio_text.",
-            "denoiser.time_in.": "denoiser.time_embedding.linear_1.", "denoiser.time_out.": "denoiser.time_embedding.linear_2.",
+            "speech.word_proj.": "modality_encoder.text_encoder_body.",
+            "speech.mix.": "modality_encoder.mix_audio_text.",
+            "denoiser.time_in.": "denoiser.time_embedding.linear_1.",
+            "denoiser.time_out.": "denoiser.time_embedding.linear_2.",
             "denoiser.step_proj.": "denoiser.time_embedding.cond_proj.", "denoiser.seed_proj.": "denoiser.embed_text.",
-            "denoiser.token_in.": "denoiser.input_process.poseEmbedding.", "denoiser.token_fuse.": "denoiser.input_process2.",
-            "denoiser.token_out.": "denoiser.output_process.poseFinal.", "denoiser.null_cond": "denoiser.null_cond_embed"}
+            "denoiser.token_in.": "denoiser.input_process.poseEmbedding.",
+            "denoiser.token_fuse.": "denoiser.input_process2.",
+            "denoiser.token_out.": "denoiser.output_process.poseFinal.",
+            "denoiser.null_cond": "denoiser.null_cond_embed"}
     out = {}
     for k, v in ours.items():
         parts = k.split(".")

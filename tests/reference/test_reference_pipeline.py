@@ -52,7 +52,8 @@ def test_same_seed_same_motion_and_seed_matters(pipe):
 def test_neutral_seed_is_the_mean_pose_encoding():
     """The first window's seed encodes the mean pose standing still: decoding it gives back ~that pose."""
     torch.manual_seed(0)
-    rvqs = {r: ReferenceRVQ(RVQConfig(input_dim=n, width=8, code_dim=8, num_codes=16)).eval() for r, n in REGION_DIMS.items()}
+    rvqs = {r: ReferenceRVQ(RVQConfig(input_dim=n, width=8, code_dim=8,
+                                      num_codes=16)).eval() for r, n in REGION_DIMS.items()}
     stats = {"mean": torch.zeros(330), "std": torch.ones(330), "trans_mean": torch.tensor([0.5, 1.0, -0.5]),
              "trans_std": torch.ones(3)}
     seed = ReferenceBundle(rvqs, stats).neutral_seed(4)

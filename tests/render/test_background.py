@@ -89,7 +89,8 @@ def test_render_apart_draws_the_character_given(tmp_path, make_pose, body):
     skel, _ = build_rig(body.rest_joints(), fingers=False)
     write_skinned_glb(skel, tmp_path / "boxes.vrm", vrm_body_bones(), color=(0.05, 0.1, 0.6, 1.0), half=0.05)
     motion = make_pose(12, np.linspace(-1.2, 1.2, 12))
-    out = render_apart([motion], None, tmp_path / "req" / "apart.mp4", size=(64, 64), nice=5, rig=tmp_path / "boxes.vrm")
+    out = render_apart([motion], None, tmp_path / "req" / "apart.mp4", size=(64, 64), nice=5,
+                       rig=tmp_path / "boxes.vrm")
     ref = render_video([motion], None, tmp_path / "inproc.mp4", size=(64, 64),
                        character=load_character(tmp_path / "boxes.vrm"))
     plain = render_video([motion], None, tmp_path / "mannequin.mp4", size=(64, 64))

@@ -49,7 +49,8 @@ def test_the_character_has_its_own_silhouette(boxes, arms_down):
 
 def test_the_silhouette_follows_the_motion(boxes, arms_down, arms_up):
     cam = fit_camera([arms_up], style=STYLE)
-    down, up = (_mask(render_frames([m], [0], style=STYLE, camera=cam, character=boxes)[0]) for m in (arms_down, arms_up))
+    down, up = (_mask(render_frames([m], [0], style=STYLE, camera=cam,
+                                    character=boxes)[0]) for m in (arms_down, arms_up))
     top = lambda m: int(np.argmax(m.any(1)))                                 # noqa: E731  first row with the figure
     assert top(up) < top(down) - 5                                           # raised hands reach above the head
     rows = np.nonzero(down.any(1))[0]

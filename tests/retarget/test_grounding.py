@@ -13,7 +13,6 @@ from scipy.spatial.transform import Rotation
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, bvh_positions, vrm_body_bones, write_gltf
 from _standing import other_legs, segments, standing, stepping, swaying
-from gesturelsm.body.model import resolve_body
 from gesturelsm.cli import main
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.export.rig import export_rig_bvh, export_rig_glb
@@ -23,11 +22,6 @@ from gesturelsm.retarget.grounding import leg_problem
 
 LEGS = ("left_hip", "left_knee", "left_ankle", "left_foot", "right_hip", "right_knee", "right_ankle", "right_foot")
 UNITS = {"vrm": 1.0, "glb": 100.0}
-
-
-@pytest.fixture(scope="module")
-def body():
-    return resolve_body(None)
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +104,6 @@ def test_only_the_legs_change_the_upper_body_bit_for_bit(grounded, character, bo
 def test_the_files_carry_the_grounded_legs(grounded, character, body, tmp_path):
     seq, contacts = grounded
     on = retarget_motion(seq, character, body)
-    off = retarget_motion(seq, character, body, grounding=False)
     skel = character.skeleton
     by_node = {skel.nodes[i]: i for i in range(len(skel))}
     gltf, blob = read_glb(export_rig_glb(seq, character, tmp_path / f"take{character.path.suffix}", body))

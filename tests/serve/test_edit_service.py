@@ -58,11 +58,14 @@ def test_edits_chain_undo_is_the_previous_result_and_downloads_follow_the_edit(g
                                                      "GestureLSM, DDIM"),
     (("first", "gesturelsm", None, 2, ["upper"], 0), "Give the time range to regenerate"),
     (("first", "gesturelsm", "soon", 2, ["upper"], 0), "Give the time range to regenerate"),
-    (("first", "gesturelsm", 1, 2, ["upper"], "x"), "The seed must be a whole number from 0"),
+    (("first", "gesturelsm", 1, 2, ["upper"], "x"), "Seed must be a whole number from 0 to 4294967295 (got 'x')"),
     (("first", "gesturelsm", 1, 2, [], 0), "Choose at least one body region"),
     (("first", "gesturelsm", 1, 2, ["arms"], 0), "Unknown body region 'arms'"),
-    (("first", "gesturelsm", 1, 2, ["upper"], -1), "The seed must be a whole number from 0"),
-    (("first", "gesturelsm", 1, 2, ["upper"], 1.5), "The seed must be a whole number from 0"),
+    (("first", "gesturelsm", 1, 2, ["upper"], -1), "Seed must be from 0 to 4294967295 (got -1)"),
+    (("first", "gesturelsm", 1, 2, ["upper"], 1.5), "Seed must be a whole number from 0 to 4294967295 (got 1.5; "
+                                                    "it is not rounded for you)"),
+    (("first", "gesturelsm", 1, 2, ["upper"], 2**40), "Seed must be from 0 to 4294967295 (got 1099511627776)"),
+    (("first", "gesturelsm", 1, 2, ["upper"], None), "Seed is empty"),
     (("first", "gesturelsm", 4, 9, ["upper"], 0), "the range 4-9 s of upper lies outside the speech (0-6.00 s)"),
     (("first", "gesturelsm", 3, 2, ["upper"], 0), "the range 3-2 s of upper is reversed"),
 ])

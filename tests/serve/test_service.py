@@ -24,7 +24,8 @@ from _support import speech_like, synthetic_motion
 
 def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     steps = []
-    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps={"gesturelsm": 2, "ddim": 3}, size=256),
+    out = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps={"gesturelsm": 2, "ddim": 3},
+                              size=256),
                       progress=lambda f, m: steps.append((f, m)))
     assert out.video.exists() and out.video.stat().st_size > 1000
     import imageio

@@ -46,7 +46,9 @@ def test_shipped_decoders_add_little_jitter_to_real_motion(beat2_root):
     (clip,) = [c for c in data.clips if c.motion is not None]
     feats = clip.motion.to_features()
     with torch.no_grad():
-        rec = MotionSequence.from_features(join_regions(decode_latents(tokenizers, encode_regions(tokenizers, feats), len(feats))))
+        rec = MotionSequence.from_features(join_regions(decode_latents(tokenizers, encode_regions(tokenizers, feats),
+                                                                       len(feats))))
     real, back = amplitude_stats(data.joints(clip.motion)), amplitude_stats(data.joints(rec))
     assert back.jerk < 1.5 * real.jerk, (back.jerk, real.jerk)
-    assert abs(back.height_p95 - real.height_p95) < 0.03 and abs(back.wrist_speed - real.wrist_speed) < 0.1 * real.wrist_speed
+    assert abs(back.height_p95 - real.height_p95) < 0.03
+    assert abs(back.wrist_speed - real.wrist_speed) < 0.1 * real.wrist_speed

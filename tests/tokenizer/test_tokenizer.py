@@ -183,7 +183,8 @@ def test_train_and_eval_cli_on_a_tiny_folder(tmp_path, beat2_maker, capsys):
     tune = ["train-tokenizer", "--data", str(data), "--regions", "upper", "--steps", "3", "--batch-size", "4",
             "--window", "32", "--out", str(tmp_path / "tuned"), "--decoder-only", str(tmp_path / "ship")]
     assert main(tune) == 0
-    src, tuned = RVQVAE.load(tmp_path / "ship" / "upper.safetensors"), RVQVAE.load(tmp_path / "tuned" / "upper.safetensors")
+    src = RVQVAE.load(tmp_path / "ship" / "upper.safetensors")
+    tuned = RVQVAE.load(tmp_path / "tuned" / "upper.safetensors")
     assert tuned.config.accel_weight == 2.0 and src.config.accel_weight == 0.0
     assert torch.equal(src.encoder.net[0].weight, tuned.encoder.net[0].weight)
     assert torch.equal(src.rvq.layers[0].codebook, tuned.rvq.layers[0].codebook)

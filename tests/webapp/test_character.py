@@ -113,7 +113,7 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
 
 
 def _request(wav, methods) -> tuple:
-    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
+    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
     return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False, True)
 
 

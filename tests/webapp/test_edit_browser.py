@@ -1,7 +1,8 @@
 """The page's Edit section in headless Chromium on the shipped checkpoints: generate 10 s, select 2-4 s, regions
 upper + hands, Regenerate; the player shows the edited motion in place of the original (kept frames bit for bit),
 A/B swaps it with the original on the same clock, the statistics follow it (the downloads: tests/webapp/
-test_edit_section.py), a second edit chains, and Undo twice restores the original motion file's bytes. Skips, saying why, without chromium, the player bundle or
+test_edit_section.py), a second edit chains, and Undo twice restores the original motion file's bytes. Skips, saying
+why, without chromium, the player bundle or
 the shipped checkpoints."""
 from __future__ import annotations
 

@@ -27,6 +27,8 @@ def test_the_section_is_wired_with_its_element_ids(service):
     assert {"edit-start", "edit-end", "edit-regions", "edit-run", "edit-undo", "edit-method", "edit-seed"} <= ids
     names = {f.api_name for f in (page.fns.values() if isinstance(page.fns, dict) else page.fns)}
     assert "edit_motion" in names
+    seed = next(c for c in page.blocks.values() if getattr(c, "elem_id", None) == "edit-seed")
+    assert seed.preprocess(1.5) == 1.5 and seed.preprocess(2**40) == 2**40   # sent as typed, for the validator
 
 
 def test_edit_downloads_and_undo_through_the_page_handlers(service, speech_wav):

@@ -1,5 +1,6 @@
 """The page's chained events (gesturelsm/webapp/ui.py _Handlers): the video renders in a pool of its own beside
-generation, and a video for a request that a newer request of the same page replaced is not rendered, or is stopped mid-way."""
+generation, and a video for a request that a newer request of the same page replaced is not rendered, or is stopped
+mid-way."""
 from __future__ import annotations
 
 import threading
@@ -12,7 +13,7 @@ from gesturelsm.webapp.ui import _Handlers, build_demo
 
 
 def inputs(wav, seed: int, grounding: bool = True) -> tuple:
-    #       audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
+    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
     return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding)
 
 

@@ -1,5 +1,6 @@
 """The Live tab's server side: the tab builds inside a Blocks; microphone chunks (int16, 48 kHz) stream motion records
-(base64 in the hidden textbox) and the median latency out; the stop button ends the stream; a busy message past the limit; a closed tab stops it."""
+(base64 in the hidden textbox) and the median latency out; the stop button ends the stream; a busy message past the
+limit; a closed tab stops it."""
 from __future__ import annotations
 
 import base64

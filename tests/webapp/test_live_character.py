@@ -25,9 +25,9 @@ from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import load_character, retarget_motion
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order, character_payload  # noqa: E402
-from gesturelsm.webapp.live import payload  # noqa: E402
-from gesturelsm.webapp.live_character import EXPIRED, CharacterStream, LiveCharacters  # noqa: E402
+from gesturelsm.webapp.character import bone_order, character_payload
+from gesturelsm.webapp.live import payload
+from gesturelsm.webapp.live_character import EXPIRED, CharacterStream, LiveCharacters
 
 CHUNKS = (20, 20, 7, 33, 20, 20)          # the live feed's 20-frame chunks, and uneven ones
 

@@ -10,22 +10,16 @@ from scipy.spatial.transform import Rotation
 
 from _rigs import build_rig, vrm_body_bones, write_gltf
 from _standing import other_legs, segments, standing, stepping, swaying
-from gesturelsm.body.model import resolve_body
 from gesturelsm.grounding import ground_motion
 from gesturelsm.retarget import SourceBody, load_character, retarget
 from gesturelsm.retarget.grounding import CharacterStreamGrounder
 from gesturelsm.retarget.solve import prepare
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order  # noqa: E402
-from gesturelsm.webapp.live_character import CharacterStream  # noqa: E402
+from gesturelsm.webapp.character import bone_order
+from gesturelsm.webapp.live_character import CharacterStream
 
 CHUNKS = (20, 20, 7, 33, 20, 1, 19)
-
-
-@pytest.fixture(scope="module")
-def body():
-    return resolve_body(None)
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import logging
+import select
 import socket
 import struct
 import threading
@@ -76,6 +77,30 @@ class RawClient:
         self.sock.close()
 
 
+class Handlers:
+    """The socket's handlers (`live_socket.serve`, wrapped) running and finished, to wait on instead of sleeping."""
+
+    def __init__(self, serve):
+        self.serve, self.running, self.finished, self.lock = serve, 0, 0, threading.Lock()
+
+    async def __call__(self, *args, **kwargs):
+        with self.lock:
+            self.running += 1
+        try:
+            return await self.serve(*args, **kwargs)
+        finally:
+            with self.lock:
+                self.running, self.finished = self.running - 1, self.finished + 1
+
+
+def _wait(condition, what: str, limit: float = 60.0) -> None:
+    """Until `condition()` holds; `limit` seconds only bound a server that never gets there (then the test fails)."""
+    deadline = time.monotonic() + limit
+    while not condition():
+        assert time.monotonic() < deadline, f"the server never got there: {what}"
+        time.sleep(0.01)
+
+
 def _pcm(seconds: float) -> list[bytes]:
     y = (np.clip(speech_like(seconds, seed=7), -1, 1) * 32767).astype("<i2")
     return [y[a:a + 1600].tobytes() for a in range(0, len(y), 1600)]
@@ -84,27 +109,27 @@ def _pcm(seconds: float) -> list[bytes]:
 HELLO = json.dumps({"sample_rate": 16000})
 
 
-def _no_hello(port, mgr):
+def _no_hello(port, mgr, handlers):
     RawClient(port).drop()
 
 
-def _after_hello(port, mgr):
+def _after_hello(port, mgr, handlers):
     c = RawClient(port)
     c.send(HELLO)
-    time.sleep(0.3)
+    _wait(lambda: mgr.active == 1, "the stream opened")
     c.drop()
 
 
-def _while_streaming(port, mgr):
+def _while_streaming(port, mgr, handlers):
     c = RawClient(port)
     c.send(HELLO)
     for b in _pcm(3.0):
         c.send(b)
-    time.sleep(1.5)                      # motion chunks are being pushed to a client that reads none
+    assert select.select([c.sock], [], [], 120)[0]   # motion is being pushed to a client that reads none
     c.drop()
 
 
-def _right_after_stop(port, mgr):
+def _right_after_stop(port, mgr, handlers):
     c = RawClient(port)
     c.send(HELLO)
     for b in _pcm(2.0):
@@ -113,22 +138,21 @@ def _right_after_stop(port, mgr):
     c.drop()
 
 
-def _refused(port, mgr):
+def _refused(port, mgr, handlers):
     c = RawClient(port)
     c.send(json.dumps({"sample_rate": 1}))   # refused: the server sends the reason and closes
     c.drop()
 
 
-def _busy(port, mgr):
+def _busy(port, mgr, handlers):
     first = RawClient(port)
     first.send(HELLO)
-    deadline = time.monotonic() + 10
-    while mgr.active < 1 and time.monotonic() < deadline:
-        time.sleep(0.02)
+    _wait(lambda: mgr.active == 1, "the first stream opened")
+    done = handlers.finished
     second = RawClient(port)
     second.send(HELLO)                   # past the limit: the server sends "busy" to a client that is gone
     second.drop()
-    time.sleep(0.3)
+    _wait(lambda: handlers.finished > done, "the second visitor was answered")
     first.drop()
 
 
@@ -136,15 +160,17 @@ STAGES = [_no_hello, _after_hello, _while_streaming, _right_after_stop, _refused
 
 
 @pytest.mark.parametrize("stage", STAGES, ids=[s.__name__.strip("_") for s in STAGES])
-def test_a_client_that_leaves_leaves_no_traceback(served, caplog, stage):
+def test_a_client_that_leaves_leaves_no_traceback(served, caplog, monkeypatch, stage):
+    from gesturelsm.webapp import live_socket
+
     mgr, port = served
+    handlers = Handlers(live_socket.serve)
+    monkeypatch.setattr(live_socket, "serve", handlers)      # the route looks it up at each connection
     caplog.set_level(logging.DEBUG)
     for _ in range(3):
-        stage(port, mgr)
-    deadline = time.monotonic() + 15
-    while mgr.active and time.monotonic() < deadline:
-        time.sleep(0.05)
-    time.sleep(0.5)                      # the server's handlers finish after the last drop
+        stage(port, mgr, handlers)
+    _wait(lambda: mgr.active == 0 and handlers.running == 0 and handlers.finished >= 3,
+          "every handler finished after the last drop")
     import gc
 
     gc.collect()                         # "Task exception was never retrieved" is logged when a task is collected

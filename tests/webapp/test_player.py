@@ -190,7 +190,8 @@ def test_the_page_decodes_what_python_encodes(tmp_path):
                    bone_root=rng.normal(size=(T, 3)).astype(np.float32))
     frec = replace(crec, morph=rng.uniform(size=(T, 6)).astype(np.float32))          # a face: 6 morph channels
     files = {"/index.html": (b"<!doctype html><title>decode</title>", "text/html"),
-             "/player.js": (BUNDLE.read_bytes(), "text/javascript"), "/m.bin": (encode(rec), "application/octet-stream"),
+             "/player.js": (BUNDLE.read_bytes(), "text/javascript"),
+             "/m.bin": (encode(rec), "application/octet-stream"),
              "/c.bin": (encode(crec), "application/octet-stream"),
              "/f.bin": (encode(frec), "application/octet-stream")}
 

@@ -1,5 +1,6 @@
-"""The page's motion statistics (gesturelsm/webapp/stats_view.py) and Sweep tab (gesturelsm/webapp/sweep_tab.py), driven through their handlers
-on tiny checkpoints: the numbers are `gesturelsm eval`'s definitions and the same as `gesturelsm sweep` prints."""
+"""The page's motion statistics (gesturelsm/webapp/stats_view.py) and Sweep tab (gesturelsm/webapp/sweep_tab.py), driven
+through their handlers on tiny checkpoints: the numbers are `gesturelsm eval`'s definitions and the same as `gesturelsm
+sweep` prints."""
 from __future__ import annotations
 
 import json

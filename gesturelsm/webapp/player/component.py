@@ -59,7 +59,8 @@ def player_component(service: GestureService) -> gr.HTML:
     the default shape as the page opens."""
     if not BUNDLE.exists():
         return gr.HTML(MISSING, elem_id="motion-player-box")
-    return gr.HTML("", html_template=ELEMENT.format(preload=body_url(service)), js_on_load=MOUNT_JS.format(bundle=BUNDLE),
+    return gr.HTML("", html_template=ELEMENT.format(preload=body_url(service)),
+                   js_on_load=MOUNT_JS.format(bundle=BUNDLE),
                    elem_id="motion-player-box", padding=False)
 
 

@@ -1,0 +1,71 @@
+"""benchmarks/_harness.py: the data path (GESTURELSM_SHARED, else ../shared), the thread count, a timer with medians and
+one row format; and every benchmark script takes the shared data and its thread count from it."""
+from __future__ import annotations
+
+import ast
+import importlib.util
+import json
+import statistics
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+BENCHMARKS = REPO / "benchmarks"
+
+
+def _harness(monkeypatch, shared: str | None):
+    if shared is None:
+        monkeypatch.delenv("GESTURELSM_SHARED", raising=False)
+    else:
+        monkeypatch.setenv("GESTURELSM_SHARED", shared)
+    spec = importlib.util.spec_from_file_location("_harness_under_test", BENCHMARKS / "_harness.py")
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, module)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_data_path(monkeypatch, tmp_path):
+    h = _harness(monkeypatch, str(tmp_path))
+    assert h.BEAT2 == tmp_path / "data" / "beat2" and h.CHARACTERS == tmp_path / "assets" / "characters"
+    assert h.take_wav("2_scott_0_2_2") == tmp_path / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+    assert _harness(monkeypatch, None).SHARED == REPO.parent / "shared"
+
+
+def test_timer_and_rows(monkeypatch):
+    h = _harness(monkeypatch, None)
+    calls = []
+    t = h.timed(lambda: calls.append(1), repeats=5, warmup=2)
+    assert len(calls) == 7 and len(t.runs) == 5
+    assert t.median == statistics.median(t.runs) and t.min == min(t.runs)
+    rows = h.Rows(["setting", "median s"])
+    rows.add("8 steps", "0.41")
+    assert rows.markdown().splitlines() == ["| setting | median s |", "|---|---|", "| 8 steps | 0.41 |"]
+    assert json.loads(rows.json()) == [{"setting": "8 steps", "median s": "0.41"}]
+
+
+def test_threads(monkeypatch):
+    import torch
+
+    h = _harness(monkeypatch, None)
+    before = torch.get_num_threads()
+    try:
+        assert h.set_threads(1) == 1 and torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
+
+
+def test_every_script_takes_the_data_path_and_threads_from_the_harness():
+    for path in sorted(BENCHMARKS.glob("*.py")):
+        if path.name == "_harness.py":
+            continue
+        tree = ast.parse(path.read_text())
+        nodes = list(ast.walk(tree))
+        assert not any(isinstance(n, ast.Constant) and n.value == "shared" for n in nodes), \
+            f"{path.name} builds the shared-data path itself"
+        assert not any(isinstance(n, ast.Attribute) and n.attr == "set_num_threads" for n in nodes), \
+            f"{path.name} sets torch's threads itself"
+        used = {n.id for n in nodes if isinstance(n, ast.Name)} & {"BEAT2", "SHARED", "CHARACTERS", "set_threads"}
+        known = {a.name for n in nodes if isinstance(n, ast.ImportFrom) for a in n.names}        # _harness's, or
+        known |= {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
+        assert used <= known, (path.name, used - known)                     # another script's, or its own name
