@@ -23,6 +23,7 @@ from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
+from gesturelsm.serve.renders import CLOSED, SUPERSEDED
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS
@@ -82,6 +83,45 @@ def _examples() -> list[list]:
     return [[str(EXAMPLES / m["audio"]), m["text"]] for m in meta if (EXAMPLES / m["audio"]).exists()]
 
 
+class _VideoStatus:
+    """A render's newest progress line, handed from the thread that renders to the handler that shows it."""
+
+    def __init__(self, every_s: float = 1.0):
+        self.every_s = every_s
+        self.message: str | None = None
+        self.closed = False                  # the handler was closed: the page that asked is gone
+        self._ended = False
+        self._cond = threading.Condition()
+
+    def set(self, fraction: float, message: str) -> None:
+        with self._cond:
+            self.message = message
+            self._cond.notify_all()
+
+    def finish(self) -> None:
+        with self._cond:
+            self._ended = True
+            self._cond.notify_all()
+
+    def close(self) -> None:
+        self.closed = True
+
+    def updates(self):
+        """Each new line, at most one per `every_s`, until the render ends."""
+        shown = None
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: self._ended or self.message != shown, timeout=self.every_s)
+                if self._ended:
+                    return
+                message = self.message
+            if message is not None and message != shown:
+                shown = message
+                yield message
+                with self._cond:                 # at most one line per every_s: the page redraws the summary
+                    self._cond.wait_for(lambda: self._ended, timeout=self.every_s)
+
+
 class _Handlers:
     """The page's event handlers over one service; each turns the service's errors into one message."""
 
@@ -96,10 +136,23 @@ class _Handlers:
         if request is None or out is None:
             return
         with self._lock:
+            before = self.newest.get(request.session_hash)
             self.newest[request.session_hash] = out.job.folder
             self.newest.move_to_end(request.session_hash)
             while len(self.newest) > 10000:
                 self.newest.popitem(last=False)
+        if before is not None and before != out.job.folder:     # the page shows newer bodies: its older video goes
+            self.service.renders.cancel(request.session_hash, SUPERSEDED)
+
+    def session_ended(self, request: gr.Request = None) -> None:
+        """The page was closed or reloaded (Gradio's unload): its videos, waiting or rendering, are cancelled."""
+        if request is None or not request.session_hash:
+            return
+        n = self.service.renders.cancel(request.session_hash, CLOSED)
+        if n:
+            log.info("a page closed: %d video(s) of it cancelled", n)
+        with self._lock:
+            self.newest.pop(request.session_hash, None)
 
     def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
@@ -166,24 +219,52 @@ class _Handlers:
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
         return gr.skip() if self._replaced(request, out) else out
 
-    def show_video(self, out: Result | None, character=None, request: gr.Request = None, progress=gr.Progress()):
-        """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
-        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). The
-        rendered result goes back into the page's state only while no newer request has replaced it there. With the
-        page session's `character`, the video draws the character's own mesh."""
+    def show_video(self, out: Result | None, character=None, request: gr.Request = None):
+        """Renders the video in the server's render queue (`serve/renders.py`), beside generation: generating again
+        never waits for a video, and the summary says where the video is (its place in the queue, then frame k/n and
+        the time left). The page session's video is cancelled, waiting or rendering, when the page asks for newer
+        motion, closes (this generator is closed, or the page's unload), or ends. The rendered result goes back into
+        the page's state only while no newer request has replaced it there. With the page session's `character`, the
+        video draws the character's own mesh."""
+        skip = (gr.skip(), gr.skip(), gr.skip(), gr.skip())
         if out is None:
-            return None, gr.skip(), gr.skip(), gr.skip()
+            yield None, gr.skip(), gr.skip(), gr.skip()
+            return
         if self._replaced(request, out):
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
+            yield skip
+            return
+        owner = request.session_hash if request is not None else None
+        status = _VideoStatus()
+        done: dict = {}
+
+        def work() -> None:
+            try:
+                done["out"] = self.service.render(out, progress=status.set, character=character, owner=owner,
+                                                  cancelled=lambda: status.closed or self._replaced(request, out))
+            except BaseException as exc:            # noqa: BLE001 (handed to the handler's thread below)
+                done["error"] = exc
+            finally:
+                status.finish()
+        worker = threading.Thread(target=work, name="gesturelsm-video", daemon=True)
+        worker.start()
         try:
-            out = self.service.render(out, progress=lambda f, m: progress(f, desc=m),
-                                      cancelled=lambda: self._replaced(request, out), character=character)
-        except RenderCancelled:
-            log.info("a video was not finished: the page asked for newer motion")
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
-        except GestureError as exc:
+            for message in status.updates():
+                yield gr.skip(), gr.skip(), out.summary_with(message), gr.skip()
+        finally:
+            if worker.is_alive():                    # closed before the video came: the page is gone
+                status.close()
+        worker.join()
+        exc = done.get("error")
+        if isinstance(exc, RenderCancelled):
+            log.info("a video was not finished: %s", exc)
+            yield skip
+            return
+        if isinstance(exc, GestureError):
             self.refuse(exc)
-        return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
+        if exc is not None:
+            raise exc
+        new = done["out"]
+        yield str(new.video), new.table, new.summary, self._kept(request, new)
 
     def made_downloads(self, out: Result | None, request: gr.Request = None):
         """The downloads of each method made so far (npz and BVH), while the others are still generated; the rest of
@@ -193,7 +274,8 @@ class _Handlers:
         return [str(p) for p in aside(self.service.export_each, out)]       # beside generation, niced
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
-        """The downloads; with a character, each method's motion in the character's own file too."""
+        """The downloads, as soon as the motions exist (before the video: a video never holds them up); with a
+        character, each method's motion in the character's own file too."""
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
@@ -327,7 +409,10 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
     # low-priority process, render/background.py); its progress is not drawn (it slowed the player), the summary says
     # "multiple": the next request's video step is queued even while this one's is pending (Gradio's default "once"
     # drops a step triggered while the same step is pending, and the newest request then never got its video)
-    render = {"concurrency_limit": settings.concurrency, "concurrency_id": "render", "trigger_mode": "multiple"}
+    # the videos' own queue is the service's (serve/renders.py: place in line, a closed page's video cancelled), so
+    # Gradio lets every video step in at once (each waits in that queue, saying where it is)
+    render = {"concurrency_limit": None, "concurrency_id": "render", "trigger_mode": "multiple"}
+    exports = {"concurrency_limit": settings.concurrency, "concurrency_id": "exports", "trigger_mode": "multiple"}
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
@@ -368,11 +453,12 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
                        concurrency_limit=1, concurrency_id="downloads", trigger_mode="always_last")
 
         def follow(event, named: bool = False) -> None:     # after Generate, an edit or an undo (motions in state)
-            event.then(h.show_video, [state, character], [video, table, summary, state],
-                       api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
-                       **render) \
-                .then(h.add_exports, [state, character], [files, view, summary, state],
-                      api_name="add_exports" if named else None, api_visibility="private", **render)
+            # the downloads first, in a pool of their own (never behind anybody's video), then the video
+            event.then(h.add_exports, [state, character], [files, view, summary, state],
+                       api_name="add_exports" if named else None, api_visibility="private", **exports) \
+                .then(h.show_video, [state, character], [video, table, summary, state],
+                      api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
+                      **render)
         follow(shown, named=True)
         edit_section.attach(edit, h, shown, state, character, dict(payload=payload, table=table, summary=summary,
                                                                    video=video, files=files), follow)
@@ -383,6 +469,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
                   js=VIEWER_MOUNTED_JS, api_visibility="private")
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
+        demo.unload(h.session_ended)                   # a closed page's videos are cancelled (serve/renders.py)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
     return Demo(demo, service, live=manager, routes=routes)
 
