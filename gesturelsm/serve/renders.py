@@ -153,25 +153,25 @@ class RenderQueue:
 
 
 def video_progress(progress: Callable[[float, str], None]) -> Callable[[float, str], None]:
-    """A render's progress (`render_apart`'s fraction and "frame k/n (x fps)") as the visitor reads it: "video: frame
-    k/n, about S s left", the time left from the frame rate so far (since the first frame)."""
+    """A render's progress (`render_apart`'s fraction and "frame k/n (x fps)") as the visitor reads it: "rendering:
+    frame k/n, about S s left", the time left from the frame rate so far (since the first frame)."""
     first: list[tuple[float, float]] = []
 
     def report(fraction: float, message: str) -> None:
         m = _FRAME.search(message)
         if m is None:
-            progress(fraction, f"video: {message}" if message else "video: rendering")
+            progress(fraction, f"rendering: {message}" if message else "rendering")
             return
         k, n = int(m.group(1)), int(m.group(2))
         now = time.monotonic()
         if not first:
             first.append((now, fraction))
-            progress(fraction, f"video: frame {k}/{n}")
+            progress(fraction, f"rendering: frame {k}/{n}")
             return
         t0, f0 = first[0]
         rate = (fraction - f0) / max(now - t0, 1e-9)
         left = (1.0 - fraction) / rate if rate > 0 else None
-        progress(fraction, f"video: frame {k}/{n}" + (f", about {left:.0f} s left" if left is not None else ""))
+        progress(fraction, f"rendering: frame {k}/{n}" + (f", about {left:.0f} s left" if left is not None else ""))
     return report
 
 
@@ -182,8 +182,8 @@ def waiting_line(position: int) -> str:
     """The visitor's line for a video waiting in the queue at `position` (1: next)."""
     ahead = position - 1
     if ahead <= 0:
-        return "video: next in line, waiting for the video being rendered to finish"
-    return f"video: queue position {position}, {ahead} video{'s' * (ahead != 1)} ahead of it"
+        return "waiting: next in line, after the video being rendered"
+    return f"waiting: queue position {position}, {ahead} video{'s' * (ahead != 1)} ahead of it"
 
 
 __all__ = ["CLOSED", "RenderQueue", "SUPERSEDED", "Ticket", "video_progress", "waiting_line"]

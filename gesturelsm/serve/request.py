@@ -135,7 +135,7 @@ class Result:
     def summary_with(self, video_status: str | None) -> str:
         """The summary, with `video_status` (where the video is: its place in the queue, frame k/n and the time
         left) in place of "Rendering the video (mp4)..." while it is not ready."""
-        rendering = "(mp4)..." if not video_status else f"(mp4): {video_status.removeprefix('video: ')}"
+        rendering = "(mp4)..." if not video_status else f"(mp4): {video_status.removeprefix('rendering: ')}"
         if self.pending:
             made = ", ".join(label(m) for m in self.motions) or "nothing yet"
             ready = (f"**Ready after {seconds_text(self.motion_seconds)}:** {made}. **Generating:** "

@@ -86,14 +86,16 @@ def _examples() -> list[list]:
 class _VideoStatus:
     """A render's newest progress line, handed from the thread that renders to the handler that shows it."""
 
-    def __init__(self, every_s: float = 1.0):
-        self.every_s = every_s
+    def __init__(self, every_s: float = 1.0, progress=None):
+        self.every_s, self.progress = every_s, progress
         self.message: str | None = None
         self.closed = False                  # the handler was closed: the page that asked is gone
         self._ended = False
         self._cond = threading.Condition()
 
     def set(self, fraction: float, message: str) -> None:
+        if self.progress is not None:
+            self.progress(fraction, desc=message)
         with self._cond:
             self.message = message
             self._cond.notify_all()
@@ -219,7 +221,15 @@ class _Handlers:
         """`out` for the page's state, unless a newer request of the page replaced it (the state holds that one)."""
         return gr.skip() if self._replaced(request, out) else out
 
-    def show_video(self, out: Result | None, character=None, request: gr.Request = None):
+    def show_video(self, out: Result | None, character=None, request: gr.Request = None, progress=gr.Progress()):
+        """`video_steps` run to its end: the page's outputs once the video is made (or skipped); `progress(fraction,
+        desc=...)` gets where the video is meanwhile."""
+        last = None
+        for last in self.video_steps(out, character, request, progress):
+            pass
+        return last
+
+    def video_steps(self, out: Result | None, character=None, request: gr.Request = None, progress=None):
         """Renders the video in the server's render queue (`serve/renders.py`), beside generation: generating again
         never waits for a video, and the summary says where the video is (its place in the queue, then frame k/n and
         the time left). The page session's video is cancelled, waiting or rendering, when the page asks for newer
@@ -234,7 +244,7 @@ class _Handlers:
             yield skip
             return
         owner = request.session_hash if request is not None else None
-        status = _VideoStatus()
+        status = _VideoStatus(progress=progress)
         done: dict = {}
 
         def work() -> None:
@@ -456,7 +466,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
             # the downloads first, in a pool of their own (never behind anybody's video), then the video
             event.then(h.add_exports, [state, character], [files, view, summary, state],
                        api_name="add_exports" if named else None, api_visibility="private", **exports) \
-                .then(h.show_video, [state, character], [video, table, summary, state],
+                .then(h.video_steps, [state, character], [video, table, summary, state],
                       api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
                       **render)
         follow(shown, named=True)

@@ -95,8 +95,8 @@ def test_the_lines_the_visitor_reads():
     report(0.0, "starting: framing the camera on the motions")
     report(0.01, "frame 1/100 (3.0 fps)")
     report(0.5, "frame 50/100 (3.0 fps)")
-    assert seen[0] == "video: starting: framing the camera on the motions" and seen[1] == "video: frame 1/100"
-    assert seen[2].startswith("video: frame 50/100, about ") and seen[2].endswith(" s left")
+    assert seen[0] == "rendering: starting: framing the camera on the motions" and seen[1] == "rendering: frame 1/100"
+    assert seen[2].startswith("rendering: frame 50/100, about ") and seen[2].endswith(" s left")
 
 
 @pytest.fixture
@@ -149,7 +149,7 @@ def test_a_closed_page_video_goes_and_the_next_page_renders(service, speech_wav,
     t2.join(10)
     out = t2.out["result"]
     assert out.video.read_bytes() == b"mp4" and service.renders.running == 0
-    assert any(m.startswith("video: frame 50/100") for m in s2)
+    assert any(m.startswith("rendering: frame 50/100") for m in s2)
 
 
 def test_a_newer_request_of_the_same_page_supersedes_its_video(service, speech_wav, blocking_render):
