@@ -115,6 +115,10 @@ class RenderQueue:
         self._cancel(old, SUPERSEDED)
         return ticket
 
+    def supersede(self, owner: Hashable) -> int:
+        """Cancel every ticket of `owner`, whose newer request replaced them; returns how many."""
+        return self.cancel(owner, SUPERSEDED)
+
     def cancel(self, owner: Hashable, reason: str = CLOSED) -> int:
         """Cancel every ticket of `owner` (waiting ones leave the line, running ones' renders are killed); returns
         how many."""

@@ -88,7 +88,7 @@ class ReplicatedService(GestureService):
         return cls(here.pipeline, page, here.body, handle, count, conn, name)
 
     def close(self) -> None:
-        replicas.stop(self.name)
+        replicas.stop(self.name, cluster_goes=self.connection is not None and self.connection.owned)
         if self.connection is not None:
             self.connection.close()
 

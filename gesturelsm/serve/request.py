@@ -11,7 +11,7 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -207,7 +207,7 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
         rows.append(TimingRow(GROUND_TRUTH_LABEL, None, None, None, None, None, None, None, None))
     for e in edits:
         g = generation_seconds(e.stages)
-        rows.append(TimingRow(e.label, *(_cell(e.stages.get(k, 0.0)) for k in STAGES[:-1]),
+        rows.append(TimingRow(e.label, *(_cell(e.stages.get(k)) for k in STAGES[:-1]),
                               _cell(e.rendering), round(g, 3), None))
     features = _shared(timings, "features") or 0.0
     whole = features + sum(g - timings[m].get("features", 0.0) for m, g in gens.items())
@@ -225,3 +225,20 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
 
 def _cell(v: float | None) -> float | None:
     return None if v is None else round(float(v), 3)
+
+
+def with_render_time(result: Result, render_s: float, ready: float) -> Result:
+    """`result` (its video just made) with the video's own render time in its rows (the edit's row for an edited
+    result) and `seconds` (request or edit start to video ready)."""
+    if result.edit_timings:
+        edits = (*result.edit_timings[:-1], replace(result.edit_timings[-1], rendering=render_s))
+        result = replace(result, edit_timings=edits)
+    else:
+        result = replace(result, render_seconds=render_s)
+    return replace(result, rows=result_rows(result), seconds=ready)
+
+
+def result_rows(result: Result):
+    """The timing table of `result` (`request.timing_rows`) from what it holds."""
+    return timing_rows(result.timings, result.ground_truth is not None, result.job.speech_seconds,
+                       result.render_seconds, result.made_ahead, result.speech_ahead, result.edit_timings)

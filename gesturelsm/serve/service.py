@@ -52,7 +52,7 @@ from .config import ServiceSettings
 from .prepared import PreparedUploads, file_key
 from .progressive import SPEECH_AHEAD, stream_request
 from .renders import RenderQueue, video_progress, waiting_line
-from .request import VIDEO_SIZES, Request, Result, timing_rows
+from .request import VIDEO_SIZES, Request, Result, result_rows, with_render_time
 from .sweep import SweepOutcome, SweepRequest, run_sweep_request
 
 log = logging.getLogger("gesturelsm.app")
@@ -391,23 +391,6 @@ class GestureService:
                 files.append(export_keypoints(seq, out / f"{name}_keypoints.json", body=self.body))
                 files.append(export_arkit(seq, out / f"{name}_arkit.csv", body=self.body))
         return [Path(f) for f in files], glb
-
-
-def with_render_time(result: Result, render_s: float, ready: float) -> Result:
-    """`result` (its video just made) with the video's own render time in its rows (the edit's row for an edited
-    result) and `seconds` (request or edit start to video ready)."""
-    if result.edit_timings:
-        edits = (*result.edit_timings[:-1], replace(result.edit_timings[-1], rendering=render_s))
-        result = replace(result, edit_timings=edits)
-    else:
-        result = replace(result, render_seconds=render_s)
-    return replace(result, rows=result_rows(result), seconds=ready)
-
-
-def result_rows(result: Result):
-    """The timing table of `result` (`request.timing_rows`) from what it holds."""
-    return timing_rows(result.timings, result.ground_truth is not None, result.job.speech_seconds,
-                       result.render_seconds, result.made_ahead, result.speech_ahead, result.edit_timings)
 
 
 def _warmup_words() -> list:

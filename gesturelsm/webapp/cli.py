@@ -188,10 +188,10 @@ def page_service(args: argparse.Namespace, settings, stages: "Stages | None" = N
     if args.cluster and not args.replicas:
         raise GestureError("--cluster says where replicas run: give --replicas N too")
     if args.replicas:
-        from gesturelsm.serve.replicated import ReplicatedService
-
         say(f"starting {args.replicas} replica(s) on the Ray cluster ({args.cluster or 'local'}): each loads the models"
             + ("" if args.no_warmup else " and warms up") + "; the models for the Live tab load here")
+        from gesturelsm.serve.replicated import ReplicatedService
+
         return ReplicatedService.start(settings, args.replicas, args.cluster or parse_cluster("local"),
                                        warmup=not args.no_warmup, name=f"gesturelsm-{args.port}")
     say("loading the models (" + (f"checkpoints {args.checkpoints}" if args.checkpoints else "shipped checkpoints")

@@ -20,16 +20,14 @@ from gesturelsm.backends import SPECS, STEPS_SETTINGS, label, ours_default
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
-from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
-from gesturelsm.serve.renders import CLOSED, SUPERSEDED
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.check import cfg_bound
 
-from . import edit_section, live, live_socket, stats_view, sweep_tab
+from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
@@ -61,9 +59,9 @@ SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with yo
 *Feet on the ground* (on by default) plants each foot where it lands (leg IK), keeps the body from drifting away and
 puts it on the floor, for every method and ground truth, without touching the upper body; *stand in place* removes
 horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations.
-Timings: features, alignment and transcription are computed once and shared by all methods; the real-time factor is seconds of
-speech per second of generation (alignment, transcription and rendering excluded, as in the paper); the last row is the whole
-request, upload to video."""
+Timings: each where it was spent (*made ahead*: before the click); features, alignment and transcription are computed once for all
+methods; the real-time factor is speech seconds per generation second (alignment, transcription and rendering excluded, as in
+the paper); an edit has its own row; the last row is the whole request: all its methods and the one video's render time."""
 
 
 def _limits() -> str:
@@ -81,47 +79,6 @@ def _examples() -> list[list]:
     except (OSError, ValueError):
         return []
     return [[str(EXAMPLES / m["audio"]), m["text"]] for m in meta if (EXAMPLES / m["audio"]).exists()]
-
-
-class _VideoStatus:
-    """A render's newest progress line, handed from the thread that renders to the handler that shows it."""
-
-    def __init__(self, every_s: float = 1.0, progress=None):
-        self.every_s, self.progress = every_s, progress
-        self.message: str | None = None
-        self.closed = False                  # the handler was closed: the page that asked is gone
-        self._ended = False
-        self._cond = threading.Condition()
-
-    def set(self, fraction: float, message: str) -> None:
-        if self.progress is not None:
-            self.progress(fraction, desc=message)
-        with self._cond:
-            self.message = message
-            self._cond.notify_all()
-
-    def finish(self) -> None:
-        with self._cond:
-            self._ended = True
-            self._cond.notify_all()
-
-    def close(self) -> None:
-        self.closed = True
-
-    def updates(self):
-        """Each new line, at most one per `every_s`, until the render ends."""
-        shown = None
-        while True:
-            with self._cond:
-                self._cond.wait_for(lambda: self._ended or self.message != shown, timeout=self.every_s)
-                if self._ended:
-                    return
-                message = self.message
-            if message is not None and message != shown:
-                shown = message
-                yield message
-                with self._cond:                 # at most one line per every_s: the page redraws the summary
-                    self._cond.wait_for(lambda: self._ended, timeout=self.every_s)
 
 
 class _Handlers:
@@ -143,18 +100,13 @@ class _Handlers:
             self.newest.move_to_end(request.session_hash)
             while len(self.newest) > 10000:
                 self.newest.popitem(last=False)
-        if before is not None and before != out.job.folder:     # the page shows newer bodies: its older video goes
-            self.service.renders.cancel(request.session_hash, SUPERSEDED)
+        if before is not None and before != out.job.folder:     # newer bodies on the page: its older video goes
+            self.service.renders.supersede(request.session_hash)
 
     def session_ended(self, request: gr.Request = None) -> None:
-        """The page was closed or reloaded (Gradio's unload): its videos, waiting or rendering, are cancelled."""
-        if request is None or not request.session_hash:
-            return
-        n = self.service.renders.cancel(request.session_hash, CLOSED)
-        if n:
-            log.info("a page closed: %d video(s) of it cancelled", n)
-        with self._lock:
-            self.newest.pop(request.session_hash, None)
+        """The page closed or reloaded (Gradio's unload): its videos are cancelled, waiting or rendering."""
+        if request is not None and self.service.renders.cancel(request.session_hash):
+            log.info("a page closed: its video was cancelled")
 
     def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
@@ -222,59 +174,12 @@ class _Handlers:
         return gr.skip() if self._replaced(request, out) else out
 
     def show_video(self, out: Result | None, character=None, request: gr.Request = None, progress=gr.Progress()):
-        """`video_steps` run to its end: the page's outputs once the video is made (or skipped); `progress(fraction,
-        desc=...)` gets where the video is meanwhile."""
-        last = None
-        for last in self.video_steps(out, character, request, progress):
-            pass
-        return last
+        """`video_steps` run to its end (`progress(fraction, desc=...)`: where the video is meanwhile)."""
+        return videos.last(self.video_steps(out, character, request, progress))
 
     def video_steps(self, out: Result | None, character=None, request: gr.Request = None, progress=None):
-        """Renders the video in the server's render queue (`serve/renders.py`), beside generation: generating again
-        never waits for a video, and the summary says where the video is (its place in the queue, then frame k/n and
-        the time left). The page session's video is cancelled, waiting or rendering, when the page asks for newer
-        motion, closes (this generator is closed, or the page's unload), or ends. The rendered result goes back into
-        the page's state only while no newer request has replaced it there. With the page session's `character`, the
-        video draws the character's own mesh."""
-        skip = (gr.skip(), gr.skip(), gr.skip(), gr.skip())
-        if out is None:
-            yield None, gr.skip(), gr.skip(), gr.skip()
-            return
-        if self._replaced(request, out):
-            yield skip
-            return
-        owner = request.session_hash if request is not None else None
-        status = _VideoStatus(progress=progress)
-        done: dict = {}
-
-        def work() -> None:
-            try:
-                done["out"] = self.service.render(out, progress=status.set, character=character, owner=owner,
-                                                  cancelled=lambda: status.closed or self._replaced(request, out))
-            except BaseException as exc:            # noqa: BLE001 (handed to the handler's thread below)
-                done["error"] = exc
-            finally:
-                status.finish()
-        worker = threading.Thread(target=work, name="gesturelsm-video", daemon=True)
-        worker.start()
-        try:
-            for message in status.updates():
-                yield gr.skip(), gr.skip(), out.summary_with(message), gr.skip()
-        finally:
-            if worker.is_alive():                    # closed before the video came: the page is gone
-                status.close()
-        worker.join()
-        exc = done.get("error")
-        if isinstance(exc, RenderCancelled):
-            log.info("a video was not finished: %s", exc)
-            yield skip
-            return
-        if isinstance(exc, GestureError):
-            self.refuse(exc)
-        if exc is not None:
-            raise exc
-        new = done["out"]
-        yield str(new.video), new.table, new.summary, self._kept(request, new)
+        """The video in the server's render queue, the summary saying where it is (`videos.steps`)."""
+        yield from videos.steps(self, out, character, request, progress)
 
     def made_downloads(self, out: Result | None, request: gr.Request = None):
         """The downloads of each method made so far (npz and BVH), while the others are still generated; the rest of
@@ -284,8 +189,7 @@ class _Handlers:
         return [str(p) for p in aside(self.service.export_each, out)]       # beside generation, niced
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
-        """The downloads, as soon as the motions exist (before the video: a video never holds them up); with a
-        character, each method's motion in the character's own file too."""
+        """The downloads, before the video (never behind one); with a character, each motion in its own file too."""
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
@@ -415,12 +319,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
-    # videos and downloads in a pool of their own: generating again never waits behind a video (the render runs in a
-    # low-priority process, render/background.py); its progress is not drawn (it slowed the player), the summary says
-    # "multiple": the next request's video step is queued even while this one's is pending (Gradio's default "once"
-    # drops a step triggered while the same step is pending, and the newest request then never got its video)
-    # the videos' own queue is the service's (serve/renders.py: place in line, a closed page's video cancelled), so
-    # Gradio lets every video step in at once (each waits in that queue, saying where it is)
+    # videos in a pool of their own: generating again never waits behind one; every video step is let in, the
+    # service's render queue (serve/renders.py) renders them in turn, says each one's place and cancels a closed page's;
+    # the downloads in a pool of their own. "multiple": a newer request's step is queued while an older one's is pending
     render = {"concurrency_limit": None, "concurrency_id": "render", "trigger_mode": "multiple"}
     exports = {"concurrency_limit": settings.concurrency, "concurrency_id": "exports", "trigger_mode": "multiple"}
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
