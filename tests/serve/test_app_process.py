@@ -97,3 +97,33 @@ def test_a_stop_while_starting_is_one_line(app_args):
     text = "\n".join(app.lines)
     assert code == 0 and "Traceback" not in text and "Keyboard interruption" not in text, text
     assert app.lines[-1].endswith("] stopped") and any("stopping (SIGTERM)" in ln for ln in app.lines), text
+
+
+@pytest.mark.slow
+def test_stopping_the_app_with_replicas_prints_no_ray_noise(tiny_assets, tmp_path):
+    """`python -m app --replicas 1` (a local Ray cluster) stopped by Ctrl-C, as a terminal sends it (to the whole
+    process group): the app's own lines, no "(raylet) ... retried" warnings, no Ray process left."""
+    pytest.importorskip("ray")
+    args = ["--replicas", "1", "--cluster", "local", "--checkpoints", str(tiny_assets), "--workdir",
+            str(tmp_path / "work"), "--no-warmup", "--no-ahead", "--port", str(_free_port()), "--max-seconds", "20"]
+    env = {**os.environ, "PYTHONPATH": str(REPO), "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen([sys.executable, "-m", "app", *args], cwd=REPO, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                            start_new_session=True)
+    app = App.__new__(App)
+    app.proc, app.lines, app._cond = proc, [], threading.Condition()
+    app._reader = threading.Thread(target=app._read, daemon=True)
+    app._reader.start()
+    try:
+        app.wait_for("ready: methods", timeout=900)
+    except BaseException:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise
+    os.killpg(proc.pid, signal.SIGINT)                                  # Ctrl-C in a terminal: the whole group
+    code = proc.wait(300)
+    app._reader.join(30)
+    text = "\n".join(app.lines)
+    assert code == 0, text
+    assert "stopping the replicas" in text and app.lines[-1].endswith("] stopped"), text
+    assert "(raylet)" not in text and "retried" not in text and "Traceback" not in text, text
+    assert "Keyboard interruption" not in text and "Started Serve" not in text, text
