@@ -137,9 +137,9 @@ class Result:
         left) in place of "Rendering the video (mp4)..." while it is not ready."""
         rendering = "(mp4)..." if not video_status else f"(mp4): {video_status.removeprefix('rendering: ')}"
         if self.pending:
-            made = ", ".join(label(m) for m in self.motions) or "nothing yet"
-            ready = (f"**Ready after {seconds_text(self.motion_seconds)}:** {made}. **Generating:** "
-                     f"{', '.join(label(m) for m in self.pending)}...")
+            made = ", ".join(label(m) for m in self.motions)
+            ready = (f"**Ready {seconds_text(self.motion_seconds)} after the click:** {made}. " if made else "") + \
+                f"**Generating:** {', '.join(label(m) for m in self.pending)}..."
         else:
             ready = motion_ready(self)
             if self.edit_timings:

@@ -34,8 +34,10 @@ def queue_url(tiny_assets, tmp_path_factory):
         pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
     if not BUNDLE.exists():
         pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    # render_nice 0: on a loaded test machine a niced render may not reach its first frame for minutes (the order of
+    # events is the same at any niceness)
     settings = ServiceSettings(checkpoints=str(tiny_assets), max_seconds=90, ahead=False, concurrency=1,
-                               workdir=str(tmp_path_factory.mktemp("queue_work")))
+                               render_nice=0, workdir=str(tmp_path_factory.mktemp("queue_work")))
     service = GestureService.from_settings(settings)
     with served(service) as url:
         yield url, service

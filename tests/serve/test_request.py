@@ -89,3 +89,10 @@ def test_the_summary_never_says_zero_seconds_and_keeps_the_generation_after_an_e
                      edit_timings=(EditTiming("GestureLSM, edit 1", {"sampling": 1.0}, 1.3),))
     assert "**Motion ready in 3.2 s.**" in edited.summary                   # the generation's figure stays
     assert "**Edit made in 1.3 s.**" in edited.summary and "Rendering the edit's video" in edited.summary
+
+
+def test_a_growing_result_says_what_is_ready_after_the_click():
+    none_yet = _result(pending=("gesturelsm",), motion_seconds=0.0)
+    assert "**Generating:** GestureLSM..." in none_yet.summary and "0.0 s" not in none_yet.summary
+    one = _result(pending=("ddim",), motion_seconds=1.26, motions={"gesturelsm": object()})
+    assert "**Ready 1.3 s after the click:** GestureLSM. **Generating:** DDIM..." in one.summary
