@@ -210,10 +210,10 @@ def _serve(service, args: argparse.Namespace, stages: Stages) -> None:
     from .ui import build_demo
 
     demo = build_demo(service, max(1, args.queue_size))
-    stages.say(f"starting the web server on {args.host}:{args.port}")
-    demo.launch(host=args.host, port=args.port, prevent_thread_lock=True, quiet=True)
-    stages.say(f"ready: methods {', '.join(service.methods)}; open http://{args.host}:{args.port} (Ctrl-C stops)")
-    try:
+    try:                                                     # a stop from here on closes the page
+        stages.say(f"starting the web server on {args.host}:{args.port}")
+        demo.launch(host=args.host, port=args.port, prevent_thread_lock=True, quiet=True)
+        stages.say(f"ready: methods {', '.join(service.methods)}; open http://{args.host}:{args.port} (Ctrl-C stops)")
         while True:                                          # until Ctrl-C or SIGTERM (Stop)
             time.sleep(3600)
     except (Stop, KeyboardInterrupt) as stop:
