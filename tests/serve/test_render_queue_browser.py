@@ -14,7 +14,7 @@ from _support import CHROMIUM, served, speech_like
 FILES = ("gesturelsm.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm_keypoints.json", "gesturelsm_arkit.csv")
 
 # records, in the page, the order in which the downloads (all of FILES) and the video's file appear
-WATCH_JS = """(files) => { window.__order = [];
+WATCH_JS = r"""(files) => { window.__order = [];
     const seen = (what) => { if (!window.__order.includes(what)) window.__order.push(what); };
     window.__watch = setInterval(() => {
         const names = [...document.querySelectorAll('#downloads .filename')]
