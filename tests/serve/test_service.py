@@ -71,6 +71,7 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     drawn, rigs = [], []
 
     def render_apart(motions, audio, video, **kw):
+        time.sleep(0.01)                                    # a stand-in that takes a moment, as a render does
         drawn.append((len(motions), kw["labels"], kw["size"], len(audio)))
         rigs.append(kw.get("rig"))
         Path(video).write_bytes(b"mp4")
