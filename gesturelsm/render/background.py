@@ -43,6 +43,7 @@ from .frames import RenderWarning
 log = logging.getLogger(__name__)
 AUTOGROUP = Path("/proc/self/autogroup")
 _running: set[subprocess.Popen] = set()
+CANCEL_POLL_S = 0.1          # how often a running render asks whether it was cancelled
 _lock = threading.Lock()
 
 
@@ -122,23 +123,32 @@ def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
                                 start_new_session=True)
         with _lock:
             _running.add(proc)
+        killed = threading.Event()
+        watcher = _watch(proc, cancelled, killed) if cancelled is not None else None
         try:
             for line in proc.stdout:
                 msg = _json(line)
                 if "process" in msg:
                     log.info("rendering in process %s", msg["process"])
+                    if progress is not None:
+                        progress(0.0, "starting: framing the camera on the motions")
                 elif "fraction" in msg:
                     if cancelled is not None and cancelled():
                         raise RenderCancelled("the render was cancelled")
                     if progress is not None:
                         progress(float(msg["fraction"]), str(msg.get("message", "")))
             code = proc.wait()
+            if killed.is_set():
+                raise RenderCancelled("the render was cancelled")
         except BaseException:
             proc.kill()                      # the renderer writes a .part file, renamed when complete: remove it
             proc.wait()
             out.with_name(f".{out.stem}.part{proc.pid}.mp4").unlink(missing_ok=True)   # as render_video names it
             raise
         finally:
+            if watcher is not None:
+                killed.set()                         # the watcher ends (the process has ended)
+                watcher.join()
             with _lock:
                 _running.discard(proc)
         err.seek(0)
@@ -152,6 +162,27 @@ def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
         said = next((ln.split("error: ", 1)[1] for ln in reversed(lines) if "error: " in ln), None)
         raise RenderError(said or f"the render process failed (exit {code}): "
                                   f"{lines[-1] if lines else 'no message'}")
+
+
+def _watch(proc: subprocess.Popen, cancelled: Callable[[], bool], killed: threading.Event,
+           every_s: float = CANCEL_POLL_S) -> threading.Thread:
+    """A thread that asks `cancelled()` every `every_s` seconds while `proc` runs and kills it at once when it says
+    yes (setting `killed`): a cancelled render stops within a fraction of a second, also before its first frame
+    (framing the camera on a long motion takes seconds, with no progress line to check at)."""
+    def watch() -> None:
+        while not killed.wait(every_s) and proc.poll() is None:
+            try:
+                stop = cancelled()
+            except Exception:                    # noqa: BLE001 (a broken check must not kill the watcher)
+                log.exception("checking whether a render was cancelled failed")
+                continue
+            if stop:
+                killed.set()
+                proc.kill()
+                return
+    thread = threading.Thread(target=watch, name="gesturelsm-render-watch", daemon=True)
+    thread.start()
+    return thread
 
 
 def _json(line: str) -> dict:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
+import time
 from typing import Callable, Hashable, Iterator
 
 from ..pipeline import Made, Plan
@@ -46,6 +47,8 @@ class Run:
     def __init__(self, key: Hashable, busy: Callable[[], bool] = lambda: False, what: str = ""):
         self.key, self.busy, self.what = key, busy, what
         self.made: list[Made] = []
+        self.made_at: list[float] = []         # time.perf_counter() when each was made
+        self.started_at: float | None = None   # when the run began making (after the run before it stopped)
         self.done = False
         self.failed = False                    # cancelled, or stopped by an error of the server's (not finished)
         self.cancelled = threading.Event()
@@ -56,7 +59,16 @@ class Run:
     def add(self, x: Made) -> None:
         with self._cond:
             self.made.append(x)
+            self.made_at.append(time.perf_counter())
             self._cond.notify_all()
+
+    def seconds(self, x: Made) -> float | None:
+        """Wall time from the run's start until `x` (one of its methods) was made: the work done ahead up to it."""
+        with self._cond:
+            i = next((k for k, y in enumerate(self.made) if y is x), None)
+            if i is None or self.started_at is None:
+                return None
+            return self.made_at[i] - self.started_at
 
     def finish(self, failed: bool = False) -> None:
         with self._cond:
@@ -127,6 +139,7 @@ class Ahead:
             if before is not None and before.thread is not None and before.thread.ident is not None:
                 before.thread.join()               # one run on the cores at a time: the cancelled one stops first
             run.check()
+            run.started_at = time.perf_counter()
             log.info("making motion ahead: %s", run.what)
             for x in make(run):                    # its windows check for cancelling (make's progress: run.check)
                 run.add(x)

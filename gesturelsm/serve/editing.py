@@ -19,7 +19,7 @@ from ..constants import Progress
 from ..errors import InputError
 from ..motion.regions import GENERATED_REGIONS
 from ..settings.check import checked_seed
-from .request import Result
+from .request import EditTiming, Result
 
 EDITED = ", edited"          # appended once to an edited motion's label (player and video)
 
@@ -90,8 +90,10 @@ def edit_result(pipeline, result: Result | None, method: str, start, end, region
     what = (f"{label(method)}: {', '.join(chosen)} {start:.2f}-{end:.2f} s, "
             f"seed {seed} ({seconds:.2f} s)")
     warnings = (*result.warnings, *(w for w in res.warnings if w not in result.warnings))
-    return replace(result, video=None, downloads=(), glb=None, warnings=warnings, seconds=seconds,
-                   motion_seconds=seconds, motions=motions, job=job, previous=result, edits=(*result.edits, what))
+    own = EditTiming(f"{label(method)}, edit {len(result.edits) + 1}",
+                     {k: v for k, v in res.timings.items() if k not in result.speech.timings}, seconds)
+    return replace(result, video=None, downloads=(), glb=None, warnings=warnings, seconds=seconds, motions=motions,
+                   job=job, previous=result, edits=(*result.edits, what), edit_timings=(*result.edit_timings, own))
 
 
 def edited_method(result: Result) -> str | None:

@@ -28,7 +28,10 @@ log = logging.getLogger("gesturelsm.app")
 
 
 MADE_AHEAD = ("Made ahead: generation started after the upload with these settings, before Generate was clicked "
-              "(the same settings and seed make the same motion; the table's times are the generation's own).")
+              "(the same settings and seed make the same motion; the table's times are the generation's own, spent "
+              "before the click: its rows say \"made ahead\").")
+SPEECH_AHEAD = ("The speech was prepared when it was uploaded, before Generate was clicked (audio features, word "
+                "timings, the automatic transcript): the table shows the time each took then.")
 
 
 class MethodFailed(GestureError):
@@ -61,6 +64,8 @@ class Growing:
         self.made: dict[str, Made] = {}
         self.failed: dict[str, str] = {}
         self.ready_s = 0.0
+        self.ahead: list[str] = []                          # methods made before the click
+        self.ahead_s: float | None = None                   # the wall time their making took (before the click)
 
     def add(self, x: Made) -> None:
         self.made[x.method] = x
@@ -80,8 +85,10 @@ class Growing:
         job = RenderJob(self.folder, tuple(motions.values()), tuple(labels), tuple(gen_s), sp.audio, sp.duration,
                         self.size, self.started, self.plan.settings.post.grounding)
         has_gt = GROUND_TRUTH in motions
-        rows, timings = timing_rows({m: dict(r.timings) for m, r in gens.items()}, has_gt, sp.duration, 0.0,
-                                    self.ready_s)
+        timings = {m: dict(r.timings) for m, r in gens.items()}
+        ahead = tuple(m for m in self.ahead if m in motions)
+        speech_ahead = SPEECH_AHEAD in self.notes
+        rows = timing_rows(timings, has_gt, sp.duration, None, ahead, speech_ahead)
         warnings = list(sp.warnings)
         for x in self.made.values():
             warnings += [w for w in x.warnings if w not in warnings]
@@ -92,7 +99,8 @@ class Growing:
         return Result(None, rows, (), None, sp.text_mode, tuple(warnings), take, self.ready_s, self.ready_s, timings,
                       motions, sp.transcript, job, speech=sp, plan=self.plan, pending=pending,
                       failed={m: self.failed[m] for m in self.slots if m in self.failed},
-                      slots=tuple((m, slot_label(m, self.plan)) for m in self.slots))
+                      slots=tuple((m, slot_label(m, self.plan)) for m in self.slots), made_ahead=ahead,
+                      ahead_seconds=self.ahead_s if ahead else None, speech_ahead=speech_ahead)
 
 
 def stream_request(service, req: Request, progress: Progress | None = None,
@@ -119,8 +127,11 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
     if GROUND_TRUTH not in plan.methods and not ready:   # else the take's lookup comes first and settles its slot
         yield grow.result()
     for i, x in enumerate(_made(service, plan, speech, run, prog)):
-        if run is not None and any(x is y for y in run.made) and MADE_AHEAD not in grow.notes:
-            grow.notes = grow.notes + [MADE_AHEAD]
+        if run is not None and any(x is y for y in run.made):
+            if MADE_AHEAD not in grow.notes:
+                grow.notes = grow.notes + [MADE_AHEAD]
+            grow.ahead.append(x.method)
+            grow.ahead_s = run.seconds(x)
         grow.add(x)
         if i + 1 >= ready:
             yield grow.result()

@@ -243,8 +243,9 @@ def deploy(spec: ReplicaSpec, count: ReplicaCount, connection: Connection, per_r
     app = serve.deployment(GestureReplica, name="GestureReplica").options(**serve_options(count, per_replica))
     app = app.bind(spec)
     quiet = {"log_level": "WARNING", "enable_access_log": False}
-    serve.start(proxy_location="Disabled", logging_config=quiet)
     logging.getLogger("ray.serve").setLevel(logging.WARNING)          # Serve's progress lines in this process
+    serve.start(proxy_location="Disabled", logging_config=quiet)
+    logging.getLogger("ray.serve").setLevel(logging.WARNING)          # (serve.start sets its own level)
     serve._run(app, name=name, route_prefix=None, logging_config=quiet, _blocking=False)
     _wait_running(name, timeout)
     return serve.get_app_handle(name)
@@ -267,14 +268,16 @@ def _wait_running(name: str, timeout: float) -> None:
         time.sleep(0.5)
 
 
-def stop(name: str = APP) -> None:
+def stop(name: str = APP, cluster_goes: bool = False) -> None:
     """Remove the replicas of application `name`, and Serve itself when no other application is left on the cluster
-    (the cluster stays up when it was joined)."""
+    (the cluster stays up when it was joined). `cluster_goes`: the cluster is stopped next (`--cluster local`), Serve
+    with it, so Serve is not shut down on its own first (its controller's shutdown task, killed meanwhile, made Ray
+    print retry warnings at every stop)."""
     from ray import serve
 
     try:
         serve.delete(name)
-        if not serve.status().applications:
+        if not cluster_goes and not serve.status().applications:
             serve.shutdown()
     except Exception:                            # the cluster is already gone: nothing left to stop
         log.info("stopping the replicas: the cluster was already gone")

@@ -88,7 +88,7 @@ class ReplicatedService(GestureService):
         return cls(here.pipeline, page, here.body, handle, count, conn, name)
 
     def close(self) -> None:
-        replicas.stop(self.name)
+        replicas.stop(self.name, cluster_goes=self.connection is not None and self.connection.owned)
         if self.connection is not None:
             self.connection.close()
 
@@ -110,11 +110,10 @@ class ReplicatedService(GestureService):
         prog(1.0, "done")
         return out
 
-    def render(self, result: Result, progress: Progress | None = None,
-               cancelled: Callable[[], bool] | None = None, character=None) -> Result:
-        if result.video is not None or not result.motions:
-            return result
-        (progress or (lambda f, m: None))(0.62, "rendering video on a replica")
+    def _video(self, result: Result, progress: Progress, cancelled: Callable[[], bool], character) -> Result:
+        """The video rendered on a replica (`GestureService.render` keeps the queue here: one per page session, a
+        closed page's cancelled)."""
+        progress(0.0, "rendering on a replica")
         rig = Files.of(character.path, ship=True) if character is not None and character.document is not None \
             else None
         reply = self._call("render", result, time.perf_counter() - result.job.started, rig, cancelled=cancelled)
@@ -186,10 +185,10 @@ class ReplicatedService(GestureService):
 
 
 def _wait(response, cancelled: Callable[[], bool] | None):
-    """The response's value; `cancelled()` asked every second stops waiting (RenderCancelled)."""
+    """The response's value; `cancelled()` asked every 0.2 s stops waiting and cancels the call (RenderCancelled)."""
     while True:
         try:
-            return response.result(timeout_s=1.0)
+            return response.result(timeout_s=0.2 if cancelled is not None else 1.0)
         except TimeoutError:
             if cancelled is not None and cancelled():
                 response.cancel()

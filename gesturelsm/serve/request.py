@@ -11,7 +11,7 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -84,6 +84,16 @@ class RenderJob:
     grounding: bool = True                             # feet on the ground: a character's too, on its own legs
 
 
+@dataclass(frozen=True)
+class EditTiming:
+    """One edit's own timings, shown beside the generation's: its row's label, seconds per stage (sampling,
+    decoding, ...), its wall time, and its video's render time once rendered."""
+    label: str
+    stages: Mapping[str, float]
+    seconds: float
+    rendering: float | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class Result:
     """What one request shows the visitor; `video` is None until rendered, `downloads` empty until exported."""
@@ -94,9 +104,9 @@ class Result:
     text_mode: str
     warnings: tuple[str, ...]
     ground_truth: str | None                 # the BEAT2 take recognised, if any
-    seconds: float                           # request start to video ready (to motions ready before the video)
-    motion_seconds: float                    # request start to motions ready
-    timings: Mapping[str, Mapping[str, float]]              # per generator and stage, seconds
+    seconds: float                           # request start (the click) to video ready (to motions ready before it)
+    motion_seconds: float                    # the click to the generation's motions ready (an edit keeps it)
+    timings: Mapping[str, Mapping[str, float]]              # per generator and stage, seconds (rendering: none)
     motions: Mapping[str, MotionSequence] = field(repr=False)   # shown, post-processed, by method
     transcript: str | None                   # the automatic transcript used (shown in the transcript box)
     job: RenderJob = field(repr=False)
@@ -107,6 +117,11 @@ class Result:
     pending: tuple[str, ...] = ()            # methods still being made (a result that grows: serve/progressive.py)
     failed: Mapping[str, str] = field(default_factory=dict)       # method -> why it has no motion
     slots: tuple[tuple[str, str], ...] = ()  # (method, label) of every method shown, made or not, in page order
+    made_ahead: tuple[str, ...] = ()         # methods whose motion was made before the click (serve/ahead.py)
+    ahead_seconds: float | None = None       # wall time the motion made before the click took (None: none was)
+    speech_ahead: bool = False               # the speech was prepared at the upload, before the click
+    render_seconds: float | None = None      # the generation's video's own render time (None: not rendered)
+    edit_timings: tuple[EditTiming, ...] = ()   # each edit's own timings, oldest first
 
     @property
     def table(self) -> list[list]:
@@ -115,13 +130,26 @@ class Result:
 
     @property
     def summary(self) -> str:
+        return self.summary_with(None)
+
+    def summary_with(self, video_status: str | None) -> str:
+        """The summary, with `video_status` (where the video is: its place in the queue, frame k/n and the time
+        left) in place of "Rendering the video (mp4)..." while it is not ready."""
+        rendering = "(mp4)..." if not video_status else f"(mp4): {video_status.removeprefix('rendering: ')}"
         if self.pending:
-            made = ", ".join(label(m) for m in self.motions) or "nothing yet"
-            ready = (f"**Ready after {self.motion_seconds:.1f} s:** {made}. **Generating:** "
-                     f"{', '.join(label(m) for m in self.pending)}...")
+            made = ", ".join(label(m) for m in self.motions)
+            ready = (f"**Ready {seconds_text(self.motion_seconds)} after the click:** {made}. " if made else "") + \
+                f"**Generating:** {', '.join(label(m) for m in self.pending)}..."
         else:
-            ready = f"**Motion ready in {self.motion_seconds:.1f} s.** " + (
-                f"**Video ready in {self.seconds:.1f} s.**" if self.video else "Rendering the video (mp4)...")
+            ready = motion_ready(self)
+            if self.edit_timings:
+                e = self.edit_timings[-1]
+                ready += f" **Edit made in {seconds_text(e.seconds)}.** " + (
+                    f"**Its video ready in {seconds_text(self.seconds)}.**" if self.video
+                    else f"Rendering the edit's video {rendering}")
+            else:
+                ready += " " + (f"**Video ready in {seconds_text(self.seconds)}.**" if self.video
+                                else f"Rendering the video {rendering}")
         lines = [f"**Transcript:** {self.text_mode}", ready]
         if self.ground_truth:
             lines.append(f"**Ground truth:** BEAT2 take `{self.ground_truth}`")
@@ -130,19 +158,87 @@ class Result:
         return "\n\n".join(lines)
 
 
-def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float, render_s: float,
-                ready: float) -> tuple[tuple[TimingRow, ...], dict[str, dict[str, float]]]:
-    """(A row per generator, the ground truth's, then the whole request's; each generator's timings with its share
-    of the rendering, which is split evenly over the shown motions)."""
-    n = len(timings) + int(ground_truth)
-    rows, shared = [], {}
+def seconds_text(s: float | None) -> str:
+    """Seconds as the summary says them: one decimal, and never "0.0 s" for work that took time."""
+    if s is None:
+        return "-"
+    return "under 0.1 s" if s < 0.05 else f"{s:.1f} s"
+
+
+def motion_ready(result: "Result") -> str:
+    """The summary's line on the generation's motion: after the click, and what was made before it."""
+    if result.made_ahead:
+        ahead = (f" (made ahead: {seconds_text(result.ahead_seconds)} of generation before the click)"
+                 if result.ahead_seconds is not None else " (made ahead, before the click)")
+        return f"**Motion ready {seconds_text(result.motion_seconds)} after the click**{ahead}."
+    return f"**Motion ready in {seconds_text(result.motion_seconds)}.**"
+
+
+AHEAD = " (made ahead)"                      # appended to the label of a row whose work was done before the click
+
+
+def _shared(timings: Mapping[str, Mapping[str, float]], stage: str) -> float | None:
+    """A stage of the speech's, done once for every method (features, alignment, transcription)."""
+    values = [t[stage] for t in timings.values() if stage in t]
+    return max(values) if values else None
+
+
+def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float,
+                render_s: float | None, made_ahead: Sequence[str] = (), speech_ahead: bool = False,
+                edits: Sequence[EditTiming] = ()) -> tuple[TimingRow, ...]:
+    """The timing table: a row per generator (its own stages and generation time, "(made ahead)" when it was made
+    before the click), the ground truth's, one per edit (its own stages and video), then the whole request's.
+
+    Every figure is the time the work took where it was spent: the speech's stages (features, alignment,
+    transcription) are done once for all methods and shown in each row as they took, also when they were done at the
+    upload (the whole request's row says so); the video is one render of all the methods side by side, so its time
+    is the whole request's (an edit's video is the edit's row's), never split over the methods. The whole request's
+    generation is the work of all its methods (the speech's features once, each method's sampling and decoding), so
+    it is never below one method's."""
+    rows = []
+    gens = {}
     for m, t in timings.items():
-        shared[m] = {**t, "rendering": render_s / n}
         g = generation_seconds(t)
-        rows.append(TimingRow(label(m), *(round(shared[m].get(k, 0.0), 3) for k in STAGES), round(g, 3),
+        gens[m] = g
+        rows.append(TimingRow(label(m) + (AHEAD if m in made_ahead else ""),
+                              *(_cell(t.get(k, 0.0)) for k in STAGES[:-1]), None, round(g, 3),
                               round(duration / max(g, 1e-9), 1)))
     if ground_truth:
-        rows.append(TimingRow(GROUND_TRUTH_LABEL, 0.0, 0.0, 0.0, 0.0, 0.0, round(render_s / n, 3), 0.0, None))
-    rows.append(TimingRow(f"whole request, {duration:.1f} s of speech", None, None, None, None, None,
-                          round(render_s, 3), round(ready, 3), round(duration / max(ready, 1e-9), 2)))
-    return tuple(rows), shared
+        rows.append(TimingRow(GROUND_TRUTH_LABEL, None, None, None, None, None, None, None, None))
+    for e in edits:
+        g = generation_seconds(e.stages)
+        rows.append(TimingRow(e.label, *(_cell(e.stages.get(k)) for k in STAGES[:-1]),
+                              _cell(e.rendering), round(g, 3), None))
+    features = _shared(timings, "features") or 0.0
+    whole = features + sum(g - timings[m].get("features", 0.0) for m, g in gens.items())
+    where = ", speech prepared at the upload" if speech_ahead else ""
+    where += ", motion made ahead" if made_ahead else ""
+    rows.append(TimingRow(f"whole request, {duration:.1f} s of speech{where}",
+                          _cell(_shared(timings, "features")), _cell(_shared(timings, "alignment")),
+                          _cell(_shared(timings, "transcription")),
+                          _cell(sum(t.get("sampling", 0.0) for t in timings.values()) if timings else None),
+                          _cell(sum(t.get("decoding", 0.0) for t in timings.values()) if timings else None),
+                          _cell(render_s), round(whole, 3) if gens else None,
+                          round(duration / max(whole, 1e-9), 2) if gens else None))
+    return tuple(rows)
+
+
+def _cell(v: float | None) -> float | None:
+    return None if v is None else round(float(v), 3)
+
+
+def with_render_time(result: Result, render_s: float, ready: float) -> Result:
+    """`result` (its video just made) with the video's own render time in its rows (the edit's row for an edited
+    result) and `seconds` (request or edit start to video ready)."""
+    if result.edit_timings:
+        edits = (*result.edit_timings[:-1], replace(result.edit_timings[-1], rendering=render_s))
+        result = replace(result, edit_timings=edits)
+    else:
+        result = replace(result, render_seconds=render_s)
+    return replace(result, rows=result_rows(result), seconds=ready)
+
+
+def result_rows(result: Result):
+    """The timing table of `result` (`request.timing_rows`) from what it holds."""
+    return timing_rows(result.timings, result.ground_truth is not None, result.job.speech_seconds,
+                       result.render_seconds, result.made_ahead, result.speech_ahead, result.edit_timings)

@@ -50,8 +50,9 @@ from .editing import edit_result
 from .limits import transcript_problems
 from .config import ServiceSettings
 from .prepared import PreparedUploads, file_key
-from .progressive import stream_request
-from .request import VIDEO_SIZES, Request, Result, timing_rows
+from .progressive import SPEECH_AHEAD, stream_request
+from .renders import RenderQueue, video_progress, waiting_line
+from .request import VIDEO_SIZES, Request, Result, result_rows, with_render_time
 from .sweep import SweepOutcome, SweepRequest, run_sweep_request
 
 log = logging.getLogger("gesturelsm.app")
@@ -68,6 +69,7 @@ class GestureService:
         self.workdir.mkdir(parents=True, exist_ok=True)
         self.uploads = PreparedUploads()            # uploads decoded and prepared before the click (prefetch)
         self.ahead = Ahead()                        # motion made before the click for the page's settings (prefetch)
+        self.renders = RenderQueue(settings.concurrency)   # videos: this many at once, the rest wait (serve/renders.py)
 
     @classmethod
     def from_settings(cls, settings: ServiceSettings = ServiceSettings()) -> "GestureService":
@@ -254,8 +256,8 @@ class GestureService:
         if path is None:
             return (plan, *prepare())
         speech, notes = self.uploads.prepared(path, self._speech_key(req, plan), prepare)
-        if not fresh:      # prepared before this request: its stages took no time of this request's
-            speech = replace(speech, timings={k: 0.0 for k in speech.timings})
+        if not fresh:      # prepared at the upload: its stages' times are the ones spent then, and said so
+            notes = [*notes, SPEECH_AHEAD]
         return plan, speech, notes
 
     def sweep(self, req: SweepRequest, limits: SweepLimits = SweepLimits(), progress: Progress | None = None,
@@ -295,7 +297,8 @@ class GestureService:
         """A new result with `method`'s motion of `result` edited (serve/editing.py); `result` is its `previous`."""
         self.ahead.cancel()
         with self.ahead.generating():
-            return edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
+            out = edit_result(self.pipeline, result, method, start, end, regions, seed, progress, self.body)
+        return replace(out, rows=result_rows(out))
 
     def folder(self) -> Path:
         """A new request folder: 128 random bits in its name (not guessable by other visitors), deleted with the
@@ -305,35 +308,48 @@ class GestureService:
         return out
 
     def render(self, result: Result, progress: Progress | None = None,
-               cancelled: Callable[[], bool] | None = None, character=None) -> Result:
+               cancelled: Callable[[], bool] | None = None, character=None, owner=None) -> Result:
         """The result with its video: for a request run with `render=False` (the page shows the motions first),
         with the rendering column of the timing rows and `seconds` (request start to video ready) filled in;
-        a result that has its video comes back as it is. `cancelled()` (asked every ~1 % of the frames) stops it:
-        RenderCancelled (render/background.py). character: a retarget.Character; one with a mesh is drawn in
-        the video instead of the body."""
+        a result that has its video comes back as it is. The video waits for its turn in the server's render queue
+        (`serve/renders.py`: `owner`, the page session, has one video in it at a time, a newer one cancels the older);
+        progress says its place in the queue, then frame k/n and the time left. `cancelled()` (asked every 0.1 s),
+        or the ticket cancelled by `cancel_renders(owner)`, stops it at once, in the queue or rendering:
+        RenderCancelled (render/background.py). character: a retarget.Character; one with a mesh is drawn in the video
+        instead of the body."""
         if result.video is not None or not result.motions:
             return result
-        job, prog = result.job, progress or (lambda f, m: None)
-        prog(0.62, "rendering video")
-        t_r = time.perf_counter()
+        prog = progress or (lambda f, m: None)
+        with self.renders.enter(owner) as ticket:
+            ticket.wait(lambda position: prog(0.62, waiting_line(position)), cancelled)
+            t_r = time.perf_counter()
+            out = self._video(result, video_progress(lambda f, m: prog(0.62 + 0.3 * f, m)),
+                              lambda: ticket.cancelled.is_set() or (cancelled is not None and cancelled()),
+                              character)
+            render_s = time.perf_counter() - t_r
+        return with_render_time(out, render_s, time.perf_counter() - result.job.started)
+
+    def cancel_renders(self, owner) -> int:
+        """Stop every video of `owner` (a page session that closed or ended): waiting ones leave the queue, a running
+        one's process is killed and its slot freed; returns how many."""
+        return self.renders.cancel(owner)
+
+    def _video(self, result: Result, progress: Progress, cancelled: Callable[[], bool], character) -> Result:
+        """The result with its video rendered here (a process of its own, niced: render/background.py)."""
+        job = result.job
         video = job.folder / "gestures.mp4"
         # the render process loads the body itself: hand it the file (None: it resolves the default as we would)
         body_path = (self.body.path if hasattr(self.body, "path")
                      else None if self.body is None else resolve_model_path(self.body))
         try:
             render_apart(list(job.motions), job.audio, video, labels=list(job.labels), size=(job.size, job.size),
-                         body_path=body_path, gen_seconds=list(job.gen_seconds),
-                         progress=lambda f, msg: prog(0.62 + 0.3 * f, f"rendering: {msg}"),
+                         body_path=body_path, gen_seconds=list(job.gen_seconds), progress=progress,
                          nice=self.settings.render_nice, cancelled=cancelled,
                          rig=character.path if character is not None and character.document is not None else None,
                          grounding=job.grounding)
         except RenderError as exc:
             raise RenderError(f"Rendering failed on the server: {exc}") from None
-        render_s = time.perf_counter() - t_r
-        ready = time.perf_counter() - job.started
-        rows, timings = timing_rows(result.timings, result.ground_truth is not None, job.speech_seconds, render_s,
-                                    ready)
-        return replace(result, video=video, rows=rows, timings=timings, seconds=ready)
+        return replace(result, video=video)
 
     def export(self, result: Result) -> Result:
         """The result with its downloads (the page shows the video first, then calls this); written once: a result

@@ -11,6 +11,7 @@ import logging
 import os
 import signal
 import sys
+import time
 
 from gesturelsm.cluster import cluster_argument, parse_cluster, replicas_argument
 from gesturelsm.errors import GestureError
@@ -108,12 +109,37 @@ def add_parser(subparsers) -> None:
     add_arguments(p).set_defaults(func=lambda args: run_demo(args, "gesturelsm serve"))
 
 
-def _interrupt(signum, frame) -> None:
-    raise KeyboardInterrupt
+class Stop(BaseException):
+    """Ctrl-C or SIGTERM: the server stops (a BaseException, as KeyboardInterrupt, so no handler takes it for an
+    error)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def what(self) -> str:
+        return "Ctrl-C" if self.signum == signal.SIGINT else signal.Signals(self.signum).name
+
+
+def _stop_signal(signum, frame) -> None:
+    raise Stop(signum)
+
+
+class Stages:
+    """The start-up's lines on stdout: one per stage as it begins, with the seconds since the start."""
+
+    def __init__(self, prog: str, out=None):
+        self.prog, self.out, self.t0 = prog, out, time.perf_counter()
+
+    def say(self, line: str) -> None:
+        print(f"{self.prog}: [{time.perf_counter() - self.t0:5.1f} s] {line}", file=self.out or sys.stdout,
+              flush=True)
 
 
 def run_demo(args: argparse.Namespace, prog: str) -> int:
-    """Load the models, warm them up, and serve the page until stopped (Ctrl-C or SIGTERM)."""
+    """Load the models, warm them up, and serve the page until stopped (Ctrl-C or SIGTERM), saying each start-up
+    stage as it begins and how it stopped."""
     os.environ["GRADIO_ANALYTICS_ENABLED"] = "False"
     os.environ["HF_HUB_DISABLE_TELEMETRY"] = "1"
     os.environ.setdefault("HF_HUB_OFFLINE", "1")
@@ -125,46 +151,96 @@ def run_demo(args: argparse.Namespace, prog: str) -> int:
                                workdir=args.workdir, max_seconds=args.max_seconds, max_upload_mb=args.max_upload_mb,
                                keep_minutes=args.keep_minutes, concurrency=max(1, args.concurrency),
                                threads=max(1, args.threads), ahead=not args.no_ahead)
+    stages = Stages(prog)
+    handlers = _handle_stops()
+    service = None
     try:
-        engines = engine_relay(args)
-        service = page_service(args, settings)
-    except GestureError as exc:                          # one line each
-        print(f"{prog}: error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        return _serve(service, args, engines)
+        try:
+            engines = engine_relay(args)
+            service = page_service(args, settings, stages)
+        except GestureError as exc:                          # one line each
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 2
+        _serve(service, args, stages, engines)
+    except (Stop, KeyboardInterrupt) as stop:
+        what = stop.what if isinstance(stop, Stop) else "Ctrl-C"
+        stages.say(f"stopping ({what}) while starting")
     finally:
-        if args.replicas:
-            service.close()                             # the replicas stop; a joined cluster stays up
+        signal.signal(signal.SIGINT, signal.SIG_IGN)        # a second Ctrl-C does not cut the clean-up short
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        try:
+            if args.replicas and service is not None:
+                stages.say("stopping the replicas")
+                _quiet_ray_on_stop()
+                service.close()                             # the replicas stop; a joined cluster stays up
+        finally:
+            _restore(handlers)
+    stages.say("stopped")
+    return 0
 
 
-def page_service(args: argparse.Namespace, settings):
+def _handle_stops() -> dict:
+    """Ctrl-C and SIGTERM stop the server the same way (outputs deleted, one line); returns the handlers before."""
+    try:
+        return {s: signal.signal(s, _stop_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:                                     # not the main thread (a test): Python's own handling
+        return {}
+
+
+def _restore(handlers: dict) -> None:
+    for s, h in handlers.items():
+        signal.signal(s, h)
+
+
+def _quiet_ray_on_stop() -> None:
+    """Stopping: Ray's own loggers say only errors (its workers' reconnect retries while the local cluster goes down
+    are not news to the one who stopped it)."""
+    os.environ.setdefault("RAY_BACKEND_LOG_LEVEL", "error")
+    for name in ("ray", "ray.serve", "ray._private", "ray.util", "ray._raylet"):
+        logging.getLogger(name).setLevel(logging.ERROR)
+
+
+def page_service(args: argparse.Namespace, settings, stages: "Stages | None" = None):
     """The page's service: in this process, or with --replicas over Ray Serve replicas on --cluster."""
+    say = stages.say if stages is not None else (lambda line: None)
     if args.cluster and not args.replicas:
         raise GestureError("--cluster says where replicas run: give --replicas N too")
     if args.replicas:
+        say(f"starting {args.replicas} replica(s) on the Ray cluster ({args.cluster or 'local'}): each loads the models"
+            + ("" if args.no_warmup else " and warms up") + "; the models for the Live tab load here")
         from gesturelsm.serve.replicated import ReplicatedService
 
         return ReplicatedService.start(settings, args.replicas, args.cluster or parse_cluster("local"),
                                        warmup=not args.no_warmup, name=f"gesturelsm-{args.port}")
+    say("loading the models (" + (f"checkpoints {args.checkpoints}" if args.checkpoints else "shipped checkpoints")
+        + ", " + (f"body {args.model}" if args.model else "built-in mannequin") + ")")
     from gesturelsm.serve.service import GestureService
 
     return GestureService.from_settings(settings)
 
 
-def _serve(service, args: argparse.Namespace, engines=None) -> int:
+def _serve(service, args: argparse.Namespace, stages: Stages, engines=None) -> None:
     if not args.no_warmup:
+        stages.say("warming up: one generation per speech length and method, so the first visitor waits for none "
+                   "of it (--no-warmup skips it)")
         service.warmup()
+    stages.say("building the page")
     from .ui import build_demo
 
-    signal.signal(signal.SIGTERM, _interrupt)                  # stop like Ctrl-C: the outputs are deleted
-    signal.signal(signal.SIGINT, signal.default_int_handler)   # also when started in the background
-    print(f"GestureLSM demo: methods {', '.join(service.methods)}; open http://{args.host}:{args.port}", flush=True)
-    try:
-        build_demo(service, max(1, args.queue_size), engines).launch(host=args.host, port=args.port)
-    except KeyboardInterrupt:                                  # stopped while the server starts (swept already)
-        pass
-    return 0
+    demo = build_demo(service, max(1, args.queue_size), engines)
+    try:                                                     # a stop from here on closes the page
+        stages.say(f"starting the web server on {args.host}:{args.port}")
+        demo.launch(host=args.host, port=args.port, prevent_thread_lock=True, quiet=True)
+        stages.say(f"ready: methods {', '.join(service.methods)}; open http://{args.host}:{args.port} (Ctrl-C stops)")
+        while True:                                          # until Ctrl-C or SIGTERM (Stop)
+            time.sleep(3600)
+    except (Stop, KeyboardInterrupt) as stop:
+        what = stop.what if isinstance(stop, Stop) else "Ctrl-C"
+        signal.signal(signal.SIGINT, signal.SIG_IGN)        # a second Ctrl-C does not cut the clean-up short
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        stages.say(f"stopping ({what}): closing the page and deleting its output files")
+    finally:
+        demo.close()
 
 
 def main(argv: list[str] | None = None, prog: str = "python -m app") -> int:

@@ -20,7 +20,6 @@ from gesturelsm.backends import SPECS, STEPS_SETTINGS, label, ours_default
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
-from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
@@ -28,7 +27,7 @@ from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.check import cfg_bound
 
-from . import edit_section, live, live_socket, stats_view, sweep_tab
+from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
@@ -58,10 +57,10 @@ decoders turn the latents into SMPL-X joint rotations at 30 fps, which are rende
 speech. *CFG* is classifier-free guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
 *Feet on the ground* (on by default) plants each foot where it lands (leg IK), keeps the body from drifting away and
 puts it on the floor, for every method and ground truth, without touching the upper body; *stand in place* removes
-horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations. Timings: features, alignment
-and transcription are computed once and shared by all methods; the real-time factor is seconds of speech per second of
-generation (alignment, transcription and rendering excluded, as in the paper); the last row is the whole request, upload
-to video."""
+horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations. Timings: each where it was
+spent (*made ahead*: before the click); features, alignment and transcription are computed once for all methods; the
+real-time factor is speech seconds per generation second (alignment, transcription and rendering excluded, as in the
+paper); an edit has its own row; the last row is the whole request: all its methods and the one video's render time."""
 
 
 def _limits() -> str:
@@ -95,10 +94,18 @@ class _Handlers:
         if request is None or out is None:
             return
         with self._lock:
+            before = self.newest.get(request.session_hash)
             self.newest[request.session_hash] = out.job.folder
             self.newest.move_to_end(request.session_hash)
             while len(self.newest) > 10000:
                 self.newest.popitem(last=False)
+        if before is not None and before != out.job.folder:     # newer bodies on the page: its older video goes
+            self.service.renders.supersede(request.session_hash)
+
+    def session_ended(self, request: gr.Request = None) -> None:
+        """The page closed or reloaded (Gradio's unload): its videos are cancelled, waiting or rendering."""
+        if request is not None and self.service.renders.cancel(request.session_hash):
+            log.info("a page closed: its video was cancelled")
 
     def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
@@ -167,23 +174,12 @@ class _Handlers:
         return gr.skip() if self._replaced(request, out) else out
 
     def show_video(self, out: Result | None, character=None, request: gr.Request = None, progress=gr.Progress()):
-        """Renders in the "render" pool, beside generation: generating again never waits for a video. A video for a
-        request that a newer one of the same page replaced is not rendered, or stopped (its bodies are gone). The
-        rendered result goes back into the page's state only while no newer request has replaced it there. With the
-        page session's `character`, the video draws the character's own mesh."""
-        if out is None:
-            return None, gr.skip(), gr.skip(), gr.skip()
-        if self._replaced(request, out):
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
-        try:
-            out = self.service.render(out, progress=lambda f, m: progress(f, desc=m),
-                                      cancelled=lambda: self._replaced(request, out), character=character)
-        except RenderCancelled:
-            log.info("a video was not finished: the page asked for newer motion")
-            return gr.skip(), gr.skip(), gr.skip(), gr.skip()
-        except GestureError as exc:
-            self.refuse(exc)
-        return str(out.video), out.table, out.summary + "\n\nPreparing downloads...", self._kept(request, out)
+        """`video_steps` run to its end (`progress(fraction, desc=...)`: where the video is meanwhile)."""
+        return videos.last(self.video_steps(out, character, request, progress))
+
+    def video_steps(self, out: Result | None, character=None, request: gr.Request = None, progress=None):
+        """The video in the server's render queue, the summary saying where it is (`videos.steps`)."""
+        yield from videos.steps(self, out, character, request, progress)
 
     def made_downloads(self, out: Result | None, request: gr.Request = None):
         """The downloads of each method made so far (npz and BVH), while the others are still generated; the rest of
@@ -193,7 +189,7 @@ class _Handlers:
         return [str(p) for p in aside(self.service.export_each, out)]       # beside generation, niced
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
-        """The downloads; with a character, each method's motion in the character's own file too."""
+        """The downloads, before the video (never behind one); with a character, each motion in its own file too."""
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
         out = self.service.export(out)
@@ -323,11 +319,11 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
     settings = service.settings
     h = _Handlers(service)
     gen = {"concurrency_limit": settings.concurrency, "concurrency_id": "generation"}   # one generation pool
-    # videos and downloads in a pool of their own: generating again never waits behind a video (the render runs in a
-    # low-priority process, render/background.py); its progress is not drawn (it slowed the player), the summary says
-    # "multiple": the next request's video step is queued even while this one's is pending (Gradio's default "once"
-    # drops a step triggered while the same step is pending, and the newest request then never got its video)
-    render = {"concurrency_limit": settings.concurrency, "concurrency_id": "render", "trigger_mode": "multiple"}
+    # videos in a pool of their own: generating again never waits behind one; every video step is let in, the
+    # service's render queue (serve/renders.py) renders them in turn, says each one's place and cancels a closed page's;
+    # the downloads in a pool of their own. "multiple": a newer request's step is queued while an older one's is pending
+    render = {"concurrency_limit": None, "concurrency_id": "render", "trigger_mode": "multiple"}
+    exports = {"concurrency_limit": settings.concurrency, "concurrency_id": "exports", "trigger_mode": "multiple"}
     with gr.Blocks(title="GestureLSM demo", delete_cache=gradio_delete_cache(settings.keep_minutes)) as demo:
         gr.Markdown(INTRO)
         with gr.Row():
@@ -368,11 +364,12 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
                        concurrency_limit=1, concurrency_id="downloads", trigger_mode="always_last")
 
         def follow(event, named: bool = False) -> None:     # after Generate, an edit or an undo (motions in state)
-            event.then(h.show_video, [state, character], [video, table, summary, state],
-                       api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
-                       **render) \
-                .then(h.add_exports, [state, character], [files, view, summary, state],
-                      api_name="add_exports" if named else None, api_visibility="private", **render)
+            # the downloads first, in a pool of their own (never behind anybody's video), then the video
+            event.then(h.add_exports, [state, character], [files, view, summary, state],
+                       api_name="add_exports" if named else None, api_visibility="private", **exports) \
+                .then(h.video_steps, [state, character], [video, table, summary, state],
+                      api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
+                      **render)
         follow(shown, named=True)
         edit_section.attach(edit, h, shown, state, character, dict(payload=payload, table=table, summary=summary,
                                                                    video=video, files=files), follow)
@@ -383,6 +380,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
                   js=VIEWER_MOUNTED_JS, api_visibility="private")
         api_button = gr.Button(visible=False)          # the stable API endpoint: all outputs from one call
         api_button.click(h.generate, inputs, [video, table, summary, files, view], api_name="generate", **gen)
+        demo.unload(h.session_ended)                   # a closed page's videos are cancelled (serve/renders.py)
     demo.queue(max_size=queue_size, default_concurrency_limit=settings.concurrency)
     return Demo(demo, service, live=manager, routes=routes)
 

@@ -75,3 +75,32 @@ def test_each_problem_is_one_message(generated, args, message):
     with pytest.raises(InputError) as err:
         service.edit(*args)
     assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_an_edit_shows_its_own_timings_beside_the_generation(generated, monkeypatch):
+    """The generation's "Motion ready" figure stays after an edit; the edit has a row of its own (its stages, not the
+    speech's again), and its video's render time goes in that row, the generation's video keeping its own."""
+    import time
+    from pathlib import Path
+
+    import gesturelsm.serve.service as service_module
+
+    def render_apart(motions, audio, video, **kw):          # a stand-in that takes a moment, as a render does
+        time.sleep(0.01)
+        Path(video).write_bytes(b"v")
+    monkeypatch.setattr(service_module, "render_apart", render_apart)
+    service, first = generated
+    rendered = service.render(first)
+    out = service.edit(rendered, "gesturelsm", 1.0, 3.0, ["hands"], 5)
+    assert out.motion_seconds == first.motion_seconds
+    assert "**Motion ready in " in out.summary and "**Edit made in " in out.summary
+    assert [r.method for r in out.rows][:3] == ["GestureLSM", "DDIM", "GestureLSM, edit 1"]
+    row = out.rows[2]
+    assert row.sampling > 0 and row.features is None and row.transcription is None and row.rendering is None
+    assert out.rows[-1].rendering == rendered.rows[-1].rendering                  # the generation's video's own time
+    video = service.render(out)
+    assert video.rows[2].rendering == round(video.edit_timings[-1].rendering, 3) and video.rows[2].rendering > 0
+    assert video.rows[-1].rendering == rendered.rows[-1].rendering
+    assert "Its video ready in" in video.summary
+    two = service.edit(video, "ddim", 0.5, 1.0, ["upper"], 1)
+    assert [r.method for r in two.rows][2:4] == ["GestureLSM, edit 1", "DDIM, edit 2"]

@@ -77,3 +77,30 @@ def test_a_request_reaches_a_replica_with_its_missing_fields_still_missing():
     for dumps, loads in ((pickle.dumps, pickle.loads), (cloudpickle.dumps, cloudpickle.loads)):
         got = loads(dumps(req))
         assert got.steps is MISSING and got.ddim_steps is MISSING and got == req
+
+
+def test_stopping_replicas_on_a_cluster_this_process_started_leaves_serve_to_the_cluster(monkeypatch):
+    """`--cluster local`: the cluster goes next (ray.shutdown), Serve with it; shutting Serve down on its own first made
+    Ray print "(raylet) Task ServeController.graceful_shutdown failed ... retried" at every stop. A joined cluster keeps
+    running, so Serve is shut down there once no application is left (the subprocess check: test_app_process.py)."""
+    from types import SimpleNamespace
+
+    from ray import serve
+
+    from gesturelsm.serve import replicas
+    from gesturelsm.serve.replicated import ReplicatedService
+
+    calls = []
+    monkeypatch.setattr(serve, "delete", lambda name: calls.append(("delete", name)))
+    monkeypatch.setattr(serve, "shutdown", lambda: calls.append(("shutdown",)))
+    monkeypatch.setattr(serve, "status", lambda: SimpleNamespace(applications={}))
+    for owned, want in ((True, [("delete", "app-1")]), (False, [("delete", "app-1"), ("shutdown",)])):
+        calls.clear()
+        closed = []
+        service = ReplicatedService.__new__(ReplicatedService)
+        service.name, service.connection = "app-1", SimpleNamespace(owned=owned, close=lambda: closed.append(1))
+        service.close()
+        assert calls == want and closed == [1]
+    calls.clear()
+    replicas.stop("app-2")                              # by default (a joined cluster): Serve goes when it is empty
+    assert calls == [("delete", "app-2"), ("shutdown",)]

@@ -38,10 +38,13 @@ def test_two_methods_side_by_side_with_timings_and_exports(service, speech_wav):
     assert len(out.rows) == 3 and [len(r) for r in out.table] == [len(TIMING_COLUMNS)] * 3
     assert out.rows[0].method == "GestureLSM" and out.rows[1].method == "DDIM"
     for r in out.rows[:2]:
-        assert r.sampling > 0 and r.decoding > 0 and r.rendering > 0 and r.real_time_factor > 0
+        assert r.sampling > 0 and r.decoding > 0 and r.rendering is None and r.real_time_factor > 0
         assert r.cells() == [r.method, r.features, r.alignment, r.transcription, r.sampling, r.decoding, r.rendering,
                              r.generation, r.real_time_factor]          # the table's columns, in TIMING_COLUMNS order
-    assert out.rows[-1].generation == pytest.approx(out.seconds, abs=1e-3)
+    whole = out.rows[-1]                                 # the one video's own render time; every method's generation
+    assert whole.rendering == pytest.approx(out.render_seconds, abs=1e-3) and 0 < whole.rendering < out.seconds
+    assert whole.generation >= max(r.generation for r in out.rows[:2])
+    assert whole.sampling == pytest.approx(out.rows[0].sampling + out.rows[1].sampling, abs=2e-3)
     names = sorted(p.name for p in out.downloads)
     assert names == ["ddim.bvh", "ddim.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm.npz",
                      "gesturelsm_arkit.csv", "gesturelsm_keypoints.json"]
@@ -69,6 +72,7 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     drawn, rigs = [], []
 
     def render_apart(motions, audio, video, **kw):
+        time.sleep(0.01)                                    # a stand-in that takes a moment, as a render does
         drawn.append((len(motions), kw["labels"], kw["size"], len(audio)))
         rigs.append(kw.get("rig"))
         Path(video).write_bytes(b"mp4")
@@ -76,13 +80,13 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     monkeypatch.setattr(service_module, "render_apart", render_apart)
     a = service.run(Request(str(speech_wav), methods=["gesturelsm", "ddim"], steps=1, size=256, exports=False,
                             render=False))
-    assert a.video is None and a.downloads == () and [r.rendering for r in a.rows] == [0.0] * 3
+    assert a.video is None and a.downloads == () and [r.rendering for r in a.rows] == [None] * 3
     r = service.render(a)
-    assert a.video is None and [row.rendering for row in a.rows] == [0.0] * 3 and a.seconds == a.motion_seconds
+    assert a.video is None and [row.rendering for row in a.rows] == [None] * 3 and a.seconds == a.motion_seconds
     assert r.video == a.job.folder / "gestures.mp4" and r.video.read_bytes() == b"mp4"
-    assert r.timings["gesturelsm"]["rendering"] > 0 and a.timings["gesturelsm"]["rendering"] == 0.0
-    assert r.seconds > a.seconds and r.rows[-1].generation == round(r.seconds, 3)
-    assert a.rows[-1].generation == round(a.seconds, 3)
+    assert [row.rendering for row in r.rows[:2]] == [None, None] and r.rows[-1].rendering > 0   # one video: its time
+    assert r.rows[-1].rendering == round(r.render_seconds, 3) and a.render_seconds is None
+    assert r.seconds > a.seconds and r.rows[-1].generation == a.rows[-1].generation      # generation: unchanged
     assert drawn == [(2, list(a.job.labels), (256, 256), len(a.job.audio))]
     assert service.render(r) is r and len(drawn) == 1                      # rendered once
     e = service.export(r)
@@ -325,14 +329,17 @@ def test_the_upload_is_prepared_before_the_click_and_reused(service, tmp_path, m
     assert service.prefetch(req.audio_path) and calls == {"decode": 1, "prepare": 1, "transcribe": 1}
     out = service.run(req)
     assert calls == {"decode": 1, "prepare": 1, "transcribe": 1}                 # the click only generated
-    assert out.text_mode.startswith("automatic transcript") and out.rows[0].transcription == 0.0
+    # prepared before the click: the table shows the real time the transcription took then, and says where
+    assert out.text_mode.startswith("automatic transcript") and out.rows[0].transcription > 0
+    assert out.speech_ahead and "speech prepared at the upload" in out.rows[-1].method
+    assert any(w.startswith("The speech was prepared when it was uploaded") for w in out.warnings)
     typed = service.run(replace(req, text="hello there"))                      # other words: prepared again
     assert calls == {"decode": 1, "prepare": 2, "transcribe": 1} and "aligned" in typed.text_mode
     RECENT.clear()
     service.uploads.clear()
     fresh = service.run(req)
     assert calls == {"decode": 2, "prepare": 3, "transcribe": 2}
-    assert fresh.transcript == out.transcript and fresh.rows[0].transcription > 0
+    assert fresh.transcript == out.transcript and fresh.rows[0].transcription > 0 and not fresh.speech_ahead
     broken = tmp_path / "broken.wav"
     broken.write_bytes(b"RIFF not really a wav")
     assert service.prefetch(str(broken)) is False and service.prefetch(None) is False

@@ -28,7 +28,12 @@ def test_video_and_downloads_run_in_their_own_pool_beside_generation(service):
     fns = list(fns.values() if isinstance(fns, dict) else fns)
     pools = {f.api_name: f.concurrency_id for f in fns}
     assert pools["generate_motion"] == "generation"
-    assert pools["show_video"] == pools["add_exports"] == "render" != pools["generate_motion"]
+    # the downloads in a pool of their own, before the video (nobody's video holds them up); the videos' pool lets
+    # every step in, the service's render queue keeps one video at a time (serve/renders.py)
+    assert pools["show_video"] == "render" and pools["add_exports"] == "exports"
+    assert len({pools["show_video"], pools["add_exports"], pools["generate_motion"]}) == 3
+    limits = {f.api_name: f.concurrency_limit for f in fns}
+    assert limits["show_video"] is None and limits["add_exports"] == service.settings.concurrency
     # a newer request's video step is queued while an older one's is pending (Gradio's default "once" drops it)
     modes = {f.api_name: f.trigger_mode for f in fns}
     assert modes["show_video"] == modes["add_exports"] == "multiple"
