@@ -71,7 +71,7 @@ def main() -> None:
             stats = [motion_statistics(pipe.generate(speech, seed=s, method="gesturelsm").motion, body, ctx)
                      for s in range(args.seeds)]
             rows[name] = {k: float(np.nanmean([st[k] for st in stats])) for k in KEYS}
-        said = (words.transcript or "")[:40].replace("|", "/")
+        said = (words.transcript or (words.warnings[0] if words.warnings else ""))[:60].replace("|", "/")
         cells = " | ".join(f"{rows['audio'][k]:.3f} / {rows['words'][k]:.3f}" for k in KEYS)
         print(f"| {lang} ({voice}) | {len(y) / 16000:.1f} | {words.text_mode} | {said} | {cells} |", flush=True)
     if ref:
