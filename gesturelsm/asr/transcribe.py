@@ -1,4 +1,5 @@
-"""Speech -> recognised English words with times, offline (Whisper tiny.en via faster-whisper) + our aligner.
+"""Speech -> recognised words with times, offline: English with Whisper tiny.en + our aligner, other languages
+with Whisper base (multilingual.py) and its own word times.
 
     from gesturelsm.asr import transcribe
     tr = transcribe(audio_16k)          # Transcript(words, text, language, ..., timing_method, warnings)
@@ -16,11 +17,16 @@ or French speech, confidently writes unrelated English ("thank you for watching 
 token log-probability (about -1.0 to -1.5 on eSpeak German/French against -0.15 to -0.3 on real and eSpeak
 English). Recognitions below MIN_AVG_LOGPROB, or with no words (silence, noise, music), are rejected with a
 message; the caller then generates from the audio only.
+
+Other languages (`language`): under AUTO the English model runs first, unchanged; where it rejects the speech as
+unsure or looping (or hears no words), the multilingual model identifies the language (MIN_LANGUAGE_PROBABILITY;
+English again keeps the rejection) and transcribes it, rejected below MIN_AVG_LOGPROB_OTHER. A chosen language goes
+straight to the multilingual model.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -36,6 +42,10 @@ MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) En
 # -0.76 (robotic voices), so its own bar is lower; below it the words are not trusted (docs/TRANSCRIPTION.md).
 MIN_AVG_LOGPROB_OTHER = -1.0
 MIN_LANGUAGE_PROBABILITY = 0.5   # an automatic language identification less sure than this is not acted on
+# Where tiny.en heard no words at all the bar is higher: eSpeak Japanese sits on Whisper's no-speech rule (no-speech
+# probability ~0.6 with a mean log-probability ~-1.0), so tiny.en sometimes drops every window of it, while white noise,
+# music and chords are identified as Nynorsk or English at 0.43-0.58 (eSpeak Japanese: 0.90-0.92).
+MIN_LANGUAGE_PROBABILITY_NO_WORDS = 0.75
 # Greedy decoding: on the real BEAT2 takes it finds nearly every word beam 5 finds, nearly as close in time, with a
 # mean log-probability as far above MIN_AVG_LOGPROB, in clearly less time (docs/TRANSCRIPTION.md has the figures,
 # from benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload.
@@ -134,8 +144,8 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     """Recognise `audio` ((N,) float32, 16 kHz) and time its words. Raises RecognizerUnavailable when
     faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc).
 
-    language: AUTO (English first; where the English model rejects the speech as unsure or looping, the multilingual
-    model identifies the language and transcribes it), ENGLISH (the English model only, as before languages were
+    language: AUTO (English first; where the English model rejects the speech as unsure or looping, or hears no words,
+    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only, as before languages were
     added) or a Whisper code from languages.LANGUAGES (the multilingual model in that language, nothing identified)."""
     if timing not in TIMINGS:
         raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
@@ -147,14 +157,15 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     if language not in (AUTO, ENGLISH):
         return _other_language(y, language, None, timing, beam_size)
     tr = _english(y, timing, beam_size)
-    if language == ENGLISH or tr.accepted or not tr.details.get("not_english"):
+    if language == ENGLISH or tr.accepted or not (tr.details.get("not_english") or tr.details.get("no_words")):
         return tr
     return _identified(y, tr, timing, beam_size)
 
 
 def _english(y: np.ndarray, timing: str, beam_size: int) -> Transcript:
     """The English model's transcript (Whisper tiny.en, our aligner's word times); details["not_english"] where it
-    was rejected as unsure or looping, the rejections another language explains."""
+    was rejected as unsure or looping, the rejections another language explains, details["no_words"] where it heard
+    nothing (another language is then identified only when the multilingual model is sure of it)."""
     words, avg, details = recognize(y, beam_size)
     heard = " ".join(w.text for w in words)
     conf = math.exp(avg) if words else 0.0
@@ -166,6 +177,7 @@ def _english(y: np.ndarray, timing: str, beam_size: int) -> Transcript:
                          f"over and over (\"{phrase}\"). The speech may not be English, or it is music, tones or "
                          "noise.", phrase, 0.0, details)
     if not words:
+        details["no_words"] = True
         return _rejected("No speech was recognised (silence, noise or music?).", details=details)
     if avg < MIN_AVG_LOGPROB:
         details["not_english"] = True
@@ -181,6 +193,8 @@ def _identified(y: np.ndarray, english: Transcript, timing: str, beam_size: int)
     again, or no language it is sure of, keeps the English model's rejection (with what was identified)."""
     lang, prob, _ = multilingual.load_model().detect_language(np.ascontiguousarray(y, np.float32))
     details = {**english.details, "identified": lang, "identified_probability": float(prob)}
+    if english.details.get("no_words") and (lang == ENGLISH or prob < MIN_LANGUAGE_PROBABILITY_NO_WORDS):
+        return replace(english, details=details)              # silence, noise, music: the English model's verdict
     if lang == ENGLISH or lang not in CHOICES or prob < MIN_LANGUAGE_PROBABILITY:
         why = (f" The multilingual recogniser heard English too (probability {prob:.2f})." if lang == ENGLISH else
                f" The multilingual recogniser could not tell the language (at best {name(lang)}, probability "

@@ -76,6 +76,16 @@ def test_english_again_or_an_unsure_identification_keeps_the_rejection(calls, la
     assert tr.warnings[0].endswith(AUDIO_ONLY_NOTE) and tr.warnings[0].count(AUDIO_ONLY_NOTE) == 1
 
 
+@pytest.mark.parametrize("lang, prob, accepted", [("ja", 0.9, True), ("nn", 0.6, False), ("en", 0.9, False)])
+def test_no_words_from_the_english_model_need_a_sure_identification(calls, monkeypatch, lang, prob, accepted):
+    monkeypatch.setattr(tmod, "_english", lambda y, t, b: tmod._rejected("No speech was recognised.",
+                                                                          details={"no_words": True}))
+    calls.model = FakeMultilingual(lang, prob)
+    tr = transcribe(AUDIO)
+    assert tr.accepted == accepted and calls.model.detected == 1
+    assert accepted or tr.warnings[0].startswith("No speech was recognised.")       # the English model's verdict
+
+
 def test_english_chosen_keeps_the_english_verdict(calls):
     tr = transcribe(AUDIO, language="en")
     assert not tr.accepted and calls.model.detected == 0 and calls.other == []
