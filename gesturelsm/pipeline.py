@@ -20,7 +20,7 @@ import numpy as np
 import torch
 
 from .align import align_words
-from .asr.languages import AUTO
+from .asr.languages import AUTO, NOT_FOR_GESTURES, gesture_words
 from .asr.source import AutomaticWords, automatic_words, remember_words, typed_alignment
 from .audio import SAMPLE_RATE, resample, to_mono
 from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
@@ -210,7 +210,9 @@ class GesturePipeline:
         if progress:
             progress(0.1, "audio features")
         mode, transcript = "audio-only (no transcript given)", None
-        if text and text.strip():
+        if text and text.strip() and not gesture_words(language, text):
+            words, mode = None, f"audio-only (a Chinese or Japanese transcript: {NOT_FOR_GESTURES})"
+        elif text and text.strip():
             if progress:
                 progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()

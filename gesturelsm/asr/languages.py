@@ -44,6 +44,19 @@ NO_ESPEAK = frozenset({"zh", "ja", "yue", "bo", "br", "fo", "gl", "ha", "jw", "k
 NO_SPACES = frozenset({"zh", "ja", "yue", "th", "lo", "my", "km", "bo"})
 
 
+# Chinese and Japanese words come back one character (or short run) each, and the gestures' text features come from
+# an English sentence encoder: on eSpeak Japanese the words moved no statistic towards the speaker's and lowered beat
+# consistency, so those languages gesture from the audio only (docs/TRANSCRIPTION.md, Other languages).
+NOT_FOR_GESTURES = ("the words are shown, not used for the gestures: the text encoder is English and reads Chinese and "
+                    "Japanese one character at a time")
+
+
+def gesture_words(code: str, text: str = "") -> bool:
+    """Whether words of `code` (a Whisper code or AUTO, with their `text`) condition the gestures: not for the
+    languages written without spaces (NO_SPACES) nor for Han/kana text under AUTO."""
+    return code not in NO_SPACES and not (code == AUTO and has_cjk(text))
+
+
 def name(code: str) -> str:
     return "automatic" if code == AUTO else LANGUAGES.get(code, code)
 
@@ -61,4 +74,5 @@ def has_cjk(text: str) -> bool:
                or "\uf900" <= c <= "\ufaff" for c in text)
 
 
-__all__ = ["AUTO", "CHOICES", "ENGLISH", "LANGUAGES", "NO_ESPEAK", "NO_SPACES", "espeak_voice", "has_cjk", "name"]
+__all__ = ["AUTO", "CHOICES", "ENGLISH", "LANGUAGES", "NOT_FOR_GESTURES", "NO_ESPEAK", "NO_SPACES", "espeak_voice",
+           "gesture_words", "has_cjk", "name"]

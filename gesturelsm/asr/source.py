@@ -16,7 +16,7 @@ from typing import Callable, Generic, Hashable, TypeVar
 import numpy as np
 
 from ..align import AlignConfig, Word
-from .languages import AUTO, ENGLISH, espeak_voice, has_cjk, name
+from .languages import AUTO, ENGLISH, NOT_FOR_GESTURES, espeak_voice, gesture_words, has_cjk, name
 from .model import RecognizerUnavailable
 from .transcribe import Transcript, transcribe
 
@@ -131,9 +131,11 @@ def _recognised(audio_16k: np.ndarray, language: str = AUTO) -> AutomaticWords:
                               [f"Automatic transcription is unavailable: {exc}. Generating from the audio only."])
     if not tr.accepted:
         return AutomaticWords(None, "audio-only (automatic transcription rejected)", tr, list(tr.warnings))
-    mode = (f"automatic transcript ({len(tr.words)} words recognised{language_said(tr)}, confidence "
-            f"{tr.confidence:.2f}, word timings: {tr.timing_method})")
-    return AutomaticWords(tr.words, mode, tr, list(tr.warnings))
+    said = (f"{len(tr.words)} words recognised{language_said(tr)}, confidence {tr.confidence:.2f}, word timings: "
+            f"{tr.timing_method}")
+    if not gesture_words(tr.language, tr.text):
+        return AutomaticWords(None, f"audio-only ({said}: \"{tr.text}\"; {NOT_FOR_GESTURES})", tr, list(tr.warnings))
+    return AutomaticWords(tr.words, f"automatic transcript ({said})", tr, list(tr.warnings))
 
 
 def language_said(tr: Transcript) -> str:

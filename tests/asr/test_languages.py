@@ -9,9 +9,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from gesturelsm.align import AlignConfig, Word
+from gesturelsm.align import AlignConfig, AlignmentResult, Word
 from gesturelsm.asr import multilingual
-from gesturelsm.asr.languages import AUTO, CHOICES, espeak_voice, has_cjk
+from gesturelsm.asr.languages import AUTO, CHOICES, espeak_voice, gesture_words, has_cjk
 from gesturelsm.asr.source import automatic_words, language_said, typed_alignment
 from gesturelsm.asr.transcribe import AUDIO_ONLY_NOTE, Transcript, transcribe
 from gesturelsm.settings import CLI, PAGE, Asked, checked, settings_problems
@@ -105,6 +105,15 @@ def test_remembered_words_are_per_language(calls):
     assert calls.other == ["ja", "zh"] and a.words == b.words and "in Japanese" in a.text_mode
 
 
+def test_chinese_and_japanese_words_are_shown_not_used_for_the_gestures(calls):
+    got = automatic_words(AUDIO + 2e-3, language="ja")
+    assert got.words is None and got.transcript.accepted and got.transcript.words       # recognised, kept, not used
+    assert got.text_mode.startswith("audio-only (2 words recognised in Japanese (chosen)") and '"こん"' in got.text_mode
+    assert "not used for the gestures" in got.text_mode
+    assert gesture_words("es") and gesture_words(AUTO, "hola") and not gesture_words(AUTO, "你好")
+    assert not gesture_words("zh") and not gesture_words("ja")
+
+
 def test_unknown_language_is_refused():
     with pytest.raises(ValueError, match="language must be one of"):
         transcribe(AUDIO, language="klingon")
@@ -160,3 +169,19 @@ def test_spanish_speech_is_identified_and_timed_inside_the_speech(recognizer, es
     assert len(tr.words) >= len(SPANISH.split()) - 4 and np.all(np.diff(starts) > 0)
     assert starts[0] >= 0.4 and tr.words[-1].end <= len(y) / SR - 0.3         # inside the speech, not the padding
     assert {"tarde", "hermana"} <= {w.text.strip(",.").lower() for w in tr.words}
+
+
+def test_the_pipeline_aligns_typed_text_in_its_language_and_keeps_cjk_text_out_of_the_gestures(tiny_pipeline, espeak,
+                                                                                               monkeypatch):
+    import gesturelsm.pipeline as pipeline
+
+    used = []
+    monkeypatch.setattr(pipeline, "align_words", lambda y, text, config: used.append(config.voices) or
+                        AlignmentResult([Word("hola", 0.2, 0.6)], 0.9, "dtw"))
+    y = speak("hola amigos", "es")
+    es = tiny_pipeline.prepare_speech(y, SR, text="hola amigos", language="es", transcribe=False)
+    assert used == [("es+klatt", "es+m7", "es+f3")] and es.words and es.has_word.any()
+    for lang in ("zh", AUTO):
+        zh = tiny_pipeline.prepare_speech(y, SR, text="你好世界", language=lang, transcribe=False)
+        assert zh.words is None and not zh.has_word.any() and "not used for the gestures" in zh.text_mode
+    assert len(used) == 1
