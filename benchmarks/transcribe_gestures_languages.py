@@ -7,7 +7,8 @@ language, about 20 s; eSpeak's Mandarin is not recognised as Chinese by Whisper 
 so). Each clip is transcribed with the default settings (language auto: tiny.en rejects it, Whisper base identifies
 the language); the shipped GestureLSM (its default steps, CFG 2) then generates from the audio only and with the
 recognised words, same seeds. Statistics (gesturelsm.evaluation.motion_stats, against the shipped speaker's row):
-raised share, loudness following, beat consistency, hand spread; means over seeds.
+raised share, loudness following, beat consistency, hand spread; means over seeds. Chinese and Japanese words are
+not used for the gestures since this measurement, so their "words" column now repeats the audio-only one.
 """
 from __future__ import annotations
 
