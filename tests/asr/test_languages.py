@@ -185,3 +185,14 @@ def test_the_pipeline_aligns_typed_text_in_its_language_and_keeps_cjk_text_out_o
         zh = tiny_pipeline.prepare_speech(y, SR, text="你好世界", language=lang, transcribe=False)
         assert zh.words is None and not zh.has_word.any() and "not used for the gestures" in zh.text_mode
     assert len(used) == 1
+
+
+def test_a_web_request_carries_its_language_to_the_settings():
+    from gesturelsm.serve.checks import check_request
+    from gesturelsm.serve.request import Request
+    from gesturelsm.settings import Limits
+
+    _, settings, problems = check_request(Request("a.wav", language="es"), ["gesturelsm"], Limits(), [256, 384, 512])
+    assert problems == [] and settings.language == "es"
+    _, settings, problems = check_request(Request("a.wav", language="xx"), ["gesturelsm"], Limits(), [256, 384, 512])
+    assert settings is None and problems[0].startswith("Language must be auto or a language code")
