@@ -32,8 +32,8 @@ from .motion.sequence import MotionSequence
 from .pipeline import GesturePipeline
 from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, output_file, refuse,
-                                 say)
+from .settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
+                                 output_file, refuse, say)
 
 SPEECH_SLACK = 60.0             # seconds of speech beyond the motion decoded at most (to say how far apart they are)
 _FRAME = re.compile(r"[0-9]+")                                 # ASCII digits: str.isdigit() takes "²" and "٣"
@@ -58,6 +58,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
+    add_language_flag(g)
     g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="a method whose sampler can hold known latents: "
                    + ", ".join(k for k, s in SPECS.items() if s.inpainting) + f" (default: {DEFAULT_METHOD})")
@@ -197,7 +198,7 @@ def run_edit(args: argparse.Namespace) -> int:
     st = a.settings
     res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
                     cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
-                    post=st.post, progress=say)
+                    post=st.post, progress=say, language=st.language)
     path = res.motion.save(a.out)
     done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=st.post.grounding),
                         a.bvh and export_bvh(res.motion, a.bvh, body=resolve_body(None)),

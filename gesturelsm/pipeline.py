@@ -20,7 +20,8 @@ import numpy as np
 import torch
 
 from .align import align_words
-from .asr.source import AutomaticWords, automatic_words, remember_words
+from .asr.languages import AUTO, NOT_FOR_GESTURES, gesture_words
+from .asr.source import AutomaticWords, automatic_words, remember_words, typed_alignment
 from .audio import SAMPLE_RATE, resample, to_mono
 from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
                        load_backends)
@@ -192,22 +193,22 @@ class GesturePipeline:
         T = int(len(y) * FPS // SAMPLE_RATE)
         return y[: int(round(T * SAMPLE_RATE / FPS))], T
 
-    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE) -> AutomaticWords:
+    def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE, language: str = AUTO) -> AutomaticWords:
         """Transcribe now what prepare_speech(audio, sr) would transcribe, so that it finds the words ready
         (asr.source remembers them by content); returns them. Bad audio raises InputError, as prepare_speech would."""
-        return automatic_words(self._checked_audio(audio, sr)[0])
+        return automatic_words(self._checked_audio(audio, sr)[0], language=language)
 
-    def remember_transcript(self, audio: np.ndarray, sr: int, words: AutomaticWords) -> None:
+    def remember_transcript(self, audio: np.ndarray, sr: int, words: AutomaticWords, language: str = AUTO) -> None:
         """Words `prefetch_transcript` returned in another process for this audio: prepare_speech(audio, sr) here
         uses them instead of transcribing again."""
-        remember_words(self._checked_audio(audio, sr)[0], words)
+        remember_words(self._checked_audio(audio, sr)[0], words, language)
 
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
                        text: str | None = None, progress: Progress | None = None,
-                       transcribe: bool = True) -> SpeechInput:
-        """Validate and resample audio; word timings from aligning a typed `text`, else from `words` (e.g. a
-        TextGrid), else from automatic transcription (`transcribe`), else audio-only. Features that do not
-        depend on the method are computed here once."""
+                       transcribe: bool = True, language: str = AUTO) -> SpeechInput:
+        """Validate and resample audio; word timings from aligning a typed `text` (with `language`'s eSpeak voice),
+        else from `words` (e.g. a TextGrid), else from automatic transcription (`transcribe`, in `language`: see
+        gesturelsm.asr), else audio-only. Features that do not depend on the method are computed here once."""
         timings: dict[str, float] = {}
         warnings: list[str] = []
         t0 = time.perf_counter()
@@ -217,11 +218,13 @@ class GesturePipeline:
         if progress:
             progress(0.1, "audio features")
         mode, transcript = "audio-only (no transcript given)", None
-        if text and text.strip():
+        if text and text.strip() and not gesture_words(language, text):
+            words, mode = None, f"audio-only (a Chinese or Japanese transcript: {NOT_FOR_GESTURES})"
+        elif text and text.strip():
             if progress:
                 progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()
-            res = align_words(y, text)
+            res = align_words(y, text, typed_alignment(language, text))
             timings["alignment"] = time.perf_counter() - t1
             words = res.words
             mode = f"transcript, word timings aligned automatically ({res.method}, confidence {res.confidence:.2f})"
@@ -235,7 +238,7 @@ class GesturePipeline:
             if progress:
                 progress(0.1, "recognising the words (automatic transcription)")
             t1 = time.perf_counter()
-            auto = automatic_words(y)
+            auto = automatic_words(y, language=language)
             timings["transcription"] = time.perf_counter() - t1
             words, mode, transcript = auto.words, auto.text_mode, auto.transcript
             transcript = transcript.text if transcript is not None and auto.words else None
@@ -342,7 +345,7 @@ class GesturePipeline:
              keyframes: Sequence = (), method: str = DEFAULTS.methods[0], steps: int | None = None,
              cfg: float = DEFAULTS.cfg, seed: int = DEFAULTS.seed, sr: int = SAMPLE_RATE, words: list | None = None,
              text: str | None = None, transcribe: bool = DEFAULTS.transcribe, post: PostProcess = DEFAULTS.post,
-             body=None, progress: Progress | None = None) -> GenerationResult:
+             body=None, progress: Progress | None = None, language: str = DEFAULTS.language) -> GenerationResult:
         """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
         speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
         motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
@@ -388,7 +391,7 @@ class GesturePipeline:
         if sr <= 0:
             raise InputError(f"invalid sample rate {sr}")
         y, warnings = fit_speech(resample(to_mono(speech), int(sr), SAMPLE_RATE), motion.num_frames)
-        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe)
+        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language)
         return prepared, warnings + prepared.warnings
 
 

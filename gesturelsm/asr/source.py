@@ -15,7 +15,8 @@ from typing import Callable, Generic, Hashable, TypeVar
 
 import numpy as np
 
-from ..align import Word
+from ..align import AlignConfig, Word
+from .languages import AUTO, ENGLISH, NOT_FOR_GESTURES, espeak_voice, gesture_words, has_cjk, name
 from .model import RecognizerUnavailable
 from .transcribe import Transcript, transcribe
 
@@ -29,6 +30,16 @@ def transcript_source(text: str | None, has_textgrid: bool, auto: bool) -> str:
     if has_textgrid:
         return TEXTGRID
     return AUTOMATIC if auto else AUDIO_ONLY
+
+
+def typed_alignment(language: str, text: str) -> AlignConfig:
+    """How a typed transcript in `language` is aligned: English voices for auto/en (as before languages were added),
+    the language's eSpeak NG voices where eSpeak reads it (Spanish "es", German "de", Russian "ru", ...), none for
+    Chinese and Japanese (also a Han/kana transcript under auto): its characters are spread over the speech by length
+    (the aligner says so; leaving the box empty has them recognised and timed by the recogniser)."""
+    if language in (AUTO, ENGLISH):
+        return AlignConfig.for_language(None) if has_cjk(text) else AlignConfig()
+    return AlignConfig.for_language(espeak_voice(language))
 
 
 V = TypeVar("V")
@@ -93,32 +104,43 @@ def _key(y: np.ndarray) -> tuple[int, bytes]:
     return len(y), hashlib.blake2b(y.tobytes(), digest_size=16).digest()
 
 
-def automatic_words(audio_16k: np.ndarray, remember: bool = True) -> AutomaticWords:
-    """Recognise (N,) float32 16 kHz speech (the same samples again: the remembered answer, see the module doc;
-    remember=False recognises afresh and keeps nothing)."""
+def automatic_words(audio_16k: np.ndarray, remember: bool = True, language: str = AUTO) -> AutomaticWords:
+    """Recognise (N,) float32 16 kHz speech in `language` (languages.CHOICES; AUTO: English, else the language the
+    multilingual model identifies); the same samples and language again: the remembered answer, see the module doc;
+    remember=False recognises afresh and keeps nothing."""
     y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
     if not remember:
-        return _recognised(y)
-    got = RECENT.get(_key(y), lambda: _recognised(y))
+        return _recognised(y, language)
+    got = RECENT.get((*_key(y), language), lambda: _recognised(y, language))
     return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings))
 
 
-def remember_words(audio_16k: np.ndarray, words: AutomaticWords) -> None:
+def remember_words(audio_16k: np.ndarray, words: AutomaticWords, language: str = AUTO) -> None:
     """Keep `words`, recognised from these samples in another process (the web demo's replicas), as if recognised
-    here: `automatic_words` of the same samples returns them."""
+    here: `automatic_words` of the same samples and language returns them."""
     y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
-    RECENT.get(_key(y), lambda: words)
+    RECENT.get((*_key(y), language), lambda: words)
 
 
-def _recognised(audio_16k: np.ndarray) -> AutomaticWords:
+def _recognised(audio_16k: np.ndarray, language: str = AUTO) -> AutomaticWords:
     """Recognise (N,) float32 16 kHz speech; words when accepted, else audio-only with the reason."""
     try:
-        tr = transcribe(audio_16k)
+        tr = transcribe(audio_16k, language=language)
     except RecognizerUnavailable as exc:
         return AutomaticWords(None, "audio-only (automatic transcription unavailable)", None,
                               [f"Automatic transcription is unavailable: {exc}. Generating from the audio only."])
     if not tr.accepted:
         return AutomaticWords(None, "audio-only (automatic transcription rejected)", tr, list(tr.warnings))
-    mode = (f"automatic transcript ({len(tr.words)} words recognised, confidence {tr.confidence:.2f}, "
-            f"word timings: {tr.timing_method})")
-    return AutomaticWords(tr.words, mode, tr, list(tr.warnings))
+    said = (f"{len(tr.words)} words recognised{language_said(tr)}, confidence {tr.confidence:.2f}, word timings: "
+            f"{tr.timing_method}")
+    if not gesture_words(tr.language, tr.text):
+        return AutomaticWords(None, f"audio-only ({said}: \"{tr.text}\"; {NOT_FOR_GESTURES})", tr, list(tr.warnings))
+    return AutomaticWords(tr.words, f"automatic transcript ({said})", tr, list(tr.warnings))
+
+
+def language_said(tr: Transcript) -> str:
+    """", in Japanese (identified, probability 0.92)" for speech not heard by the English model; "" for English."""
+    if tr.language == ENGLISH and tr.language_probability is None:
+        return ""
+    how = "chosen" if tr.language_probability is None else f"identified, probability {tr.language_probability:.2f}"
+    return f" in {name(tr.language)} ({how})"

@@ -1,4 +1,5 @@
-"""Speech -> recognised English words with times, offline (Whisper tiny.en via faster-whisper) + our aligner.
+"""Speech -> recognised words with times, offline: English with Whisper tiny.en + our aligner, other languages
+with Whisper base (multilingual.py) and its own word times.
 
     from gesturelsm.asr import transcribe
     tr = transcribe(audio_16k)          # Transcript(words, text, language, ..., timing_method, warnings)
@@ -16,19 +17,35 @@ or French speech, confidently writes unrelated English ("thank you for watching 
 token log-probability (about -1.0 to -1.5 on eSpeak German/French against -0.15 to -0.3 on real and eSpeak
 English). Recognitions below MIN_AVG_LOGPROB, or with no words (silence, noise, music), are rejected with a
 message; the caller then generates from the audio only.
+
+Other languages (`language`): under AUTO the English model runs first, unchanged; where it rejects the speech as
+unsure or looping (or hears no words), the multilingual model identifies the language (MIN_LANGUAGE_PROBABILITY;
+English again keeps the rejection) and transcribes it, rejected below MIN_AVG_LOGPROB_OTHER. A chosen language goes
+straight to the multilingual model.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..align import Word, align_words
+from ..align import AlignConfig, Word, align_words
+from ..align.features import frame_time, voice_activity
 from ..constants import SAMPLE_RATE
+from . import multilingual
+from .languages import AUTO, CHOICES, ENGLISH, NO_SPACES, espeak_voice, name
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
 
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
+# The multilingual model (Whisper base) on speech it identified: eSpeak Japanese, Spanish and German score -0.63 to
+# -0.76 (robotic voices), so its own bar is lower; below it the words are not trusted (docs/TRANSCRIPTION.md).
+MIN_AVG_LOGPROB_OTHER = -1.0
+MIN_LANGUAGE_PROBABILITY = 0.5   # an automatic language identification less sure than this is not acted on
+# Where tiny.en heard no words at all the bar is higher: eSpeak Japanese sits on Whisper's no-speech rule (no-speech
+# probability ~0.6 with a mean log-probability ~-1.0), so tiny.en sometimes drops every window of it, while white noise,
+# music and chords are identified as Nynorsk or English at 0.43-0.58 (eSpeak Japanese: 0.90-0.92).
+MIN_LANGUAGE_PROBABILITY_NO_WORDS = 0.75
 # Greedy decoding: on the real BEAT2 takes it finds nearly every word beam 5 finds, nearly as close in time, with a
 # mean log-probability as far above MIN_AVG_LOGPROB, in clearly less time (docs/TRANSCRIPTION.md has the figures,
 # from benchmarks/transcribe_accuracy.py --beam-size 1 / 5). The page waits for it when Generate follows an upload.
@@ -49,8 +66,10 @@ AUDIO_ONLY_NOTE = " Generating from the audio only; type the transcript to use t
 class Transcript:
     """What the recogniser heard. `words` is empty unless `accepted`; `heard` keeps the raw text anyway.
 
-    language: "en" when accepted (the model is English-only), else "unknown". language_probability: the
-    model gives none (English-only), so None. confidence: exp(mean token log-probability), 0..1.
+    language: the Whisper code of the language heard ("en" from the English model, "ja", "zh", "es", ... from the
+    multilingual one) when accepted, else "unknown". language_probability: the multilingual model's identification
+    (None for English from the English-only model, or for a language the user chose). confidence: exp(mean token
+    log-probability), 0..1.
     timing_method: "dtw" (our aligner on the recognised text), "whisper" (Whisper's word times) or "none"."""
 
     words: list[Word]
@@ -79,27 +98,30 @@ def sequential(words: list[Word], min_s: float = 0.01) -> list[Word]:
     return out
 
 
-def _decode(audio: np.ndarray, beam_size: int, temperature) -> list:
-    segments, _info = load_model().transcribe(np.ascontiguousarray(audio, np.float32), language="en",
-                                              beam_size=beam_size, word_timestamps=True,
-                                              condition_on_previous_text=False, temperature=temperature)
+def _decode(audio: np.ndarray, beam_size: int, temperature, model=None, language: str = ENGLISH) -> list:
+    segments, _info = (model or load_model()).transcribe(np.ascontiguousarray(audio, np.float32), language=language,
+                                                         beam_size=beam_size, word_timestamps=True,
+                                                         condition_on_previous_text=False, temperature=temperature)
     return list(segments)
 
 
-def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE) -> tuple[list[Word], float, dict]:
+def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE, model=None,
+              language: str = ENGLISH) -> tuple[list[Word], float, dict]:
     """Whisper's words with its own times, the mean token log-probability (weighted by tokens) and details.
 
     One greedy pass first (temperature 0). Where every window it decoded is a loop (one phrase repeated: compression
     ratio > LOOP_RATIO), there is no speech to find: no words, details["repeated_phrase"] = True. Where only some
-    windows loop, the audio is decoded again with Whisper's temperature fallback (FALLBACK_TEMPERATURES)."""
-    segments = _decode(audio, beam_size, 0.0)
+    windows loop, the audio is decoded again with Whisper's temperature fallback (FALLBACK_TEMPERATURES).
+    `model`: None for the English model, else a loaded model (the multilingual one) decoding `language`."""
+    label = MODEL_NAME if model is None else multilingual.MODEL_NAME
+    segments = _decode(audio, beam_size, 0.0, model, language)
     loops = [seg.compression_ratio > LOOP_RATIO for seg in segments]
     if segments and all(loops):
-        return [], -math.inf, {"model": MODEL_NAME, "mean_word_probability": 0.0, "repeated_phrase": True,
+        return [], -math.inf, {"model": label, "mean_word_probability": 0.0, "repeated_phrase": True,
                                "heard_repeated": _clip(" ".join(segments[0].text.split())),
                                "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
     if any(loops):
-        segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES))
+        segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES), model, language)
     words: list[Word] = []
     logp, ntok, probs, no_speech = 0.0, 0, [], []
     for seg in segments:
@@ -113,36 +135,118 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE) -> tuple[list[Word]
                 probs.append(float(w.probability))
     words = sequential(words)
     avg = logp / ntok if ntok else -math.inf
-    details = {"model": MODEL_NAME, "mean_word_probability": float(np.mean(probs)) if probs else 0.0,
+    details = {"model": label, "mean_word_probability": float(np.mean(probs)) if probs else 0.0,
                "max_no_speech_probability": max(no_speech, default=1.0)}
     return words, avg, details
 
 
-def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE) -> Transcript:
+def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE, language: str = AUTO) -> Transcript:
     """Recognise `audio` ((N,) float32, 16 kHz) and time its words. Raises RecognizerUnavailable when
-    faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc)."""
+    faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc).
+
+    language: AUTO (English first; where the English model rejects the speech as unsure or looping, or hears no words,
+    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only, as before languages were
+    added) or a Whisper code from languages.LANGUAGES (the multilingual model in that language, nothing identified)."""
     if timing not in TIMINGS:
         raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
+    if language not in CHOICES:
+        raise ValueError(f"language must be one of {', '.join(CHOICES)} (got {language!r})")
     y = np.asarray(audio, np.float32).reshape(-1)
     if len(y) < MIN_SECONDS * SAMPLE_RATE or not np.isfinite(y).all() or np.abs(y).max() < 1e-4:
         return _rejected("The audio is too short, silent or invalid: there is no speech to recognise.")
+    if language not in (AUTO, ENGLISH):
+        return _other_language(y, language, None, timing, beam_size)
+    tr = _english(y, timing, beam_size)
+    if language == ENGLISH or tr.accepted or not (tr.details.get("not_english") or tr.details.get("no_words")):
+        return tr
+    return _identified(y, tr, timing, beam_size)
+
+
+def _english(y: np.ndarray, timing: str, beam_size: int) -> Transcript:
+    """The English model's transcript (Whisper tiny.en, our aligner's word times); details["not_english"] where it
+    was rejected as unsure or looping, the rejections another language explains, details["no_words"] where it heard
+    nothing (another language is then identified only when the multilingual model is sure of it)."""
     words, avg, details = recognize(y, beam_size)
     heard = " ".join(w.text for w in words)
     conf = math.exp(avg) if words else 0.0
     details["avg_logprob"] = avg
     if details.get("repeated_phrase"):
         phrase = details["heard_repeated"]
+        details["not_english"] = True
         return _rejected(f"Automatic transcription was rejected: the English speech recogniser only heard one phrase "
                          f"over and over (\"{phrase}\"). The speech may not be English, or it is music, tones or "
                          "noise.", phrase, 0.0, details)
     if not words:
+        details["no_words"] = True
         return _rejected("No speech was recognised (silence, noise or music?).", details=details)
     if avg < MIN_AVG_LOGPROB:
+        details["not_english"] = True
         return _rejected(f"Automatic transcription was rejected: the English speech recogniser is unsure of what it "
                          f"heard (confidence {conf:.2f}; it heard \"{_clip(heard)}\"). The speech may not be English, "
                          "or it is noise or music.", heard, conf, details)
     timed, method, warnings = _timed(y, words, heard, timing)
     return Transcript(timed, heard, "en", None, method, warnings, True, conf, heard, details)
+
+
+def _identified(y: np.ndarray, english: Transcript, timing: str, beam_size: int) -> Transcript:
+    """The English model rejected `y`: the multilingual model identifies its language and transcribes it. English
+    again, or no language it is sure of, keeps the English model's rejection (with what was identified)."""
+    lang, prob, _ = multilingual.load_model().detect_language(np.ascontiguousarray(y, np.float32))
+    details = {**english.details, "identified": lang, "identified_probability": float(prob)}
+    if english.details.get("no_words") and (lang == ENGLISH or prob < MIN_LANGUAGE_PROBABILITY_NO_WORDS):
+        return replace(english, details=details)              # silence, noise, music: the English model's verdict
+    if lang == ENGLISH or lang not in CHOICES or prob < MIN_LANGUAGE_PROBABILITY:
+        why = (f" The multilingual recogniser heard English too (probability {prob:.2f})." if lang == ENGLISH else
+               f" The multilingual recogniser could not tell the language (at best {name(lang)}, probability "
+               f"{prob:.2f}); choose it to transcribe it anyway.")
+        message = english.warnings[0].removesuffix(AUDIO_ONLY_NOTE) + why + AUDIO_ONLY_NOTE
+        return Transcript([], "", "unknown", None, "none", [message], False, english.confidence, english.heard,
+                          details)
+    return _other_language(y, lang, float(prob), timing, beam_size)
+
+
+def _other_language(y: np.ndarray, lang: str, prob: float | None, timing: str, beam_size: int) -> Transcript:
+    """`y` transcribed in `lang` by the multilingual model; the recogniser's own word times (`timing` "dtw": our
+    aligner with the language's eSpeak voice, where eSpeak reads it)."""
+    words, avg, details = recognize(y, beam_size, multilingual.load_model(), lang)
+    heard = ("" if lang in NO_SPACES else " ").join(w.text for w in words)
+    conf = math.exp(avg) if words else 0.0
+    details.update(avg_logprob=avg, language_name=name(lang))
+    said = f"the speech recogniser ({name(lang)})"
+    if details.get("repeated_phrase"):
+        return _rejected(f"Automatic transcription was rejected: {said} only heard one phrase over and over "
+                         f"(\"{details['heard_repeated']}\"): music, tones or noise?", details["heard_repeated"], 0.0,
+                         details)
+    if not words:
+        return _rejected("No speech was recognised (silence, noise or music?).", details=details)
+    if avg < MIN_AVG_LOGPROB_OTHER:
+        return _rejected(f"Automatic transcription was rejected: {said} is unsure of what it heard (confidence "
+                         f"{conf:.2f}; it heard \"{_clip(heard)}\").", heard, conf, details)
+    voice = espeak_voice(lang)
+    if timing == "dtw" and voice is not None:
+        res = align_words(y, heard, AlignConfig.for_language(voice))
+        return Transcript(res.words, heard, lang, prob, "dtw", [res.warning] if res.warning else [], True, conf,
+                          heard, details)
+    return Transcript(inside_speech(words, y), heard, lang, prob, "whisper", [], True, conf, heard, details)
+
+
+def inside_speech(words: list[Word], y: np.ndarray) -> list[Word]:
+    """Whisper's word times with each start moved out of a pause to where speech resumes (its first word often
+    starts at 0.0 s, in the silence before the speech), never past the word's end or the next word's start."""
+    act = voice_activity(y)
+    segs = act.segments()
+    if not segs or not words:
+        return words
+    starts = frame_time(np.array([s for s, _ in segs]))
+    ends = frame_time(np.array([e for _, e in segs]))
+    out = []
+    for k, w in enumerate(words):
+        n = int(np.searchsorted(starts, w.start, side="right"))   # voiced runs starting at or before w.start
+        start = w.start
+        if (n == 0 or w.start >= ends[n - 1]) and n < len(starts):  # in a pause: the next run starts the word
+            start = min(float(starts[n]), w.end - 0.01)
+        out.append(Word(w.text, max(start, w.start), w.end))
+    return sequential(out)
 
 
 def _timed(y: np.ndarray, words: list[Word], text: str, timing: str) -> tuple[list[Word], str, list[str]]:

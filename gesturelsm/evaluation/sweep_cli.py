@@ -18,7 +18,8 @@ from ..cluster import ProgressLine, add_cluster_argument, connect
 from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
-from ..settings.arguments import add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
+from ..settings.arguments import add_language_flag, add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
+from ..settings.check import check_language
 from ..settings.values import from_text
 from .sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, check_grid, run_sweep, sweep_grid
 from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
@@ -43,6 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--text", default=None, help="transcript (word timings aligned automatically)")
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
     src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
+    add_language_flag(p)
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
@@ -70,6 +72,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     audio_path = input_file(args.audio, "AUDIO", p)
     textgrid = input_file(args.textgrid, "--textgrid", p) if args.textgrid else None
     out = output_folder(args.out, "--out", p)
+    language = check_language(args.language, "--language", p)
     refuse(p)
     if n_threads:
         torch.set_num_threads(n_threads)
@@ -80,7 +83,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     check_grid(pipe, grid, len(audio) / SAMPLE_RATE, SweepLimits(LIMITS.max_cells, LIMITS.max_seeds, max_work))
     words = read_words(textgrid) if textgrid else None
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
-                                 progress=say)
+                                 progress=say, language=language)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
     with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:

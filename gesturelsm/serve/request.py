@@ -68,6 +68,7 @@ class Request:
     transcribe: bool = DEFAULTS.transcribe   # automatic transcript when neither text nor TextGrid is given
     render: bool = True                      # False: motions only (the page's player); GestureService.render later
     grounding: bool = DEFAULTS.post.grounding   # feet on the ground (gesturelsm.grounding)
+    language: str = DEFAULTS.language        # the speech's language (auto: English, else the one identified)
 
 
 @dataclass(frozen=True, eq=False)

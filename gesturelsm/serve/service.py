@@ -42,7 +42,7 @@ from ..export import export_arkit, export_bvh, export_glb, export_keypoints, exp
 from ..motion.sequence import MotionSequence
 from ..backends import GROUND_TRUTH, SPECS, checkpoint_sources
 from ..pipeline import GesturePipeline, Plan, SpeechInput
-from ..settings import Limits
+from ..settings import DEFAULTS, Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
 from .ahead import Ahead, motion_key
@@ -124,7 +124,8 @@ class GestureService:
         if not audio_path:
             return False
         try:
-            self.speech(Request(audio_path, text=text or "", textgrid_path=textgrid_path, transcribe=transcribe),
+            self.speech(Request(audio_path, text=text or "", textgrid_path=textgrid_path, transcribe=transcribe,
+                                language=ahead.language if ahead is not None else DEFAULTS.language),
                          None, lambda f, m: None)
         except GestureError as exc:                      # the request refuses it with this message
             log.info("upload not prepared %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
@@ -162,7 +163,7 @@ class GestureService:
     @staticmethod
     def _speech_key(req: Request, plan: Plan) -> tuple:
         """The transcript settings an upload's speech is prepared for."""
-        return ((req.text or "").strip(), file_key(req.textgrid_path), plan.settings.transcribe)
+        return ((req.text or "").strip(), file_key(req.textgrid_path), plan.settings.transcribe, plan.settings.language)
 
     def cleanup(self, max_age_s: float | None = None) -> int:
         """Delete request folders older than keep_minutes; returns how many were removed."""
@@ -251,7 +252,8 @@ class GestureService:
             prog(0.02, "reading speech")
             speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
                                                   progress=lambda f, m: prog(0.02 + 0.1 * f, m),
-                                                  transcribe=plan.settings.transcribe)
+                                                  transcribe=plan.settings.transcribe,
+                                                  language=plan.settings.language)
             return speech, notes
         if path is None:
             return (plan, *prepare())

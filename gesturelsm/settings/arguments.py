@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
+from ..asr.languages import LANGUAGES
 from ..backends import GROUND_TRUTH, SPECS
 from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
@@ -64,6 +65,13 @@ def add_post_flags(p: argparse.ArgumentParser) -> None:
     add_grounding_flag(p)
 
 
+def add_language_flag(p: argparse.ArgumentParser) -> None:
+    """--language: the speech's language for recognition and for aligning a typed transcript."""
+    p.add_argument("--language", default=DEFAULTS.language, metavar="CODE",
+                   help="the speech's language: auto (English first, else the language the multilingual recogniser "
+                        f"identifies) or one of {' '.join(LANGUAGES)} (default: {DEFAULTS.language})")
+
+
 def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-seconds", type=from_text, default=MAX_SECONDS,
                    help=f"longest speech accepted, seconds (default: {MAX_SECONDS:g})")
@@ -82,7 +90,8 @@ def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, proble
                   stand_in_place=getattr(args, "stand_in_place", MISSING),
                   smoothing=getattr(args, "smoothing", MISSING),
                   transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
-                  grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING)
+                  grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING,
+                  language=getattr(args, "language", MISSING))
     settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
     problems += found
     return settings
@@ -174,6 +183,6 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings", "default_steps_text",
-           "input_file",
+__all__ = ["add_language_flag", "add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings",
+           "default_steps_text", "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

@@ -13,10 +13,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
+from ..asr.languages import CHOICES
 from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
 from .defaults import DEFAULTS, SEED_MAX, Limits, PostProcess, Settings
-from .values import method_list, number_list, one_of, real_number, switch, whole_number
+from .values import method_list, number_list, one_of, real_number, shown, switch, whole_number
 
 if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings
     from ..backends import MethodSpec
@@ -46,12 +47,13 @@ class Names:
     smoothing: str
     grounding: str
     transcribe: str
+    language: str = "Language"
 
 
 PAGE = Names("Methods", "Steps", "DDIM steps", "CFG scale", "Seed", "Stand in place", "Smoothing",
              "Feet on the ground", "Automatic transcription")
 CLI = Names("--methods", "--steps", "--ddim-steps", "--cfg", "--seed", "--stand-in-place", "--smoothing",
-            "--grounding", "--no-transcribe")
+            "--grounding", "--no-transcribe", "--language")
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,7 @@ class Asked:
     smoothing: Any = MISSING
     transcribe: Any = MISSING
     grounding: Any = MISSING
+    language: Any = MISSING
 
 
 def _given(value: Any, default: Any) -> Any:
@@ -164,9 +167,20 @@ def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = L
     seed = seed_problems(_given(asked.seed, DEFAULTS.seed), names, p)
     post = check_post(asked, names, p)
     transcribe = switch(_given(asked.transcribe, DEFAULTS.transcribe), names.transcribe, p)
+    language = check_language(_given(asked.language, DEFAULTS.language), names.language, p)
     if p:
         return None, p
-    return Settings(tuple(methods), steps, cfg, seed, post, transcribe), []
+    return Settings(tuple(methods), steps, cfg, seed, post, transcribe, language), []
+
+
+def check_language(value: Any, field: str, problems: list[str]) -> str | None:
+    """"auto" or one of the recogniser's language codes (asr.languages.LANGUAGES), as sent (any case, spaces)."""
+    code = value.strip().lower() if isinstance(value, str) else value
+    if code not in CHOICES:
+        problems.append(f"{field} must be auto or a language code such as en, ja, zh, es, de, fr "
+                        f"(got {shown(value)}; the list: gesturelsm transcribe --help).")
+        return None
+    return code
 
 
 def checked(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
@@ -205,6 +219,6 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
     return None if len(problems) > n else (step_list, cfg_list, count)
 
 
-__all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_method_settings", "check_post",
-           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems",
+__all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_language", "check_method_settings",
+           "check_post", "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems",
            "steps_per_method"]

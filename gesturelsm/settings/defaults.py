@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Mapping
 
+from ..asr.languages import AUTO
 from ..constants import DEFAULT_SMOOTHING, MAX_SECONDS
 
 if TYPE_CHECKING:           # the settings load no torch: the methods' registry and the motion code on first use
@@ -48,13 +49,15 @@ class PostProcess:
 
 @dataclass(frozen=True)
 class Settings:
-    """One generation's settings: which methods, their steps, guidance, seed, post-processing and transcription."""
+    """One generation's settings: which methods, their steps, guidance, seed, post-processing, transcription and the
+    speech's language."""
     methods: tuple[str, ...] = (DEFAULT_METHOD,)     # method keys and/or GROUND_TRUTH, in the order shown
     steps: Mapping[str, int] = field(default_factory=dict)    # per method; missing: its spec's default_steps
     cfg: float = DEFAULT_CFG
     seed: int = 0
     post: PostProcess = PostProcess()
     transcribe: bool = True              # recognise the speech when neither a transcript nor word timings are given
+    language: str = AUTO                 # the speech's language (asr.languages.CHOICES): AUTO hears English first
 
     def steps_for(self, method: str) -> int:
         from ..backends import method_spec

@@ -19,8 +19,8 @@ from ..body.model import resolve_model_path
 from ..cluster import add_cluster_argument, connect
 from ..errors import GestureError, UserError
 from ..pipeline import GROUND_TRUTH, GesturePipeline
-from ..settings.arguments import (add_post_flags, add_settings_flags, cli_settings, input_file, input_folder,
-                                  output_folder, refuse)
+from ..settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
+                                  input_folder, output_folder, refuse)
 from ..settings.values import from_text, real_number, whole_number
 from .batch import find_audio, make_study
 from .design import MODES, Design
@@ -39,6 +39,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--raters", type=from_text, default=10,
                    help="number of rater links (a rerun with more adds links; default: 10)")
     add_settings_flags(p, steps="two")
+    add_language_flag(p)
     p.add_argument("--size", type=from_text, default=512, help="video size in pixels (square; default: 512)")
     p.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets/)")
     p.add_argument("--model", help="SMPL-X .npz body model (default: the built-in mannequin)")

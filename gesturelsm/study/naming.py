@@ -25,8 +25,8 @@ from ..errors import UserError
 from ..pipeline import GROUND_TRUTH, Plan
 
 SETTINGS_FILE = "study.json"
-PER_VIDEO = ("methods", "steps", "transcribe", "post")    # Settings fields that are not one video's (post: its
-                                                          # options are, one by one)
+PER_VIDEO = ("methods", "steps", "transcribe", "language", "post")   # Settings fields that are not one video's (post:
+                                                                       # its options are, one by one)
 FLAGS = {"steps": "--steps / --ddim-steps", "cfg": "--cfg", "seed": "--seed", "smoothing": "--smoothing",
          "stand_in_place": "--stand-in-place", "grounding": "--grounding", "size": "--size", "body": "--model",
          "character": "--rig", "weights": "--checkpoints", "mode": "--design", "attention": "--attention",

@@ -106,12 +106,14 @@ def reproducible() -> Iterator[None]:
 
 
 def _speech(built: Built, unit: VideoUnit):
-    key = (hashlib.blake2b(unit.audio.tobytes(), digest_size=16).hexdigest(), unit.words, unit.text)
+    key = (hashlib.blake2b(unit.audio.tobytes(), digest_size=16).hexdigest(), unit.words, unit.text,
+           unit.plan.settings.language)
     if key not in built.speech:
         built.speech.clear()
         try:
             built.speech[key] = built.pipeline.prepare_speech(unit.audio, words=list(unit.words) if unit.words
-                                                              else None, text=unit.text)
+                                                              else None, text=unit.text,
+                                                              language=unit.plan.settings.language)
         except ValueError as exc:                # InputError: too short, silent, too long
             raise type(exc)(f"{unit.audio_name}: {exc}") from None
     return built.speech[key]

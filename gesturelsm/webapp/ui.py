@@ -31,6 +31,7 @@ from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
+from .language import language_choice
 from .live_character import LiveCharacters
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
@@ -117,12 +118,12 @@ class _Handlers:
 
     @staticmethod
     def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, *, exports: bool,
-                render: bool = True) -> Request:
+                auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, *,
+                exports: bool, render: bool = True) -> Request:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods, steps=steps,
                        ddim_steps=ddim_steps, cfg=cfg, seed=seed, stand_in_place=in_place, grounding=grounding,
-                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
+                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render, language=language)
 
     @staticmethod
     def refuse(exc: GestureError):
@@ -141,25 +142,24 @@ class _Handlers:
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
     def prefetch(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text, grounding=DEFAULTS.post.grounding) -> None:
+                 auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language) -> None:
         """Speech uploaded or recorded (or its transcript or settings changed): decode it and prepare the speech
         (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
         (serve/prepared.py), then make the motion the settings on screen ask for, for a click that asks for the same
         (serve/ahead.py). Silent: the request reports problems."""
         ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                             auto_text, grounding, exports=False, render=False)
+                             auto_text, grounding, language, exports=False, render=False)
         self.service.prefetch(audio, text or "", textgrid, bool(auto_text), ahead=ahead)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, grounding=DEFAULTS.post.grounding, character=None, request: gr.Request = None,
+                    auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, character=None, request: gr.Request = None,
                     progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript,
         sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
         moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
         and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
         the request and progress only to positional parameters.)"""
-        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
-                grounding)
+        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding, language)
         req = self.request(*args, exports=False, render=False)
         try:
             for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
@@ -199,10 +199,10 @@ class _Handlers:
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, progress=gr.Progress()):
+                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
-                                     size, auto_text, grounding, exports=True), progress)
+                                     size, auto_text, grounding, language, exports=True), progress)
         return (str(out.video), out.table, out.summary, *self.download_files(out))
 
 
@@ -239,7 +239,8 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
     auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
-                                         label="Transcribe automatically when no transcript is given (English)"))
+                                         label="Transcribe automatically when no transcript is given"))
+    language = language_choice()
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                        file_types=[".TextGrid", ".textgrid"], type="filepath")
     methods = pass_through(gr.CheckboxGroup(choices, value=shown, label="Methods shown side by side",
@@ -265,8 +266,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
     if ex:
         gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
     return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
-             grounding], button,
-            character)
+             grounding, language], button, character)
 
 
 def _output_column(service: GestureService) -> tuple:

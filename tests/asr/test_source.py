@@ -64,7 +64,7 @@ def test_automatic_words_remembers_by_content_and_hands_out_copies(monkeypatch):
 
     seen = []
 
-    def fake(y):
+    def fake(y, language="auto"):
         seen.append(len(y))
         return source.AutomaticWords([], "automatic transcript (fake)", None, ["note"])
 
@@ -101,7 +101,7 @@ def test_generate_flags_are_exclusive_and_default_to_transcribing():
 
 
 def test_automatic_words_accepts_english_and_refuses_german(recognizer, english, german):
-    ok, no = automatic_words(english), automatic_words(german)
+    ok, no = automatic_words(english, language="en"), automatic_words(german, language="en")
     assert ok.words and ok.text_mode.startswith("automatic transcript") and ok.transcript.accepted
     assert no.words is None and no.text_mode.startswith("audio-only") and "English" in no.warnings[0]
 
@@ -126,7 +126,7 @@ def test_transcribe_cli_textgrid_round_trip(recognizer, english, tmp_path, capsy
 def test_transcribe_cli_refuses_non_speech_with_one_line(recognizer, german, tmp_path, capsys):
     wav, out = tmp_path / "de.wav", tmp_path / "de.TextGrid"
     sf.write(wav, german, SR)
-    assert main(["transcribe", str(wav), "--out", str(out)]) == 2
+    assert main(["transcribe", str(wav), "--language", "en", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "may not be English" in err and "Nothing was written" in err and not out.exists()
     sf.write(wav, np.zeros(SR, np.float32), SR)

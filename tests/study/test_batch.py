@@ -125,7 +125,7 @@ def test_video_names_change_with_every_setting_that_changes_a_video(tmp_path):
     settings = video_settings(base, "gesturelsm", render, "weights-one")
     changed = dict(steps=4, cfg=1.5, seed=1, smoothing="off", stand_in_place=True, grounding=False, size=256,
                    body="SMPLX_NEUTRAL.npz mannequin-sha", character="me.vrm mannequin-sha", weights="weights-two")
-    plan_fields = ({f.name for f in fields(Settings)} - {"methods", "steps", "transcribe", "post"}) | \
+    plan_fields = ({f.name for f in fields(Settings)} - {"methods", "steps", "transcribe", "language", "post"}) | \
         {f.name for f in fields(PostProcess)}
     assert plan_fields <= set(changed), "a setting is missing from this test"
     assert set(settings) == set(changed)

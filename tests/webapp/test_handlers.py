@@ -45,7 +45,7 @@ def test_gradio_hands_the_handlers_the_page_session():
     from gradio.helpers import special_args
 
     h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
-    for fn, n_inputs, progress in ((h.show_motion, 14, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
+    for fn, n_inputs, progress in ((h.show_motion, 15, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
         filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
         assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
 

@@ -1,0 +1,16 @@
+"""The page's Speech language choice (`#language`): auto (English first) or one of the recogniser's languages."""
+from __future__ import annotations
+
+import gradio as gr
+
+from gesturelsm.asr.languages import LANGUAGES
+from gesturelsm.settings import DEFAULTS
+
+from .raw_inputs import pass_through
+
+
+def language_choice() -> gr.Dropdown:
+    """A dropdown whose value goes to the request as sent (the settings' validator checks it)."""
+    return pass_through(gr.Dropdown([("Automatic (English first)", "auto"), *((f"{n} ({c})", c) for c, n in
+                                                                             LANGUAGES.items())],
+                                    value=DEFAULTS.language, label="Speech language", elem_id="language"))
