@@ -23,25 +23,23 @@ os.environ.setdefault("GRADIO_ANALYTICS_ENABLED", "False")
 os.environ.setdefault("HF_HUB_DISABLE_TELEMETRY", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-# For each table under the given boxes: is it cut (wider than every box around it, none of which scrolls)?
-TABLES_JS = """(boxes) => boxes.flatMap((box) => [...document.querySelectorAll(`${box} table`)].map((t) => {
-    let cut = false, scrolls = false;
-    for (let e = t.parentElement; e && e !== document.body; e = e.parentElement) {
-        const s = getComputedStyle(e);
-        if (['auto', 'scroll'].includes(s.overflowX) && e.scrollWidth > e.clientWidth + 1) { scrolls = true; break; }
-        if (e.scrollWidth > e.clientWidth + 1 && s.overflowX !== 'visible') { cut = true; break; }
-        if (e.matches(box)) { cut = cut || e.getBoundingClientRect().right < t.getBoundingClientRect().right - 1; break; }
-    }
-    return {box, cut, scrolls, width: Math.round(t.getBoundingClientRect().width)};
-}))"""
-
-
 def save(page, path: Path, **kw) -> None:
     from PIL import Image
 
     page.screenshot(path=str(path), **kw)
     Image.open(path).convert("RGB").quantize(256).save(path, optimize=True)
     print(f"wrote {path} ({path.stat().st_size // 1024} KB)")
+
+
+def report(page, size: str, boxes: list[str]) -> None:
+    """Print, for each table in `boxes`, whether it fits its column, scrolls inside it or is cut, and any heading word
+    broken across lines."""
+    from gesturelsm.webapp.layout import TABLES_JS
+
+    for t in page.evaluate(TABLES_JS, boxes):
+        state = "CUT" if t["cut"] else "scrolls inside its column" if t["scrolls"] else "fits its column"
+        broken = f"; words broken: {', '.join(t['broken'])}" if t["broken"] else "; no heading word broken"
+        print(f"{size} {t['box']}: {state} (table {t['width']} px){broken}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -91,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                 page.locator("#timings").scroll_into_view_if_needed()
                 page.wait_for_timeout(500)
                 save(page, out / f"page-tables-{size}.png")
+                report(page, size, ["#timings", "#motion-stats-box"])
                 if not args.no_sweep:
                     page.get_by_role("tab", name="Sweep").click()
                     page.locator("#sweep-speech input[type=file]").first.set_input_files(str(wav))
@@ -103,15 +102,13 @@ def main(argv: list[str] | None = None) -> int:
                     page.locator("#sweep-table-box").scroll_into_view_if_needed()
                     page.wait_for_timeout(500)
                     save(page, out / f"sweep-{size}.png")
+                    report(page, size, ["#sweep-table-box"])
                 if page.get_by_role("tab", name="Live").count():
                     page.get_by_role("tab", name="Live").click()
                     page.wait_for_timeout(2000)
                     page.locator("#live-player-box").scroll_into_view_if_needed()
                     page.wait_for_timeout(1000)
                     save(page, out / f"live-{size}.png")
-                for t in page.evaluate(TABLES_JS, ["#timings", "#motion-stats-box", "#sweep-table-box"]):
-                    print(f"{size} {t['box']}: {'CUT' if t['cut'] else 'scrolls inside' if t['scrolls'] else 'fits'}"
-                          f" (table {t['width']} px)")
                 page.close()
             browser.close()
     finally:

@@ -32,15 +32,12 @@ from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
+from .layout import TYPED_NOTE
 from .live_character import LiveCharacters
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
-# Shown by the transcript box when speech is uploaded or recorded while the box holds words the visitor typed (words
-# the page recognised for earlier speech are cleared instead): typed words are never used silently for other speech.
-TYPED_NOTE = ("The transcript box holds words typed before this speech was chosen: Generate times them against this "
-              "speech. Clear the box to have this speech transcribed automatically.")
 # Runs in the browser as Generate is clicked, before the request: brings the player and the status under it into
 # view (the button sits below the fold on a laptop screen) and says the click was taken.
 CLICK_JS = """(...args) => {

@@ -97,3 +97,35 @@ def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_w
     np.testing.assert_array_equal(on.trans, want.trans)
     keep = [c for j in range(55) if j not in CHANGED_JOINTS for c in range(3 * j, 3 * j + 3)]
     assert np.array_equal(on.poses[:, keep], off.poses[:, keep]) and not np.allclose(on.trans, off.trans)
+
+
+def test_new_speech_clears_recognised_words_and_keeps_typed_ones_with_a_note():
+    """Speech uploaded, recorded or removed: the words the page recognised for earlier speech leave the box; words
+    the visitor typed stay, with the note shown; an empty box stays empty and the note hidden."""
+    from gesturelsm.webapp.layout import TYPED_NOTE
+
+    words = {"audio": "/up/a.wav", "text": "hello there"}
+    text, note, kept = _Handlers.new_speech(" hello there ", words)
+    assert text == "" and note["visible"] is False and kept is None
+    text, note, kept = _Handlers.new_speech("my own words", words)
+    assert text == gr.skip() and note == {"__type__": "update", "value": TYPED_NOTE, "visible": True} and kept is words
+    text, note, kept = _Handlers.new_speech("", words)
+    assert text == gr.skip() and note["visible"] is False and kept is None
+
+
+def test_a_request_never_uses_the_words_recognised_for_another_upload():
+    """The box still holds the words recognised for upload A (a generation of A finished after B was uploaded): a
+    request for B transcribes B itself; for A, or with words the visitor typed, the box's words are used."""
+    words = {"audio": "/up/a.wav", "text": "hello there"}
+    assert _Handlers.own_words("/up/b.wav", "hello there", words) == ""
+    assert _Handlers.own_words("/up/a.wav", "hello there", words) == "hello there"
+    assert _Handlers.own_words("/up/b.wav", "typed words", words) == "typed words"
+    assert _Handlers.own_words("/up/b.wav", "typed words", None) == "typed words"
+
+
+def test_the_button_sends_the_recognised_words_with_their_upload_and_a_status(service, speech_wav, hears_hello):
+    h = _Handlers(service)
+    outs = list(h.show_motion(*inputs(speech_wav, 0)[:11], True, True, None, None, progress=quiet))
+    payload, _table, _summary, out, text, words, status = outs[-1]
+    assert text == "hello there" and words == {"audio": str(speech_wav), "text": "hello there"}
+    assert status.startswith("**Motion made** for 1 of 1 methods")
