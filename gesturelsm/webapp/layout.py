@@ -22,6 +22,7 @@ PAGE_CSS = """
 /* tables of numbers: compact, headings break between words only (never "featur / es"), wide ones scroll inside */
 #timings table, #motion-stats-box table, #sweep-table-box table { font-size: 13px; }
 #timings th, #timings td, #timings th *, #timings td * { font-size: 13px !important; }
+#timings th, #timings th * { white-space: normal !important; }   /* between words: "real-time / factor" */
 #timings th, #timings th *, #motion-stats-box th, #motion-stats-box th *, #sweep-table-box th, #sweep-table-box th * {
   word-break: normal !important; overflow-wrap: normal !important; hyphens: manual !important;
 }

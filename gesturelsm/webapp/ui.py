@@ -32,18 +32,12 @@ from . import edit_section, live, live_socket, stats_view, sweep_tab
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
-from .layout import TYPED_NOTE
+from . import words as page_words
 from .live_character import LiveCharacters
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
 log = logging.getLogger("gesturelsm.app")
-# Runs in the browser as Generate is clicked, before the request: brings the player and the status under it into
-# view (the button sits below the fold on a laptop screen) and says the click was taken.
-CLICK_JS = """(...args) => {
-    const box = document.querySelector('#motion-player-box');
-    if (box) box.scrollIntoView({block: 'start', behavior: 'instant'});
-    return args; }"""
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
@@ -125,39 +119,6 @@ class _Handlers:
                        smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render)
 
     @staticmethod
-    def new_speech(text, words):
-        """Speech uploaded, recorded or removed: words the page recognised for earlier speech (`words`, the page's
-        state: {"audio": path, "text": recognised}) are cleared from the transcript box; words the visitor typed stay
-        with a visible note (TYPED_NOTE). -> (transcript box, note, words state)."""
-        typed = (text or "").strip()
-        if not typed:
-            return gr.skip(), gr.update(value="", visible=False), None
-        if words and typed == (words.get("text") or "").strip():
-            return "", gr.update(value="", visible=False), None
-        return gr.skip(), gr.update(value=TYPED_NOTE, visible=True), words
-
-    @staticmethod
-    def own_words(audio, text, words) -> str:
-        """The transcript a request of the page uses: the box's words, unless they are the words the page recognised
-        for another upload (a generation of earlier speech that finished after this upload wrote them): then none, so
-        this speech is transcribed itself."""
-        if text and words and words.get("audio") != audio and text.strip() == (words.get("text") or "").strip():
-            log.info("the transcript box held the words recognised for earlier speech: not used for this one")
-            return ""
-        return text
-
-    @staticmethod
-    def status(out: Result) -> str:
-        """The line under the player while a request is made: which methods' bodies are made, and what comes next."""
-        total = len(out.slots) or len(out.motions)
-        made, failed = len(out.motions), len(out.failed)
-        if made + failed < total:
-            return (f"**Generating:** {made} of {total} methods made; each body plays above the moment its motion is "
-                    "made.")
-        gone = f" ({failed} failed: see its label)" if failed else ""
-        return f"**Motion made** for {made} of {total} methods{gone}. Rendering the video and preparing the downloads..."
-
-    @staticmethod
     def refuse(exc: GestureError):
         """The one place the page turns errors into messages: one log line, no traceback (server bugs keep theirs)."""
         log.info("request refused: %s", " | ".join(str(exc).splitlines()))
@@ -179,7 +140,7 @@ class _Handlers:
         (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
         (serve/prepared.py), then make the motion the settings on screen ask for, for a click that asks for the same
         (serve/ahead.py). Silent: the request reports problems."""
-        text = self.own_words(audio, text, words)
+        text = page_words.own_words(audio, text, words)
         ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                              auto_text, grounding, exports=False, render=False)
         self.service.prefetch(audio, text or "", textgrid, bool(auto_text), ahead=ahead)
@@ -191,9 +152,8 @@ class _Handlers:
         sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
         moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
         and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
-        the request and progress only to positional parameters.) The recognised words also go into the page's `words`
-        state with the upload they belong to (`new_speech`, `own_words`); `#generate-status` says what is made."""
-        text = self.own_words(audio, text, words)
+        the request and progress only to positional parameters.) `words`: the page's recognised words (words.py)."""
+        text = page_words.own_words(audio, text, words)
         args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
                 grounding)
         req = self.request(*args, exports=False, render=False)
@@ -201,9 +161,8 @@ class _Handlers:
             for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
                 self.mark_newest(request, out)
                 recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
-                mine = {"audio": audio, "text": out.transcript} if out.transcript else gr.skip()
                 yield (motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised,
-                       mine, self.status(out))
+                       page_words.recognised(audio, out), page_words.status(out))
         except GestureError as exc:
             self.refuse(exc)
 
@@ -245,8 +204,7 @@ class _Handlers:
         files, glb = self.download_files(out)
         files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
                                                 out.job.grounding)]
-        done = "**Ready:** motion, video and downloads." if out.video else "**Ready:** motion and downloads."
-        return files, glb, out.summary, self._kept(request, out), done
+        return files, glb, out.summary, self._kept(request, out), page_words.READY
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                  auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, progress=gr.Progress()):
@@ -280,8 +238,7 @@ def _methods_info(methods: list[str]) -> str | None:
 
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr.Markdown]:
     """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
-    specs); returns the request's inputs in `_Handlers.request` order, the button, the Character upload and the
-    transcript's note."""
+    specs); returns the request's inputs in `_Handlers.request` order, the button, the Character upload, the note."""
     choices = [(label(m), m) for m in service.methods]
     shown = [m for m in ours_default() if m in service.methods][:3]
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
@@ -289,7 +246,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
-    note = gr.Markdown(visible=False, elem_id="transcript-note")      # typed words kept for new speech (TYPED_NOTE)
+    note = gr.Markdown(visible=False, elem_id="transcript-note")     # typed words kept for new speech (words.py)
     auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
                                          label="Transcribe automatically when no transcript is given (English)"))
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
@@ -325,9 +282,7 @@ def _output_column(service: GestureService) -> tuple:
     """Player (with the status line and the Edit section under it), video, summary, timings, downloads, GLB viewer:
     (payload, video, summary, table, files, view, show3d, stats, edit, status)."""
     motion_player.player_component(service)
-    # what the request is doing, under the player (Generate brings both into view, CLICK_JS): the stages' progress
-    # while nothing is made, then which methods are made and what follows
-    status = gr.Markdown(elem_id="generate-status", container=False)
+    status = gr.Markdown(elem_id="generate-status", container=False)     # what the request does (words.status)
     edit = edit_section.component()
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
@@ -358,16 +313,6 @@ VIEWER_MOUNTED_JS = """async (...args) => {
     for (let t0 = Date.now(); !shown() && Date.now() - t0 < 20000;) await new Promise((r) => setTimeout(r, 50));
     for (let i = 0; i < 2; i++) await new Promise((r) => requestAnimationFrame(r));
     return args; }"""
-
-
-def _changes(inputs: list) -> list:
-    """The events after which the page's request may differ: speech uploaded or recorded, the transcript left, a slider
-    let go, any other input changed."""
-    audio, text = inputs[0], inputs[1]
-    events = [audio.upload, audio.stop_recording, text.blur]
-    for c in inputs[2:]:
-        events.append(c.release if isinstance(c, gr.Slider) else c.change)
-    return events
 
 
 def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
@@ -406,22 +351,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE) -> Demo:
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
         # before the click: the upload's speech prepared (serve/prepared.py), the settings' motion made (serve/ahead.py)
-        # words: what the page recognised, with the upload it belongs to; new speech clears them from the box (typed
-        # words stay, with a note) before the prefetch reads the box
-        words, audio = gr.State(), inputs[0]
-        ahead = dict(show_progress="hidden", api_visibility="private", concurrency_limit=1, concurrency_id="prefetch",
-                     trigger_mode="always_last")
-        for changed in _changes(inputs):
-            if changed in (audio.upload, audio.stop_recording):
-                changed(h.new_speech, [text, words], [text, note, words], queue=False, api_visibility="private") \
-                    .then(h.prefetch, [*inputs, words], None, **ahead)
-            else:
-                changed(h.prefetch, [*inputs, words], None, **ahead)
-        audio.clear(h.new_speech, [text, words], [text, note, words], queue=False, api_visibility="private")
-        text.input(lambda: gr.update(visible=False), None, note, queue=False, api_visibility="private")
+        words = page_words.attach(inputs, note, h.prefetch)          # each upload its own words; prefetch
         shown = button.click(h.show_motion, [*inputs, character, words], [payload, table, summary, state, text, words,
-                                                                          status],
-                             api_name="generate_motion", js=CLICK_JS, **gen)
+                             status], api_name="generate_motion", js=page_words.CLICK_JS, **gen)
         # every payload a handler sends (Generate's, one per method made; an edit's; an undo's) goes to the player at
         # once, in the browser; the statistics and the downloads made so far follow it, beside the chain below
         payload.change(None, payload, None, js=motion_player.LOAD_JS, api_visibility="private")

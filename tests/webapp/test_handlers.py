@@ -103,24 +103,27 @@ def test_new_speech_clears_recognised_words_and_keeps_typed_ones_with_a_note():
     """Speech uploaded, recorded or removed: the words the page recognised for earlier speech leave the box; words
     the visitor typed stay, with the note shown; an empty box stays empty and the note hidden."""
     from gesturelsm.webapp.layout import TYPED_NOTE
+    from gesturelsm.webapp.words import new_speech
 
     words = {"audio": "/up/a.wav", "text": "hello there"}
-    text, note, kept = _Handlers.new_speech(" hello there ", words)
+    text, note, kept = new_speech(" hello there ", words)
     assert text == "" and note["visible"] is False and kept is None
-    text, note, kept = _Handlers.new_speech("my own words", words)
+    text, note, kept = new_speech("my own words", words)
     assert text == gr.skip() and note == {"__type__": "update", "value": TYPED_NOTE, "visible": True} and kept is words
-    text, note, kept = _Handlers.new_speech("", words)
+    text, note, kept = new_speech("", words)
     assert text == gr.skip() and note["visible"] is False and kept is None
 
 
 def test_a_request_never_uses_the_words_recognised_for_another_upload():
     """The box still holds the words recognised for upload A (a generation of A finished after B was uploaded): a
     request for B transcribes B itself; for A, or with words the visitor typed, the box's words are used."""
+    from gesturelsm.webapp.words import own_words
+
     words = {"audio": "/up/a.wav", "text": "hello there"}
-    assert _Handlers.own_words("/up/b.wav", "hello there", words) == ""
-    assert _Handlers.own_words("/up/a.wav", "hello there", words) == "hello there"
-    assert _Handlers.own_words("/up/b.wav", "typed words", words) == "typed words"
-    assert _Handlers.own_words("/up/b.wav", "typed words", None) == "typed words"
+    assert own_words("/up/b.wav", "hello there", words) == ""
+    assert own_words("/up/a.wav", "hello there", words) == "hello there"
+    assert own_words("/up/b.wav", "typed words", words) == "typed words"
+    assert own_words("/up/b.wav", "typed words", None) == "typed words"
 
 
 def test_the_button_sends_the_recognised_words_with_their_upload_and_a_status(service, speech_wav, hears_hello):

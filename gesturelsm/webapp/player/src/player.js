@@ -43,7 +43,7 @@ import { loadPayload } from './progressive.js';
 const SPACING = 1.2;           // metres between bodies, as in the server-side video
 // What the camera frames (metres): from just below the floor to above the labels over the heads, and half a body's
 // reach beside the outer bodies; the bodies fill the picture's height (MotionPlayer.frameBodies)
-const FRAME_TOP = 2.05, FRAME_BOTTOM = -0.05, REACH = 0.6;
+const FRAME_TOP = 2.05, FRAME_BOTTOM = -0.12, REACH = 0.6;
 const LABEL_ABOVE = 0.22;      // metres above the head joint where a label's bottom edge sits (clear of the face)
 
 export class MotionPlayer {
