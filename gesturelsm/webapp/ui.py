@@ -282,7 +282,7 @@ def _output_column(service: GestureService) -> tuple:
     """Player (with the status line and the Edit section under it), video, summary, timings, downloads, GLB viewer:
     (payload, video, summary, table, files, view, show3d, stats, edit, status)."""
     motion_player.player_component(service)
-    status = gr.Markdown(elem_id="generate-status", container=False)     # what the request does (words.status)
+    status = gr.Markdown(elem_id="generate-status", container=False, label="status")   # what it does (words.status)
     edit = edit_section.component()
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
