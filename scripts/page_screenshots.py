@@ -5,7 +5,8 @@
 
 Serves the app on the shipped (or given) checkpoints and, for each window size, in headless Chromium: opens the page
 (`page-idle-WxH.png`: the idle player before any speech), uploads an example with its transcript, clicks Generate
-and saves what the window shows once every method's body moves (`page-WxH.png`: the page brings the player and its
+and saves what the window shows just after the click (`page-click-WxH.png`) and once every
+method's body moves (`page-WxH.png`: the page brings the player and its
 status into view), then the results column with the timings and statistics tables (`page-tables-WxH.png`); runs a
 small sweep in the Sweep tab (`sweep-WxH.png`) and shows the Live tab before recording (`live-WxH.png`). For each
 table in `#timings`, `#motion-stats-box` and `#sweep-table-box` it prints whether it fits its column or scrolls
@@ -79,6 +80,9 @@ def main(argv: list[str] | None = None) -> int:
                 page.locator("#transcript textarea").fill(text)
                 page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
                 page.locator("#generate").click()
+                page.wait_for_function("() => document.querySelector('#generate-status').innerText.trim()",
+                                       timeout=60000)
+                save(page, out / f"page-click-{size}.png")      # just after the click: the status says the stage
                 page.wait_for_selector("#motion-player[data-state=playing]", timeout=300000)
                 page.wait_for_function("() => document.querySelector('#motion-player').dataset.bodies === "
                                        "String(window.gesturelsmPlayer.bodies.length)", timeout=300000)
