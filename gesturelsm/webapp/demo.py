@@ -13,6 +13,7 @@ from gesturelsm.live.session import LiveManager
 from gesturelsm.serve.lifetime import Sweeper, sweep_seconds
 from gesturelsm.serve.service import GestureService
 
+from .layout import PAGE_CSS
 from .player.component import served_paths
 
 
@@ -23,6 +24,7 @@ class Demo:
     live: LiveManager | None = None         # the Live tab's streams (None: no Live tab)
     routes: list[BaseRoute] = field(default_factory=list)      # the live socket, served beside the page
     sweeper: Sweeper | None = field(default=None, repr=False)  # started by launch
+    css: str = PAGE_CSS                     # the page's stylesheet (layout.py)
 
     def launch(self, host: str = "127.0.0.1", port: int = 7860, **kw):
         """Serve the page and its routes; returns what `Blocks.launch` returns. A blocking launch stops everything
@@ -36,7 +38,8 @@ class Demo:
             return self.blocks.launch(server_name=host, server_port=port,
                                       max_file_size=f"{int(service.settings.max_upload_mb)}mb",
                                       allowed_paths=[str(service.workdir), *served_paths()],
-                                      footer_links=["api"], app_kwargs=app_kwargs, **kw)
+                                      footer_links=["api"], app_kwargs=app_kwargs, css=kw.pop("css", self.css),
+                                      **kw)
         finally:
             if not kw.get("prevent_thread_lock"):
                 self._stop()

@@ -20,6 +20,7 @@ from gesturelsm.evaluation.motion_stats import (STATISTICS, SpeakerReference, Sp
                                                 motion_statistics, speaker_reference)
 
 from .aside import aside
+from .layout import SCROLL
 
 log = logging.getLogger("gesturelsm.app")
 ELEMENT_ID = "motion-stats"
@@ -84,7 +85,8 @@ def to_html(table: StatsTable | None) -> str:
             (f"Speaker row: {html.escape(table.reference.source)}." if table.reference else
              "No speaker row: assets/speaker_stats.json is missing (scripts/speaker_stats.py writes it)."))
     return (f'<div id="{ELEMENT_ID}" data-state="ready" data-seconds="{table.seconds:.4f}">'
-            f'<table class="motion-stats"><thead>{_head()}</thead><tbody>{"".join(body)}</tbody></table>'
+            f'<div {SCROLL}><table class="motion-stats"><thead>{_head()}</thead><tbody>{"".join(body)}</tbody>'
+            '</table></div>'
             f'<p><small>{note}</small></p></div>')
 
 

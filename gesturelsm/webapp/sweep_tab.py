@@ -24,6 +24,7 @@ from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
 
+from .layout import SCROLL, TYPED_NOTE
 from .player import component as motion_player
 
 log = logging.getLogger("gesturelsm.app")
@@ -65,8 +66,8 @@ def table_html(result: SweepResult) -> str:
         body.append(f'<tr data-method="speaker" title="{html.escape(result.reference.source)}"><td>speaker '
                     f'(reference)</td><td></td><td></td><td></td>' +
                     "".join(cell(s.key, st[s.key]) for s in STATISTICS) + "<td></td></tr>")
-    return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><table>'
-            f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table><p><small>'
+    return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><div {SCROLL}><table>'
+            f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table></div><p><small>'
             f"{len(result.runs)} motions of {result.speech_seconds:.1f} s in {result.seconds:.1f} s; mean ± standard "
             f"deviation over {result.grid.seeds} seed(s). Transcript: {html.escape(result.text_mode)}. Hover a heading "
             "for what it measures.</small></p></div>")
@@ -132,6 +133,13 @@ class SweepHandlers:
                               self.service.workdir / "player-bodies", url=motion_player.file_url, audio=state.wav)
 
 
+def typed_note(text: str | None):
+    """Speech uploaded or recorded in the Sweep tab: words already in its transcript box stay, with a note."""
+    if not (text or "").strip():
+        return gr.update(value="", visible=False)
+    return gr.update(value=TYPED_NOTE, visible=True)
+
+
 def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
     """The Sweep tab (call inside `with gr.Blocks()`, after the player)."""
     h = SweepHandlers(service, limits)
@@ -148,6 +156,7 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                                  elem_id="sweep-speech")
                 text = gr.Textbox(label="Transcript (optional: recognised automatically without it, as for Generate)",
                                   lines=2, elem_id="sweep-text")
+                note = gr.Markdown(visible=False, elem_id="sweep-text-note")   # typed words kept for new speech
                 auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
                                         label="Transcribe automatically when no transcript is given (English)")
                 chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=shown, label="Methods",
@@ -179,6 +188,10 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
         run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text],
                   [table, plot, files, pick, state],
                        api_name="sweep", concurrency_limit=service.settings.concurrency, concurrency_id="generation")
+        # words typed in the box are never used silently for other speech: a new upload or recording says so
+        for changed in (audio.upload, audio.stop_recording):
+            changed(typed_note, text, note, queue=False, api_visibility="private")
+        text.input(lambda: gr.update(visible=False), None, note, queue=False, api_visibility="private")
         cancel.click(h.cancel, None, status, queue=False, api_visibility="private")
         run.click(lambda: "", None, status, queue=False, api_visibility="private")
         metric.change(h.replot, [state, metric], plot, api_visibility="private", show_progress="hidden")

@@ -31,6 +31,7 @@ from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
+from . import words as page_words
 from .language import language_choice
 from .live_character import LiveCharacters
 from .player import component as motion_player
@@ -142,30 +143,34 @@ class _Handlers:
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
     def prefetch(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language) -> None:
+                 auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, words=None) -> None:
         """Speech uploaded or recorded (or its transcript or settings changed): decode it and prepare the speech
         (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
         (serve/prepared.py), then make the motion the settings on screen ask for, for a click that asks for the same
         (serve/ahead.py). Silent: the request reports problems."""
+        text = page_words.own_words(audio, text, words)
         ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
                              auto_text, grounding, language, exports=False, render=False)
         self.service.prefetch(audio, text or "", textgrid, bool(auto_text), ahead=ahead)
 
     def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, character=None, request: gr.Request = None,
-                    progress=gr.Progress()):
+                    auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, character=None,
+                    words=None, request: gr.Request = None, progress=gr.Progress()):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript,
         sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
         moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
         and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
-        the request and progress only to positional parameters.)"""
-        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding, language)
+        the request and progress only to positional parameters.) `words`: the page's recognised words (words.py)."""
+        text = page_words.own_words(audio, text, words)
+        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
+                grounding, language)
         req = self.request(*args, exports=False, render=False)
         try:
             for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
                 self.mark_newest(request, out)
                 recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
-                yield motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised
+                yield (motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised,
+                       page_words.recognised(audio, out), page_words.status(out))
         except GestureError as exc:
             self.refuse(exc)
 
@@ -228,9 +233,9 @@ def _methods_info(methods: list[str]) -> str | None:
     return " ".join(notes) or None
 
 
-def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
+def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr.Markdown]:
     """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
-    specs); returns the request's inputs in `_Handlers.request` order, the button and the Character upload."""
+    specs); returns the request's inputs in `_Handlers.request` order, the button, the Character upload, the note."""
     choices = [(label(m), m) for m in service.methods]
     shown = [m for m in ours_default() if m in service.methods][:3]
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
@@ -238,6 +243,7 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
+    note = gr.Markdown(visible=False, elem_id="transcript-note")     # typed words kept for new speech (words.py)
     auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
                                          label="Transcribe automatically when no transcript is given"))
     language = language_choice()
@@ -266,13 +272,14 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File]:
     if ex:
         gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
     return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
-             grounding, language], button, character)
+             grounding, language], button, character, note)
 
 
 def _output_column(service: GestureService) -> tuple:
-    """Player (with the Edit section under it), video, summary, timings, downloads, GLB viewer: (payload, video,
-    summary, table, files, view, show3d, stats, edit)."""
+    """Player (with the status line and the Edit section under it), video, summary, timings, downloads, GLB viewer:
+    (payload, video, summary, table, files, view, show3d, stats, edit, status)."""
     motion_player.player_component(service)
+    status = gr.Markdown(elem_id="generate-status", container=False, label="status")   # what it does (words.status)
     edit = edit_section.component()
     payload = gr.JSON(visible=False, label="motion for the in-browser player")
     # With the in-browser player (its bundle built), the player shows the motion and the mp4 is for download and
@@ -293,7 +300,7 @@ def _output_column(service: GestureService) -> tuple:
     show3d = gr.Button("Show the first method's GLB in an interactive 3D viewer", size="sm", elem_id="view3d-show")
     view = gr.Model3D(label="Interactive 3D view (animated GLB of the first method)", height=420, elem_id="view3d",
                       visible=False)
-    return payload, video, summary, table, files, view, show3d, stats, edit
+    return payload, video, summary, table, files, view, show3d, stats, edit, status
 
 
 # Runs in the browser before the GLB is requested (Gradio awaits it): waits until the viewer shown by the step
@@ -303,16 +310,6 @@ VIEWER_MOUNTED_JS = """async (...args) => {
     for (let t0 = Date.now(); !shown() && Date.now() - t0 < 20000;) await new Promise((r) => setTimeout(r, 50));
     for (let i = 0; i < 2; i++) await new Promise((r) => requestAnimationFrame(r));
     return args; }"""
-
-
-def _changes(inputs: list) -> list:
-    """The events after which the page's request may differ: speech uploaded or recorded, the transcript left, a slider
-    let go, any other input changed."""
-    audio, text = inputs[0], inputs[1]
-    events = [audio.upload, audio.stop_recording, text.blur]
-    for c in inputs[2:]:
-        events.append(c.release if isinstance(c, gr.Slider) else c.change)
-    return events
 
 
 def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=None) -> Demo:   # engines: --vmc
@@ -328,9 +325,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
         gr.Markdown(INTRO)
         with gr.Row():
             with gr.Column(scale=1):
-                inputs, button, upload = _input_column(service)
+                inputs, button, upload, note = _input_column(service)
             with gr.Column(scale=2):
-                payload, video, summary, table, files, view, show3d, stats, edit = _output_column(service)
+                payload, video, summary, table, files, view, show3d, stats, edit, status = _output_column(service)
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
@@ -351,11 +348,9 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
             chosen.then(characters.choose, [character, token], [token, spec], api_visibility="private") \
                 .then(None, spec, None, js=live.character_js())
         # before the click: the upload's speech prepared (serve/prepared.py), the settings' motion made (serve/ahead.py)
-        for changed in _changes(inputs):
-            changed(h.prefetch, inputs, None, show_progress="hidden", api_visibility="private", concurrency_limit=1,
-                    concurrency_id="prefetch", trigger_mode="always_last")
-        shown = button.click(h.show_motion, [*inputs, character], [payload, table, summary, state, text],
-                             api_name="generate_motion", **gen)
+        words = page_words.attach(inputs, note, h.prefetch)          # each upload its own words; prefetch
+        shown = button.click(h.show_motion, [*inputs, character, words], [payload, table, summary, state, text, words,
+                             status], api_name="generate_motion", js=page_words.CLICK_JS, **gen)
         # every payload a handler sends (Generate's, one per method made; an edit's; an undo's) goes to the player at
         # once, in the browser; the statistics and the downloads made so far follow it, beside the chain below
         payload.change(None, payload, None, js=motion_player.LOAD_JS, api_visibility="private")
@@ -364,12 +359,14 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
                        concurrency_limit=1, concurrency_id="downloads", trigger_mode="always_last")
 
         def follow(event, named: bool = False) -> None:     # after Generate, an edit or an undo (motions in state)
-            # the downloads first, in a pool of their own (never behind anybody's video), then the video
+            # the downloads first, in a pool of their own (never behind anybody's video), then the video; the status
+            # line says "Ready" once the video came (a failed step ends the chain: no claim of a video that failed)
             event.then(h.add_exports, [state, character], [files, view, summary, state],
                        api_name="add_exports" if named else None, api_visibility="private", **exports) \
                 .then(h.video_steps, [state, character], [video, table, summary, state],
                       api_name="show_video" if named else None, api_visibility="private", show_progress="hidden",
-                      **render)
+                      **render) \
+                .then(lambda: page_words.READY, None, status, queue=False, api_visibility="private")
         follow(shown, named=True)
         edit_section.attach(edit, h, shown, state, character, dict(payload=payload, table=table, summary=summary,
                                                                    video=video, files=files), follow)

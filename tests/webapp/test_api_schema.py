@@ -66,7 +66,7 @@ def test_every_listed_choice_is_accepted(app_url, speech_wav, field):
     for choice in choices:
         args = list(base)
         args[names.index(field)] = choice
-        payload, table, summary, text = client.predict(*args, api_name="/generate_motion")
+        payload, table, summary, text, status = client.predict(*args, api_name="/generate_motion")
         assert len(table["data"]) == 2, (field, choice, summary)
 
 

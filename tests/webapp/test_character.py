@@ -142,7 +142,7 @@ def test_a_chosen_character_gets_every_method_in_the_payload_and_the_downloads(s
     chosen, upload = choose(str(tmp_path / "me.glb"))
     assert chosen.name == "me.glb" and "me.glb" in upload["label"]
     h, methods = _Handlers(service), list(service.methods)[:2]
-    payload, _, _, out, _ = list(h.show_motion(*_request(speech_wav, methods), chosen, progress=quiet))[-1]
+    payload, _, _, out, *_ = list(h.show_motion(*_request(speech_wav, methods), chosen, progress=quiet))[-1]
     c = payload["character"]
     assert c["name"] == "me.glb" and list(c["methods"]) == [b["method"] for b in payload["bodies"]] == methods
     assert c["frames"] == payload["frames"] and c["nodes"][0] == skel.bones["pelvis"]
@@ -178,7 +178,7 @@ def test_the_character_follows_the_pages_feet_on_the_ground_option(service, spee
     h, roots = _Handlers(service), {}
     for on in (True, False):
         request = _request(speech_wav, ["gesturelsm"])[:-1] + (on,)
-        payload, _, _, out, _ = list(h.show_motion(*request, chosen, progress=quiet))[-1]
+        payload, _, _, out, *_ = list(h.show_motion(*request, chosen, progress=quiet))[-1]
         assert out.job.grounding is on
         want = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=on)
         other = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=not on)

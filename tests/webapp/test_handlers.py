@@ -55,7 +55,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     first = made(h, *inputs(speech_wav, 0), request=page, progress=quiet)
     second = made(h, *inputs(speech_wav, 1), request=page, progress=quiet)
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
-    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 4
+    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 5
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
 
     started, result = threading.Event(), {}
@@ -75,7 +75,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     video, _rows, _summary, rendered = h.show_video(third, request=page, progress=quiet)   # the newest one renders
     assert third.video is None, "the state's result is not edited: the rendered one replaces it"
     assert video == str(rendered.video) and rendered.video.stat().st_size > 1000 and rendered.job is third.job
-    files, glb, summary, exported = h.add_exports(rendered, request=page)          # and then its downloads
+    files, glb, summary, exported, _ = h.add_exports(rendered, request=page)        # and then its downloads
     assert exported.video == rendered.video and glb == str(exported.glb) and "Video ready" in summary
     assert sorted(files) == sorted(map(str, exported.downloads)) and rendered.downloads == ()
 
@@ -103,3 +103,38 @@ def test_the_feet_on_the_ground_box_grounds_every_shown_motion(service, speech_w
     np.testing.assert_array_equal(on.trans, want.trans)
     keep = [c for j in range(55) if j not in CHANGED_JOINTS for c in range(3 * j, 3 * j + 3)]
     assert np.array_equal(on.poses[:, keep], off.poses[:, keep]) and not np.allclose(on.trans, off.trans)
+
+
+def test_new_speech_clears_recognised_words_and_keeps_typed_ones_with_a_note():
+    """Speech uploaded, recorded or removed: the words the page recognised for earlier speech leave the box; words
+    the visitor typed stay, with the note shown; an empty box stays empty and the note hidden."""
+    from gesturelsm.webapp.layout import TYPED_NOTE
+    from gesturelsm.webapp.words import new_speech
+
+    words = {"audio": "/up/a.wav", "text": "hello there"}
+    text, note, kept = new_speech(" hello there ", words)
+    assert text == "" and note["visible"] is False and kept is None
+    text, note, kept = new_speech("my own words", words)
+    assert text == gr.skip() and note == {"__type__": "update", "value": TYPED_NOTE, "visible": True} and kept is words
+    text, note, kept = new_speech("", words)
+    assert text == gr.skip() and note["visible"] is False and kept is None
+
+
+def test_a_request_never_uses_the_words_recognised_for_another_upload():
+    """The box still holds the words recognised for upload A (a generation of A finished after B was uploaded): a
+    request for B transcribes B itself; for A, or with words the visitor typed, the box's words are used."""
+    from gesturelsm.webapp.words import own_words
+
+    words = {"audio": "/up/a.wav", "text": "hello there"}
+    assert own_words("/up/b.wav", "hello there", words) == ""
+    assert own_words("/up/a.wav", "hello there", words) == "hello there"
+    assert own_words("/up/b.wav", "typed words", words) == "typed words"
+    assert own_words("/up/b.wav", "typed words", None) == "typed words"
+
+
+def test_the_button_sends_the_recognised_words_with_their_upload_and_a_status(service, speech_wav, hears_hello):
+    h = _Handlers(service)
+    outs = list(h.show_motion(*inputs(speech_wav, 0)[:11], True, True, None, None, progress=quiet))
+    payload, _table, _summary, out, text, words, status = outs[-1]
+    assert text == "hello there" and words == {"audio": str(speech_wav), "text": "hello there"}
+    assert status.startswith("**Motion made** for 1 of 1 methods")

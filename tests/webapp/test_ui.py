@@ -50,14 +50,16 @@ def test_build_demo_has_the_controls(service):
     # an upload or a recording starts the transcription (speech, transcript box, auto-transcribe box as inputs)
     ids = {c["props"].get("elem_id"): c["id"] for c in cfg["components"]}
     early = {t[1]: d for d in cfg["dependencies"] for t in d["targets"] if t[0] == ids["speech"]}
-    for event in ("upload", "stop_recording"):
-        dep = early[event]
+    for event in ("upload", "stop_recording"):     # first the words recognised for earlier speech leave the box
+        dep = early[event]                          # (webapp/words.py), then the upload is prepared with the box's words
+        assert dep["api_name"].startswith("new_speech") and dep["inputs"][0] == ids["transcript"]
+        dep = next(d for d in cfg["dependencies"] if d.get("trigger_after") == dep["id"])
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
     # ... and then the motion of the settings shown is made ahead (serve/ahead.py): the prefetch gets every input the
     # Generate button sends, again when a slider is let go or another setting changes
     click = next(d for d in cfg["dependencies"] if d.get("api_name") == "generate_motion")
     prefetches = [d for d in cfg["dependencies"] if (d.get("api_name") or "").startswith("prefetch")]
-    assert all(d["inputs"] == click["inputs"][:-1] for d in prefetches)          # all but the page's character
+    assert all(d["inputs"] == click["inputs"][:-2] + click["inputs"][-1:] for d in prefetches)  # not the character
     by_label = {c["id"]: c["props"].get("label") for c in cfg["components"]}
     wired = {(by_label.get(t[0]), t[1]) for d in prefetches for t in d["targets"]}
     assert {("CFG scale", "release"), ("Seed", "change"), ("Methods shown side by side", "change")} <= wired

@@ -6,6 +6,8 @@ import * as SkeletonUtils from 'three/addons/utils/SkeletonUtils.js';
 
 export const JOINTS = 55;
 const glbCache = new Map();    // url -> Promise<gltf>
+const Z_AXIS = new THREE.Vector3(0, 0, 1);
+const IDLE_ARMS = 1.2;         // radians the arms are lowered from the bind T-pose at rest (about 70 degrees)
 
 export function loadGlb(url) {
   if (!glbCache.has(url)) glbCache.set(url, new GLTFLoader().loadAsync(url));
@@ -54,6 +56,22 @@ export class Body {
     this.rot.set(rot, this.frames * JOINTS * 4); this.pos.set(pos, this.frames * 3);
     if (this.E && expr.length) this.expr.set(expr, this.frames * this.E);
     this.frames = need;
+  }
+
+  // Standing at rest before any motion: the bind pose (a T-pose with the pelvis at the origin) with the arms
+  // lowered along the sides and the whole body lifted onto the floor (its lowest skinned vertex at y = 0).
+  idle() {
+    for (const b of this.bones) b.quaternion.identity();
+    this.bones[16].quaternion.setFromAxisAngle(Z_AXIS, -IDLE_ARMS);      // left shoulder (the body faces +z)
+    this.bones[17].quaternion.setFromAxisAngle(Z_AXIS, IDLE_ARMS);       // right shoulder
+    this.bones[18].quaternion.setFromAxisAngle(Z_AXIS, -0.15);
+    this.bones[19].quaternion.setFromAxisAngle(Z_AXIS, 0.15);
+    if (this.rest0 === undefined) this.rest0 = this.bones[0].position.y;
+    this.bones[0].position.y = this.rest0;
+    this.root.updateMatrixWorld(true);
+    const low = new THREE.Box3().setFromObject(this.mesh, true).min.y;
+    this.bones[0].position.y = this.rest0 - low;
+    this.root.updateMatrixWorld(true);
   }
 
   pose(f) {

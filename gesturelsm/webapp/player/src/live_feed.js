@@ -36,7 +36,7 @@ export class LiveFeed {
     if (this.ui.record) this.ui.record.addEventListener('click', () => this.start());
     if (this.ui.stop) this.ui.stop.addEventListener('click', () => this.stop());
     this.ready = this.player.setBodies([{ label, body: bodyUrl }]).then(() => {   // the body at rest until a stream
-      this.player.renderer.render(this.player.scene, this.player.camera);
+      this.player.standIdle();
       element.dataset.ready = '1';
     });
     this.spoken0 = null; this.seen = -1; this.shown = []; this.last = null;
@@ -57,7 +57,7 @@ export class LiveFeed {
     if (this.ws || this.clock) return;                              // a stream is on screen: it stays
     const rest = this.chosen && this.chosen.nodes ? this.chosen : null;
     this.ready = this.player.setBodies([{ label: this.label, body: this.bodyUrl, method: 'live' }], 30, rest)
-      .then(() => this.player.renderer.render(this.player.scene, this.player.camera));
+      .then(() => this.player.standIdle());
   }
 
   async reset(character = null) {

@@ -41,9 +41,13 @@ import { decodeMotion } from './motion_decoder.js';
 import { loadPayload } from './progressive.js';
 
 const SPACING = 1.2;           // metres between bodies, as in the server-side video
+// What the camera frames (metres): from just below the floor to above the labels over the heads, and half a body's
+// reach beside the outer bodies; the bodies fill the picture's height (MotionPlayer.frameBodies)
+const FRAME_TOP = 2.05, FRAME_BOTTOM = -0.12, REACH = 0.6;
+const LABEL_ABOVE = 0.22;      // metres above the head joint where a label's bottom edge sits (clear of the face)
 
 export class MotionPlayer {
-  constructor(element, { width = 640, height = 300 } = {}) {  // drawing size; CSS scales it
+  constructor(element, { width = 640, height = 360 } = {}) {  // drawing size; CSS scales it
     adoptStyles();
     this.element = element;
     this.fps = 30; this.bodies = []; this.clock = null; this.shown = -1; this.drawn = 0;
@@ -68,9 +72,8 @@ export class MotionPlayer {
     floor.rotation.x = -Math.PI / 2; this.scene.add(floor);
     this.material = new THREE.MeshMatcapMaterial({ matcap: clayMatcap() });   // lit look, no light maths
     this.camera = new THREE.PerspectiveCamera(30, width / height, 0.05, 50);
-    this.camera.position.set(0, 1.2, 4.6);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
-    this.controls.target.set(0, 1.0, 0); this.controls.update();
+    this.frameBodies(1);
     this.controls.addEventListener('change', () => { this.dirty = true; });
     const bar = el('div', { class: 'mp-bar' }, element);
     this.button = el('button', { class: 'mp-play', type: 'button', text: 'Play' }, bar);
@@ -113,6 +116,7 @@ export class MotionPlayer {
     }) : null;
     if (gen !== this.generation) return false;            // a newer request replaced these bodies
     for (const b of this.bodies) this.scene.remove(b.root);
+    if (this.idleBody) { this.scene.remove(this.idleBody.root); this.idleBody = null; }
     this.labelBox.innerHTML = '';
     this.fps = fps; this.shown = -1; this.drawn = 0;
     this.specs = specs; this.gltfs = gltfs; this.ch = ch; this.chSpec = character;
@@ -129,9 +133,27 @@ export class MotionPlayer {
       return b;
     });
     this._count();
-    this.camera.position.set(0, 1.2, 2.6 + 1.4 * Math.max(n, 1)); this.controls.update();
+    this.frameBodies(n);
     this.dirty = true;
     return true;
+  }
+
+  // The camera looks at n bodies side by side so that they fill the picture: feet on the floor at the bottom, the
+  // labels over the heads at the top, the outer bodies' reach inside the sides (the visitor may orbit from there).
+  frameBodies(n) {
+    const t = Math.tan(THREE.MathUtils.degToRad(this.camera.fov / 2));
+    const halfW = ((Math.max(n, 1) - 1) * SPACING) / 2 + REACH, halfH = (FRAME_TOP - FRAME_BOTTOM) / 2;
+    const d = Math.max(halfH / t, halfW / (t * this.camera.aspect));
+    const y = (FRAME_TOP + FRAME_BOTTOM) / 2;
+    this.camera.position.set(0, y, d); this.controls.target.set(0, y, 0); this.controls.update();
+  }
+
+  // The bodies of the player, standing at rest (arms down, feet on the floor) until motion comes: the Live tab's
+  // body before a stream, and the page's before the first request. Drawn at once.
+  standIdle() {
+    for (const b of this.bodies) if (b.idle) b.idle();
+    this.renderer.render(this.scene, this.camera);
+    this._labels();
   }
 
   // Slot i's body joins the clock where it is now: its motion (a decoded record for the mannequin, or the page's
@@ -242,8 +264,9 @@ export class MotionPlayer {
     const b = new Body(gltf, '', 0, this.material);
     this.scene.add(b.root);
     this.renderer.compile(this.scene, this.camera);
+    if (this.bodies.length) this.scene.remove(b.root);   // a payload came first: its bodies are on screen
+    else { b.idle(); this.idleBody = b; }                // shown standing at rest until the first payload
     this.renderer.render(this.scene, this.camera);
-    this.scene.remove(b.root);
     this.dirty = true;
   }
 
@@ -263,7 +286,7 @@ export class MotionPlayer {
       return;
     }
     const a = Math.min(start, T), b = Math.min(end, T);
-    this.band.style.display = '';
+    this.band.style.display = 'block';               // '' would fall back to player.css's display: none
     this.band.style.left = `${(100 * a) / T}%`; this.band.style.width = `${(100 * (b - a)) / T}%`;
     d.editStart = String(start); d.editEnd = String(end);
   }
@@ -353,7 +376,7 @@ export class MotionPlayer {
     const v = this._v || (this._v = new THREE.Vector3());
     if (!this.stageH || this.dirtyLayout) { this.stageH = this.renderer.domElement.clientHeight; this.dirtyLayout = false; }
     for (const b of this.bodies) {                // layout read once above, writes only here (no forced layout)
-      (b.head || b.bones[15]).getWorldPosition(v); v.y += 0.32; v.project(this.camera);      // joint 15: head
+      (b.head || b.bones[15]).getWorldPosition(v); v.y += LABEL_ABOVE; v.project(this.camera);   // joint 15: head
       const left = Math.round(((v.x + 1) / 2) * 1000) / 10, top = Math.round(((1 - v.y) / 2) * this.stageH);
       if (left === b.left && top === b.top) continue;                            // unchanged: no style write
       b.left = left; b.top = top;
