@@ -1,6 +1,7 @@
 """English transcription before and after the multilingual recogniser was added, in one run (markdown out).
 
-    NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_languages.py [--before 6a48afc] [--data DIR]
+    NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_languages.py \
+        [--before 6a48afc] [--data DIR]
 
 The package as it was at `--before` (taken from git into a temporary folder) and as it is now each transcribe the
 real BEAT2 takes (wave16k/*.wav) with the default settings (language auto), alternating, in fresh processes; the
@@ -27,7 +28,8 @@ out = {}
 for path in sys.argv[1:]:
     y, _ = sf.read(path, dtype="float32")
     t = time.perf_counter(); tr = transcribe(y); dt = time.perf_counter() - t
-    out[path] = {"s": dt, "lang": tr.language, "words": [[w.text, round(w.start, 4), round(w.end, 4)] for w in tr.words]}
+    out[path] = {"s": dt, "lang": tr.language,
+                 "words": [[w.text, round(w.start, 4), round(w.end, 4)] for w in tr.words]}
 print(json.dumps(out))
 """
 
@@ -60,7 +62,7 @@ def main() -> None:
                 last[name] = got
                 for w, r in got.items():
                     times[name].setdefault(w, []).append(r["s"])
-    print(f"| take | before (s) | after (s) | words | same words and times | language after |")
+    print("| take | before (s) | after (s) | words | same words and times | language after |")
     print("|---|---|---|---|---|---|")
     for w in wavs:
         b, a = last["before"][w], last["after"][w]

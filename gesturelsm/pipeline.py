@@ -367,7 +367,7 @@ class GesturePipeline:
         check_smoothing(post.smoothing)
         keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
         ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
-        speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress)
+        speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress, language)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
         out = self.backends[method].edit(speech, motion, ask, steps, cfg, seed, prog)
         t0 = time.perf_counter()
@@ -381,7 +381,8 @@ class GesturePipeline:
                                 speech.text_mode, warnings + out.warnings + ([note] if note else []))
 
     def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
-                     text: str | None, transcribe: bool, progress: Progress | None) -> tuple[SpeechInput, list[str]]:
+                     text: str | None, transcribe: bool, progress: Progress | None,
+                     language: str = DEFAULTS.language) -> tuple[SpeechInput, list[str]]:
         """The speech of an edit, exactly as long as the motion: given prepared, it must be; given as samples, it
         is cut or padded with silence when it differs by a little (motion.editing.fit_speech)."""
         if isinstance(speech, SpeechInput):
@@ -395,5 +396,5 @@ class GesturePipeline:
         return prepared, warnings + prepared.warnings
 
 
-__all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError", "AudioError",
-           "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]
+__all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError",
+           "AudioError", "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

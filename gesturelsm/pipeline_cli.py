@@ -19,8 +19,8 @@ from .export.rig import export_rig
 from .pipeline import GenerationResult, GesturePipeline, with_speech
 from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
-                                 output_file, positive, refuse, say)
+from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
+                                 cli_settings, input_file, output_file, positive, refuse, say)
 
 
 GENERATE = """`gesturelsm generate`: speech -> one method's motion as a BEAT2-layout npz (SMPL-X, 30 fps).

@@ -1,7 +1,7 @@
 """A VMC receiver of our own, for a look at what a stream carries: listens on a UDP port, decodes the bundles with a
 small OSC decoder (struct only: not our sender's library), puts the received local bone poses on the skeleton they
-describe (forward kinematics in Unity's left-handed frame) and draws frames of it with matplotlib, from behind and from the side,
-with the VRM blendshapes received, into a PNG.
+describe (forward kinematics in Unity's left-handed frame) and draws frames of it with matplotlib, from behind and
+from the side, with the VRM blendshapes received, into a PNG.
 
     python scripts/vmc_view.py --port 39539 --out docs/engines.png &      # listen
     gesturelsm stream take.npz --vmc 127.0.0.1:39539                      # send

@@ -139,8 +139,8 @@ HOSTILE: dict[str, tuple] = {
     "one .npy array": (lambda p: np.save(p.with_suffix(".npy"), np.zeros((T, 165))) or
                        p.with_suffix(".npy").rename(p), "one array, not a .npz"),
 }
-BOMBS = ("deflate bomb: 2,000,000 zero frames (1.3 GB) in a 6 MB file", "header claiming 10^9 frames", "betas claiming 10^8 values",
-         "words claiming 10^7 words")
+BOMBS = ("deflate bomb: 2,000,000 zero frames (1.3 GB) in a 6 MB file", "header claiming 10^9 frames",
+         "betas claiming 10^8 values", "words claiming 10^7 words")
 
 ACCEPTED: dict[str, tuple] = {
     "BEAT2's own layout (float64 trans and expressions, string model / gender, 0-d int32 rate)":

@@ -18,7 +18,8 @@ from ..cluster import ProgressLine, add_cluster_argument, connect
 from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
-from ..settings.arguments import add_language_flag, add_max_seconds_flag, input_file, output_folder, positive, refuse, say, threads
+from ..settings.arguments import (add_language_flag, add_max_seconds_flag, input_file, output_folder, positive, refuse,
+                                  say, threads)
 from ..settings.check import check_language
 from ..settings.values import from_text
 from .sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, check_grid, run_sweep, sweep_grid

@@ -45,8 +45,11 @@ def fgd(pairing: Pairing, weights: Path) -> float:
     from scipy import linalg
 
     model = load_emage_weights(SkeletonConvEncoder(), weights)
-    feats = lambda p: emage_features(model, axis_angle_to_rot6d(torch.from_numpy(p).float().reshape(
-        len(p), 55, 3)).reshape(len(p), 330).numpy())
+
+    def feats(p: np.ndarray) -> np.ndarray:
+        six = axis_angle_to_rot6d(torch.from_numpy(p).float().reshape(len(p), 55, 3)).reshape(len(p), 330)
+        return emage_features(model, six.numpy())
+
     pred, target = [], []
     for take, files in pairing.generated.items():
         human = read_poses(pairing.human[take])[0]

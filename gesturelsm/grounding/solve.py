@@ -39,7 +39,8 @@ class GroundingSettings:
     height_seconds: float = 0.3                               # smoothing of the root's height correction
     bob: float = 0.6                # the root height's ups and downs are scaled by this (1: as the legs have them)
     reach: float = REACH                                      # a planted leg is stretched at most this much
-    knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight` (else height_seconds)
+    knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight`
+                                    # (else height_seconds)
     straight: bool = False          # True: the root as high as the straightest planted leg asks, knees as the
                                     # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
     heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)

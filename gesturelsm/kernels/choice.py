@@ -257,7 +257,8 @@ def _tell() -> None:
     if _told:
         return
     where = cache.cache_path()
-    line = (f"gesturelsm: timing the fast CPU kernels on this machine (first runs here; at most {budget_base():.1f} s + "
+    line = ("gesturelsm: timing the fast CPU kernels on this machine (first runs here; at most "
+            f"{budget_base():.1f} s + "
             f"{100 * SHARE:.0f} % of this run, the rest in later runs; kept in {where or 'memory only'})")
     _told.append(line)
     print(line, file=sys.stderr, flush=True)

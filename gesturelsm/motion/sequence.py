@@ -17,7 +17,7 @@ import torch
 from ..constants import FPS
 from ..errors import MotionFileError
 from .motion_file import read_motion_file
-from .regions import EXPR_OFFSET, FEATURE_DIM, NUM_EXPRESSIONS, ROT_DIM, TRANS_OFFSET
+from .regions import EXPR_OFFSET, FEATURE_DIM, ROT_DIM, TRANS_OFFSET
 from .rotations import axis_angle_to_rot6d, rot6d_to_axis_angle
 from .skeleton import MIRROR_PERM, NUM_JOINTS
 from .translation import trans_to_velocity, velocity_to_trans

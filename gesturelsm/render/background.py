@@ -173,7 +173,7 @@ def _watch(proc: subprocess.Popen, cancelled: Callable[[], bool], killed: thread
         while not killed.wait(every_s) and proc.poll() is None:
             try:
                 stop = cancelled()
-            except Exception:                    # noqa: BLE001 (a broken check must not kill the watcher)
+            except Exception:
                 log.exception("checking whether a render was cancelled failed")
                 continue
             if stop:

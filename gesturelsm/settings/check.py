@@ -220,5 +220,5 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_language", "check_method_settings",
-           "check_post", "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems", "settings_problems",
-           "steps_per_method"]
+           "check_post", "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems",
+           "settings_problems", "steps_per_method"]

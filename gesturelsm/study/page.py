@@ -88,7 +88,8 @@ function show(state) {
   t.dataset.trial = String(current.index); t.dataset.kind = current.kind;
   $("pair-choices").hidden = rating; $("rating-form").hidden = !rating; $("right-figure").hidden = rating;
   $("question").textContent = rating ? "Watch the video with sound, then rate it on each scale."
-    : current.question || "Watch both videos with sound. Which character's gestures look more natural and fit the speech better?";
+    : current.question
+      || "Watch both videos with sound. Which character's gestures look more natural and fit the speech better?";
   if (rating) {
     $("scales").innerHTML = "";
     for (const s of current.scales) {

@@ -1,5 +1,6 @@
 """results.png: Bradley-Terry scores with intervals and the pairwise win-rate matrix (pairwise studies), the
-matched share per method (appropriateness studies), or mean ratings with intervals per scale (rating studies). Drawn with matplotlib's Agg backend (no display)."""
+matched share per method (appropriateness studies), or mean ratings with intervals per scale (rating studies).
+Drawn with matplotlib's Agg backend (no display)."""
 from __future__ import annotations
 
 from pathlib import Path

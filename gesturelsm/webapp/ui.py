@@ -124,7 +124,8 @@ class _Handlers:
         """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
         return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods, steps=steps,
                        ddim_steps=ddim_steps, cfg=cfg, seed=seed, stand_in_place=in_place, grounding=grounding,
-                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render, language=language)
+                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render,
+                       language=language)
 
     @staticmethod
     def refuse(exc: GestureError):
@@ -204,7 +205,8 @@ class _Handlers:
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, progress=gr.Progress()):
+                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language,
+                 progress=gr.Progress()):
         """The API (`/generate`): everything in one call."""
         out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
                                      size, auto_text, grounding, language, exports=True), progress)

@@ -33,7 +33,8 @@ def test_its_own_voice_beats_the_english_voice(clip_maker):
     assert errors[0] < errors[1]
 
 
-@pytest.mark.parametrize("language, text", [("ja", "きのう ともだちと ひるごはんを たべました"), ("zh", "我们昨天在公园散步")])
+@pytest.mark.parametrize("language, text", [("ja", "きのう ともだちと ひるごはんを たべました"),
+                                            ("zh", "我们昨天在公园散步")])
 def test_scripts_espeak_does_not_read_are_spread_with_a_warning(clip, language, text):
     res = align_words(clip.audio, text, typed_alignment(language, text))
     assert res.method == "even" and "does not read this language" in res.warning

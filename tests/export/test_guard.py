@@ -38,7 +38,8 @@ def _bad(wild_motion):
 def test_every_writer_refuses_and_writes_nothing(wild_motion, body, tmp_path, case):
     seq = _bad(wild_motion)[case]
     writers = {"a.npz": lambda p: export_npz(seq, p), "a.bvh": lambda p: export_bvh(seq, p, body=body),
-               "a.glb": lambda p: export_glb(seq, p, body=body), "a.json": lambda p: export_keypoints(seq, p, body=body),
+               "a.glb": lambda p: export_glb(seq, p, body=body),
+               "a.json": lambda p: export_keypoints(seq, p, body=body),
                "a.csv": lambda p: export_arkit(seq, p, body=body), "s.npz": lambda p: seq.save(p)}
     for name, write in writers.items():
         with pytest.raises(GestureError, match="NaN or infinite|frame rate|no frames|fps"):

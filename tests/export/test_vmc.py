@@ -65,7 +65,8 @@ def smplx_directions(seq: MotionSequence, body) -> np.ndarray:
 def received_directions(bones_per_frame: list[dict]) -> np.ndarray:
     """(T, L, 3) limb directions from the received local positions and rotations, by forward kinematics in
     Unity's own left-handed frame (quaternion products as Unity's), then mirrored to the body's frame."""
-    parent_bone = {UNITY_BONE[j]: (UNITY_BONE[JOINT_NAMES[p]] if p >= 0 else None) for j, p in zip(JOINT_NAMES, PARENTS)}
+    parent_bone = {UNITY_BONE[j]: (UNITY_BONE[JOINT_NAMES[p]] if p >= 0 else None)
+                   for j, p in zip(JOINT_NAMES, PARENTS)}
     out = []
     for bones in bones_per_frame:
         Gw, Pw = {}, {}

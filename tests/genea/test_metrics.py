@@ -83,7 +83,7 @@ def test_takes_that_differ_are_one_line(folders, capsys):
     (human / f"{TAKES[0]}.npz").unlink()
     assert main(["genea", "metrics", str(gen), str(human)]) == 2
     err = capsys.readouterr().err
-    assert f"no human motion" in err and TAKES[0] in err and "Traceback" not in err
+    assert "no human motion" in err and TAKES[0] in err and "Traceback" not in err
 
 
 def test_one_sample_per_take_leaves_sample_div_out(folders, tmp_path, capsys):

@@ -68,7 +68,8 @@ def test_the_reader_refuses_each_crafted_file_in_one_line(crafted, name):
 def test_unusual_valid_files_load(tmp_path, name):
     seq = MotionSequence.load(make(name, tmp_path))
     assert seq.num_frames == ACCEPTED[name][1] and seq.fps == 30
-    assert seq.poses.dtype == np.float32 and seq.expressions.shape == (seq.num_frames, 100) and seq.betas.shape == (300,)
+    assert seq.poses.dtype == np.float32 and seq.expressions.shape == (seq.num_frames, 100)
+    assert seq.betas.shape == (300,)
 
 
 def test_beat2s_own_take_loads_as_it_is(beat2_root):

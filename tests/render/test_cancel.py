@@ -23,7 +23,7 @@ def test_a_cancelled_render_process_ends_and_frees_its_slot(tmp_path, make_pose)
             with ticket:
                 render_apart([make_pose(9000, -1.2)], None, tmp_path / "req" / "v.mp4", size=(64, 64), nice=5,
                              progress=lambda f, m: started.set(), cancelled=ticket.cancelled.is_set)
-        except BaseException as exc:     # noqa: BLE001 (the test reads it)
+        except BaseException as exc:
             outcome["error"] = exc
     thread = threading.Thread(target=render)
     thread.start()

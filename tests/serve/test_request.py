@@ -81,10 +81,12 @@ def _result(**kw) -> Result:
 def test_the_summary_never_says_zero_seconds_and_keeps_the_generation_after_an_edit():
     made = _result(made_ahead=("gesturelsm",), ahead_seconds=2.44)
     assert "0.0 s" not in made.summary
-    assert "Motion ready under 0.1 s after the click** (made ahead: 2.4 s of generation before the click)" in made.summary
+    assert ("Motion ready under 0.1 s after the click** (made ahead: 2.4 s of generation before the click)"
+            in made.summary)
     plain = _result(motion_seconds=3.21)
     assert "**Motion ready in 3.2 s.**" in plain.summary and "Rendering the video (mp4)..." in plain.summary
-    assert "Rendering the video (mp4): frame 3/90, about 4 s left" in plain.summary_with("rendering: frame 3/90, about 4 s left")
+    assert ("Rendering the video (mp4): frame 3/90, about 4 s left"
+            in plain.summary_with("rendering: frame 3/90, about 4 s left"))
     edited = _result(motion_seconds=3.21, seconds=1.3, edits=("GestureLSM: upper 1.00-2.00 s, seed 1 (1.30 s)",),
                      edit_timings=(EditTiming("GestureLSM, edit 1", {"sampling": 1.0}, 1.3),))
     assert "**Motion ready in 3.2 s.**" in edited.summary                   # the generation's figure stays

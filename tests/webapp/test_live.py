@@ -195,7 +195,7 @@ def test_the_operators_vmc_address_gets_one_live_stream_and_a_second_visitor_is_
     finally:
         rx.close()
     assert "this server's engine (VMC)" in stats1 and BUSY_NOTE in stats2
-    assert 30 <= len(rx.packets) <= 60               # 2 s at 30 fps, the first stream only (a loaded machine drops some)
+    assert 30 <= len(rx.packets) <= 60     # 2 s at 30 fps, the first stream only (a loaded machine drops some)
     msgs = decode_bundle(rx.packets[-1][1])
     assert sum(m[0] == "/VMC/Ext/Bone/Pos" for m in msgs) == 55
     assert relay.owner is None and mgr.active == 0

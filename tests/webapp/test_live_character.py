@@ -141,7 +141,8 @@ def test_without_a_character_the_records_are_the_mannequins_byte_for_byte(charac
 
 def test_streamed_face_weights_equal_the_whole_motions(body, motion, tmp_path):
     """A VRM with visemes and blink: each chunk's morph weights are the whole motion's at those frames, the export's
-    `morph_weights(alive_face_weights(...))` (blinks included), in the channel order the stream's spec lists; the records carry them."""
+    `morph_weights(alive_face_weights(...))` (blinks included), in the channel order the stream's spec lists; the
+    records carry them."""
     from _skinned import face_vrm
     from gesturelsm.export.alive import alive_face_weights
     from gesturelsm.retarget.face import PRESETS, morph_weights

@@ -122,9 +122,9 @@ def test_the_api_never_reuses_an_earlier_calls_words(page_url, speeches):
     client = gradio_client(page_url)
     heard = []
     for wav in speeches:
-        #            audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto, ground
+        # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto, ground, lang
         out = client.predict(handle_file(str(wav)), "", None, ["gesturelsm"], 2, 2.0, 0, 2, False, "light", 256,
-                             True, True, api_name="/generate_motion")
+                             True, True, "auto", api_name="/generate_motion")
         heard.append(_words(out[3]))                                   # the transcript box
     assert len(heard[0] & _words(A_WORDS)) >= 5 and len(heard[1] & _words(B_WORDS)) >= 5, heard
 

@@ -51,7 +51,7 @@ def test_build_demo_has_the_controls(service):
     ids = {c["props"].get("elem_id"): c["id"] for c in cfg["components"]}
     early = {t[1]: d for d in cfg["dependencies"] for t in d["targets"] if t[0] == ids["speech"]}
     for event in ("upload", "stop_recording"):     # first the words recognised for earlier speech leave the box
-        dep = early[event]                          # (webapp/words.py), then the upload is prepared with the box's words
+        dep = early[event]                        # (webapp/words.py), then the upload is prepared with the box's words
         assert dep["api_name"].startswith("new_speech") and dep["inputs"][0] == ids["transcript"]
         dep = next(d for d in cfg["dependencies"] if d.get("trigger_after") == dep["id"])
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
