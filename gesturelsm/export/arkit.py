@@ -64,7 +64,7 @@ from ..errors import BodyModelError
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import JOINT_INDEX, PARENTS
 from ..retarget.face import BLINK_FROM, CORNERS, FULL_SPREAD, INNER_LOWER, INNER_UPPER, face_landmarks, landmark_gap
-from .alive import JAW_FULL, Blinker, neutral_eye, neutral_head, with_blinks
+from .alive import JAW_FULL, Blinker, blink_free, neutral_eye, neutral_head, pause_gate, with_blinks
 
 # Live Link Face's CSV column order and spelling (ARKit's names, capitalised)
 ARKIT_NAMES: tuple[str, ...] = (
@@ -81,6 +81,10 @@ HEAD_NAMES = ("HeadYaw", "HeadPitch", "HeadRoll")
 EYE_NAMES = ("LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll", "RightEyeYaw", "RightEyePitch", "RightEyeRoll")
 assert len(ARKIT_NAMES) == 52 and len(set(ARKIT_NAMES)) == 52
 
+# the mouth's speech shapes, eased shut in the pauses of a motion that keeps its words (alive.pause_gate)
+SPEECH_SHAPES = [ARKIT_NAMES.index(n) for n in (
+    "JawOpen", "MouthClose", "MouthFunnel", "MouthPucker", "MouthStretchLeft", "MouthStretchRight",
+    "MouthUpperUpLeft", "MouthUpperUpRight", "MouthLowerDownLeft", "MouthLowerDownRight")]
 FULL_MOVE = 0.10          # landmark displacement (fraction of the neutral mouth width) = weight 1
 JAW_SIDE = 0.15           # radians of jaw rotation about the vertical axis = JawLeft / JawRight 1
 EYE_WIDE_FULL = 0.30      # eyelid gap opened by this fraction of the neutral gap = EyeWide 1
@@ -241,10 +245,14 @@ def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Bli
     for i, name in enumerate(ARKIT_NAMES):
         if name in measured:
             weights[:, i] = measured[name]
+    gate = pause_gate(seq.words, T, seq.fps)
+    if gate is not None:                                  # the motion keeps its words: the mouth shut in pauses
+        weights[:, SPEECH_SHAPES] *= gate[:, None]
     if blinks and T:
         blinker = blinker if blinker is not None else Blinker(int(seq.fps))
         mouth = weights[:, ARKIT_NAMES.index("JawOpen")]
-        closed = with_blinks(np.maximum(measured["EyeBlinkLeft"], measured["EyeBlinkRight"]), blinker, mouth)
+        closed = with_blinks(np.maximum(measured["EyeBlinkLeft"], measured["EyeBlinkRight"]), blinker, mouth,
+                             blink_free(seq.words, T, seq.fps))
         for side in ("Left", "Right"):
             k = ARKIT_NAMES.index(f"EyeBlink{side}")
             weights[:, k] = np.maximum(weights[:, k], closed)
