@@ -117,3 +117,37 @@ def test_without_words_the_face_is_the_measured_one(body):
     again = arkit_face(_speaking(T), body, blinker=Blinker(FPS, 0))
     np.testing.assert_array_equal(face.weights, again.weights)
     assert face.weight("JawOpen").min() > 0.1                          # no pause closes a mouth without words
+
+
+def test_real_take_with_its_textgrid_words_shuts_the_mouth_in_pauses(beat2_root, real_motion, body):
+    """The speaker's take (its first 30 s) with its TextGrid's words: JawOpen near 0 in pauses of 0.5 s or more,
+    the words' frames as without words, speech still reaching a face capture's range, few blinks mid-word."""
+    from dataclasses import replace
+
+    from gesturelsm.align.textgrid import read_words
+
+    seconds = 30.0
+    T = int(seconds * real_motion.fps)
+    words = tuple((w.text, w.start, w.end) for w in read_words(beat2_root / "textgrid" / "2_scott_0_1_1.TextGrid")
+                  if w.text.strip() and w.start < seconds)
+    words = tuple((w, a, min(b, seconds)) for w, a, b in words)
+    seq = real_motion.slice(0, T)
+    face = arkit_face(replace(seq, words=words), body)
+    plain = arkit_face(seq, body)
+    t = np.arange(T) / real_motion.fps
+    inside = np.zeros(T, bool)
+    for _, a, b in words:
+        inside |= (t >= a) & (t < b)
+    spans = sorted((a, b) for _, a, b in words)
+    pause = np.zeros(T, bool)
+    for (_, end), (start, _) in zip(spans[:-1], spans[1:]):
+        if start - end >= 0.5:
+            pause |= (t >= end) & (t < start)
+    assert pause.sum() > 15 and np.median(plain.weight("JawOpen")[pause]) > 0.1      # open in pauses without words
+    jaw = face.weight("JawOpen")
+    assert np.median(jaw[pause]) <= 0.05
+    np.testing.assert_array_equal(jaw[inside], plain.weight("JawOpen")[inside])
+    assert np.percentile(jaw, 95) >= 0.25
+    blinks = (_onsets(face.weight("EyeBlinkLeft")) - 0.5) / real_motion.fps
+    assert 3 <= len(blinks) <= 15                                      # 6-30 a minute
+    assert mid_word(words, blinks).mean() < 0.5
