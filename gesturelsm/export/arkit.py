@@ -232,7 +232,8 @@ def arkit_face(seq: MotionSequence, body=None, blinks: bool = True, blinker: Bli
     BodyModel, a model path, or None for $GESTURELSM_SMPLX_MODEL / the built-in mannequin. `blinks`: procedural
     blinks where the model does not blink (alive.py), from `blinker` (a stream's, carried over chunks) or a new
     one seeded 0; False: the eyelids as measured. `neutral`: head and eye angles relative to the speaker's neutral
-    (False: to the rest pose)."""
+    (False: to the rest pose). When `seq` keeps its words, the mouth's speech shapes are shut in the pauses and
+    blinks favour word borders (alive.py); without words the face is as measured."""
     body = resolve_body(body)
     if len(body.module.lmk_faces_idx) != 51:
         raise BodyModelError(f"the body model {body.path.name} has no 51 facial landmarks to measure the face on")
