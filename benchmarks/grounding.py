@@ -18,7 +18,7 @@ motion (64 s) as recorded and grounded.
 The bars (the feet issue), each checked per recording: foot skate <= the real take's, contact share >= 0.5, drift
 <= 0.3 m/min, range <= 1.5 m, penetration <= 1 cm, bob <= the real take's, leg jerk <= ungrounded + 10 %, raised
 share / wrist height p95 / wrist speed within 2 % of ungrounded, knee flexion within 3 degrees of ungrounded and at
-most 14 (standing straight, issue 51). `--straight` grounds with GroundingSettings(straight=True). Cost: grounding
+most 14 (standing straight). `--straight` grounds with GroundingSettings(straight=True). Cost: grounding
 each take on one core (this process
 pinned to one CPU, torch on one thread), median of `--repeats`, per 60 s of motion.
 

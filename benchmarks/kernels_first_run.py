@@ -8,7 +8,7 @@ sides of each comparison run in turn (A B A B ...) so that load from other proce
 1. First run against a warm one, on --short seconds of speech: "first run" has an empty kernel cache
    (GESTURELSM_KERNELS_CACHE pointing at a fresh file each time: every choice has to be measured, within the
    per-process budget of kernels/choice.py), "warm" a cache filled beforehand by an unbounded run on the same
-   speech (GESTURELSM_KERNELS_BUDGET=1e9), as on a machine that has run before. The bar (issue 51): first <= 1.2 x
+   speech (GESTURELSM_KERNELS_BUDGET=1e9), as on a machine that has run before. The bar: first <= 1.2 x
    warm. The first run's one line on stderr is printed.
 2. One-shot on --long seconds of speech: the fast paths with a filled cache against GESTURELSM_ONEDNN=0 (every
    fast path off). The bar: the fast paths' speed (ONEDNN=0 time / fast time) >= 0.97.
@@ -28,9 +28,10 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("GESTURELSM_SHARED") or ROOT.parent / "shared")
-TAKE = SHARED / "data" / "beat2" / "wave16k" / "2_scott_0_2_2.wav"
+from _harness import REPO as ROOT
+from _harness import take_wav
+
+TAKE = take_wav("2_scott_0_2_2")
 
 
 def cut(seconds: float, folder: Path) -> Path:

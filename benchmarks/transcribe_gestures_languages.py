@@ -8,8 +8,8 @@ so). Each clip is transcribed with the default settings (language auto: tiny.en 
 the language); the shipped GestureLSM (its default steps, CFG 2) then generates from the audio only and with the
 recognised words, same seeds. Statistics (gesturelsm.evaluation.motion_stats, against the shipped speaker's row):
 raised share, loudness following, beat consistency, hand spread; means over seeds. The recognised words are handed
-to the generator as given word timings, so Chinese and Japanese words (which the pipeline itself no longer uses for
-the gestures, after this measurement) are measured too.
+to the generator as given word timings, so Chinese and Japanese words (which the pipeline itself does not use for
+the gestures, because of this measurement) are measured too.
 """
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
 """English transcription before and after the multilingual recogniser was added, in one run (markdown out).
 
     NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_languages.py \
-        [--before 6a48afc] [--data DIR]
+        --before REV [--data DIR]
 
-The package as it was at `--before` (taken from git into a temporary folder) and as it is now each transcribe the
+The package at the commit `--before` (taken from git into a temporary folder) and the working tree each transcribe the
 real BEAT2 takes (wave16k/*.wav) with the default settings (language auto), alternating, in fresh processes; the
 table gives the time per take (model loaded beforehand) and whether the words and their times are identical.
 """
@@ -17,7 +17,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+from _harness import BEAT2, REPO
+
 CHILD = r"""
 import json, sys, time
 import soundfile as sf
@@ -43,9 +44,9 @@ def run(tree: Path, wavs: list[str]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--before", default="6a48afc", help="the commit before languages were added")
-    ap.add_argument("--data", type=Path, default=Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared"))
-                    / "data" / "beat2")
+    ap.add_argument("--before", required=True, metavar="REV", help="the commit to compare against (one without the "
+                    "multilingual recogniser)")
+    ap.add_argument("--data", type=Path, default=BEAT2)
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
     wavs = sorted(str(p) for p in (args.data / "wave16k").glob("*.wav"))

@@ -1,4 +1,4 @@
-"""Crafted motion files for the hardening tests (issue 53; docs/HOSTILE.md lists each with what it gets), made in
+"""Crafted motion files for the hardening tests (docs/HOSTILE.md lists each with what it gets), made in
 well under a second each without the package: every way a BEAT2-layout .npz from a stranger can be wrong.
 
 `HOSTILE` maps a name to (a function writing the file at a path, the words the refusal must contain);

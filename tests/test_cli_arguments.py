@@ -15,17 +15,19 @@ from gesturelsm.pipeline import GesturePipeline
 
 @pytest.fixture
 def places(tmp_path, monkeypatch):
-    """{wav}: speech, {folder}: a folder, {file}: a plain file, {tmp}: a fresh folder; loading a model fails the
-    test."""
+    """{wav}: speech, {folder}: a folder, {speech}: a folder holding speech, {file}: a plain file, {tmp}: a fresh
+    folder; loading a model fails the test."""
     sf.write(tmp_path / "s.wav", speech_like(1.0), 16000)
     (tmp_path / "folder").mkdir()
+    (tmp_path / "speech").mkdir()
+    sf.write(tmp_path / "speech" / "s.wav", speech_like(1.0), 16000)
     (tmp_path / "file.txt").write_text("not a folder")
 
     def no_work(*_a, **_k):
         raise AssertionError("a model was loaded although an argument is bad")
     monkeypatch.setattr(GesturePipeline, "from_pretrained", no_work)
     return {"wav": str(tmp_path / "s.wav"), "folder": str(tmp_path / "folder"), "file": str(tmp_path / "file.txt"),
-            "tmp": str(tmp_path)}
+            "speech": str(tmp_path / "speech"), "tmp": str(tmp_path)}
 
 
 BAD = [
@@ -46,13 +48,13 @@ BAD = [
     ("sweep {wav} --seeds 0 --out {tmp}/o", "--seeds must be from 1 to 4"),
     ("sweep {wav} --out {file}", "is a file; give a folder"),
     ("sweep {folder} --out {tmp}/o", "is a folder; give a file"),
-    ("batch --audio-dir {folder} --out {file}", "is a file; give a folder"),
+    ("batch --audio-dir {speech} --out {file}", "is a file; give a folder"),
     ("batch --audio-dir {file} --out {tmp}/o", "--audio-dir {file}: is a file; give a folder"),
-    ("batch --audio-dir {folder} --out {tmp}/o --steps 0", "--steps must be from 1 to 128 (got 0)"),
-    ("batch --audio-dir {folder} --out {tmp}/o --ddim-steps 2000", "--ddim-steps must be from 1 to 1000 (got 2000)"),
-    ("batch --audio-dir {folder} --out {tmp}/o --raters 0", "--raters must be from 1 to"),
-    ("batch --audio-dir {folder} --out {tmp}/o --size 100", "--size must be from 128 to 1024"),
-    ("batch --audio-dir {folder} --out {tmp}/o --methods ground_truth", "ground_truth needs --beat2"),
+    ("batch --audio-dir {speech} --out {tmp}/o --steps 0", "--steps must be from 1 to 128 (got 0)"),
+    ("batch --audio-dir {speech} --out {tmp}/o --ddim-steps 2000", "--ddim-steps must be from 1 to 1000 (got 2000)"),
+    ("batch --audio-dir {speech} --out {tmp}/o --raters 0", "--raters must be from 1 to"),
+    ("batch --audio-dir {speech} --out {tmp}/o --size 100", "--size must be from 128 to 1024"),
+    ("batch --audio-dir {speech} --out {tmp}/o --methods gesturelsm ground_truth", "ground_truth needs --beat2"),
     ("eval --data {folder} --threads -3 --out {tmp}/o", "--threads must be from 1 to"),
     ("eval --data {folder} --steps 0 --out {tmp}/o", "--steps must be from 1 to"),
     ("eval --data {folder} --out {file}", "is a file; give a folder"),

@@ -112,7 +112,7 @@ def test_a_motion_that_is_not_the_speechs_length_or_not_a_motion(files, tiny_ass
     (["--regenerate", "upper@1-3", "--bvh", "/proc/self/x.bvh"], "--bvh /proc/self/x.bvh: cannot write in"),
 ])
 def test_crafted_arguments_are_refused_before_any_model_loads(files, tmp_path, capsys, monkeypatch, extra, message):
-    """Issue 53: each a line and status 2, and no model is loaded for any of them (a model load would fail the
+    """Each a line and status 2, and no model is loaded for any of them (a model load would fail the
     test: the refusal comes from the arguments, the motion and the speech alone)."""
     from gesturelsm.pipeline import GesturePipeline
 

@@ -33,7 +33,7 @@ def transcript_source(text: str | None, has_textgrid: bool, auto: bool) -> str:
 
 
 def typed_alignment(language: str, text: str) -> AlignConfig:
-    """How a typed transcript in `language` is aligned: English voices for auto/en (as before languages were added),
+    """How a typed transcript in `language` is aligned: English voices for auto/en,
     the language's eSpeak NG voices where eSpeak reads it (Spanish "es", German "de", Russian "ru", ...), none for
     Chinese and Japanese (also a Han/kana transcript under auto): its characters are spread over the speech by length
     (the aligner says so; leaving the box empty has them recognised and timed by the recogniser)."""

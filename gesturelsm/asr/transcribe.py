@@ -145,9 +145,8 @@ def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc).
 
     language: AUTO (English first; where the English model rejects the speech as unsure or looping, or hears no words,
-    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only, as before
-    languages were added) or a Whisper code from languages.LANGUAGES (the multilingual model in that language, nothing
-    identified)."""
+    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only) or a Whisper
+    code from languages.LANGUAGES (the multilingual model in that language, nothing identified)."""
     if timing not in TIMINGS:
         raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
     if language not in CHOICES:

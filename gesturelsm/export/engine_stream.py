@@ -42,7 +42,7 @@ class Address:
 
 
 def parse_address(text: str, flag: str = "--vmc") -> Address:
-    """`HOST:PORT` (an IPv6 host in brackets: `[::1]:39539`) -> Address, the host resolved once now. A bad one is a
+    """`HOST:PORT` (an IPv6 host in brackets: `[::1]:39539`) -> Address, the host resolved once, here. A bad one is a
     UserError naming the flag, in one line."""
     text = str(text).strip()
     host, sep, port = text.rpartition(":")

@@ -16,8 +16,8 @@ from pathlib import Path
 from ..backends import SPECS, checkpoint_sources
 from ..cluster import add_cluster_argument, connect
 from ..settings import DEFAULT_METHOD
-from ..settings.arguments import (add_max_seconds_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
-                                  input_folder, output_file, output_folder, positive, refuse)
+from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
+                                  cli_settings, input_file, input_folder, output_file, output_folder, positive, refuse)
 from ..settings.values import from_text, whole_number
 from .leaderboard import EMAGE_FILE, MEAN_SPEED_FILE, evaluate
 from .metrics import HEADERS, KEYS
@@ -43,6 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--textgrids", help="folder of <stem>.TextGrid word timings (default: transcribe each speech)")
     s.add_argument("--no-transcribe", action="store_true",
                    help="audio-only: do not transcribe the speech when no --textgrids are given")
+    add_language_flag(s)
     add_settings_flags(s, steps="one")
     s.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS), help="the method to submit")
     s.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets; NOT "

@@ -45,7 +45,7 @@ def make_samples(pipe: GesturePipeline, unit: SpeechUnit) -> dict[str, bytes]:
     """The speech's samples (file name -> npz bytes), one per seed, the speech prepared once."""
     try:
         speech = pipe.prepare_speech(unit.audio, SAMPLE_RATE, words=list(unit.words) if unit.words else None,
-                                     transcribe=unit.settings.transcribe)
+                                     transcribe=unit.settings.transcribe, language=unit.settings.language)
     except ValueError as exc:                  # InputError: too short, silent, too long
         raise type(exc)(f"{unit.stem}: {exc}") from None
     out = {}
@@ -101,6 +101,7 @@ def submit(speech_dir: Path, out: Path, settings: Settings, *, samples: int, che
     spec = SubmitSpec(tuple(Files.of(c, ship) for c in checkpoints), method, max_seconds)
     manifest = Manifest(dict(method=method, steps=settings.steps_for(method), cfg=settings.cfg, seed=settings.seed,
                              samples=samples, post=asdict(settings.post), transcribe=settings.transcribe,
+                             language=settings.language,
                              transcript="TextGrid" if textgrids else
                              ("recognised" if settings.transcribe else "none (audio only)")),
                         checkpoint_hashes(checkpoints, method), {})

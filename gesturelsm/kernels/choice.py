@@ -180,7 +180,7 @@ def budget_base() -> float:
 
 
 def budget() -> float:
-    """Seconds this process may have spent measuring by now: `budget_base()` plus SHARE of the wall time since
+    """Seconds this process may have spent measuring so far: `budget_base()` plus SHARE of the wall time since
     its first choice (0 when the base is 0)."""
     base = budget_base()
     if base <= 0:
@@ -208,7 +208,7 @@ def taken(path: str, key: Hashable, pair: Pair) -> bool:
 
 
 def decide(path: str, key: Hashable, pair: Pair) -> Choice | None:
-    """The choice for `path` at `key`: forced, kept, read from the cache or measured now (within the budget);
+    """The choice for `path` at `key`: forced, kept, read from the cache or measured in this call (within the budget);
     None where nothing is decided yet (forced off, while tracing, or no time left to measure it this time)."""
     force = forced()
     if force is not None:

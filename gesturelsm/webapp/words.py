@@ -1,4 +1,4 @@
-"""Each upload its own words, and the click that is seen (issue 51).
+"""Each upload its own words, and the click that is seen .
 
 Words the page recognised belong to the upload they came from: the page keeps them in a state (`words`:
 {"audio": path, "text": recognised}) beside the transcript box. New speech (uploaded, recorded or removed) clears

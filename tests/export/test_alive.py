@@ -1,5 +1,5 @@
 """export/alive.py with a motion's words: the mouth shut in the pauses, blinks at word borders and in pauses; and
-without words, the face exactly as before words were kept."""
+without words, the face of the words-free rule, bit for bit."""
 from __future__ import annotations
 
 import numpy as np
@@ -101,7 +101,7 @@ def test_blink_border_zone_counts_word_borders():
 
 
 def test_without_words_the_blinks_are_todays_bit_for_bit():
-    """Pinned from the code before words were kept (main 17f5af9): same seed, same mouth, the same blinks."""
+    """Golden values of the words-free rule: the same seed, the same mouth, the same blinks."""
     t = np.arange(1800) / FPS
     mouth = 0.3 * (np.sin(2 * np.pi * t * 1.7) > 0)
     w = Blinker(FPS, seed=0).next(mouth)

@@ -1,4 +1,4 @@
-"""Renders nobody else can block (issue 51), in headless Chromium with two page sessions on one server (one video at
+"""Renders nobody else can block, in headless Chromium with two page sessions on one server (one video at
 a time, the tiny checkpoints): session 1 generates 60 s of speech and its tab is closed while its video renders;
 session 2 then generates 5 s: all its files (npz, BVH, GLB, keypoints, ARKit CSV) are offered before its video, its
 video's progress shows frames, and its mp4 arrives; session 1's video was cancelled, never finished (had it run on,

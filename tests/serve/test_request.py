@@ -1,6 +1,6 @@
 """A request's values (gesturelsm/serve/request.py): the timing table's rows are typed, their cells come in the
 column order the page and the API show, and the generation time leaves out alignment, transcription and rendering.
-Every figure is the time spent where it was spent (issue 51, item 6): the one video's render time is the whole
+Every figure is the time spent where it was spent: the one video's render time is the whole
 request's (never the same share in every method's row), work done before the click is shown and marked, the whole
 request's generation is never below one method's, an edit has its own row and never replaces the generation's
 "Motion ready" figure, and no summary says "0.0 s"."""

@@ -58,8 +58,9 @@ def test_each_video_is_cut_to_its_segments_with_its_motion(speech, tmp_path):
     for k, it in enumerate(plan.items):
         audio = sf.read(speech / it.audio, dtype="float32")[0]
         synthetic_video(out / "videos" / it.video, audio, (200, 40, 40), seconds=2.0, fps=30)
+        frame = np.arange(60, dtype=np.float32)[:, None] / 100        # each frame's poses name it (f / 100)
         np.savez(out / "key" / "motion" / it.video.replace(".mp4", ".npz"),
-                 poses=np.arange(60 * 165, dtype=np.float32).reshape(60, 165) + k, trans=np.zeros((60, 3)))
+                 poses=np.repeat(frame, 165, axis=1) + k, trans=np.zeros((60, 3)))
     segs = read_segments(_csv(tmp_path / "s.csv", [("2_scott_0_2_2", 0.5, 1.5), ("2_scott_0_3_3", 0.2, 1.0),
                                                    ("2_scott_0_3_3", 1.0, 2.0)]), files)
     seg_files, items = cut_segments(plan, files, segs, StudyItem)
@@ -76,7 +77,7 @@ def test_each_video_is_cut_to_its_segments_with_its_motion(speech, tmp_path):
         assert len(poses) == want
     first = next(it for it in items if it.audio.startswith("2_scott_0_2_2") and it.method == "alpha")
     poses = np.load(out / "key" / "motion" / first.video.replace(".mp4", ".npz"))["poses"]
-    assert poses[0, 0] == 15 * 165                          # frame round(30 x 0.5) of the whole motion
+    assert poses[0, 0] == pytest.approx(0.15)               # frame round(30 x 0.5) of the whole motion
     again = cut_segments(plan, files, segs, StudyItem)[1]  # a rerun keeps the names and makes nothing new
     assert [it.video for it in again] == [it.video for it in items]
 
@@ -86,7 +87,7 @@ def test_batch_refuses_bad_segments_before_rendering(tiny_assets, speech, tmp_pa
 
     bad = _csv(tmp_path / "s.csv", [("2_scott_0_9_9", 0, 1)])
     assert main(["batch", "--audio-dir", str(speech), "--out", str(tmp_path / "o"), "--methods", "gesturelsm",
-                 "--checkpoints", str(tiny_assets), "--segments", str(bad)]) == 2
+                 "--design", "rating", "--checkpoints", str(tiny_assets), "--segments", str(bad)]) == 2
     assert "no speech file '2_scott_0_9_9'" in capsys.readouterr().err
     assert not (tmp_path / "o" / "videos").exists()
     assert main(["batch", "--audio-dir", str(speech), "--out", str(tmp_path / "o"), "--segments",

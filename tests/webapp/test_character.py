@@ -113,8 +113,9 @@ def test_three_vrm_posed_from_the_payload_matches(character, payload, real_motio
 
 
 def _request(wav, methods) -> tuple:
-    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
-    return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False, True)
+    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding,
+    # language
+    return (str(wav), "", None, methods, 1, 2.0, 0, 2, False, "light", 256, False, True, "auto")
 
 
 def test_a_broken_character_is_a_warning_and_the_mannequin_stays(service, speech_wav, tmp_path):
@@ -177,7 +178,7 @@ def test_the_character_follows_the_pages_feet_on_the_ground_option(service, spee
     chosen, _ = choose(str(tmp_path / "legs.glb"))
     h, roots = _Handlers(service), {}
     for on in (True, False):
-        request = _request(speech_wav, ["gesturelsm"])[:-1] + (on,)
+        request = _request(speech_wav, ["gesturelsm"])[:-2] + (on, "auto")
         payload, _, _, out, *_ = list(h.show_motion(*request, chosen, progress=quiet))[-1]
         assert out.job.grounding is on
         want = retarget_motion(out.motions["gesturelsm"], chosen, service.body, grounding=on)

@@ -27,7 +27,7 @@ def test_an_api_client_edits_the_motion_it_generated(app_url, speech_wav):
     assert "/edit_motion" in api
     method = next(p for p in api["/edit_motion"]["parameters"] if p["component"] == "Dropdown")
     assert "gesturelsm" in method["python_type"]["type"]                  # the choices are listed to a client
-    payload, table, summary, _ = _generate(client, speech_wav)
+    payload, table, summary, *_ = _generate(client, speech_wav)
     assert table["data"][0][0] == "GestureLSM"
     out = client.predict("gesturelsm", 0.5, 1.5, ["upper", "hands"], 3, api_name="/edit_motion")
     payload, table, summary = out[:3]

@@ -46,7 +46,7 @@ def test_edit_downloads_and_undo_through_the_page_handlers(service, speech_wav):
     assert "**Edited:** DDIM: upper, face 0.50-1.50 s, seed 4" in summary and new.previous is first
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4    # the edit replaced it
     video, _, _, new = h.show_video(new, request=page, progress=quiet)
-    files, glb, _, new, _ = h.add_exports(new, request=page)
+    files, glb, _, new = h.add_exports(new, request=page)
     npz = next(f for f in files if f.endswith("ddim.npz"))
     assert str(new.job.folder) in npz and video.startswith(str(new.job.folder))
     assert np.array_equal(MotionSequence.load(npz).expressions, new.motions["ddim"].expressions)

@@ -13,8 +13,9 @@ from gesturelsm.webapp.ui import _Handlers, build_demo
 
 
 def inputs(wav, seed: int, grounding: bool = True) -> tuple:
-    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding
-    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding)
+    # audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text, grounding,
+    # language
+    return (str(wav), "", None, ["gesturelsm"], 1, 2.0, seed, 2, False, "light", 256, False, grounding, "auto")
 
 
 def made(h, *args, **kw):
@@ -45,7 +46,7 @@ def test_gradio_hands_the_handlers_the_page_session():
     from gradio.helpers import special_args
 
     h, page = _Handlers.__new__(_Handlers), SimpleNamespace(session_hash="page-1")
-    for fn, n_inputs, progress in ((h.show_motion, 15, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
+    for fn, n_inputs, progress in ((h.show_motion, 16, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
         filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
         assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
 
@@ -55,7 +56,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     first = made(h, *inputs(speech_wav, 0), request=page, progress=quiet)
     second = made(h, *inputs(speech_wav, 1), request=page, progress=quiet)
     assert h.show_video(first, request=page, progress=quiet) == (gr.skip(),) * 4     # replaced: not rendered
-    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 5
+    assert not list(first.job.folder.glob("*.mp4")) and h.add_exports(first, request=page) == (gr.skip(),) * 4
     assert not h._replaced(other, first), "another page's requests replace nothing of this page's"
 
     started, result = threading.Event(), {}
@@ -75,7 +76,7 @@ def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, sp
     video, _rows, _summary, rendered = h.show_video(third, request=page, progress=quiet)   # the newest one renders
     assert third.video is None, "the state's result is not edited: the rendered one replaces it"
     assert video == str(rendered.video) and rendered.video.stat().st_size > 1000 and rendered.job is third.job
-    files, glb, summary, exported, _ = h.add_exports(rendered, request=page)        # and then its downloads
+    files, glb, summary, exported = h.add_exports(rendered, request=page)        # and then its downloads
     assert exported.video == rendered.video and glb == str(exported.glb) and "Video ready" in summary
     assert sorted(files) == sorted(map(str, exported.downloads)) and rendered.downloads == ()
 
@@ -134,7 +135,7 @@ def test_a_request_never_uses_the_words_recognised_for_another_upload():
 
 def test_the_button_sends_the_recognised_words_with_their_upload_and_a_status(service, speech_wav, hears_hello):
     h = _Handlers(service)
-    outs = list(h.show_motion(*inputs(speech_wav, 0)[:11], True, True, None, None, progress=quiet))
+    outs = list(h.show_motion(*inputs(speech_wav, 0)[:11], True, True, "auto", None, None, progress=quiet))
     payload, _table, _summary, out, text, words, status = outs[-1]
     assert text == "hello there" and words == {"audio": str(speech_wav), "text": "hello there"}
     assert status.startswith("**Motion made** for 1 of 1 methods")

@@ -1,4 +1,4 @@
-"""The page as a visitor meets it, in headless Chromium on the shipped checkpoints (issue 51):
+"""The page as a visitor meets it, in headless Chromium on the shipped checkpoints:
 - each upload its own words: upload speech A, Generate (automatic transcript), upload speech B, Generate: the box is
   emptied on B's upload and B is transcribed itself (its summary says so, its recognised words are B's, never A's);
   words the visitor typed stay on a new upload with a visible note; the API's calls never share words either;
