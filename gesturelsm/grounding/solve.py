@@ -41,10 +41,11 @@ class GroundingSettings:
     reach: float = REACH                                      # a planted leg is stretched at most this much
     knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight`
                                     # (else height_seconds)
-    straight: bool = False          # True: the root as high as the straightest planted leg asks, knees as the
+    straight: bool = True           # True: the root as high as the straightest planted leg asks, knees as the
                                     # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
     heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)
     heel_seconds: float = 0.15      # smoothing of the heel's lift
+    knee_speed: float = 2.0         # rad/s: with `straight`, a knee straightens no faster than this (the heel lifts)
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
 
 
@@ -187,6 +188,26 @@ def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray,
     return out, about(k, alpha) @ R
 
 
+def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np.ndarray, speed: float,
+              fps: int = FPS) -> np.ndarray:
+    """(T,) how far the leg may reach from `hip` (T, 3) towards its ankle `target` (T, 3) when its knee straightens
+    no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at most `longest` (T,) from
+    hip to ankle), let down no faster than that (it may bend as fast as it likes), back to a reach. Near straight a
+    small change of reach turns the knee fast (a foot put down with the leg nearly straight would snap it); the
+    foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`)."""
+    a, b = rig.lengths(leg)
+    d = np.minimum(np.linalg.norm(target - hip, axis=-1), longest)
+    cos = np.clip((d ** 2 - a * a - b * b) / (2 * a * b), -1.0, 1.0)
+    want = np.arccos(cos)                                              # 0: straight
+    step = speed / fps
+    got = want.copy()
+    for t in range(1, len(got)):                                       # straightening after a landing
+        got[t] = max(got[t], got[t - 1] - step)
+    for t in range(len(got) - 2, -1, -1):                              # bending before a lift (the heel first)
+        got[t] = max(got[t], got[t + 1] - step)
+    return np.sqrt(a * a + b * b + 2 * a * b * np.cos(got))
+
+
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
     """A smooth minimum of two curves: never above either, at most soft * log(2) below the lower."""
     m = np.minimum(a, b)
@@ -253,14 +274,21 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     pose.p[:, list(rig.chain), 1] += dy[:, None]
     feet = measure_feet(rig, pose, settings.floor, fps)
     pos, rot = leg_targets(rig, feet, plans, settings, R_ankle)
+    reaches = None
+    if settings.straight:
+        reaches = np.empty_like(lengths)
     for f, leg in enumerate(rig.legs if settings.straight else ()):
         longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
+        longest = np.minimum(longest, unbending(rig, leg, pose.p[:, leg.hip], pos[:, f], longest,
+                                                settings.knee_speed, fps))
+        reaches[:, f] = longest
         pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
                                        settings.heel, settings.heel_seconds, fps)
     out = local.copy()
     for f, leg in enumerate(rig.legs):
         sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],
-                       pose.R[:, leg.knee], pos[:, f], np.asarray(rig.knee_axis), settings.reach, lengths[:, f])
+                       pose.R[:, leg.knee], pos[:, f], np.asarray(rig.knee_axis),
+                       settings.reach if reaches is None else 0.0, lengths[:, f] if reaches is None else reaches[:, f])
         parent = pose.R[:, rig.parents[leg.hip]]
         out[:, leg.hip] = np.swapaxes(parent, -1, -2) @ sol.R_hip
         out[:, leg.knee] = np.swapaxes(sol.R_hip, -1, -2) @ sol.R_knee
