@@ -189,12 +189,14 @@ def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray,
 
 
 def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np.ndarray, speed: float,
-              fps: int = FPS) -> np.ndarray:
+              slack: float = np.inf, fps: int = FPS) -> np.ndarray:
     """(T,) how far the leg may reach from `hip` (T, 3) towards its ankle `target` (T, 3) when its knee straightens
     no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at most `longest` (T,) from
     hip to ankle), let down no faster than that (it may bend as fast as it likes), back to a reach. Near straight a
     small change of reach turns the knee fast (a foot put down with the leg nearly straight would snap it); the
-    foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`)."""
+    foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`). The reach is never more than
+    `slack` (m, what a lifted heel takes up) short of the target's, so a planted foot stays on its plant when the
+    motion bends or straightens a knee faster than that allows."""
     a, b = rig.lengths(leg)
     d = np.minimum(np.linalg.norm(target - hip, axis=-1), longest)
     cos = np.clip((d ** 2 - a * a - b * b) / (2 * a * b), -1.0, 1.0)
@@ -205,7 +207,7 @@ def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np
         got[t] = max(got[t], got[t - 1] - step)
     for t in range(len(got) - 2, -1, -1):                              # bending before a lift (the heel first)
         got[t] = max(got[t], got[t + 1] - step)
-    return np.sqrt(a * a + b * b + 2 * a * b * np.cos(got))
+    return np.maximum(np.sqrt(a * a + b * b + 2 * a * b * np.cos(got)), d - slack)
 
 
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
@@ -280,7 +282,7 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     for f, leg in enumerate(rig.legs if settings.straight else ()):
         longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
         longest = np.minimum(longest, unbending(rig, leg, pose.p[:, leg.hip], pos[:, f], longest,
-                                                settings.knee_speed, fps))
+                                                settings.knee_speed, 0.8 * heel_rise(rig, leg, settings.heel), fps))
         reaches[:, f] = longest
         pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
                                        settings.heel, settings.heel_seconds, fps)
