@@ -3,6 +3,7 @@ put, a sliding foot is pinned, the upper body is bit for bit the input's, contac
 the feet stand on the floor, drift goes; motions that cannot be grounded come back unchanged with a note."""
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -17,7 +18,8 @@ from gesturelsm.grounding.targets import TargetParams
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.skeleton import PARENTS
 
-TAKE = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+SHARED = Path(os.environ.get("GESTURELSM_SHARED", Path(__file__).resolve().parents[2].parent / "shared"))
+TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
 FPS = 30
 LEGS = (1, 2, 4, 5, 7, 8)
 
@@ -74,9 +76,11 @@ def angular_speed(seq: MotionSequence, joint_ids=LEGS) -> np.ndarray:
     return np.linalg.norm(log(np.swapaxes(R[:-1], -1, -2) @ R[1:]), axis=-1) * FPS
 
 
-def assert_pinned(seq: MotionSequence, contacts: np.ndarray, tol: float = 0.01, toes: bool = False) -> None:
-    """Each planted ankle (`toes`: toe joint) stays within `tol` of where its contact began."""
-    J = joints(seq)
+def assert_pinned(seq: MotionSequence, contacts: np.ndarray, tol: float = 0.01, toes: bool = False,
+                  horizontal: bool = False) -> None:
+    """Each planted ankle (`toes`: toe joint) stays within `tol` of where its contact began (`horizontal`: seen from
+    above, i.e. it does not slide; a heel lifting about the toe joint moves the ankle mostly up)."""
+    J = joints(seq)[..., [0, 2] if horizontal else [0, 1, 2]]
     for foot, ankle in ((0, 10), (1, 11)) if toes else ((0, 7), (1, 8)):
         for a, b in segments(contacts[:, foot]):
             moved = np.linalg.norm(J[a:b, ankle] - J[a, ankle], axis=1).max()
@@ -219,6 +223,7 @@ def test_the_real_take_keeps_its_feet_planted_and_its_upper_body():
     seq = MotionSequence.load(TAKE)
     res = ground_motion(seq)
     assert res.note is None and res.contacts.mean() > 0.7
-    assert_pinned(res.motion, res.contacts)
+    assert_pinned(res.motion, res.contacts, horizontal=True)                 # no foot slides; a heel lifts by
+    assert_pinned(res.motion, res.contacts, tol=0.03)                        # 0.3 rad at most (standing straight)
     keep = [c for j in range(55) if j not in CHANGED_JOINTS for c in range(3 * j, 3 * j + 3)]
     assert np.array_equal(res.motion.poses[:, keep], seq.poses[:, keep])
