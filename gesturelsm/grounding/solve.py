@@ -45,7 +45,8 @@ class GroundingSettings:
                                     # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
     heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)
     heel_seconds: float = 0.15      # smoothing of the heel's lift
-    knee_speed: float = 2.0         # rad/s: with `straight`, a knee straightens no faster than this (the heel lifts)
+    knee_speed: float = 2.2         # rad/s: with `straight`, around landings and lifts a knee straightens and bends
+                                    # no faster than this (the heel lifts instead)
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
 
 
@@ -189,25 +190,43 @@ def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray,
 
 
 def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np.ndarray, speed: float,
-              slack: float = np.inf, fps: int = FPS) -> np.ndarray:
+              slack: float = np.inf, near: np.ndarray | None = None, fps: int = FPS) -> np.ndarray:
     """(T,) how far the leg may reach from `hip` (T, 3) towards its ankle `target` (T, 3) when its knee straightens
     no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at most `longest` (T,) from
     hip to ankle), let down no faster than that (it may bend as fast as it likes), back to a reach. Near straight a
     small change of reach turns the knee fast (a foot put down with the leg nearly straight would snap it); the
     foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`). The reach is never more than
     `slack` (m, what a lifted heel takes up) short of the target's, so a planted foot stays on its plant when the
-    motion bends or straightens a knee faster than that allows."""
+    motion bends or straightens a knee faster than that allows. `near` (T,) bool: the frames around landings and
+    lifts where the limit starts (it holds on until the knee has caught up); None: everywhere."""
     a, b = rig.lengths(leg)
     d = np.minimum(np.linalg.norm(target - hip, axis=-1), longest)
     cos = np.clip((d ** 2 - a * a - b * b) / (2 * a * b), -1.0, 1.0)
     want = np.arccos(cos)                                              # 0: straight
     step = speed / fps
+    near = np.ones(len(want), bool) if near is None else near
     got = want.copy()
+    held = False
     for t in range(1, len(got)):                                       # straightening after a landing
-        got[t] = max(got[t], got[t - 1] - step)
+        if near[t] or held:
+            got[t] = max(want[t], got[t - 1] - step)
+            held = got[t] > want[t]
+    back, held = want.copy(), False
     for t in range(len(got) - 2, -1, -1):                              # bending before a lift (the heel first)
-        got[t] = max(got[t], got[t + 1] - step)
+        if near[t] or held:
+            back[t] = max(want[t], back[t + 1] - step)
+            held = back[t] > want[t]
+    got = np.maximum(got, back)
     return np.maximum(np.sqrt(a * a + b * b + 2 * a * b * np.cos(got)), d - slack)
+
+
+def transitions(contact: np.ndarray, frames: int) -> np.ndarray:
+    """(T,) bool: the frames within `frames` of a landing or a lift of a foot's (T,) contact."""
+    T = len(contact)
+    out = np.zeros(T, bool)
+    for x in np.flatnonzero(np.diff(contact.astype(int))):
+        out[max(0, x - frames):x + frames + 2] = True
+    return out
 
 
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
@@ -282,7 +301,8 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     for f, leg in enumerate(rig.legs if settings.straight else ()):
         longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
         longest = np.minimum(longest, unbending(rig, leg, pose.p[:, leg.hip], pos[:, f], longest,
-                                                settings.knee_speed, 0.8 * heel_rise(rig, leg, settings.heel), fps))
+                                                settings.knee_speed, 0.8 * heel_rise(rig, leg, settings.heel),
+                                                transitions(plans[f].contact, settings.targets.blend_frames), fps))
         reaches[:, f] = longest
         pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
                                        settings.heel, settings.heel_seconds, fps)
