@@ -114,7 +114,8 @@ def test_nothing_above_the_pelvis_changes_bit_for_bit():
     np.testing.assert_allclose(J1[:, upper] - J1[:, :1], J0[:, upper] - J0[:, :1], atol=1e-5)
 
 
-def transition_speeds(seq: MotionSequence, blend_frames: int = 8, knee_speed: float = 2.2) -> tuple[np.ndarray, float]:
+def transition_speeds(seq: MotionSequence, blend_frames: int = 8,
+                      knee_speed: float = GroundingSettings().knee_speed) -> tuple[np.ndarray, float]:
     """The grounded motion's leg joint angular speeds within the blends around every landing and lift, and the
     input's own 99th percentile of leg joint angular speed."""
     settings = GroundingSettings(targets=TargetParams(blend_frames=blend_frames), knee_speed=knee_speed)
