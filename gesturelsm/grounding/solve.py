@@ -4,11 +4,13 @@
 2. Each foot's lowest point (ankle or toe, as high above the floor as a level foot's would be) is measured
    against the lower foot, the one the body stands on, and contacts are found from that height and the foot's
    horizontal speed (contacts.py).
-3. The root's height follows the lowest planted foot so that it touches the floor (smoothed; lowered where a
-   planted leg could not reach).
+3. The root's height follows the planted feet so that they touch the floor (smoothed): by default where the
+   straightest planted leg puts it (knees as the motion had them; a leg that cannot reach lifts its heel), with
+   `straight=False` where the lowest-reaching one does (lowered where a planted leg could not reach).
 4. Each foot's target (targets.py): planted where it landed, level, on the floor; in between, its own path with
    a smoothly varying correction, never below the floor.
-5. Two-bone IK per leg (ik.py): hip and knee rotations reach the ankle target, the ankle's rotation turns the foot
+5. With `straight`, around landings and lifts a knee straightens and bends no faster than `knee_speed` (the heel
+   lifts about the toe joint instead: no snap of a nearly straight knee). Two-bone IK per leg (ik.py): hip and knee rotations reach the ankle target, the ankle's rotation turns the foot
    to its target orientation. Nothing else changes: the root's rotation, the spine, arms, head and toes keep
    their local rotations exactly.
 """
@@ -192,8 +194,9 @@ def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray,
 def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np.ndarray, speed: float,
               slack: float = np.inf, near: np.ndarray | None = None, fps: int = FPS) -> np.ndarray:
     """(T,) how far the leg may reach from `hip` (T, 3) towards its ankle `target` (T, 3) when its knee straightens
-    no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at most `longest` (T,) from
-    hip to ankle), let down no faster than that (it may bend as fast as it likes), back to a reach. Near straight a
+    after, and bends before, no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at
+    most `longest` (T,) from hip to ankle), let down no faster than that forward in time and backward in time (so
+    only ever bent more than asked), back to a reach. Near straight a
     small change of reach turns the knee fast (a foot put down with the leg nearly straight would snap it); the
     foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`). The reach is never more than
     `slack` (m, what a lifted heel takes up) short of the target's, so a planted foot stays on its plant when the
