@@ -11,8 +11,8 @@
    a smoothly varying correction, never below the floor.
 5. With `straight`, around landings and lifts a knee straightens and bends no faster than `knee_speed` (the heel
    lifts about the toe joint instead: no snap of a nearly straight knee). Two-bone IK per leg (ik.py): hip and
-   knee rotations reach the ankle target, the ankle's rotation turns the foot to its target orientation. Nothing else changes: the root's rotation, the spine, arms, head and toes keep
-   their local rotations exactly.
+   knee rotations reach the ankle target, the ankle's rotation turns the foot to its target orientation. Nothing
+   else changes: the root's rotation, the spine, arms, head and toes keep their local rotations exactly.
 """
 from __future__ import annotations
 
