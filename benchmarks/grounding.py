@@ -18,9 +18,9 @@ motion (64 s) as recorded and grounded.
 The bars (the feet issue), each checked per recording: foot skate <= the real take's, contact share >= 0.5, drift
 <= 0.3 m/min, range <= 1.5 m, penetration <= 1 cm, bob <= the real take's, leg jerk <= ungrounded + 10 %, raised
 share / wrist height p95 / wrist speed within 2 % of ungrounded, knee flexion within 3 degrees of ungrounded and at
-most 14 (standing straight). `--straight` grounds with GroundingSettings(straight=True). Cost: grounding
-each take on one core (this process
-pinned to one CPU, torch on one thread), median of `--repeats`, per 60 s of motion.
+most 14 (standing straight, the default). `--lowest` grounds with GroundingSettings(straight=False), the root as
+low as the lowest-reaching planted leg asks (`--straight` names the default). Cost: grounding each take on one
+core (this process pinned to one CPU, torch on one thread), median of `--repeats`, per 60 s of motion.
 
 With `--rig CHARACTER` the same table is measured on the character's own joints: each motion retargeted onto it
 (before: the ungrounded motion as retargeted; after: the grounded motion grounded again on the character's own legs,
@@ -72,7 +72,7 @@ SETTINGS: list = [None]          # GroundingSettings for grounded(); None: the d
 
 def grounded(seq: MotionSequence) -> tuple[MotionSequence, str | None]:
     """`seq` (smoothed as shipped) with its feet on the ground, as `finish(..., grounding=True)` does, with
-    SETTINGS[0] when set (--straight)."""
+    SETTINGS[0] when set (--straight, --lowest)."""
     if SETTINGS[0] is None:
         return finish(seq, grounding=True)
     from gesturelsm.grounding import ground_motion
@@ -287,13 +287,15 @@ def main() -> int:
     ap.add_argument("--rig", default=None, help="measure on this character's own joints (.vrm / .glb / .gltf / .bvh): "
                     "the motions retargeted onto it, after = grounded again on its own legs")
     ap.add_argument("--straight", action="store_true", help="ground with GroundingSettings(straight=True): the knees "
-                    "as straight as the motion had them")
+                    "as straight as the motion had them (the default; kept for old command lines)")
+    ap.add_argument("--lowest", action="store_true", help="ground with GroundingSettings(straight=False): the root as "
+                    "low as the lowest-reaching planted leg asks (knees about twice as bent as the motion had them)")
     args = ap.parse_args()
 
-    if args.straight:
+    if args.straight or args.lowest:
         from gesturelsm.grounding import GroundingSettings
 
-        SETTINGS[0] = GroundingSettings(straight=True)
+        SETTINGS[0] = GroundingSettings(straight=not args.lowest)
 
     from gesturelsm.backends import checkpoint_sources
     from gesturelsm.pipeline import GesturePipeline

@@ -4,13 +4,15 @@
 2. Each foot's lowest point (ankle or toe, as high above the floor as a level foot's would be) is measured
    against the lower foot, the one the body stands on, and contacts are found from that height and the foot's
    horizontal speed (contacts.py).
-3. The root's height follows the lowest planted foot so that it touches the floor (smoothed; lowered where a
-   planted leg could not reach).
+3. The root's height follows the planted feet so that they touch the floor (smoothed): by default where the
+   straightest planted leg puts it (knees as the motion had them; a leg that cannot reach lifts its heel), with
+   `straight=False` where the lowest-reaching one does (lowered where a planted leg could not reach).
 4. Each foot's target (targets.py): planted where it landed, level, on the floor; in between, its own path with
    a smoothly varying correction, never below the floor.
-5. Two-bone IK per leg (ik.py): hip and knee rotations reach the ankle target, the ankle's rotation turns the foot
-   to its target orientation. Nothing else changes: the root's rotation, the spine, arms, head and toes keep
-   their local rotations exactly.
+5. With `straight`, around landings and lifts a knee straightens and bends no faster than `knee_speed` (the heel
+   lifts about the toe joint instead: no snap of a nearly straight knee). Two-bone IK per leg (ik.py): hip and
+   knee rotations reach the ankle target, the ankle's rotation turns the foot to its target orientation. Nothing
+   else changes: the root's rotation, the spine, arms, head and toes keep their local rotations exactly.
 """
 from __future__ import annotations
 
@@ -41,10 +43,12 @@ class GroundingSettings:
     reach: float = REACH                                      # a planted leg is stretched at most this much
     knee_seconds: float = 0.2       # smoothing of each leg's hip-to-ankle distance with `straight`
                                     # (else height_seconds)
-    straight: bool = False          # True: the root as high as the straightest planted leg asks, knees as the
+    straight: bool = True           # True: the root as high as the straightest planted leg asks, knees as the
                                     # motion had them, a heel lifting where a leg cannot reach (False: the lowest)
     heel: float = 0.3               # rad: a planted foot's heel lifts at most this much (the toe joint stays put)
     heel_seconds: float = 0.15      # smoothing of the heel's lift
+    knee_speed: float = 2.2         # rad/s: with `straight`, around landings and lifts a knee straightens and bends
+                                    # no faster than this (the heel lifts instead)
     min_stance: float = 0.6         # standing: hips above the lower ankle by this share of the leg, in most frames
 
 
@@ -187,6 +191,47 @@ def on_toes(rig: LegRig, leg, hip: np.ndarray, ankle: np.ndarray, R: np.ndarray,
     return out, about(k, alpha) @ R
 
 
+def unbending(rig: LegRig, leg, hip: np.ndarray, target: np.ndarray, longest: np.ndarray, speed: float,
+              slack: float = np.inf, near: np.ndarray | None = None, fps: int = FPS) -> np.ndarray:
+    """(T,) how far the leg may reach from `hip` (T, 3) towards its ankle `target` (T, 3) when its knee straightens
+    after, and bends before, no faster than `speed` rad/s: the knee angle the target asks for (law of cosines, at
+    most `longest` (T,) from hip to ankle), let down no faster than that forward in time and backward in time (so
+    only ever bent more than asked), back to a reach. Near straight a
+    small change of reach turns the knee fast (a foot put down with the leg nearly straight would snap it); the
+    foot then lands on its ball and lowers its heel as the knee unbends (`on_toes`). The reach is never more than
+    `slack` (m, what a lifted heel takes up) short of the target's, so a planted foot stays on its plant when the
+    motion bends or straightens a knee faster than that allows. `near` (T,) bool: the frames around landings and
+    lifts where the limit starts (it holds on until the knee has caught up); None: everywhere."""
+    a, b = rig.lengths(leg)
+    d = np.minimum(np.linalg.norm(target - hip, axis=-1), longest)
+    cos = np.clip((d ** 2 - a * a - b * b) / (2 * a * b), -1.0, 1.0)
+    want = np.arccos(cos)                                              # 0: straight
+    step = speed / fps
+    near = np.ones(len(want), bool) if near is None else near
+    got = want.copy()
+    held = False
+    for t in range(1, len(got)):                                       # straightening after a landing
+        if near[t] or held:
+            got[t] = max(want[t], got[t - 1] - step)
+            held = got[t] > want[t]
+    back, held = want.copy(), False
+    for t in range(len(got) - 2, -1, -1):                              # bending before a lift (the heel first)
+        if near[t] or held:
+            back[t] = max(want[t], back[t + 1] - step)
+            held = back[t] > want[t]
+    got = np.maximum(got, back)
+    return np.maximum(np.sqrt(a * a + b * b + 2 * a * b * np.cos(got)), d - slack)
+
+
+def transitions(contact: np.ndarray, frames: int) -> np.ndarray:
+    """(T,) bool: the frames within `frames` of a landing or a lift of a foot's (T,) contact."""
+    T = len(contact)
+    out = np.zeros(T, bool)
+    for x in np.flatnonzero(np.diff(contact.astype(int))):
+        out[max(0, x - frames):x + frames + 2] = True
+    return out
+
+
 def soft_min(a: np.ndarray, b: np.ndarray, soft: float) -> np.ndarray:
     """A smooth minimum of two curves: never above either, at most soft * log(2) below the lower."""
     m = np.minimum(a, b)
@@ -253,14 +298,22 @@ def ground_legs(rig: LegRig, local: np.ndarray, root: np.ndarray, settings: Grou
     pose.p[:, list(rig.chain), 1] += dy[:, None]
     feet = measure_feet(rig, pose, settings.floor, fps)
     pos, rot = leg_targets(rig, feet, plans, settings, R_ankle)
+    reaches = None
+    if settings.straight:
+        reaches = np.empty_like(lengths)
     for f, leg in enumerate(rig.legs if settings.straight else ()):
         longest = np.maximum(settings.reach * sum(rig.lengths(leg)), lengths[:, f])
+        longest = np.minimum(longest, unbending(rig, leg, pose.p[:, leg.hip], pos[:, f], longest,
+                                                settings.knee_speed, 0.8 * heel_rise(rig, leg, settings.heel),
+                                                transitions(plans[f].contact, settings.targets.blend_frames), fps))
+        reaches[:, f] = longest
         pos[:, f], rot[:, f] = on_toes(rig, leg, pose.p[:, leg.hip], pos[:, f], rot[:, f], longest,
                                        settings.heel, settings.heel_seconds, fps)
     out = local.copy()
     for f, leg in enumerate(rig.legs):
         sol = two_bone(pose.p[:, leg.hip], pose.p[:, leg.knee], pose.p[:, leg.ankle], pose.R[:, leg.hip],
-                       pose.R[:, leg.knee], pos[:, f], np.asarray(rig.knee_axis), settings.reach, lengths[:, f])
+                       pose.R[:, leg.knee], pos[:, f], np.asarray(rig.knee_axis),
+                       settings.reach if reaches is None else 0.0, lengths[:, f] if reaches is None else reaches[:, f])
         parent = pose.R[:, rig.parents[leg.hip]]
         out[:, leg.hip] = np.swapaxes(parent, -1, -2) @ sol.R_hip
         out[:, leg.knee] = np.swapaxes(sol.R_hip, -1, -2) @ sol.R_knee
