@@ -106,10 +106,11 @@ def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, m
 
     sent, real = [], live_character.face_morph
 
-    def talking(character, channels, seq, body):
+    def talking(character, channels, seq, body, blinker=None):
         poses = seq.poses.copy()
         poses[:, 3 * JOINT_INDEX["jaw"]] = 0.3 * (np.arange(len(poses)) % 10 < 5)
-        sent.append(real(character, channels, type(seq)(poses, seq.trans, seq.expressions, seq.betas), body))
+        sent.append(real(character, channels, type(seq)(poses, seq.trans, seq.expressions, seq.betas), body,
+                         blinker))
         return sent[-1]
 
     monkeypatch.setattr(live_character, "face_morph", talking)
