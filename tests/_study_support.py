@@ -66,3 +66,26 @@ def make_synthetic_study(out: Path, methods=("alpha", "beta", "gamma"), speeches
     invite(out, raters)
     return out
 
+
+def csv_rows(path) -> list[dict]:
+    """A CSV file's rows as dicts (results/*.csv, key/links.csv)."""
+    import csv
+
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def answer_all(folder, choose) -> None:
+    """Every rater of the study in `folder` answers every trial through the database API, as the server records
+    answers; `choose(rater_id, trial, genuine)` gives the choice ('left', 'right', ...)."""
+    from gesturelsm.study import db
+    from gesturelsm.study.design import read_conditions, read_raters
+
+    genuine = {v: m for v, (_, m) in read_conditions(folder).genuine.items()}
+    engine = db.open_db(db.default_url(folder))
+    for rater in read_raters(folder).values():
+        st = db.open_session(engine, rater.id, 0)
+        for t in rater.trials:
+            nxt = t.index + 1 if t.index + 1 < len(rater.trials) else None
+            db.record(engine, rater.id, st.session, t.index, choice=choose(rater.id, t, genuine), ratings=None,
+                      played=True, next_trial=nxt, n_trials=len(rater.trials))

@@ -46,17 +46,23 @@ def threads() -> int:
     return max(1, min(MAX_THREADS, cores))
 
 
+def whisper_model(folder: Path):
+    """A faster_whisper.WhisperModel of the CTranslate2 model in `folder`, int8 on this machine's cores, never from the
+    network."""
+    try:
+        from faster_whisper import WhisperModel
+    except ImportError as exc:
+        raise RecognizerUnavailable(f"speech recognition needs faster-whisper ({INSTALL_HINT})") from exc
+    return WhisperModel(str(folder), device="cpu", compute_type="int8", cpu_threads=threads(), num_workers=1,
+                        local_files_only=True)
+
+
 def load_model():
-    """The shared faster_whisper.WhisperModel (loaded on first use, ~1-3 s)."""
+    """The shared English faster_whisper.WhisperModel (loaded on first use, ~1-3 s)."""
     global _model
     with _lock:
         if _model is None:
-            try:
-                from faster_whisper import WhisperModel
-            except ImportError as exc:
-                raise RecognizerUnavailable(f"speech recognition needs faster-whisper ({INSTALL_HINT})") from exc
-            _model = WhisperModel(str(weights_dir()), device="cpu", compute_type="int8", cpu_threads=threads(),
-                                  num_workers=1, local_files_only=True)
+            _model = whisper_model(weights_dir())
         return _model
 
 

