@@ -285,3 +285,18 @@ def hears_hello(monkeypatch):
         return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
                               "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
     monkeypatch.setattr(pipeline, "automatic_words", hear)
+
+
+@pytest.fixture
+def measuring(monkeypatch, tmp_path):
+    """Kernel choices measured (not forced), with the default measuring budget, cached in a fresh file; nothing a
+    test decides outlives it (tests/test_kernels_choice.py, tests/test_kernels_first_run.py)."""
+    from gesturelsm.kernels import choice
+
+    monkeypatch.setenv("GESTURELSM_KERNELS", "measure")
+    monkeypatch.setenv("GESTURELSM_KERNELS_CACHE", str(tmp_path / "kernels.json"))
+    monkeypatch.delenv("GESTURELSM_ONEDNN", raising=False)
+    monkeypatch.delenv("GESTURELSM_KERNELS_BUDGET", raising=False)
+    choice.forget()
+    yield tmp_path / "kernels.json"
+    choice.forget()

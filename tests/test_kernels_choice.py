@@ -38,17 +38,6 @@ class FakeCompare:
         return self.times
 
 
-@pytest.fixture
-def measuring(monkeypatch, tmp_path):
-    """Choices measured (not forced), cached in a fresh file; nothing this test decides outlives it."""
-    monkeypatch.setenv("GESTURELSM_KERNELS", "measure")
-    monkeypatch.setenv("GESTURELSM_KERNELS_CACHE", str(tmp_path / "kernels.json"))
-    monkeypatch.delenv("GESTURELSM_ONEDNN", raising=False)
-    choice.forget()
-    yield tmp_path / "kernels.json"
-    choice.forget()
-
-
 def product():
     g = torch.Generator().manual_seed(0)
     return torch.randn(96, 64, generator=g), torch.randn(48, 64, generator=g), torch.randn(48, generator=g)

@@ -30,17 +30,6 @@ class FakeCompare:
 
 
 @pytest.fixture
-def measuring(monkeypatch, tmp_path):
-    monkeypatch.setenv("GESTURELSM_KERNELS", "measure")
-    monkeypatch.setenv("GESTURELSM_KERNELS_CACHE", str(tmp_path / "kernels.json"))
-    monkeypatch.delenv("GESTURELSM_ONEDNN", raising=False)
-    monkeypatch.delenv("GESTURELSM_KERNELS_BUDGET", raising=False)
-    choice.forget()
-    yield tmp_path / "kernels.json"
-    choice.forget()
-
-
-@pytest.fixture
 def fake_clock(monkeypatch):
     """choice's wall clock (time.perf_counter as choice sees it) under the test's control."""
     now = [100.0]
