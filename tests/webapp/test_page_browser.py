@@ -187,7 +187,7 @@ def test_tables_fit_their_column_or_scroll_and_the_idle_body_stands(page_url, sp
         page.wait_for_selector("#sweep-table[data-state=ready]", timeout=300000)
         for w, h in ((1280, 800), (1920, 1080)):
             page.set_viewport_size({"width": w, "height": h})
-            page.wait_for_timeout(300)                                         # a layout pass at the new size
+            page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")  # laid out
             tables = page.evaluate(TABLES_JS, list(TABLE_BOXES))
             assert {t["box"] for t in tables} == set(TABLE_BOXES), tables
             for t in tables:
