@@ -31,6 +31,7 @@ from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .demo import Demo
+from .downloads import Downloads
 from . import words as page_words
 from .language import language_choice
 from .live_character import LiveCharacters
@@ -91,6 +92,7 @@ class _Handlers:
         # of that page is stopped, since the page already shows newer bodies (see show_video)
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
+        self.downloads = Downloads()
 
     def mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
@@ -188,20 +190,21 @@ class _Handlers:
         yield from videos.steps(self, out, character, request, progress)
 
     def made_downloads(self, out: Result | None, request: gr.Request = None):
-        """The downloads of each method made so far (npz and BVH), while the others are still generated; the rest of
-        the downloads come with `add_exports`, after the video."""
+        """npz and BVH of each method made so far, while the others are generated; `add_exports` adds the rest."""
         if out is None or not out.motions or out.downloads or self._replaced(request, out):
-            return gr.skip()
-        return [str(p) for p in aside(self.service.export_each, out)]       # beside generation, niced
+            return gr.skip()            # never fewer than add_exports' list, however late (downloads.py)
+        return self.downloads.made_so_far(out.job.folder, lambda: aside(self.service.export_each, out))
 
     def add_exports(self, out: Result | None, character=None, request: gr.Request = None):
         """The downloads, before the video (never behind one); with a character, each motion in its own file too."""
         if out is None or self._replaced(request, out):  # a newer request replaced it: its own chain exports
             return gr.skip(), gr.skip(), gr.skip(), gr.skip()
-        out = self.service.export(out)
-        files, glb = self.download_files(out)
-        files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
-                                                out.job.grounding)]
+        with self.downloads.completing(out.job.folder) as remember:
+            out = self.service.export(out)
+            files, glb = self.download_files(out)
+            files += [str(p) for p in rig_downloads(character, out.motions, out.job.folder, self.service.body,
+                                                    out.job.grounding)]
+            remember(files)
         return files, glb, out.summary, self._kept(request, out)
 
     def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,

@@ -4,6 +4,7 @@ mid-way."""
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 from types import SimpleNamespace
 
 import gradio as gr
@@ -49,6 +50,18 @@ def test_gradio_hands_the_handlers_the_page_session():
     for fn, n_inputs, progress in ((h.show_motion, 16, True), (h.show_video, 2, True), (h.add_exports, 2, False)):
         filled, progress_at, _, _ = special_args(fn, list(range(n_inputs)), request=page)
         assert filled[n_inputs] is page and progress_at == (n_inputs + 1 if progress else None)
+
+
+def test_a_late_downloads_event_never_puts_back_fewer_files_than_the_exports(service, speech_wav):
+    """The npz + BVH event follows the player's payload and waits behind the statistics, so it can run after the
+    exports with the state it was triggered with (no downloads yet): it answers with the whole list, GLB included."""
+    h, page = _Handlers(service), SimpleNamespace(session_hash="page-1")
+    stale = made(h, *inputs(speech_wav, 0), request=page, progress=quiet)
+    early = h.made_downloads(stale, request=page)
+    assert sorted(Path(f).suffix for f in early) == [".bvh", ".npz"]          # before the exports: what is made
+    files = h.add_exports(stale, request=page)[0]
+    assert any(f.endswith(".glb") for f in files) and len(files) > len(early)
+    assert h.made_downloads(stale, request=page) == files                    # late, with the stale state
 
 
 def test_a_replaced_request_gets_no_video_and_a_running_render_stops(service, speech_wav):

@@ -16,6 +16,8 @@ PLAYER = "#motion-player"
 
 @pytest.mark.browser
 def test_a_small_sweep_runs_from_the_page_and_one_motion_opens_in_the_player(service):
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     from gesturelsm.webapp.player.component import BUNDLE
 
     if not BUNDLE.exists():
@@ -47,9 +49,16 @@ def test_a_small_sweep_runs_from_the_page_and_one_motion_opens_in_the_player(ser
         page.wait_for_selector("#sweep-plot img", timeout=30000)
 
         page.locator("#sweep-open").click()
-        page.wait_for_function("() => ['playing', 'paused'].includes(document.querySelector('#motion-player')"
-                               ".dataset.state) && window.gesturelsmPlayer.payload?.bodies?.length === 1",
-                               timeout=60000)
+        try:
+            page.wait_for_function("() => ['playing', 'paused'].includes(document.querySelector('#motion-player')"
+                                   ".dataset.state) && window.gesturelsmPlayer.payload?.bodies?.length === 1",
+                                   timeout=90000)
+        except PlaywrightTimeout:                       # say what the page shows instead
+            seen = page.evaluate("""() => ({state: document.querySelector('#motion-player').dataset.state,
+                error: document.querySelector('#motion-player').dataset.error,
+                bodies: window.gesturelsmPlayer?.payload?.bodies?.length,
+                toasts: [...document.querySelectorAll('.toast-body')].map(t => t.innerText)})""")
+            pytest.fail(f"the sweep's motion did not open in the player: {seen}")
         payload = page.evaluate("() => window.gesturelsmPlayer.payload")
         assert payload["bodies"][0]["method"] == "gesturelsm" and "seed 0" in payload["bodies"][0]["label"]
         assert int(page.get_attribute(PLAYER, "data-frames")) > 0 and payload["frames"] > 0
