@@ -306,6 +306,127 @@ def quality_table(pipe, cfgs: dict) -> None:
 TAKES = ["2_scott_0_2_2", "2_scott_0_3_3"]
 
 
+def virtual_paced(pipe, cfg, audio: np.ndarray, block_ms: float):
+    """Stream `audio` in `block_ms` blocks on a virtual clock of speech: block k arrives when its last sample would
+    have been spoken, the generator works on it from max(its arrival, the end of the previous block's work) for as
+    long as its `feed` really took on this machine (so a window that overruns pushes the next ones back, as in a
+    paced run), without sleeping. The same again on a clock that advances by the CPU time the work took (this
+    thread's, `time.thread_time`: what the work needs of a core of this machine when no other work shares it; on a
+    loaded machine the wall clock adds the time other processes held the cores). Returns (delays of the blocks
+    answered before the end of the speech, motion ready - block arrival, s: on the wall clock, on the CPU clock;
+    every motion chunk incl. the end's; compute per window, ms of wall time)."""
+    from collections import deque
+
+    from gesturelsm.constants import SAMPLE_RATE
+    from gesturelsm.live import StreamingGenerator
+
+    gen = StreamingGenerator(pipe, cfg)
+    n = max(1, int(round(block_ms * SAMPLE_RATE / 1000)))
+    clock, cpu_clock, pending, delays, cpu_delays, chunks = 0.0, 0.0, deque(), [], [], []
+    for a in range(0, len(audio), n):
+        block = audio[a:a + n]
+        arrival = (a + len(block)) / SAMPLE_RATE
+        pending.append(arrival)
+        v0, c0, r0, t0 = max(clock, arrival), max(cpu_clock, arrival), time.perf_counter(), time.thread_time()
+        new = gen.feed(block)
+        cpu_clock = c0 + time.thread_time() - t0          # a chunk is the last thing a feed makes: ready at its end
+        for mc in new:
+            for _ in mc.latencies:
+                arrived = pending.popleft()
+                delays.append(v0 + mc.produced - r0 - arrived)
+                cpu_delays.append(cpu_clock - arrived)
+            chunks.append(mc)
+        clock = v0 + time.perf_counter() - r0
+    chunks += gen.finish()
+    return np.array(delays), np.array(cpu_delays), chunks, 1000 * gen.compute_s / max(gen.window, 1)
+
+
+def sweep(pipe, base, points: list[tuple[int, int]], takes: list[str], seeds: int, seconds: float,
+          block_ms: float) -> list[dict]:
+    """Every (commit, look-ahead) of `points` (held, steps, CFG ... from `base`) on each held-out take (its first
+    `seconds`) x seeds 0 .. seeds - 1, the settings interleaved stream by stream (so they share the same minutes of
+    the machine): the delay on the virtual clock of speech (`virtual_paced`) and the motion's raised share, p95
+    wrist height, loudness following and jerk at seams over inside (as `quality`)."""
+    from dataclasses import replace
+
+    from gesturelsm.audio import load_audio
+    from gesturelsm.body import load_body_model
+    from gesturelsm.metrics.amplitude import amplitude_stats
+    from gesturelsm.metrics.speech_response import energy_following
+    from gesturelsm.motion.regions import REGIONS
+
+    body, upper = load_body_model(), list(REGIONS["upper"].joints)
+    res = {p: {"delay": [], "cpu_delay": [], "compute": [], "raised": [], "height": [], "gain": [], "seam": []} for p in points}
+    for name in takes:
+        y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
+        y = y[:int(seconds * 16000)] if seconds else y
+        for seed in range(seeds):
+            for c, la in points:
+                delays, cpu_delays, chunks, compute = virtual_paced(pipe, replace(base, commit=c, lookahead=la, seed=seed), y,
+                                                        block_ms)
+                mot = chunks[0].motion.__class__(np.concatenate([m.motion.poses for m in chunks]),
+                                                 np.concatenate([m.motion.trans for m in chunks]),
+                                                 np.concatenate([m.motion.expressions for m in chunks]))
+                j = body.joints(mot.poses, mot.trans)
+                amp = amplitude_stats(j)
+                jerk = np.linalg.norm(np.diff(j[:, upper], n=3, axis=0), axis=-1).mean(1)
+                at = np.zeros(len(jerk), bool)
+                for mc in chunks[1:]:
+                    at[max(0, mc.start - 3):mc.start] = True
+                r = res[(c, la)]
+                r["delay"].append(delays)
+                r["cpu_delay"].append(cpu_delays)
+                r["compute"].append(compute)
+                r["raised"].append(amp.raised_share)
+                r["height"].append(amp.height_p95)
+                r["gain"].append(energy_following(j, y).gain)
+                r["seam"].append(jerk[at].mean() / jerk[~at].mean())
+                print(f"  {name} seed {seed} commit {c} look-ahead {la}: delay median "
+                      f"{np.median(cpu_delays):.3f} s (CPU clock), {np.median(delays):.3f} s (wall), raised {100 * amp.raised_share:.1f} %, gain "
+                      f"{r['gain'][-1]:+.3f}, load {os.getloadavg()[0]:.1f}", file=sys.stderr, flush=True)
+    out = []
+    for (c, la), r in res.items():
+        d, dc, g = np.concatenate(r["delay"]), np.concatenate(r["cpu_delay"]), np.array(r["gain"])
+        out.append({"commit": c, "lookahead": la, "wait_mean": (c / 2 + la) * 4 / 30, "wait_max": (c + la) * 4 / 30,
+                    "median": float(np.median(dc)), "p90": float(np.percentile(dc, 90)),
+                    "wall_median": float(np.median(d)), "wall_p90": float(np.percentile(d, 90)),
+                    "compute": float(np.median(r["compute"])), "raised": float(np.mean(r["raised"])),
+                    "height": float(np.mean(r["height"])), "gain": float(g.mean()),
+                    "gain_se": float(g.std(ddof=1) / np.sqrt(len(g))) if len(g) > 1 else float("nan"),
+                    "seam": float(np.mean(r["seam"]))})
+    return out
+
+
+QUALITY = ("raised", "height", "gain")     # within 10 % of the reference's (lower by at most 10 %); and seams smooth
+
+
+def sweep_table(rows: list[dict], ref: tuple[int, int], streams: int) -> dict | None:
+    """Print the sweep, every figure also in % of the reference setting's; returns the point with the lowest median
+    delay whose raised share, p95 wrist height and loudness following are each at least 90 % of the reference's and
+    whose jerk at seams is at most 1.1 x the reference's (or the inside's)."""
+    base = next(r for r in rows if (r["commit"], r["lookahead"]) == ref)
+
+    def rel(r, k):
+        return f"{100 * (r[k] / base[k] - 1):+.0f} %" if base[k] else "-"
+    print(f"| commit / look-ahead (latents) | wait for speech mean / worst (s) | delay median (s) | vs ref | "
+          f"delay p90 (s) | vs ref | wall clock: delay median / p90 (s), compute per window (ms) | raised | vs ref | p95 wrist height (m) | vs ref | "
+          f"loudness following (SE) | vs ref | jerk at seams / inside | vs ref |")
+    print("|---|" + "---|" * 15)
+    ok = [r for r in rows if all(r[k] >= 0.9 * base[k] for k in QUALITY) and r["seam"] <= max(1.1 * base["seam"], 1)]
+    best = min(ok, key=lambda r: r["median"]) if ok else None
+    for r in rows:
+        tag = " (reference)" if r is base else ""
+        tag += " **best within 10 %**" if r is best else ""
+        print(f"| {r['commit']} / {r['lookahead']}{tag} | {r['wait_mean']:.2f} / {r['wait_max']:.2f} | "
+              f"{r['median']:.3f} | {rel(r, 'median')} | {r['p90']:.3f} | {rel(r, 'p90')} | {r['wall_median']:.3f} / "
+              f"{r['wall_p90']:.3f}, {r['compute']:.0f} | "
+              f"{100 * r['raised']:.1f} % | {rel(r, 'raised')} | {r['height']:.3f} | {rel(r, 'height')} | "
+              f"{r['gain']:+.3f} ({r['gain_se']:.3f}) | {rel(r, 'gain')} | {r['seam']:.2f} | {rel(r, 'seam')} |")
+    print(f"\n({streams} streams per setting; quality: means over them; delay: median / p90 over all their blocks, "
+          f"on the clock of the CPU time the work took, and on the wall clock of this machine beside)\n")
+    return best
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seconds", type=float, default=60.0, help="paced run length (the take is looped)")
@@ -331,6 +452,12 @@ def main() -> None:
                     "and not")
     ap.add_argument("--character", metavar="PATH", help="also build each chunk's message on this character (.vrm, "
                     ".glb, .gltf, .bvh): the latency with and without it")
+    ap.add_argument("--sweep", nargs="+", default=None, metavar="C/L", help="the curve of delay against quality: "
+                    "these commit/look-ahead points (e.g. 3/1 1/1 2/0; held, steps, CFG as measured), each streamed on "
+                    "the held-out takes on a virtual clock of speech (table: each figure vs the first point's)")
+    ap.add_argument("--sweep-seeds", type=int, default=2, help="seeds per take in the sweep")
+    ap.add_argument("--sweep-seconds", type=float, default=0, help="the first S seconds of each take (0: all)")
+    ap.add_argument("--block-ms", type=float, default=50.0, help="the sweep's audio blocks (the page sends 50 ms)")
     args = ap.parse_args()
     set_threads(args.threads)
     from dataclasses import replace
@@ -351,6 +478,12 @@ def main() -> None:
     print(f"torch threads {args.threads}; load average at start {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
     take = load_audio(BEAT2 / "wave16k" / f"{args.take}.wav")
     y = np.tile(take, int(np.ceil(args.seconds * 16000 / len(take))))[:int(args.seconds * 16000)]
+    if args.sweep:
+        points = [tuple(int(v) for v in p.split("/")) for p in args.sweep]
+        virtual_paced(pipe, cfg, y[:3 * 16000], args.block_ms)         # JIT and caches outside the measurement
+        rows = sweep(pipe, cfg, points, TAKES, args.sweep_seeds, args.sweep_seconds, args.block_ms)
+        sweep_table(rows, points[0], len(TAKES) * args.sweep_seeds)
+        print(f"load average at the end (1 min) {os.getloadavg()[0]:.1f}\n")
     if not args.skip_paced:
         modes = tuple(dict.fromkeys(args.grounding))
         streams = {(k if len(modes) == 1 else f"{k}, grounding {m}"): replace(c, grounding=m == "on")
