@@ -341,49 +341,68 @@ def virtual_paced(pipe, cfg, audio: np.ndarray, block_ms: float):
     return np.array(delays), np.array(cpu_delays), chunks, 1000 * gen.compute_s / max(gen.window, 1)
 
 
-def sweep(pipe, base, points: list[tuple[int, int]], takes: list[str], seeds: int, seconds: float,
-          block_ms: float) -> list[dict]:
-    """Every (commit, look-ahead) of `points` (held, steps, CFG ... from `base`) on each held-out take (its first
-    `seconds`) x seeds 0 .. seeds - 1, the settings interleaved stream by stream (so they share the same minutes of
-    the machine): the delay on the virtual clock of speech (`virtual_paced`) and the motion's raised share, p95
-    wrist height, loudness following and jerk at seams over inside (as `quality`)."""
-    from dataclasses import replace
-
+def sweep_stream(pipe, cfg, name: str, seconds: float, block_ms: float) -> dict:
+    """One stream of the sweep: take `name` (its first `seconds`) with setting `cfg` on the virtual clock of speech
+    (`virtual_paced`), and its motion's raised share, p95 wrist height, loudness following and jerk at seams over
+    inside (as `quality`)."""
     from gesturelsm.audio import load_audio
     from gesturelsm.body import load_body_model
     from gesturelsm.metrics.amplitude import amplitude_stats
     from gesturelsm.metrics.speech_response import energy_following
     from gesturelsm.motion.regions import REGIONS
+    from gesturelsm.motion.sequence import MotionSequence
 
-    body, upper = load_body_model(), list(REGIONS["upper"].joints)
-    res = {p: {"delay": [], "cpu_delay": [], "compute": [], "raised": [], "height": [], "gain": [], "seam": []} for p in points}
-    for name in takes:
-        y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
-        y = y[:int(seconds * 16000)] if seconds else y
-        for seed in range(seeds):
-            for c, la in points:
-                delays, cpu_delays, chunks, compute = virtual_paced(pipe, replace(base, commit=c, lookahead=la, seed=seed), y,
-                                                        block_ms)
-                mot = chunks[0].motion.__class__(np.concatenate([m.motion.poses for m in chunks]),
-                                                 np.concatenate([m.motion.trans for m in chunks]),
-                                                 np.concatenate([m.motion.expressions for m in chunks]))
-                j = body.joints(mot.poses, mot.trans)
-                amp = amplitude_stats(j)
-                jerk = np.linalg.norm(np.diff(j[:, upper], n=3, axis=0), axis=-1).mean(1)
-                at = np.zeros(len(jerk), bool)
-                for mc in chunks[1:]:
-                    at[max(0, mc.start - 3):mc.start] = True
-                r = res[(c, la)]
-                r["delay"].append(delays)
-                r["cpu_delay"].append(cpu_delays)
-                r["compute"].append(compute)
-                r["raised"].append(amp.raised_share)
-                r["height"].append(amp.height_p95)
-                r["gain"].append(energy_following(j, y).gain)
-                r["seam"].append(jerk[at].mean() / jerk[~at].mean())
-                print(f"  {name} seed {seed} commit {c} look-ahead {la}: delay median "
-                      f"{np.median(cpu_delays):.3f} s (CPU clock), {np.median(delays):.3f} s (wall), raised {100 * amp.raised_share:.1f} %, gain "
-                      f"{r['gain'][-1]:+.3f}, load {os.getloadavg()[0]:.1f}", file=sys.stderr, flush=True)
+    y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
+    y = y[:int(seconds * 16000)] if seconds else y
+    delays, cpu_delays, chunks, compute = virtual_paced(pipe, cfg, y, block_ms)
+    mot = MotionSequence(np.concatenate([m.motion.poses for m in chunks]),
+                         np.concatenate([m.motion.trans for m in chunks]),
+                         np.concatenate([m.motion.expressions for m in chunks]))
+    j = load_body_model().joints(mot.poses, mot.trans)
+    amp = amplitude_stats(j)
+    jerk = np.linalg.norm(np.diff(j[:, list(REGIONS["upper"].joints)], n=3, axis=0), axis=-1).mean(1)
+    at = np.zeros(len(jerk), bool)
+    for mc in chunks[1:]:
+        at[max(0, mc.start - 3):mc.start] = True
+    r = {"delay": delays, "cpu_delay": cpu_delays, "compute": compute, "raised": amp.raised_share,
+         "height": amp.height_p95, "gain": energy_following(j, y).gain, "seam": jerk[at].mean() / jerk[~at].mean()}
+    print(f"  {name} seed {cfg.seed} commit {cfg.commit} look-ahead {cfg.lookahead}: delay median "
+          f"{np.median(cpu_delays):.3f} s (CPU clock), {np.median(delays):.3f} s (wall), raised "
+          f"{100 * r['raised']:.1f} %, gain {r['gain']:+.3f}, load {os.getloadavg()[0]:.1f}", file=sys.stderr,
+          flush=True)
+    return r
+
+
+_POOL_PIPE = None          # the pipeline the sweep's worker processes inherit (fork)
+
+
+def _pool_stream(job):
+    return job[0], job[1], sweep_stream(_POOL_PIPE, *job[2:])
+
+
+def sweep(pipe, base, points: list[tuple[int, int]], takes: list[str], seeds: int, seconds: float,
+          block_ms: float, jobs: int = 1) -> list[dict]:
+    """Every (commit, look-ahead) of `points` (held, steps, CFG ... from `base`) on each held-out take (its first
+    `seconds`) x seeds 0 .. seeds - 1, the settings interleaved stream by stream (so they share the same minutes of
+    the machine; `jobs` > 1: that many streams at once, in forked processes): `sweep_stream` each."""
+    from dataclasses import replace
+
+    global _POOL_PIPE
+    res = {p: {"delay": [], "cpu_delay": [], "compute": [], "raised": [], "height": [], "gain": [], "seam": []}
+           for p in points}
+    todo = [(c, la, replace(base, commit=c, lookahead=la, seed=seed), name, seconds, block_ms)
+            for name in takes for seed in range(seeds) for c, la in points]
+    if jobs > 1:
+        import multiprocessing
+
+        _POOL_PIPE = pipe
+        with multiprocessing.get_context("fork").Pool(jobs) as pool:
+            done = pool.map(_pool_stream, todo, chunksize=1)
+    else:
+        done = [(c, la, sweep_stream(pipe, *rest)) for c, la, *rest in todo]
+    for c, la, r in done:
+        for k, v in r.items():
+            res[(c, la)][k].append(v)
     out = []
     for (c, la), r in res.items():
         d, dc, g = np.concatenate(r["delay"]), np.concatenate(r["cpu_delay"]), np.array(r["gain"])
@@ -457,6 +476,8 @@ def main() -> None:
                     "the held-out takes on a virtual clock of speech (table: each figure vs the first point's)")
     ap.add_argument("--sweep-seeds", type=int, default=2, help="seeds per take in the sweep")
     ap.add_argument("--sweep-seconds", type=float, default=0, help="the first S seconds of each take (0: all)")
+    ap.add_argument("--sweep-jobs", type=int, default=1, help="streams of the sweep at once (processes; each "
+                    "stream's delay counts its own CPU time)")
     ap.add_argument("--block-ms", type=float, default=50.0, help="the sweep's audio blocks (the page sends 50 ms)")
     args = ap.parse_args()
     set_threads(args.threads)
@@ -481,7 +502,7 @@ def main() -> None:
     if args.sweep:
         points = [tuple(int(v) for v in p.split("/")) for p in args.sweep]
         virtual_paced(pipe, cfg, y[:3 * 16000], args.block_ms)         # JIT and caches outside the measurement
-        rows = sweep(pipe, cfg, points, TAKES, args.sweep_seeds, args.sweep_seconds, args.block_ms)
+        rows = sweep(pipe, cfg, points, TAKES, args.sweep_seeds, args.sweep_seconds, args.block_ms, args.sweep_jobs)
         sweep_table(rows, points[0], len(TAKES) * args.sweep_seeds)
         print(f"load average at the end (1 min) {os.getloadavg()[0]:.1f}\n")
     if not args.skip_paced:
