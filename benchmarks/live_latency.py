@@ -367,9 +367,9 @@ def sweep_stream(pipe, cfg, name: str, seconds: float, block_ms: float) -> dict:
     r = {"delay": delays, "cpu_delay": cpu_delays, "compute": compute, "raised": amp.raised_share,
          "height": amp.height_p95, "gain": energy_following(j, y).gain, "seam": jerk[at].mean() / jerk[~at].mean()}
     print(f"  {name} seed {cfg.seed} commit {cfg.commit} look-ahead {cfg.lookahead}: delay median "
-          f"{np.median(cpu_delays):.3f} s (CPU clock), {np.median(delays):.3f} s (wall), raised "
-          f"{100 * r['raised']:.1f} %, gain {r['gain']:+.3f}, load {os.getloadavg()[0]:.1f}", file=sys.stderr,
-          flush=True)
+          f"{np.median(cpu_delays):.3f} s (CPU clock; p90 {np.percentile(cpu_delays, 90):.3f}), "
+          f"{np.median(delays):.3f} s (wall), raised {100 * r['raised']:.1f} %, p95 wrist height {r['height']:.3f}, "
+          f"gain {r['gain']:+.3f}, seams {r['seam']:.2f}, load {os.getloadavg()[0]:.1f}", file=sys.stderr, flush=True)
     return r
 
 

@@ -37,7 +37,10 @@ many final latents on the right. The next decode sees final values there and dif
 first `blend_frames` frames of each chunk fade (in feature space, cosine weights) from the previous decode of those
 frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames
 past the chunk; beyond them its last offset fades out (a fade over only those frames leaves seams rougher than the
-inside: `benchmarks/live_latency.py --skip-paced` prints the seam jerk). Root translation is integrated across chunks
+inside: `benchmarks/live_latency.py --skip-paced` prints the seam jerk). With lookahead 0 the window has no latent
+right of the span: the decoder is given the span's last latent repeated there (enough for `blend_frames`), so the
+chunk's last frames have a right context and the next chunk has a decode to fade from (without it the jerk at seams
+was 6x the inside on a held-out take). Root translation is integrated across chunks
 (motion/translation.py convention).
 Feet on the ground (`grounding`, on by default): each emitted chunk is grounded causally before it leaves, by one
 `MotionStreamGrounder` per stream (gesturelsm/grounding/stream.py: contacts, plants, drift filter and blends carried
@@ -241,7 +244,9 @@ class StreamingGenerator:
         lo = max(0, e - self.cfg.decode_context)
         hi = self.lat0 + self.lat.shape[1] if not final_all else -(-T // 4)
         z = self.lat[:, lo - self.lat0:hi - self.lat0] * self.std                          # (R, n, D) un-scaled
-        parts = decode_latents(self.tokenizers, z, 4 * (hi - lo))
+        if T is None and 4 * hi <= stop:   # no latent right of the span (look-ahead 0): its last one, repeated
+            z = torch.cat([z, z[:, -1:].expand(-1, -(-self.cfg.blend_frames // 4), -1)], 1)
+        parts = decode_latents(self.tokenizers, z, 4 * z.shape[1])
         every = join_regions({k: v.cpu() for k, v in parts.items()})                        # (4 (hi - lo), 433)
         feats = every[self.emitted - 4 * lo:stop - 4 * lo].clone()
         if len(self.tail) and len(feats):        # fade from the previous decode of these frames into this one
