@@ -68,3 +68,19 @@ def test_a_chosen_commit_and_lookahead_are_honoured(tiny_pipeline, tmp_path, com
     rest = gen.finish()
     assert rest and rest[0].start == seen[-1][0].stop
     assert rest[-1].stop == len(y) * 30 // 16000
+
+
+def test_without_lookahead_the_decoder_still_has_a_right_context(tiny_pipeline):
+    """Look-ahead 0: no latent of the window lies right of a chunk; the decoder gets the chunk's last latent repeated
+    there, so every chunk leaves a decode of the frames after it for the next one to fade from (the seam fade)."""
+    cfg = LiveConfig(commit=2, lookahead=0, steps=1, grounding=False)
+    y = speech_like(2.0, seed=12)
+    gen = StreamingGenerator(tiny_pipeline, cfg)
+    chunks = []
+    for a in range(0, len(y), 700):
+        for mc in gen.feed(y[a:a + 700]):
+            chunks.append(mc)
+            assert mc.audio_ahead_s < 700 / 16000                   # emitted as soon as its own audio is in
+            assert len(gen.tail) == cfg.blend_frames                 # the frames after it, decoded now
+    assert len(chunks) >= 3
+
