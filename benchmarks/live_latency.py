@@ -7,6 +7,19 @@
     .venv/bin/python benchmarks/live_latency.py --skip-quality --grounding on off      # latency with and without
     .venv/bin/python benchmarks/live_latency.py --skip-paced --skip-quality --feet     # feet of streamed takes
     .venv/bin/python benchmarks/live_latency.py --skip-quality --chunk-ms 50 --streams 2   # + two sessions at once
+    .venv/bin/python benchmarks/live_latency.py --before none --skip-paced --skip-quality \
+        --sweep 3/1 3/0 2/0 2/1 1/1 --sweep-seeds 2 --sweep-seconds 30 --sweep-jobs 2   # delay against quality
+
+Sweep (--sweep C/L ...): the curve of delay against quality over commit x look-ahead. Each point (the first is the
+reference, e.g. the default 3/1) streams the two held-out takes (their first --sweep-seconds) x --sweep-seeds seeds,
+the points interleaved stream by stream, in --block-ms blocks (the page's 50 ms) on a virtual clock of speech: block
+k arrives when its last sample would have been spoken, the generator works from then (or when it finished the
+previous block) for as long as its work took, so a window that overruns delays the next ones as in a paced run. The
+work is counted in this thread's CPU time (what it needs of a core when no other work shares it) and, beside, in wall
+time (on a loaded machine that adds the time other processes held the cores). Table: delay median / p90, raised
+share, p95 wrist height, loudness following (mean and standard error over the streams), jerk at seams over inside,
+each vs the reference in %, and the point with the lowest median delay whose raised share, wrist height and loudness
+following are each at least 90 % of the reference's (seams at most 1.1x the reference's or the inside's).
 
 Before / after: every run streams the live setting main shipped before (`--before main`, BEFORE below: commit 5,
 look-ahead 1, all final latents held) beside the one measured (LiveConfig's defaults, or --commit ...), in the same
@@ -381,17 +394,18 @@ def _pool_stream(job):
 
 
 def sweep(pipe, base, points: list[tuple[int, int]], takes: list[str], seeds: int, seconds: float,
-          block_ms: float, jobs: int = 1) -> list[dict]:
+          block_ms: float, jobs: int = 1, first_seed: int = 0) -> list[dict]:
     """Every (commit, look-ahead) of `points` (held, steps, CFG ... from `base`) on each held-out take (its first
-    `seconds`) x seeds 0 .. seeds - 1, the settings interleaved stream by stream (so they share the same minutes of
-    the machine; `jobs` > 1: that many streams at once, in forked processes): `sweep_stream` each."""
+    `seconds`) x seeds first_seed .. first_seed + seeds - 1, the settings interleaved stream by stream (so they
+    share the same minutes of the machine; `jobs` > 1: that many streams at once, in forked processes):
+    `sweep_stream` each."""
     from dataclasses import replace
 
     global _POOL_PIPE
     res = {p: {"delay": [], "cpu_delay": [], "compute": [], "raised": [], "height": [], "gain": [], "seam": []}
            for p in points}
     todo = [(c, la, replace(base, commit=c, lookahead=la, seed=seed), name, seconds, block_ms)
-            for name in takes for seed in range(seeds) for c, la in points]
+            for name in takes for seed in range(first_seed, first_seed + seeds) for c, la in points]
     if jobs > 1:
         import multiprocessing
 
@@ -427,9 +441,9 @@ def sweep_table(rows: list[dict], ref: tuple[int, int], streams: int) -> dict | 
 
     def rel(r, k):
         return f"{100 * (r[k] / base[k] - 1):+.0f} %" if base[k] else "-"
-    print(f"| commit / look-ahead (latents) | wait for speech mean / worst (s) | delay median (s) | vs ref | "
-          f"delay p90 (s) | vs ref | wall clock: delay median / p90 (s), compute per window (ms) | raised | vs ref | p95 wrist height (m) | vs ref | "
-          f"loudness following (SE) | vs ref | jerk at seams / inside | vs ref |")
+    print("| commit / look-ahead (latents) | wait for speech mean / worst (s) | delay median (s) | vs ref | "
+          "delay p90 (s) | vs ref | wall clock: delay median / p90 (s), compute per window (ms) | raised | vs ref | "
+          "p95 wrist height (m) | vs ref | loudness following (SE) | vs ref | jerk at seams / inside | vs ref |")
     print("|---|" + "---|" * 15)
     ok = [r for r in rows if all(r[k] >= 0.9 * base[k] for k in QUALITY) and r["seam"] <= max(1.1 * base["seam"], 1)]
     best = min(ok, key=lambda r: r["median"]) if ok else None
@@ -475,6 +489,7 @@ def main() -> None:
                     "these commit/look-ahead points (e.g. 3/1 1/1 2/0; held, steps, CFG as measured), each streamed on "
                     "the held-out takes on a virtual clock of speech (table: each figure vs the first point's)")
     ap.add_argument("--sweep-seeds", type=int, default=2, help="seeds per take in the sweep")
+    ap.add_argument("--sweep-first-seed", type=int, default=0, help="the sweep's seeds start here")
     ap.add_argument("--sweep-seconds", type=float, default=0, help="the first S seconds of each take (0: all)")
     ap.add_argument("--sweep-jobs", type=int, default=1, help="streams of the sweep at once (processes; each "
                     "stream's delay counts its own CPU time)")
@@ -502,7 +517,8 @@ def main() -> None:
     if args.sweep:
         points = [tuple(int(v) for v in p.split("/")) for p in args.sweep]
         virtual_paced(pipe, cfg, y[:3 * 16000], args.block_ms)         # JIT and caches outside the measurement
-        rows = sweep(pipe, cfg, points, TAKES, args.sweep_seeds, args.sweep_seconds, args.block_ms, args.sweep_jobs)
+        rows = sweep(pipe, cfg, points, TAKES, args.sweep_seeds, args.sweep_seconds, args.block_ms, args.sweep_jobs,
+                     args.sweep_first_seed)
         sweep_table(rows, points[0], len(TAKES) * args.sweep_seeds)
         print(f"load average at the end (1 min) {os.getloadavg()[0]:.1f}\n")
     if not args.skip_paced:

@@ -7,7 +7,6 @@ import argparse
 import inspect
 from dataclasses import fields
 
-import numpy as np
 import pytest
 import soundfile as sf
 
