@@ -19,13 +19,13 @@ carries its momentum more than the new speech's loudness, so they follow the lou
 +0.13 at c = 5); holding only the last 4 (the seed's length, what offline windows continue from) lets the window's
 earlier part follow its own speech again, and the new latents with it (+0.16). With lookahead 0 the decoder has no
 latent right of a chunk, so it is given the chunk's last latent repeated (below). Under 0.3 s of delay needs
-c / 2 + lookahead <= ~1.5 latents, and no such point keeps the motion's quality within 10 % of these defaults: with
-lookahead 0 the motion follows the loudness much less (c = 2: +0.05 against +0.19), c = 1 raises the hands less and
-needs a window's compute in 133 ms (docs/LIVE.md, "Delay against quality"). Streamed motion is calmer than offline
-(every window start pulls the motion towards the mean, more so the shorter the commit); stronger guidance pays most
-of it back, so the live default is CFG 6. With lookahead >= t - c each window starts at st, is seeded with the
-previous window's latents there and cross-fades them exactly as offline: the windows, seeds, noise draws and latents
-are the offline ones (same seed -> same noise sequence).
+c / 2 + lookahead <= ~1.5 latents, and no such point keeps the motion's quality within 10 % of these defaults:
+with lookahead 0 the motion follows the loudness about half as much (c = 2: +0.08 against +0.16), c = 1 raises the
+hands less and needs a window's compute in 133 ms (docs/LIVE.md, "Delay against quality"). Streamed motion is
+calmer than offline (every window start pulls the motion towards the mean, more so the shorter the commit); stronger
+guidance pays most of it back, so the live default is CFG 6. With lookahead >= t - c each window starts at st, is
+seeded with the previous window's latents there and cross-fades them exactly as offline: the windows, seeds, noise
+draws and latents are the offline ones (same seed -> same noise sequence).
 
 Audio features (features/audio.py) per window, from the audio of the window plus `context_s` seconds before it:
 - envelope (max |y| over the next 1024 samples): exact wherever 1024 later samples have arrived; within 64 ms of
