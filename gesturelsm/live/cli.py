@@ -86,7 +86,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=from_text, default=LiveConfig.seed, help="generation seed")
     p.add_argument("--commit", type=from_text, default=LiveConfig.commit,
                    help="latents finalised per window (4 frames each)")
-    p.add_argument("--lookahead", type=from_text, default=LiveConfig.lookahead, help="latents of audio look-ahead")
+    p.add_argument("--lookahead", type=from_text, default=LiveConfig.lookahead,
+                   help="latents of audio look-ahead (--commit 2 --lookahead 0: the fast setting, about 0.3 s behind "
+                   "the voice, the motion following the loudness less: docs/LIVE.md)")
     p.add_argument("--held", type=from_text, default=LiveConfig.held,
                    help="final latents before the new ones held fixed while sampling (0: all in the window)")
     p.add_argument("--grounding", choices=("on", "off"), default="on",
