@@ -320,8 +320,8 @@ class GesturePipeline:
                                                                                        transcribe, stream=True)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
         pending, t0 = speech.stream, time.perf_counter()
-        if pending is not None and not isinstance(self.backends[method], FlowBackend):
-            speech, pending = self.settled(speech), None           # the authors' models read the words at once
+        if pending is not None and (pending.done or not isinstance(self.backends[method], FlowBackend)):
+            speech, pending = self.settled(speech), None           # words known; the authors' models read them at once
         try:
             out = self.backends[method].generate(speech, steps, cfg, seed, prog)
         except Restart:                                            # not the streamed words: as the one-shot path

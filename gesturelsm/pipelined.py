@@ -179,6 +179,11 @@ class PendingWords:
         if self._done and not self.valid:
             raise Restart()
 
+    @property
+    def done(self) -> bool:
+        """The words are finished (settle() returns at once)."""
+        return self._done
+
     def settle(self) -> SpeechInput:
         """The finished speech (waits for the words); the thread's error, if it failed."""
         self._thread.join()
