@@ -30,7 +30,7 @@ from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
-from .pipelined import (HIDDEN, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech,
+from .pipelined import (HIDDEN, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
                         overlap_timings, with_speech, with_words)
 from .generator.model import GestureGenerator
 from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
@@ -81,13 +81,6 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
-
-
-def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
-           body=None) -> tuple[MotionSequence, str | None]:
-    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
-    ground on `body`), and why grounding had to leave it as it was, when it had to."""
-    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 @dataclass
@@ -319,23 +312,30 @@ class GesturePipeline:
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe, stream=True)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        pending, t0 = speech.stream, time.perf_counter()
-        if pending is not None and (pending.done or not isinstance(self.backends[method], FlowBackend)):
-            speech, pending = self.settled(speech), None           # words known; the authors' models read them at once
-        try:
-            out = self.backends[method].generate(speech, steps, cfg, seed, prog)
-        except Restart:                                            # not the streamed words: as the one-shot path
-            out = None
-        timings = {}
-        if pending is not None:
-            speech = pending.settle()
-            out = out or self.backends[method].generate(speech, steps, cfg, seed, prog)
-            timings = overlap_timings(pending, t0, out.timings)
+        out, speech, timings = self._streamed(speech, method,
+                                              lambda sp: self.backends[method].generate(sp, steps, cfg, seed, prog))
         if progress:
             progress(1.0, f"{method}: done")
         return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed),
                                 {**speech.timings, **out.timings, **timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
+
+    def _streamed(self, speech: SpeechInput, method: str, make) -> tuple:
+        """(make(speech), the finished speech, overlap timings): with pipelined speech `make` runs while the words are
+        recognised, and again on the finished speech where they were not the streamed words (pipelined.Restart)."""
+        pending, t0, early = speech.stream, time.perf_counter(), {}
+        if pending is not None and (pending.done or not isinstance(self.backends[method], FlowBackend)):
+            early = {WAITING: 0.0, HIDDEN: 0.0}                    # words known before; the authors' models read
+            speech, pending = self.settled(speech), None           # them at once
+        try:
+            out = make(speech)
+        except Restart:                                            # not the streamed words: as the one-shot path
+            out = None
+        if pending is None:
+            return out, speech, early
+        speech = pending.settle()
+        out = out or make(speech)
+        return out, speech, overlap_timings(pending, t0, out.timings)
 
     # ---- editing -----------------------------------------------------------------------------------------
     @torch.no_grad()
@@ -367,7 +367,10 @@ class GesturePipeline:
         ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
         speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress, language)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        out = self.backends[method].edit(speech, motion, ask, steps, cfg, seed, prog)
+        out, speech, streamed = self._streamed(speech, method,
+                                               lambda sp: self.backends[method].edit(sp, motion, ask, steps, cfg, seed,
+                                                                                     prog))
+        warnings += speech.warnings
         t0 = time.perf_counter()
         gen, note = replace(post, grounding=post.grounding and "lower" in ask.regions).apply(
             splice(motion, out.motion, out.start, ask.regions), body)
@@ -375,7 +378,7 @@ class GesturePipeline:
         if progress:
             progress(1.0, f"{method}: edited {ask.describe()}")
         return GenerationResult(merged, method, int(steps), float(cfg), int(seed),
-                                {**speech.timings, **out.timings, "merging": time.perf_counter() - t0},
+                                {**speech.timings, **out.timings, **streamed, "merging": time.perf_counter() - t0},
                                 speech.text_mode, warnings + out.warnings + ([note] if note else []))
 
     def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
@@ -386,12 +389,11 @@ class GesturePipeline:
         if isinstance(speech, SpeechInput):
             if speech.num_frames != motion.num_frames:
                 raise EditError(length_mismatch(motion.num_frames, speech.duration))
-            return speech, list(speech.warnings)
+            return speech, []
         if sr <= 0:
             raise InputError(f"invalid sample rate {sr}")
         y, warnings = fit_speech(resample(to_mono(speech), int(sr), SAMPLE_RATE), motion.num_frames)
-        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language)
-        return prepared, warnings + prepared.warnings
+        return self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language, stream=True), warnings
 
 
 __all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError",

@@ -28,6 +28,7 @@ from .backends import SpeechInput
 from .constants import FPS, SAMPLE_RATE
 from .features.text import TEXT_DIM, TextEmbedder, WordFeatureStream, features_final_until
 from .motion.sequence import MotionSequence
+from .settings import PostProcess
 
 STREAMED_LANGUAGES = (AUTO, ENGLISH)        # the English model runs window by window; others recognise whole speech
 PENDING_MODE = "automatic transcript (being recognised)"
@@ -52,6 +53,13 @@ def with_speech(motion: MotionSequence, speech: "SpeechInput") -> MotionSequence
     words = tuple((w.text, float(w.start), float(w.end)) for w in speech.words or ())
     transcript = speech.transcript or (" ".join(w for w, _, _ in words) or None)
     return replace(motion, transcript=transcript, words=words)
+
+
+def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
+           body=None) -> tuple[MotionSequence, str | None]:
+    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
+    ground on `body`), and why grounding had to leave it as it was, when it had to."""
+    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 class Restart(Exception):
@@ -192,5 +200,6 @@ class PendingWords:
         return self._final
 
 
-__all__ = ["HIDDEN", "WAITING", "overlap_timings", "with_speech", "PendingWords", "Restart", "automatic_speech",
+__all__ = ["HIDDEN", "WAITING", "finish", "overlap_timings", "with_speech", "PendingWords", "Restart",
+           "automatic_speech",
            "ready_points_of", "windowed_ready_points", "with_words", "STREAMED_LANGUAGES"]

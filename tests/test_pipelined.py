@@ -95,6 +95,11 @@ def test_pipelined_generation_gives_the_one_shot_motion_bit_for_bit(tiny_pipelin
     assert np.array_equal(done.word_features.numpy(), one.word_features.numpy())
     c = tiny_pipeline.generate(y, SAMPLE_RATE, steps=2, seed=3)        # raw audio: pipelined by default
     _same(a.motion, c.motion)
+    ranges = {"upper": [(20.0, 30.0)]}                                 # an edit of samples streams its words too
+    e1 = tiny_pipeline.edit(a.motion, one, ranges, steps=2, seed=4)
+    e2 = tiny_pipeline.edit(a.motion, y, ranges, steps=2, seed=4, sr=SAMPLE_RATE)
+    _same(e1.motion, e2.motion)
+    assert HIDDEN in e2.timings and e2.text_mode == a.text_mode and calls == [False, True, True, True]
 
 
 def test_a_rejected_transcript_regenerates_as_the_one_shot_path(tiny_pipeline, recogniser):
