@@ -223,10 +223,10 @@ class GesturePipeline:
             return with_words(speech, words, "transcript with given word timings")
         if not transcribe:
             return speech
-        if stream and language in STREAMED_LANGUAGES and TextEmbedder.shared().available:
-            return PendingWords.start(speech, language)
         if progress:
             progress(0.1, "recognising the words (automatic transcription)")
+        if stream and language in STREAMED_LANGUAGES and TextEmbedder.shared().available:
+            return PendingWords.start(speech, language, automatic_words, progress)
         t1 = time.perf_counter()
         auto = automatic_words(y, language=language)
         if progress:
@@ -334,7 +334,7 @@ class GesturePipeline:
         if pending is None:
             return out, speech, early
         speech = pending.settle()
-        out = out or make(speech)
+        out = out if out is not None and pending.valid else make(speech)
         return out, speech, overlap_timings(pending, t0, out.timings)
 
     # ---- editing -----------------------------------------------------------------------------------------

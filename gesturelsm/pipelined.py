@@ -76,7 +76,7 @@ def windowed_ready_points(y: np.ndarray, num_frames: int) -> tuple[int, ...]:
 def ready_points_of(auto: AutomaticWords, y: np.ndarray, num_frames: int) -> tuple[int, ...]:
     """`windowed_ready_points` for words the English model recognised window by window; () for any other words."""
     tr = auto.transcript
-    windowed = auto.words and tr is not None and tr.language == ENGLISH and tr.details.get("windows")
+    windowed = auto.words and getattr(tr, "language", None) == ENGLISH and getattr(tr, "details", {}).get("windows")
     return windowed_ready_points(y, num_frames) if windowed else ()
 
 
@@ -115,8 +115,8 @@ class PendingWords:
     `stream` of a SpeechInput (`start`). Generation calls `wait(n)`; the pipeline calls `settle()` for the finished
     speech and reads `valid` (the streamed words are its words) and the seconds it waited (`waited`)."""
 
-    def __init__(self, speech: SpeechInput, language: str):
-        self.base, self.language = speech, language
+    def __init__(self, speech: SpeechInput, language: str, recognise=automatic_words, progress=None):
+        self.base, self.language, self.recognise, self.progress = speech, language, recognise, progress
         self.features = WordFeatureStream(TextEmbedder.shared(), speech.num_frames)
         self.ready_points = windowed_ready_points(speech.audio, speech.num_frames)
         self._cond = threading.Condition()
@@ -131,9 +131,10 @@ class PendingWords:
         self._thread = threading.Thread(target=self._run, name="gesturelsm-words", daemon=True)
 
     @classmethod
-    def start(cls, speech: SpeechInput, language: str) -> SpeechInput:
-        """`speech` (audio features ready) with its words being recognised on a thread from now on."""
-        pending = cls(speech, language)
+    def start(cls, speech: SpeechInput, language: str, recognise=automatic_words, progress=None) -> SpeechInput:
+        """`speech` (audio features ready) with its words being recognised on a thread from now on, by `recognise`
+        (asr.source.automatic_words or a stand-in with its signature); `progress` hears "speech transcribed"."""
+        pending = cls(speech, language, recognise, progress)
         streamed = replace(speech, words=[], word_features=torch.from_numpy(pending.features.features),
                            has_word=torch.from_numpy(pending.features.has_word), text_mode=PENDING_MODE,
                            ready_points=pending.ready_points, stream=pending)
@@ -150,7 +151,7 @@ class PendingWords:
 
     def _run(self) -> None:
         try:
-            auto = automatic_words(self.base.audio, language=self.language, on_piece=self._piece)
+            auto = self.recognise(self.base.audio, language=self.language, on_piece=self._piece)
             self.transcription_s = time.perf_counter() - self.started - self.text_seconds
             streamed = list(self.features.words)
             if auto.words and not streamed and ready_points_of(auto, self.base.audio, self.base.num_frames):
@@ -169,6 +170,8 @@ class PendingWords:
                     transcript=transcript, ready_points=self.ready_points, stream=None)
             else:
                 self._final = automatic_speech(self.base, auto, self.transcription_s)
+            if self.progress:
+                self.progress(0.2, "speech transcribed")
         except BaseException as exc:  # handed to the generating thread
             self._error = exc
         finally:

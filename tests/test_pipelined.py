@@ -102,9 +102,10 @@ def test_pipelined_generation_gives_the_one_shot_motion_bit_for_bit(tiny_pipelin
     assert HIDDEN in e2.timings and e2.text_mode == a.text_mode and calls == [False, True, True, True]
 
 
-def test_a_rejected_transcript_regenerates_as_the_one_shot_path(tiny_pipeline, recogniser):
+@pytest.mark.parametrize("seconds", [SECONDS, 6.0])                # generated before the verdict, or stopped
+def test_a_rejected_transcript_regenerates_as_the_one_shot_path(tiny_pipeline, recogniser, seconds):
     recogniser(False)                                                  # words streamed, then rejected
-    y = speech_like(SECONDS, seed=1)
+    y = speech_like(seconds, seed=1)
     one = tiny_pipeline.prepare_speech(y, SAMPLE_RATE)
     assert one.words is None and one.ready_points == ()
     b = tiny_pipeline.generate(tiny_pipeline.prepare_speech(y, SAMPLE_RATE, stream=True), steps=2, seed=0)
