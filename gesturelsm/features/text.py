@@ -175,8 +175,8 @@ class TextEmbedder:
 
 class WordFeatureStream:
     """Frame features (bounded context) built as the words arrive, in time order: `extend(words, final_until)` adds
-    words and says that every word starting before `final_until` (s) is now known; the features of the frames before
-    `ready_frames()` are then final and equal, bit for bit, to `frame_features` of the whole word list. Not
+    words and says that every word starting before `final_until` (s) is known from then on; the features of the frames
+    before `ready_frames()` are then final and equal, bit for bit, to `frame_features` of the whole word list. Not
     thread-safe by itself: one thread extends, others read under the caller's lock."""
 
     def __init__(self, embedder: TextEmbedder, num_frames: int, fps: int = FPS):
