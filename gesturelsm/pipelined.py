@@ -133,7 +133,8 @@ class PendingWords:
     @classmethod
     def start(cls, speech: SpeechInput, language: str, recognise=automatic_words, progress=None) -> SpeechInput:
         """`speech` (audio features ready) with its words being recognised on a thread started by this call, by
-        `recognise` (asr.source.automatic_words or a stand-in with its signature); `progress` hears "speech transcribed"."""
+        `recognise` (asr.source.automatic_words or a stand-in with its signature); `progress` hears "speech
+        transcribed"."""
         pending = cls(speech, language, recognise, progress)
         streamed = replace(speech, words=[], word_features=torch.from_numpy(pending.features.features),
                            has_word=torch.from_numpy(pending.features.has_word), text_mode=PENDING_MODE,
