@@ -1,6 +1,12 @@
 """Automatic transcription (gesturelsm.asr) on the real BEAT2 takes against their MFA TextGrids (markdown out).
 
     NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_accuracy.py [--data DIR] [--beam-size 1]
+    ... benchmarks/transcribe_accuracy.py --windowed     # recognition windows (what `transcribe` runs) vs whole
+
+--windowed: word recall of the English model run on the whole take at once (Whisper's own 30-s windows) against
+recognition window by window as `transcribe` and the pipelined generation run it (asr/windows.py: a short first
+window, the rest ~24 s, cut in pauses), each window timed by the aligner on its own; recognition + alignment seconds
+of each, and the words' onset error against MFA.
 
 Per take: word recovery (recognised words paired in order with the MFA words by spoken form / MFA words),
 word-onset error against MFA (mean, p90, share within 100 ms) for each timing option ("whisper": Whisper's
@@ -31,7 +37,8 @@ sys.path.insert(0, str(REPO))
 from gesturelsm.align import Word, align_words, read_words  # noqa: E402
 from gesturelsm.align.metrics import onset_errors_ms, onset_stats  # noqa: E402
 from gesturelsm.align.normalize import speak  # noqa: E402
-from gesturelsm.asr.transcribe import BEAM_SIZE, MIN_AVG_LOGPROB, recognize  # noqa: E402
+from gesturelsm.asr.transcribe import BEAM_SIZE, MIN_AVG_LOGPROB, english_pieces, recognize  # noqa: E402
+from gesturelsm.asr.windows import recognition_cuts  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
 
 SR = 16_000
@@ -80,6 +87,34 @@ def accuracy(data: Path, beam_size: int) -> list[str]:
     return rows
 
 
+def windowed(data: Path, beam_size: int) -> list[str]:
+    """Whole-take recognition (then alignment of the whole text) against window-by-window recognition and alignment."""
+    rows = ["| take | MFA words | windows (s) | recovered, whole | recovered, windowed | s whole (recognise + align) "
+            "| s windowed | onset mean ms whole / windowed |", "|---|---|---|---|---|---|---|---|"]
+    recognize(np.zeros(SR, np.float32))
+    tot = [0, 0, 0]
+    for take in TAKES:
+        ref = read_words(data / "textgrid" / f"{take}.TextGrid")
+        y = load_audio(data / "wave16k" / f"{take}.wav")
+        t0 = time.perf_counter()
+        words, _, _ = recognize(y, beam_size)
+        whole = align_words(y, " ".join(w.text for w in words)).words
+        t1 = time.perf_counter()
+        pieces = list(english_pieces(y, "auto", beam_size))
+        t2 = time.perf_counter()
+        win = [w for p in pieces for w in p.words]
+        a, b = recovered(whole, ref), recovered(win, ref)
+        tot = [tot[0] + len(ref), tot[1] + a, tot[2] + b]
+        cuts = ", ".join(f"{c / SR:.1f}" for c in recognition_cuts(y)[1:-1])
+        ea, eb = onset_stats(onset_errors_ms(whole, ref)), onset_stats(onset_errors_ms(win, ref))
+        rows.append(f"| {take} | {len(ref)} | cut at {cuts} | {a} ({100 * a / len(ref):.1f} %) | {b} "
+                    f"({100 * b / len(ref):.1f} %) | {t1 - t0:.1f} | {t2 - t1:.1f} | {ea.mean_ms:.0f} / "
+                    f"{eb.mean_ms:.0f} |")
+    rows.append(f"| all three | {tot[0]} | | {tot[1]} ({100 * tot[1] / tot[0]:.1f} %) | {tot[2]} "
+                f"({100 * tot[2] / tot[0]:.1f} %) | | | |")
+    return rows
+
+
 def _status_mb(key: str) -> float:
     """VmRSS (resident now) or VmHWM (peak resident since start or the last reset) of this process, MB."""
     for line in Path("/proc/self/status").read_text().splitlines():
@@ -119,6 +154,7 @@ def main() -> int:
     ap.add_argument("--data", type=Path, default=BEAT2)
     ap.add_argument("--beam-size", type=int, default=BEAM_SIZE,
                     help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
+    ap.add_argument("--windowed", action="store_true", help="only: whole-take against window-by-window recognition")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if not (args.data / "textgrid").is_dir():
@@ -126,6 +162,9 @@ def main() -> int:
         return 2
     if args.memory_child:
         memory_child(args.data)
+        return 0
+    if args.windowed:
+        print("\n".join(windowed(args.data, args.beam_size)))
         return 0
     print("\n".join(accuracy(args.data, args.beam_size)))
     print("\n" + memory(args.data))

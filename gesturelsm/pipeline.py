@@ -30,6 +30,8 @@ from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
+from .pipelined import (HIDDEN, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
+                        overlap_timings, with_speech, with_words)
 from .generator.model import GestureGenerator
 from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
 from .motion.merge import apply_edit, splice
@@ -40,7 +42,8 @@ from .tokenizer.model import RVQVAE
 
 GROUND_TRUTH_MISSING = ("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; it is left "
                         "out.")
-NOT_GENERATION = ("alignment", "transcription", "rendering")    # stages outside generation time (the paper's AITS)
+NOT_GENERATION = ("alignment", "transcription", "rendering",     # stages outside generation time (the paper's AITS)
+                  WAITING, HIDDEN)
 
 
 def generation_seconds(timings: Mapping[str, float]) -> float:
@@ -78,21 +81,6 @@ class Generated:
     results: dict[str, GenerationResult]       # generator methods: timings and settings
     ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
     warnings: list[str]
-
-
-def with_speech(motion: MotionSequence, speech: "SpeechInput") -> MotionSequence:
-    """`motion` keeping the transcript and word timings it was made from (saved in its npz: `transcript`, `words`,
-    `word_times`; `gesturelsm edit` reuses them); none for audio-only speech."""
-    words = tuple((w.text, float(w.start), float(w.end)) for w in speech.words or ())
-    transcript = speech.transcript or (" ".join(w for w, _, _ in words) or None)
-    return replace(motion, transcript=transcript, words=words)
-
-
-def finish(seq: MotionSequence, stand_in_place: bool = False, smoothing: str = "off", grounding: bool = False,
-           body=None) -> tuple[MotionSequence, str | None]:
-    """`seq` post-processed with these options (`settings.PostProcess.apply`: stand in place, smoothing, feet on the
-    ground on `body`), and why grounding had to leave it as it was, when it had to."""
-    return PostProcess(stand_in_place, smoothing, grounding).apply(seq, body)
 
 
 @dataclass
@@ -205,59 +193,50 @@ class GesturePipeline:
 
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
                        text: str | None = None, progress: Progress | None = None,
-                       transcribe: bool = True, language: str = AUTO) -> SpeechInput:
+                       transcribe: bool = True, language: str = AUTO, stream: bool = False) -> SpeechInput:
         """Validate and resample audio; word timings from aligning a typed `text` (with `language`'s eSpeak voice),
         else from `words` (e.g. a TextGrid), else from automatic transcription (`transcribe`, in `language`: see
-        gesturelsm.asr), else audio-only. Features that do not depend on the method are computed here once."""
-        timings: dict[str, float] = {}
-        warnings: list[str] = []
+        gesturelsm.asr), else audio-only. Features that do not depend on the method are computed here once.
+        `stream`: automatic English words are recognised on a thread while `generate` already works on the first
+        windows (gesturelsm.pipelined; the same motion as without); the speech's words, mode and transcript are those
+        of `settled(speech)` once generated."""
         t0 = time.perf_counter()
         y, T = self._checked_audio(audio, sr)
         channels = torch.from_numpy(audio_channels(y))
-        timings["features"] = time.perf_counter() - t0
+        speech = SpeechInput(y, T, channels, None, torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool),
+                             "audio-only (no transcript given)", {"features": time.perf_counter() - t0}, [], None)
         if progress:
             progress(0.1, "audio features")
-        mode, transcript = "audio-only (no transcript given)", None
         if text and text.strip() and not gesture_words(language, text):
-            words, mode = None, f"audio-only (a Chinese or Japanese transcript: {NOT_FOR_GESTURES})"
-        elif text and text.strip():
+            return replace(speech, text_mode=f"audio-only (a Chinese or Japanese transcript: {NOT_FOR_GESTURES})")
+        if text and text.strip():
             if progress:
                 progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()
             res = align_words(y, text, typed_alignment(language, text))
-            timings["alignment"] = time.perf_counter() - t1
-            words = res.words
+            speech.timings["alignment"] = time.perf_counter() - t1
             mode = f"transcript, word timings aligned automatically ({res.method}, confidence {res.confidence:.2f})"
-            if res.warning:
-                warnings.append(res.warning)
             if progress:
                 progress(0.2, "transcript aligned")
-        elif words is not None:
-            mode = "transcript with given word timings"
-        elif transcribe:
-            if progress:
-                progress(0.1, "recognising the words (automatic transcription)")
-            t1 = time.perf_counter()
-            auto = automatic_words(y, language=language)
-            timings["transcription"] = time.perf_counter() - t1
-            words, mode, transcript = auto.words, auto.text_mode, auto.transcript
-            transcript = transcript.text if transcript is not None and auto.words else None
-            warnings += auto.warnings
-            if progress:
-                progress(0.2, "speech transcribed")
-        wf, hw = torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool)
-        if words:
-            t2 = time.perf_counter()
-            emb = TextEmbedder.shared()
-            if emb.available:
-                ft = emb.frame_features(words, T)
-                wf, hw = torch.from_numpy(ft.features), torch.from_numpy(ft.has_word)
-            else:
-                warnings.append(f"{emb.error}; generating from audio only")
-                words, mode = None, "audio-only (text encoder unavailable)"
-            timings["features"] += time.perf_counter() - t2
-        return SpeechInput(y, T, channels, words or None, wf, hw, mode, timings, warnings,
-                           transcript if words else None)
+            return with_words(speech, res.words, mode, warnings=[res.warning] if res.warning else [])
+        if words is not None:
+            return with_words(speech, words, "transcript with given word timings")
+        if not transcribe:
+            return speech
+        if progress:
+            progress(0.1, "recognising the words (automatic transcription)")
+        if stream and language in STREAMED_LANGUAGES and TextEmbedder.shared().available:
+            return PendingWords.start(speech, language, automatic_words, progress)
+        t1 = time.perf_counter()
+        auto = automatic_words(y, language=language)
+        if progress:
+            progress(0.2, "speech transcribed")
+        return automatic_speech(speech, auto, time.perf_counter() - t1)
+
+    @staticmethod
+    def settled(speech: SpeechInput) -> SpeechInput:
+        """The finished speech of pipelined speech (its words known: waits for them); other speech as it is."""
+        return speech.stream.settle() if speech.stream is not None else speech
 
     # ---- generation --------------------------------------------------------------------------------------
     def check_settings(self, method: str, steps: int, cfg: float) -> None:
@@ -295,6 +274,7 @@ class GesturePipeline:
                 else:
                     res = self.generate(speech, steps=plan.steps_for(m), cfg=plan.settings.cfg,
                                         seed=plan.settings.seed, method=m, progress=prog)
+                    speech = self.settled(speech)
                     made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
                 if made.motion is not None:
                     made.motion, note = plan.settings.post.apply(made.motion.slice(0, T), body)
@@ -330,14 +310,32 @@ class GesturePipeline:
         steps = self.spec(method).default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
-                                                                                       transcribe)
+                                                                                       transcribe, stream=True)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        out = self.backends[method].generate(speech, steps, cfg, seed, prog)
+        out, speech, timings = self._streamed(speech, method,
+                                              lambda sp: self.backends[method].generate(sp, steps, cfg, seed, prog))
         if progress:
             progress(1.0, f"{method}: done")
         return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed),
-                                {**speech.timings, **out.timings},
+                                {**speech.timings, **out.timings, **timings},
                                 speech.text_mode, list(speech.warnings) + out.warnings)
+
+    def _streamed(self, speech: SpeechInput, method: str, make) -> tuple:
+        """(make(speech), the finished speech, overlap timings): with pipelined speech `make` runs while the words are
+        recognised, and again on the finished speech where they were not the streamed words (pipelined.Restart)."""
+        pending, t0, early = speech.stream, time.perf_counter(), {}
+        if pending is not None and (pending.done or not isinstance(self.backends[method], FlowBackend)):
+            early = {WAITING: 0.0, HIDDEN: 0.0}                    # words known before; the authors' models read
+            speech, pending = self.settled(speech), None           # them at once
+        try:
+            out = make(speech)
+        except Restart:                                            # not the streamed words: as the one-shot path
+            out = None
+        if pending is None:
+            return out, speech, early
+        speech = pending.settle()
+        out = out if out is not None and pending.valid else make(speech)
+        return out, speech, overlap_timings(pending, t0, out.timings)
 
     # ---- editing -----------------------------------------------------------------------------------------
     @torch.no_grad()
@@ -369,7 +367,10 @@ class GesturePipeline:
         ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
         speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress, language)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
-        out = self.backends[method].edit(speech, motion, ask, steps, cfg, seed, prog)
+        out, speech, streamed = self._streamed(speech, method,
+                                               lambda sp: self.backends[method].edit(sp, motion, ask, steps, cfg, seed,
+                                                                                     prog))
+        warnings += speech.warnings
         t0 = time.perf_counter()
         gen, note = replace(post, grounding=post.grounding and "lower" in ask.regions).apply(
             splice(motion, out.motion, out.start, ask.regions), body)
@@ -377,7 +378,7 @@ class GesturePipeline:
         if progress:
             progress(1.0, f"{method}: edited {ask.describe()}")
         return GenerationResult(merged, method, int(steps), float(cfg), int(seed),
-                                {**speech.timings, **out.timings, "merging": time.perf_counter() - t0},
+                                {**speech.timings, **out.timings, **streamed, "merging": time.perf_counter() - t0},
                                 speech.text_mode, warnings + out.warnings + ([note] if note else []))
 
     def _edit_speech(self, motion: MotionSequence, speech: np.ndarray | SpeechInput, sr: int, words: list | None,
@@ -388,12 +389,11 @@ class GesturePipeline:
         if isinstance(speech, SpeechInput):
             if speech.num_frames != motion.num_frames:
                 raise EditError(length_mismatch(motion.num_frames, speech.duration))
-            return speech, list(speech.warnings)
+            return speech, []
         if sr <= 0:
             raise InputError(f"invalid sample rate {sr}")
         y, warnings = fit_speech(resample(to_mono(speech), int(sr), SAMPLE_RATE), motion.num_frames)
-        prepared = self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language)
-        return prepared, warnings + prepared.warnings
+        return self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language, stream=True), warnings
 
 
 __all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError",

@@ -281,7 +281,7 @@ def hears_hello(monkeypatch):
     from gesturelsm.align import Word
     from gesturelsm.asr.source import AutomaticWords
 
-    def hear(audio, remember=True, language="auto"):
+    def hear(audio, remember=True, language="auto", on_piece=None):
         return AutomaticWords([Word("hello", 0.3, 0.7), Word("there", 0.8, 1.3)], "automatic transcript (2 words "
                               "recognised, confidence 0.90, word timings: test)", SimpleNamespace(text="hello there"))
     monkeypatch.setattr(pipeline, "automatic_words", hear)

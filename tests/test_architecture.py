@@ -30,6 +30,7 @@ FLOORS: list[set[str]] = [
     {"backends"},                                              # every method (ours, the authors') behind one call,
                                                                # each described once (its spec)
     {"settings"},                                              # one generation's settings, defaults, validator
+    {"pipelined"},                                             # speech preparation pipelined with generation
     {"pipeline"},                                              # speech -> motion, one request flow
     {"study", "evaluation", "pipeline_cli", "edit_cli", "live",  # what uses the pipeline (live: streaming; the
      "genea"},                                                 # generate and edit commands; GENEA submissions)

@@ -18,7 +18,7 @@ import numpy as np
 from ..align import AlignConfig, Word
 from .languages import AUTO, ENGLISH, NOT_FOR_GESTURES, espeak_voice, gesture_words, has_cjk, name
 from .model import RecognizerUnavailable
-from .transcribe import Transcript, transcribe
+from .transcribe import Piece, Transcript, transcribe
 
 TYPED, TEXTGRID, AUTOMATIC, AUDIO_ONLY = "typed transcript", "TextGrid", "automatic transcript", "audio only"
 
@@ -104,14 +104,17 @@ def _key(y: np.ndarray) -> tuple[int, bytes]:
     return len(y), hashlib.blake2b(y.tobytes(), digest_size=16).digest()
 
 
-def automatic_words(audio_16k: np.ndarray, remember: bool = True, language: str = AUTO) -> AutomaticWords:
+def automatic_words(audio_16k: np.ndarray, remember: bool = True, language: str = AUTO,
+                    on_piece: Callable[[Piece], None] | None = None) -> AutomaticWords:
     """Recognise (N,) float32 16 kHz speech in `language` (languages.CHOICES; AUTO: English, else the language the
     multilingual model identifies); the same samples and language again: the remembered answer, see the module doc;
-    remember=False recognises afresh and keeps nothing."""
+    remember=False recognises afresh and keeps nothing. `on_piece`: each recognition window's English words as soon as
+    they are timed (transcribe's `on_piece`; not called for a remembered answer)."""
     y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
+    more = [on_piece] if on_piece else []
     if not remember:
-        return _recognised(y, language)
-    got = RECENT.get((*_key(y), language), lambda: _recognised(y, language))
+        return _recognised(y, language, *more)
+    got = RECENT.get((*_key(y), language), lambda: _recognised(y, language, *more))
     return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings))
 
 
@@ -122,10 +125,11 @@ def remember_words(audio_16k: np.ndarray, words: AutomaticWords, language: str =
     RECENT.get((*_key(y), language), lambda: words)
 
 
-def _recognised(audio_16k: np.ndarray, language: str = AUTO) -> AutomaticWords:
+def _recognised(audio_16k: np.ndarray, language: str = AUTO,
+                on_piece: Callable[[Piece], None] | None = None) -> AutomaticWords:
     """Recognise (N,) float32 16 kHz speech; words when accepted, else audio-only with the reason."""
     try:
-        tr = transcribe(audio_16k, language=language)
+        tr = transcribe(audio_16k, language=language, **({"on_piece": on_piece} if on_piece else {}))
     except RecognizerUnavailable as exc:
         return AutomaticWords(None, "audio-only (automatic transcription unavailable)", None,
                               [f"Automatic transcription is unavailable: {exc}. Generating from the audio only."])

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from ..constants import SAMPLE_RATE
 from . import multilingual
 from .languages import AUTO, CHOICES, ENGLISH, NO_SPACES, espeak_voice, name
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
+from .windows import recognition_cuts
 
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
 # The multilingual model (Whisper base) on speech it identified: eSpeak Japanese, Spanish and German score -0.63 to
@@ -113,13 +115,20 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE, model=None,
     ratio > LOOP_RATIO), there is no speech to find: no words, details["repeated_phrase"] = True. Where only some
     windows loop, the audio is decoded again with Whisper's temperature fallback (FALLBACK_TEMPERATURES).
     `model`: None for the English model, else a loaded model (the multilingual one) decoding `language`."""
+    words, logp, ntok, details = _recognized(audio, beam_size, model, language)
+    return words, (logp / ntok if ntok else -math.inf), details
+
+
+def _recognized(audio: np.ndarray, beam_size: int, model, language: str) -> tuple[list[Word], float, int, dict]:
+    """recognize's words, the sum of token log-probabilities and the token count (to pool windows), details
+    (with "word_probabilities": the words' probabilities)."""
     label = MODEL_NAME if model is None else multilingual.MODEL_NAME
     segments = _decode(audio, beam_size, 0.0, model, language)
     loops = [seg.compression_ratio > LOOP_RATIO for seg in segments]
     if segments and all(loops):
-        return [], -math.inf, {"model": label, "mean_word_probability": 0.0, "repeated_phrase": True,
-                               "heard_repeated": _clip(" ".join(segments[0].text.split())),
-                               "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
+        return [], 0.0, 0, {"model": label, "mean_word_probability": 0.0, "repeated_phrase": True,
+                            "heard_repeated": _clip(" ".join(segments[0].text.split())), "word_probabilities": [],
+                            "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
     if any(loops):
         segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES), model, language)
     words: list[Word] = []
@@ -133,46 +142,57 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE, model=None,
             if text:
                 words.append(Word(text, float(w.start), float(w.end)))
                 probs.append(float(w.probability))
-    words = sequential(words)
-    avg = logp / ntok if ntok else -math.inf
     details = {"model": label, "mean_word_probability": float(np.mean(probs)) if probs else 0.0,
-               "max_no_speech_probability": max(no_speech, default=1.0)}
-    return words, avg, details
+               "max_no_speech_probability": max(no_speech, default=1.0), "word_probabilities": probs}
+    return sequential(words), logp, ntok, details
 
 
-def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE, language: str = AUTO) -> Transcript:
-    """Recognise `audio` ((N,) float32, 16 kHz) and time its words. Raises RecognizerUnavailable when
-    faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc).
-
-    language: AUTO (English first; where the English model rejects the speech as unsure or looping, or hears no words,
-    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only) or a Whisper
-    code from languages.LANGUAGES (the multilingual model in that language, nothing identified)."""
-    if timing not in TIMINGS:
-        raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
-    if language not in CHOICES:
-        raise ValueError(f"language must be one of {', '.join(CHOICES)} (got {language!r})")
-    y = np.asarray(audio, np.float32).reshape(-1)
-    if len(y) < MIN_SECONDS * SAMPLE_RATE or not np.isfinite(y).all() or np.abs(y).max() < 1e-4:
-        return _rejected("The audio is too short, silent or invalid: there is no speech to recognise.")
-    if language not in (AUTO, ENGLISH):
-        return _other_language(y, language, None, timing, beam_size)
-    tr = _english(y, timing, beam_size)
-    if language == ENGLISH or tr.accepted or not (tr.details.get("not_english") or tr.details.get("no_words")):
-        return tr
-    return _identified(y, tr, timing, beam_size)
+@dataclass(frozen=True)
+class Piece:
+    """The English model's words of one recognition window (asr/windows.py), timed by our aligner on that window's
+    audio; times in seconds from the start of the whole speech. Every word starting before `final_until` is known once
+    this piece and the ones before it are (the window's end; infinity for the last window)."""
+    words: list[Word]
+    final_until: float
+    heard: str
+    logp: float
+    ntok: int
+    timing_method: str
+    warnings: list[str]
+    details: dict
 
 
-def _english(y: np.ndarray, timing: str, beam_size: int) -> Transcript:
-    """The English model's transcript (Whisper tiny.en, our aligner's word times); details["not_english"] where it
-    was rejected as unsure or looping, the rejections another language explains, details["no_words"] where it heard
-    nothing (another language is then identified only when the multilingual model is sure of it)."""
-    words, avg, details = recognize(y, beam_size)
-    heard = " ".join(w.text for w in words)
+def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE) -> Iterator[Piece]:
+    """The English model on `y` window by window (windows.recognition_cuts), each window's words timed on its own
+    audio (`timing` as `transcribe` takes it). A window whose every Whisper segment loops has no words (its
+    details["repeated_phrase"]); `english_transcript` pools the pieces."""
+    cuts = recognition_cuts(y)
+    for j, (a, b) in enumerate(zip(cuts, cuts[1:])):
+        chunk = y[a:b]
+        words, logp, ntok, details = _recognized(chunk, beam_size, None, ENGLISH)
+        heard = " ".join(w.text for w in words)
+        timed, method, warnings = _timed(chunk, words, heard, timing) if words else ([], "none", [])
+        t0, length = a / SAMPLE_RATE, (b - a) / SAMPLE_RATE
+        timed = [Word(w.text, t0 + min(w.start, length), t0 + min(max(w.end, w.start), length)) for w in timed]
+        final = math.inf if j == len(cuts) - 2 else b / SAMPLE_RATE
+        yield Piece(timed, final, heard, logp, ntok, method, warnings, details)
+
+
+def english_transcript(pieces: list[Piece]) -> Transcript:
+    """The English model's transcript of `y` from all its pieces: rejected (details["not_english"]) when every window
+    loops or the pooled mean token log-probability is below MIN_AVG_LOGPROB, (details["no_words"]) with no words."""
+    words = [w for p in pieces for w in p.words]
+    heard = " ".join(p.heard for p in pieces if p.heard)
+    logp, ntok = sum(p.logp for p in pieces), sum(p.ntok for p in pieces)
+    avg = logp / ntok if ntok else -math.inf
+    probs = [q for p in pieces for q in p.details.get("word_probabilities", [])]
+    details = {"model": MODEL_NAME, "mean_word_probability": float(np.mean(probs)) if probs else 0.0,
+               "max_no_speech_probability": max((p.details["max_no_speech_probability"] for p in pieces),
+                                                default=1.0), "avg_logprob": avg, "windows": len(pieces)}
     conf = math.exp(avg) if words else 0.0
-    details["avg_logprob"] = avg
-    if details.get("repeated_phrase"):
-        phrase = details["heard_repeated"]
-        details["not_english"] = True
+    if pieces and all(p.details.get("repeated_phrase") for p in pieces):
+        phrase = pieces[0].details["heard_repeated"]
+        details.update(not_english=True, repeated_phrase=True, heard_repeated=phrase)
         return _rejected(f"Automatic transcription was rejected: the English speech recogniser only heard one phrase "
                          f"over and over (\"{phrase}\"). The speech may not be English, or it is music, tones or "
                          "noise.", phrase, 0.0, details)
@@ -184,8 +204,47 @@ def _english(y: np.ndarray, timing: str, beam_size: int) -> Transcript:
         return _rejected(f"Automatic transcription was rejected: the English speech recogniser is unsure of what it "
                          f"heard (confidence {conf:.2f}; it heard \"{_clip(heard)}\"). The speech may not be English, "
                          "or it is noise or music.", heard, conf, details)
-    timed, method, warnings = _timed(y, words, heard, timing)
-    return Transcript(timed, heard, "en", None, method, warnings, True, conf, heard, details)
+    methods = {p.timing_method for p in pieces if p.words}
+    warnings = list(dict.fromkeys(w for p in pieces for w in p.warnings))
+    return Transcript(words, heard, "en", None, "dtw" if methods == {"dtw"} else "whisper", warnings, True, conf,
+                      heard, details)
+
+
+def transcribe(audio: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE, language: str = AUTO,
+               on_piece: Callable[[Piece], None] | None = None) -> Transcript:
+    """Recognise `audio` ((N,) float32, 16 kHz) and time its words. Raises RecognizerUnavailable when
+    faster-whisper or the weights are not installed; every other outcome is a Transcript (see its doc).
+
+    language: AUTO (English first; where the English model rejects the speech as unsure or looping, or hears no words,
+    the multilingual model identifies the language and transcribes it), ENGLISH (the English model only) or a Whisper
+    code from languages.LANGUAGES (the multilingual model in that language, nothing identified). `on_piece`: called
+    with each recognition window's English words as soon as they are timed (the pipelined generation's words)."""
+    if timing not in TIMINGS:
+        raise ValueError(f"timing must be one of {TIMINGS} (got {timing!r})")
+    if language not in CHOICES:
+        raise ValueError(f"language must be one of {', '.join(CHOICES)} (got {language!r})")
+    y = np.asarray(audio, np.float32).reshape(-1)
+    if len(y) < MIN_SECONDS * SAMPLE_RATE or not np.isfinite(y).all() or np.abs(y).max() < 1e-4:
+        return _rejected("The audio is too short, silent or invalid: there is no speech to recognise.")
+    if language not in (AUTO, ENGLISH):
+        return _other_language(y, language, None, timing, beam_size)
+    tr = _english(y, timing, beam_size, *([on_piece] if on_piece else []))
+    if language == ENGLISH or tr.accepted or not (tr.details.get("not_english") or tr.details.get("no_words")):
+        return tr
+    return _identified(y, tr, timing, beam_size)
+
+
+def _english(y: np.ndarray, timing: str, beam_size: int, on_piece: Callable[[Piece], None] | None = None) -> Transcript:
+    """The English model's transcript, recognised and timed window by window (`english_pieces`, pooled by
+    `english_transcript`); details["not_english"] where it was rejected as unsure or looping, the rejections another
+    language explains, details["no_words"] where it heard nothing (another language is then identified only when the
+    multilingual model is sure of it)."""
+    pieces = []
+    for piece in english_pieces(y, timing, beam_size):
+        pieces.append(piece)
+        if on_piece:
+            on_piece(piece)
+    return english_transcript(pieces)
 
 
 def _identified(y: np.ndarray, english: Transcript, timing: str, beam_size: int) -> Transcript:
@@ -267,4 +326,5 @@ def _clip(text: str, n: int = 60) -> str:
     return text if len(text) <= n else text[: n - 3].rstrip() + "..."
 
 
-__all__ = ["Transcript", "RecognizerUnavailable", "recognize", "sequential", "transcribe", "MIN_AVG_LOGPROB"]
+__all__ = ["Transcript", "Piece", "RecognizerUnavailable", "recognize", "sequential", "transcribe", "english_pieces",
+           "english_transcript", "MIN_AVG_LOGPROB"]

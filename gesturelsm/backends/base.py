@@ -32,6 +32,13 @@ class SpeechInput:
     timings: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     transcript: str | None = None       # the automatic transcript's text when one was recognised and used
+    # Frame counts at which the word features become final, in order (the recognition windows of an automatic English
+    # transcript; empty otherwise): generation conditions its windows in groups that follow them, in both the one-shot
+    # and the pipelined path, so that the two compute the same numbers.
+    ready_points: tuple[int, ...] = ()
+    # Pipelined speech (gesturelsm.pipelined.PendingWords): the words are still being recognised; `stream.wait(n)`
+    # blocks until the word features of frames [0, n) are final. None: everything is final.
+    stream: object | None = None
 
     @property
     def duration(self) -> float:

