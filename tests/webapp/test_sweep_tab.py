@@ -181,7 +181,8 @@ def test_the_sweep_tab_hears_the_speech_in_the_language_chosen(service, speech_w
     def hear(audio, remember=True, language="auto"):
         heard.append(language)
         return AutomaticWords([Word("hola", 0.3, 0.7), Word("amigos", 0.8, 1.3)], "automatic transcript (2 words "
-                              "recognised in Spanish (chosen), word timings: test)", SimpleNamespace(text="hola amigos"))
+                              "recognised in Spanish (chosen), word timings: test)",
+                              SimpleNamespace(text="hola amigos"))
     monkeypatch.setattr(pipeline, "automatic_words", hear)
     wav = tmp_path / "spanish.wav"          # an upload of its own: the service reuses what it prepared for a file
     shutil.copyfile(speech_wav, wav)
