@@ -3,9 +3,9 @@
     NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_gestures_languages.py [--seeds 2]
 
 No real Japanese, Chinese, Spanish or German speech is stored here, so the clips are eSpeak NG's (three sentences per
-language, about 20 s; eSpeak's Mandarin is not recognised as Chinese by Whisper base, so Chinese is left out and says
-so). Each clip is transcribed with the default settings (language auto: tiny.en rejects it, Whisper base identifies
-the language); the shipped GestureLSM (its default steps, CFG 2) then generates from the audio only and with the
+language, about 15 s; Chinese is eSpeak's Mandarin spoken from pinyin, which Whisper base identifies as Chinese).
+Each clip is transcribed with the default settings (language auto: tiny.en rejects it, Whisper base identifies the
+language); the shipped GestureLSM (its default steps, CFG 2) then generates from the audio only and with the
 recognised words, same seeds. Statistics (gesturelsm.evaluation.motion_stats, against the shipped speaker's row):
 raised share, loudness following, beat consistency, hand spread; means over seeds. The recognised words are handed
 to the generator as given word timings, so Chinese and Japanese words (which the pipeline itself does not use for
@@ -38,7 +38,13 @@ CLIPS = {
     "de": ("de", ["gestern nachmittag sind wir mit dem fahrrad zum markt gefahren und haben brot gekauft",
                   "danach sind wir durch den park gelaufen und haben über den sommer gesprochen",
                   "nächste woche wollen wir in die berge fahren und viele fotos machen"]),
-    "zh": ("cmn", ["我们昨天下午在公园里散步", "天气非常好", "很多人在那里跳舞和唱歌"]),
+    # Mandarin from pinyin with tone numbers (eSpeak's `cmn` voice reads hanzi as tone numbers aloud, "men five"; its
+    # pinyin voice with the f3 variant is identified as Chinese): 我们昨天下午在公园里散步，天气非常好。/
+    # 看到很多孩子在那里跳舞和唱歌。/ 然后我们去市场买了新鲜的面包和苹果。
+    "zh": ("cmn-latn-pinyin+f3", [
+        "wo3 men5 zuo2 tian1 xia4 wu3 zai4 gong1 yuan2 li3 san4 bu4 tian1 qi4 fei1 chang2 hao3",
+        "kan4 dao4 hen3 duo1 hai2 zi5 zai4 na4 li3 tiao4 wu3 he2 chang4 ge1",
+        "ran2 hou4 wo3 men5 qu4 shi4 chang3 mai3 le5 xin1 xian1 de5 mian4 bao1 he2 ping2 guo3"]),
 }
 KEYS = ("raised_share", "loudness_gain", "bc", "hand_spread")
 

@@ -2,6 +2,10 @@
 
 Prints the method, the confidence and any warning (fallbacks are explained, never silent); with
 `--reference REF.TextGrid` also the onset error against that file.
+
+`--language` takes the codes every other command takes (auto, en, es, de, ja, ...: languages.CHOICES), read with
+that language's eSpeak NG voice (languages.typed_alignment); an eSpeak NG voice (en-gb-x-rp, pt-br, cmn, en-us+f3),
+what the flag took before, is still accepted and used as it is.
 """
 from __future__ import annotations
 
@@ -12,7 +16,9 @@ from pathlib import Path
 
 from ..audio import SAMPLE_RATE, load_audio
 from ..errors import UserError
+from . import tts
 from .aligner import AlignConfig, align_words
+from .languages import AUTO, CHOICES, typed_alignment
 from .metrics import onset_errors_ms, onset_stats
 from .normalize import tokenize
 from .textgrid import read_words, write_textgrid
@@ -27,8 +33,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src.add_argument("--text-file", type=Path, help="read the transcript from this UTF-8 text file")
     p.add_argument("--out", type=Path, help="write the words tier here (.TextGrid); default: print the words")
     p.add_argument("--format", choices=("long", "short"), default="long", help="TextGrid text format")
-    p.add_argument("--language", default="en-us",
-                   help="eSpeak NG language/voice of the speech (default en-us; see `espeak-ng --voices`)")
+    p.add_argument("--language", default=AUTO, metavar="CODE",
+                   help=f"the speech's language, as for the other commands: {' '.join(CHOICES)} (default: {AUTO}, "
+                        "English unless the text is Chinese or Japanese); the transcript is read with its eSpeak NG "
+                        "voice. An eSpeak NG voice (en-gb-x-rp, pt-br, en-us+f3; the File column of "
+                        "`espeak-ng --voices`) is used as it is")
     p.add_argument("--reference", type=Path, help="a TextGrid with known word timings: report onset errors")
     p.set_defaults(func=run)
 
@@ -40,17 +49,40 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None and args.out.suffix.lower() != ".textgrid":
         raise UserError(f"--out must end in .TextGrid (got {args.out.name})")
     reference = read_words(args.reference) if args.reference else None
+    config = language_config(args.language, text)
     audio = load_audio(args.audio, SAMPLE_RATE)
     t0 = time.perf_counter()
-    result = align_words(audio, text, AlignConfig.for_language(args.language))
+    result = align_words(audio, text, config)
     elapsed = time.perf_counter() - t0
     duration = len(audio) / SAMPLE_RATE
     print(f"{len(result.words)} words, method {result.method}, confidence {result.confidence:.2f}, "
           f"{elapsed:.1f} s for {duration:.1f} s of audio")
     if result.warning:
         print(f"warning: {result.warning}", file=sys.stderr)
+    if not config.voices:
+        print(f"hint: `gesturelsm transcribe {args.audio} --language {args.language.strip()}` recognises the words and "
+              "times them itself", file=sys.stderr)
     output_words(result.words, duration, args, reference)
     return 0
+
+
+def language_config(value: str, text: str) -> AlignConfig:
+    """How `--language VALUE` reads `text`: a language code (CHOICES) with its eSpeak NG voice, else an eSpeak NG
+    voice name as it is (with a +variant or not); UserError naming the codes for anything else. Where eSpeak NG is
+    missing a name cannot be checked and goes on as before (the aligner then spreads the words and says why)."""
+    code = value.strip().lower()
+    if code in CHOICES:
+        return typed_alignment(code, text)
+    base = value.strip().split("+")[0]
+    if base:
+        try:
+            tts.synthesize(["a"], (base,))
+        except tts.TTSUnavailable:
+            base = "" if tts.available() else base       # eSpeak works but has no such voice
+    if not base:
+        raise UserError(f"--language {value!r} is neither a language code ({' '.join(CHOICES)}) nor a voice eSpeak NG "
+                        "loads (the File column of espeak-ng --voices, e.g. en-gb-x-rp)")
+    return AlignConfig.for_language(value.strip())
 
 
 def output_words(words: list, duration: float, args: argparse.Namespace, reference: list | None) -> None:

@@ -6,40 +6,14 @@
     espeak_voice("ja")         # None: eSpeak reads kanji as "Chinese letter" and Chinese with tone numbers, so
                                # Chinese and Japanese words are timed by the recogniser, never by eSpeak
 
-No imports beyond the standard library: the settings' validator checks a language against LANGUAGES.
+The codes (LANGUAGES, CHOICES) and their eSpeak voices are gesturelsm.align.languages', re-exported here: the aligner
+(a floor below) reads typed transcripts with them and `gesturelsm align --language` takes the same codes.
 """
 from __future__ import annotations
 
-AUTO = "auto"
-ENGLISH = "en"
-# Whisper's languages (its code -> English name), as the multilingual recogniser (Whisper base) knows them.
-LANGUAGES: dict[str, str] = {
-    "en": "English", "zh": "Chinese", "de": "German", "es": "Spanish", "ru": "Russian", "ko": "Korean",
-    "fr": "French", "ja": "Japanese", "pt": "Portuguese", "tr": "Turkish", "pl": "Polish", "ca": "Catalan",
-    "nl": "Dutch", "ar": "Arabic", "sv": "Swedish", "it": "Italian", "id": "Indonesian", "hi": "Hindi",
-    "fi": "Finnish", "vi": "Vietnamese", "he": "Hebrew", "uk": "Ukrainian", "el": "Greek", "ms": "Malay",
-    "cs": "Czech", "ro": "Romanian", "da": "Danish", "hu": "Hungarian", "ta": "Tamil", "no": "Norwegian",
-    "th": "Thai", "ur": "Urdu", "hr": "Croatian", "bg": "Bulgarian", "lt": "Lithuanian", "la": "Latin",
-    "mi": "Maori", "ml": "Malayalam", "cy": "Welsh", "sk": "Slovak", "te": "Telugu", "fa": "Persian",
-    "lv": "Latvian", "bn": "Bengali", "sr": "Serbian", "az": "Azerbaijani", "sl": "Slovenian", "kn": "Kannada",
-    "et": "Estonian", "mk": "Macedonian", "br": "Breton", "eu": "Basque", "is": "Icelandic", "hy": "Armenian",
-    "ne": "Nepali", "mn": "Mongolian", "bs": "Bosnian", "kk": "Kazakh", "sq": "Albanian", "sw": "Swahili",
-    "gl": "Galician", "mr": "Marathi", "pa": "Punjabi", "si": "Sinhala", "km": "Khmer", "sn": "Shona",
-    "yo": "Yoruba", "so": "Somali", "af": "Afrikaans", "oc": "Occitan", "ka": "Georgian", "be": "Belarusian",
-    "tg": "Tajik", "sd": "Sindhi", "gu": "Gujarati", "am": "Amharic", "yi": "Yiddish", "lo": "Lao", "uz": "Uzbek",
-    "fo": "Faroese", "ht": "Haitian Creole", "ps": "Pashto", "tk": "Turkmen", "nn": "Nynorsk", "mt": "Maltese",
-    "sa": "Sanskrit", "lb": "Luxembourgish", "my": "Myanmar", "bo": "Tibetan", "tl": "Tagalog", "mg": "Malagasy",
-    "as": "Assamese", "tt": "Tatar", "haw": "Hawaiian", "ln": "Lingala", "ha": "Hausa", "ba": "Bashkir",
-    "jw": "Javanese", "su": "Sundanese",
-}
-CHOICES: tuple[str, ...] = (AUTO, *LANGUAGES)          # what --language and the page accept
-# eSpeak NG's voice for a Whisper code where the names differ; codes missing here and from NO_ESPEAK use their own.
-_ESPEAK = {"en": "en-us", "fr": "fr-fr", "no": "nb", "nn": "nb", "pt": "pt", "fa": "fa"}
-# Scripts eSpeak does not read as the language: Chinese (tone numbers, no words) and Japanese (kanji read as
-# "Chinese letter"); no voice in eSpeak NG 1.51/1.52: Tibetan, Breton, Faroese, Galician, Hausa, ... (checked against
-# `espeak-ng --voices`).
-NO_ESPEAK = frozenset({"zh", "ja", "yue", "bo", "br", "fo", "gl", "ha", "jw", "km", "ln", "lo", "mg", "mn", "oc", "ps",
-                       "sa", "sn", "so", "su", "tg", "tl", "yi", "yo"})
+# The codes and their eSpeak voices live with the aligner (a floor below), which reads typed transcripts with them.
+from ..align.languages import AUTO, CHOICES, ENGLISH, LANGUAGES, NO_ESPEAK, espeak_voice, has_cjk
+
 # Languages written without spaces between words: the recogniser gives characters (or short runs) as words.
 NO_SPACES = frozenset({"zh", "ja", "yue", "th", "lo", "my", "km", "bo"})
 
@@ -59,19 +33,6 @@ def gesture_words(code: str, text: str = "") -> bool:
 
 def name(code: str) -> str:
     return "automatic" if code == AUTO else LANGUAGES.get(code, code)
-
-
-def espeak_voice(code: str) -> str | None:
-    """The eSpeak NG voice that reads transcripts of `code` (a Whisper code), or None where eSpeak cannot."""
-    if code in NO_ESPEAK or code not in LANGUAGES:
-        return None
-    return _ESPEAK.get(code, code)
-
-
-def has_cjk(text: str) -> bool:
-    """Han or kana in `text`: a transcript eSpeak cannot read (Chinese, Japanese)."""
-    return any("\u3040" <= c <= "\u30ff" or "\u3400" <= c <= "\u4dbf" or "\u4e00" <= c <= "\u9fff"
-               or "\uf900" <= c <= "\ufaff" for c in text)
 
 
 __all__ = ["AUTO", "CHOICES", "ENGLISH", "LANGUAGES", "NOT_FOR_GESTURES", "NO_ESPEAK", "NO_SPACES", "espeak_voice",

@@ -15,8 +15,9 @@ from typing import Callable, Generic, Hashable, TypeVar
 
 import numpy as np
 
-from ..align import AlignConfig, Word
-from .languages import AUTO, ENGLISH, NOT_FOR_GESTURES, espeak_voice, gesture_words, has_cjk, name
+from ..align import Word
+from ..align.languages import typed_alignment as typed_alignment  # re-exported: its home is the aligner
+from .languages import AUTO, ENGLISH, NOT_FOR_GESTURES, gesture_words, name
 from .model import RecognizerUnavailable
 from .transcribe import Piece, Transcript, transcribe
 
@@ -30,16 +31,6 @@ def transcript_source(text: str | None, has_textgrid: bool, auto: bool) -> str:
     if has_textgrid:
         return TEXTGRID
     return AUTOMATIC if auto else AUDIO_ONLY
-
-
-def typed_alignment(language: str, text: str) -> AlignConfig:
-    """How a typed transcript in `language` is aligned: English voices for auto/en,
-    the language's eSpeak NG voices where eSpeak reads it (Spanish "es", German "de", Russian "ru", ...), none for
-    Chinese and Japanese (also a Han/kana transcript under auto): its characters are spread over the speech by length
-    (the aligner says so; leaving the box empty has them recognised and timed by the recogniser)."""
-    if language in (AUTO, ENGLISH):
-        return AlignConfig.for_language(None) if has_cjk(text) else AlignConfig()
-    return AlignConfig.for_language(espeak_voice(language))
 
 
 V = TypeVar("V")

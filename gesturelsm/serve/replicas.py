@@ -31,6 +31,7 @@ from ..audio import SAMPLE_RATE, load_audio
 from ..cluster import Connection, Files, ReplicaCount, require_cpus
 from ..errors import ClusterError
 from ..retarget import load_character
+from ..settings import DEFAULTS
 from .config import ServiceSettings
 from .request import Request, Result
 from .service import GestureService
@@ -148,7 +149,7 @@ class GestureReplica:
             if words is not None:
                 try:
                     loaded = load_audio(req.audio_path, max_seconds=self.service.settings.max_seconds)
-                    self.service.pipeline.remember_transcript(loaded, SAMPLE_RATE, words)
+                    self.service.pipeline.remember_transcript(loaded, SAMPLE_RATE, words, req.language)
                 except ValueError:                  # the request itself says what is wrong with the audio
                     pass
             service = self.service
@@ -179,13 +180,13 @@ class GestureReplica:
         finally:
             shutil.rmtree(result.job.folder, ignore_errors=True)
 
-    def transcribe(self, audio: Upload) -> AutomaticWords | None:
-        """The automatic transcript `run` would make for this upload (the page asks while the visitor chooses the
-        settings); None when the audio cannot be used (the request says why)."""
+    def transcribe(self, audio: Upload, language: str = DEFAULTS.language) -> AutomaticWords | None:
+        """The automatic transcript `run` would make for this upload in `language` (a checked code; the page asks while
+        the visitor chooses the settings); None when the audio cannot be used (the request says why)."""
         folder = self.scratch.call_folder()
         try:
             loaded = load_audio(_save(folder, audio), max_seconds=self.service.settings.max_seconds)
-            return self.service.pipeline.prefetch_transcript(loaded, SAMPLE_RATE)
+            return self.service.pipeline.prefetch_transcript(loaded, SAMPLE_RATE, language)
         except ValueError:
             return None
         finally:

@@ -33,6 +33,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..asr.languages import AUTO
 from ..asr.source import AUTOMATIC, AutomaticWords, transcript_source
 from ..audio import load_audio
 from ..body.model import resolve_model_path
@@ -61,7 +62,7 @@ class ReplicatedService(GestureService):
                  connection: Connection | None = None, name: str = replicas.APP):
         super().__init__(pipeline, settings, body)
         self.handle, self.count, self.connection, self.name = handle, count, connection, name
-        self._words: OrderedDict[str, AutomaticWords] = OrderedDict()
+        self._words: OrderedDict[tuple[str, str], AutomaticWords] = OrderedDict()   # by (upload, language)
         self._lock = threading.Lock()
 
     @classmethod
@@ -100,10 +101,11 @@ class ReplicatedService(GestureService):
         started = time.perf_counter()
         self.cleanup()
         req, plan = self.check(req)
+        req = replace(req, language=plan.settings.language)     # checked: the replica remembers the words under it
         upload = _upload(req.audio_path)
         textgrid = _upload(req.textgrid_path) if req.textgrid_path else None
         auto = transcript_source(req.text, bool(req.textgrid_path), plan.settings.transcribe) == AUTOMATIC
-        words = self._remembered(upload) if auto else None
+        words = self._remembered(upload, req.language) if auto else None
         prog(0.05, "generating on a replica")
         reply = self._call("run", req, upload, textgrid, words, self._take(req))
         out = _receive(reply, self.folder(), started)    # the visitor's own folder, as without replicas
@@ -130,28 +132,29 @@ class ReplicatedService(GestureService):
         """A replica transcribes the upload while the visitor chooses the settings (when the request would: no
         transcript typed, no TextGrid, transcription on); the words go with the request. The rest of the speech is
         prepared on the replica that makes the request; no motion is made ahead (`ahead` is not used: which replica
-        takes the click is not known before it)."""
+        takes the click is not known before it, but its language is the one transcribed in)."""
         if not audio_path or transcript_source(text, bool(textgrid_path), transcribe) != AUTOMATIC:
             return False
         try:
-            self.check(Request(audio_path))
+            _, plan = self.check(Request(audio_path, language=ahead.language if ahead is not None else AUTO))
+            language = plan.settings.language
             upload = _upload(audio_path)
-            words = self._call("transcribe", upload)
+            words = self._call("transcribe", upload, language)
         except GestureError as exc:
             log.info("no transcript prefetched for %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
             return False
         if words is None:
             return False
         with self._lock:
-            self._words[_digest(upload)] = words
+            self._words[(_digest(upload), language)] = words
             while len(self._words) > REMEMBERED:
                 self._words.popitem(last=False)
         return True
 
     # ---- helpers ---------------------------------------------------------------------------------------------
-    def _remembered(self, upload: Upload) -> AutomaticWords | None:
+    def _remembered(self, upload: Upload, language: str = AUTO) -> AutomaticWords | None:
         with self._lock:
-            return self._words.get(_digest(upload))
+            return self._words.get((_digest(upload), language))
 
     def _take(self, req: Request) -> Files | None:
         """Ground truth asked for: the BEAT2 take this speech is (the folder is here), its two files by value."""

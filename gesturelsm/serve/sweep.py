@@ -32,6 +32,7 @@ class SweepRequest:
     metric: Any = "wrist_speed"              # the statistic plotted (evaluation.sweep_report.PLOT_METRICS)
     text: Any = ""
     transcribe: Any = DEFAULTS.transcribe    # automatic transcript when no text is typed (as Generate)
+    language: Any = DEFAULTS.language        # the speech's language (auto: English, else the one identified)
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,8 @@ def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress:
         problems += str(exc).splitlines()
     metric = one_of(req.metric, "Statistic", PLOT_METRICS, problems)
     methods = grid.methods if grid else service.pipeline.methods[:1]
-    base = Request(req.audio_path, text=req.text, methods=methods, transcribe=req.transcribe, render=False,
-                   exports=False)
+    base = Request(req.audio_path, text=req.text, methods=methods, transcribe=req.transcribe, language=req.language,
+                   render=False, exports=False)
     base, _, audio = service.load(base, extra=problems)
     check_grid(service.pipeline, grid, len(audio) / SAMPLE_RATE, limits)
     plan, speech, notes = service.speech(base, audio, lambda f, m: prog(0.1 * f, m))

@@ -24,6 +24,7 @@ from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
 
+from .language import language_choice
 from .layout import SCROLL, TYPED_NOTE
 from .player import component as motion_player
 
@@ -95,12 +96,13 @@ class SweepHandlers:
         raise gr.Error(msg, duration=None, print_exception=False)
 
     def run(self, audio_path, methods, steps, cfgs, seeds, metric, text, auto_text=DEFAULTS.transcribe,
-            request: gr.Request = None, progress=gr.Progress()):
+            language=DEFAULTS.language, request: gr.Request = None, progress=gr.Progress()):
         """-> table html, plot, downloads, run choices, state."""
         stop = self._flag(request)
         stop.clear()
         try:
-            out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text, auto_text),
+            out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text, auto_text,
+                                                  language),
                                      self.limits, progress=lambda f, m: progress(f, desc=m), cancelled=stop.is_set)
         except GestureError as exc:
             log.info("sweep refused: %s", " | ".join(str(exc).splitlines()))
@@ -158,7 +160,8 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                                   lines=2, elem_id="sweep-text")
                 note = gr.Markdown(visible=False, elem_id="sweep-text-note")   # typed words kept for new speech
                 auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
-                                        label="Transcribe automatically when no transcript is given (English)")
+                                        label="Transcribe automatically when no transcript is given")
+                language = language_choice("sweep-language")     # as Generate's #language
                 chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=shown, label="Methods",
                                           elem_id="sweep-methods")
                 steps = gr.Textbox(" ".join(map(str, DEFAULT_STEPS)), label="Steps (space-separated)",
@@ -185,7 +188,7 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
                 files = gr.File(label="Sweep table and plot (CSV, markdown, JSON, PNG)", file_count="multiple",
                                 elem_id="sweep-files")
         state, payload = gr.State(), gr.JSON(visible=False)
-        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text],
+        run.click(h.run, [audio, chosen, steps, cfgs, seeds, metric, text, auto_text, language],
                   [table, plot, files, pick, state],
                        api_name="sweep", concurrency_limit=service.settings.concurrency, concurrency_id="generation")
         # words typed in the box are never used silently for other speech: a new upload or recording says so

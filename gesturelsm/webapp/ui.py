@@ -49,15 +49,15 @@ Record or upload speech, optionally give the transcript, and watch a body gestur
 Runs on a plain CPU; the body is a built-in mannequin (SMPL-X layout) unless a real SMPL-X model is configured."""
 
 HOW_IT_WORKS = """**How it works.** The speech is turned into an amplitude envelope and onset track; if you give a
-transcript, each word is timed against the audio (eSpeak NG synthesis + DTW, no Montreal Forced Aligner), or taken from
-your TextGrid, and embedded with MiniLM; with neither, the speech is **transcribed automatically** (Whisper tiny.en,
-offline, English only) and the recognised words appear in the transcript box, where you can correct them and run again;
-untick *Transcribe automatically*, or give non-English speech, and the model runs **audio-only** (the summary above the
-video says which transcript source was used). A spatial-temporal transformer then samples latent codes of four body
-regions (upper body, hands, lower body, face) with **shortcut flow matching** (GestureLSM): a few steps are enough.
-*Rectified flow* and *DDIM* are the baselines trained the same way with their usual objectives. Per-region RVQ-VAE
-decoders turn the latents into SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with your
-speech. *CFG* is classifier-free guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
+transcript, each word is timed against the audio (eSpeak NG + DTW, in its language's voice), or taken from your
+TextGrid, and embedded with MiniLM; with neither, the speech is **transcribed automatically** (offline; Whisper tiny.en,
+base for other languages) and the recognised words appear in the transcript box to correct and run again; untick
+*Transcribe automatically* and the model runs **audio-only**, as for Chinese and Japanese words (shown, not used: the
+text encoder is English). A spatial-temporal transformer then samples latent codes of four body regions (upper body,
+hands, lower body, face) with **shortcut flow matching** (GestureLSM): a few steps are enough. *Rectified flow* and
+*DDIM* are the baselines trained the same way with their usual objectives. Per-region RVQ-VAE decoders turn the latents
+into SMPL-X joint rotations at 30 fps, which are rendered offscreen and muxed with your speech. *CFG* is classifier-free
+guidance on the speech; *seed* picks the noise, so the same seed gives the same motion.
 *Feet on the ground* (on by default) plants each foot where it lands (leg IK), keeps the body from drifting away and
 puts it on the floor, for every method and ground truth, without touching the upper body; *stand in place* removes
 horizontal root movement; *smoothing* is a Savitzky-Golay filter on the joint rotations. Timings: each where it was

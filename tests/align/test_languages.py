@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gesturelsm.align import AlignConfig, align_words
-from gesturelsm.asr.source import typed_alignment
+from gesturelsm.align.languages import typed_alignment
 
 SPANISH = "ayer por la tarde fuimos al mercado con mi hermana y compramos pan fresco manzanas y una botella de leche"
 GERMAN = ("gestern nachmittag sind wir mit dem fahrrad zum markt gefahren und haben frisches brot äpfel und eine "

@@ -16,7 +16,7 @@ from gesturelsm.asr.source import automatic_words, language_said, typed_alignmen
 from gesturelsm.asr.transcribe import AUDIO_ONLY_NOTE, Transcript, transcribe
 from gesturelsm.settings import CLI, PAGE, Asked, checked, settings_problems
 
-from _asr_support import SR, speak
+from _asr_support import CHINESE, CHINESE_PINYIN, CHINESE_VOICE, SIMPLIFIED, SR, speak, speak_timed
 
 tmod = importlib.import_module("gesturelsm.asr.transcribe")   # the module (the package exports its function)
 AUDIO = (0.1 * np.sin(np.arange(3 * SR) * 0.05)).astype(np.float32)
@@ -169,6 +169,40 @@ def test_spanish_speech_is_identified_and_timed_inside_the_speech(recognizer, es
     assert len(tr.words) >= len(SPANISH.split()) - 4 and np.all(np.diff(starts) > 0)
     assert starts[0] >= 0.4 and tr.words[-1].end <= len(y) / SR - 0.3         # inside the speech, not the padding
     assert {"tarde", "hermana"} <= {w.text.strip(",.").lower() for w in tr.words}
+
+
+@pytest.mark.slow
+def test_chinese_speech_is_identified_and_its_characters_timed_by_gesturelsm_transcribe(recognizer, espeak, tmp_path,
+                                                                                      capsys):
+    """eSpeak's Mandarin (from pinyin, 48 syllables, 14.5 s) through `gesturelsm transcribe`: Chinese identified, the
+    characters printed with increasing times inside the speech, each word's start near eSpeak's onset of its
+    syllable (matched character by character; measured: 38 of 48 characters, mean 0.06 s off)."""
+    import difflib
+
+    import soundfile as sf
+
+    from gesturelsm.cli import main
+
+    if not multilingual.available():
+        pytest.skip("the multilingual recogniser's wheels are not installed")
+    y, onsets = speak_timed(CHINESE_PINYIN, CHINESE_VOICE)
+    wav = tmp_path / "zh.wav"
+    sf.write(wav, y, SR)
+    assert main(["transcribe", str(wav)]) == 0
+    head, text, *lines = capsys.readouterr().out.splitlines()
+    assert " in Chinese (identified, probability 0." in head
+    words = [(float(a), float(b), w) for a, b, w in (line.split(None, 2) for line in lines)]
+    starts = np.array([a for a, _, _ in words])
+    assert np.all(np.diff(starts) >= 0) and starts[0] >= 0.4 and words[-1][1] <= len(y) / SR - 0.3
+    chars, first = [], []
+    for start, _, w in words:
+        for i, c in enumerate(c for c in w.translate(SIMPLIFIED) if has_cjk(c)):
+            chars.append(c)
+            first.append(start if i == 0 else None)
+    match = difflib.SequenceMatcher(None, CHINESE, "".join(chars), autojunk=False).get_matching_blocks()
+    assert sum(n for *_, n in match) >= 0.6 * len(CHINESE)
+    errors = np.abs([first[b + k] - onsets[a + k] for a, b, n in match for k in range(n) if first[b + k] is not None])
+    assert len(errors) >= 20 and np.mean(errors) < 0.15 and np.mean(errors < 0.2) >= 0.8
 
 
 def test_the_pipeline_aligns_typed_text_in_its_language_and_keeps_cjk_text_out_of_the_gestures(tiny_pipeline, espeak,

@@ -165,3 +165,43 @@ def test_statistics_follow_the_motion_beside_the_player_and_video_chain(service)
     fns = demo.blocks.fns
     pools = {f.api_name: f.concurrency_id for f in (fns.values() if isinstance(fns, dict) else fns)}
     assert pools["motion_stats"] == "stats" and pools["sweep"] == "generation"
+
+
+def test_the_sweep_tab_hears_the_speech_in_the_language_chosen(service, speech_wav, monkeypatch, tmp_path):
+    """`#sweep-language` (as Generate's `#language`) reaches the recogniser; a language it does not know is refused
+    with the Generate tab's one line, before any work."""
+    from types import SimpleNamespace
+
+    import gesturelsm.pipeline as pipeline
+    from gesturelsm.align import Word
+    from gesturelsm.asr.source import AutomaticWords
+
+    heard = []
+
+    def hear(audio, remember=True, language="auto"):
+        heard.append(language)
+        return AutomaticWords([Word("hola", 0.3, 0.7), Word("amigos", 0.8, 1.3)], "automatic transcript (2 words "
+                              "recognised in Spanish (chosen), word timings: test)",
+                              SimpleNamespace(text="hola amigos"))
+    monkeypatch.setattr(pipeline, "automatic_words", hear)
+    wav = tmp_path / "spanish.wav"          # an upload of its own: the service reuses what it prepared for a file
+    shutil.copyfile(speech_wav, wav)
+    *_, state = SweepHandlers(service).run(str(wav), ["gesturelsm"], "1", "2", 1, "bc", "", True, "es",
+                                           progress=quiet)
+    assert heard == ["es"] and "in Spanish" in state.result.text_mode
+    with pytest.raises(gr.Error, match=re.escape("Language must be auto or a language code")):
+        SweepHandlers(service).run(str(wav), ["gesturelsm"], "1", "2", 1, "bc", "", True, "klingon", progress=quiet)
+    assert heard == ["es"]
+
+
+def test_the_sweep_tab_offers_the_generate_tabs_languages(service):
+    from gesturelsm.webapp.ui import build_demo
+
+    demo = build_demo(service)
+    config = demo.blocks.get_config_file()
+    by_elem = {c["props"].get("elem_id"): c for c in config["components"] if c["props"].get("elem_id")}
+    generate, sweep = by_elem["language"], by_elem["sweep-language"]
+    assert sweep["props"]["choices"] == generate["props"]["choices"] and len(generate["props"]["choices"]) > 90
+    assert sweep["props"]["value"] == generate["props"]["value"] == "auto"
+    deps = {d.get("api_name"): d for d in config["dependencies"]}
+    assert deps["sweep"]["inputs"][-1] == sweep["id"]
