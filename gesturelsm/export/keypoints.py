@@ -59,7 +59,9 @@ HAND_LEFT, HAND_RIGHT = _hand("left"), _hand("right")
 assert len(BODY_25) == 25 and len(HAND_LEFT) == 21
 
 
-STREAM_FRAMES = 1024         # frames whose keypoints export_keypoints holds at once (about 4 MB of them)
+# frames whose keypoints export_keypoints holds at once (about 4 MB of them); a multiple of keypoints_3d's body
+# batch (128), so the streamed numbers are those of keypoints_2d over the whole motion, bit for bit
+STREAM_FRAMES = 1024
 
 
 def _keypoints_3d_chunks(seq: MotionSequence, body, chunk: int = 128) -> Iterator[dict[str, np.ndarray]]:
