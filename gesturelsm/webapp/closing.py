@@ -15,8 +15,13 @@ a failed method and goes on with the next one.
 from __future__ import annotations
 
 import contextlib
+import logging
 import threading
-from typing import Callable, Iterator
+from typing import Callable, Iterable, Iterator
+
+import gradio as gr
+
+log = logging.getLogger("gesturelsm.app")
 
 
 class PageClosed(BaseException):
@@ -26,9 +31,27 @@ class PageClosed(BaseException):
 class PageWork:
     """The stop flags of the work each page session is running (module docstring)."""
 
-    def __init__(self):
+    def __init__(self, renders=None):
+        self.renders = renders                  # the service's render queue (serve/renders.py), or None
         self._running: dict[str, set[threading.Event]] = {}
         self._lock = threading.Lock()
+
+    def session_ended(self, request: gr.Request = None) -> None:
+        """The page closed or reloaded (Gradio's unload): its videos are cancelled, waiting or rendering, and its
+        generation, edit or sweep stops at its next step."""
+        if request is not None and self.renders is not None and self.renders.cancel(request.session_hash):
+            log.info("a page closed: its video was cancelled")
+        if self.close(request):
+            log.info("a page closed: its running work stops")
+
+    def until_closed(self, request, progress, work: Callable[[Callable], Iterable]) -> Iterator:
+        """What `work(report)` yields, `report` being `progress` that stops it (PageClosed) once the page of
+        `request` closed; the iteration then ends without more."""
+        try:
+            with self.running(request) as closed:
+                yield from work(self.checked(progress, closed))
+        except PageClosed:
+            log.info("a page closed during its request: the work stopped")
 
     @contextlib.contextmanager
     def running(self, request) -> Iterator[threading.Event]:

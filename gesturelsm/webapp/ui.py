@@ -30,7 +30,7 @@ from gesturelsm.settings.check import cfg_bound
 from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
-from .closing import PageClosed, PageWork
+from .closing import PageWork
 from .demo import Demo
 from .downloads import Downloads
 from . import words as page_words
@@ -94,7 +94,8 @@ class _Handlers:
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
         self.downloads = Downloads()
-        self.pages = PageWork()          # the work each page runs (Generate, an edit, a sweep): stopped if it closes
+        self.pages = PageWork(service.renders)      # each page's videos and running work, stopped when it closes
+        self.session_ended = self.pages.session_ended      # Gradio's unload (closing.py)
 
     def mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
@@ -107,14 +108,6 @@ class _Handlers:
                 self.newest.popitem(last=False)
         if before is not None and before != out.job.folder:     # newer bodies on the page: its older video goes
             self.service.renders.supersede(request.session_hash)
-
-    def session_ended(self, request: gr.Request = None) -> None:
-        """The page closed or reloaded (Gradio's unload): its videos are cancelled, waiting or rendering, and its
-        generation, edit or sweep stops at its next step (closing.py)."""
-        if request is not None and self.service.renders.cancel(request.session_hash):
-            log.info("a page closed: its video was cancelled")
-        if self.pages.close(request):
-            log.info("a page closed: its running work stops")
 
     def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
@@ -174,14 +167,11 @@ class _Handlers:
                 grounding, language)
         req = self.request(*args, exports=False, render=False)
         try:
-            with self.pages.running(request) as closed:        # the tab closed: stop at the next window
-                for out in self.service.stream(req, progress=PageWork.checked(progress, closed)):
-                    self.mark_newest(request, out)
-                    recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript
-                    yield (motion_player.payload(self.service, out, character), out.table, out.summary, out,
-                           recognised, page_words.recognised(audio, out), page_words.status(out))
-        except PageClosed:
-            log.info("a page closed during Generate: its generation stopped")
+            for out in self.pages.until_closed(request, progress, lambda p: self.service.stream(req, progress=p)):
+                self.mark_newest(request, out)
+                recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
+                yield (motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised,
+                       page_words.recognised(audio, out), page_words.status(out))
         except GestureError as exc:
             self.refuse(exc)
 
