@@ -22,7 +22,7 @@ from .align.words import Word
 from .audio import AudioTooLongError, load_audio
 from .backends import SPECS, checkpoint_sources
 from .body.model import resolve_body
-from .constants import SAMPLE_RATE
+from .constants import MAX_MOTION_SECONDS, SAMPLE_RATE
 from .errors import UserError
 from .export import export_bvh, export_glb
 from .export.rig import export_rig
@@ -32,8 +32,8 @@ from .motion.sequence import MotionSequence
 from .pipeline import GesturePipeline
 from .retarget import check_usable, load_character
 from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
-                                 output_file, refuse, say)
+from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
+                                 cli_settings, input_file, output_file, positive, refuse, say)
 
 SPEECH_SLACK = 60.0             # seconds of speech beyond the motion decoded at most (to say how far apart they are)
 _FRAME = re.compile(r"[0-9]+")                                 # ASCII digits: str.isdigit() takes "²" and "٣"
@@ -63,6 +63,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="a method whose sampler can hold known latents: "
                    + ", ".join(k for k, s in SPECS.items() if s.inpainting) + f" (default: {DEFAULT_METHOD})")
     add_settings_flags(g, steps="one")
+    add_max_seconds_flag(g)            # the motion's (so the speech's) length; generate's flag, with the same cap
     g.add_argument("--checkpoints", help="folder with tokenizer/ and generator/ (default: shipped assets)")
     add_post_flags(g)                  # applied to the regenerated motion; the kept motion is the input's
     g.add_argument("--out", required=True, help="output .npz (BEAT2-compatible; .npz is added to a name without it)")
@@ -85,12 +86,14 @@ class Checked:
     out: Path
     bvh: Path | None
     glb: Path | None
+    max_seconds: float
 
 
 def check_arguments(args: argparse.Namespace) -> Checked:
     """Every argument, all problems at once (InputError), before anything is loaded."""
     p: list[str] = []
     settings = cli_settings(args, [args.method], p)
+    max_seconds = positive(args.max_seconds, "--max-seconds", p, hi=MAX_MOTION_SECONDS)   # motion_file.py's limit
     try:
         regenerate = parse_regenerate(args.regenerate)
     except UserError as exc:
@@ -110,7 +113,7 @@ def check_arguments(args: argparse.Namespace) -> Checked:
         if path is not None:
             writable(path, field, p)
     refuse(p)
-    return Checked(settings, regenerate, *files)
+    return Checked(settings, regenerate, *files, max_seconds)
 
 
 def writable(path: Path, field: str, problems: list[str]) -> None:
@@ -181,6 +184,10 @@ def run_edit(args: argparse.Namespace) -> int:
     if rig is not None:
         check_usable(rig, draw=False)
     motion = MotionSequence.load(a.motion)
+    if motion.duration > a.max_seconds:        # the pipeline's limit on the speech, said here before the models load
+        raise EditError(f"{a.motion.name} is {motion.duration:.0f} s long; the limit is {a.max_seconds:g} s: give "
+                        f"--max-seconds {math.ceil(motion.duration)} to edit it (at most {MAX_MOTION_SECONDS:g}, "
+                        "as for generate)")
     keys = parse_keyframes(args.keyframe, motion)
     edit_spec(a.regenerate, motion.num_frames, keys, SPECS[args.method].regions, args.method)   # before the models
     try:                        # never decode much more speech than an edit of this motion can use
@@ -194,7 +201,8 @@ def run_edit(args: argparse.Namespace) -> int:
         words = [Word(w, s, e) for w, s, e in motion.words if e > s]     # the words it was made with
         say(0.0, f"using the {len(words)} word timings kept in {a.motion.name} (--text or --textgrid to change them)")
     say(0.0, f"loading the models ({args.method})")
-    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method])
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
+                                           max_seconds=a.max_seconds)
     st = a.settings
     res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
                     cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,

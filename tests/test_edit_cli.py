@@ -110,6 +110,9 @@ def test_a_motion_that_is_not_the_speechs_length_or_not_a_motion(files, tiny_ass
     (["--regenerate", "upper@1-3", "--keyframe", "99999999999999999999999@2"], "frame 99999999999999999999999 is not"),
     (["--regenerate", "upper@1-3", "--out", "/proc/x.npz"], "--out /proc/x.npz: cannot write in /proc"),
     (["--regenerate", "upper@1-3", "--bvh", "/proc/self/x.bvh"], "--bvh /proc/self/x.bvh: cannot write in"),
+    (["--regenerate", "upper@1-3", "--max-seconds", "5"],
+     "motion.npz is 6 s long; the limit is 5 s: give --max-seconds 6 to edit it (at most 3600, as for generate)"),
+    (["--regenerate", "upper@1-3", "--max-seconds", "3601"], "--max-seconds must be a number above 0 and at most 3600"),
 ])
 def test_crafted_arguments_are_refused_before_any_model_loads(files, tmp_path, capsys, monkeypatch, extra, message):
     """Each a line and status 2, and no model is loaded for any of them (a model load would fail the
@@ -154,3 +157,30 @@ def test_speech_hours_longer_than_the_motion_is_refused_without_decoding_it(file
                  "--no-transcribe", "--out", str(tmp_path / "x.npz")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "hours.flac is more than 60 s longer than the motion (6.00 s)" in err[0]
+
+
+@pytest.mark.slow
+def test_a_motion_longer_than_the_default_limit_edits_with_max_seconds(tiny_assets, tmp_path, capsys, monkeypatch):
+    """A motion past the default 300 s (as `generate --max-seconds` makes them, up to an hour) is refused in one
+    line before any model loads, naming the flag; with the flag it is edited, the rest kept bit for bit. (It used
+    to be refused after the models loaded, pointing at a pipeline setting no flag of edit reached.)"""
+    from gesturelsm.pipeline import GesturePipeline
+
+    from _support import synthetic_motion
+
+    seconds = 320
+    synthetic_motion(frames=30 * seconds, seed=4).save(tmp_path / "long.npz")
+    sf.write(tmp_path / "long.wav", speech_like(seconds, seed=4), 16000)
+    argv = ["edit", str(tmp_path / "long.npz"), str(tmp_path / "long.wav"), "--regenerate", "upper@200-203",
+            "--checkpoints", str(tiny_assets), "--steps", "1", "--no-transcribe", "--out", str(tmp_path / "e.npz")]
+    with monkeypatch.context() as m:
+        m.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: pytest.fail("models loaded")))
+        assert main(argv) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if not line.startswith("[")]
+    assert err == ["gesturelsm edit: error: long.npz is 320 s long; the limit is 300 s: give --max-seconds 320 to "
+                   "edit it (at most 3600, as for generate)"]
+    assert main(argv + ["--max-seconds", "320"]) == 0
+    before, after = MotionSequence.load(tmp_path / "long.npz"), MotionSequence.load(tmp_path / "e.npz")
+    assert after.num_frames == before.num_frames == 30 * seconds
+    assert np.array_equal(after.poses[:5900], before.poses[:5900]) and np.array_equal(after.trans, before.trans)
+    assert not np.array_equal(after.poses[6000:6090], before.poses[6000:6090])

@@ -15,11 +15,12 @@ from __future__ import annotations
 
 from .address import (ClusterAddress, ReplicaCount, add_cluster_argument, cluster_argument, parse_cluster,
                       parse_replicas, replicas_argument)
-from .connect import Connection, connect, package_fingerprint, require_cpus
+from .connect import Connection, check_reachable, connect, package_fingerprint, require_cpus
 from .files import Files, write_atomic
 from .progress import ProgressLine, Tally
 from .runner import Failure, Job, RunReport, Stopped, Unit, run_units
 
 __all__ = ["ClusterAddress", "Connection", "Failure", "Files", "Job", "ProgressLine", "ReplicaCount", "RunReport",
-           "Stopped", "Tally", "Unit", "add_cluster_argument", "cluster_argument", "connect", "package_fingerprint",
-           "parse_cluster", "parse_replicas", "replicas_argument", "require_cpus", "run_units", "write_atomic"]
+           "Stopped", "Tally", "Unit", "add_cluster_argument", "check_reachable", "cluster_argument", "connect",
+           "package_fingerprint", "parse_cluster", "parse_replicas", "replicas_argument", "require_cpus", "run_units",
+           "write_atomic"]

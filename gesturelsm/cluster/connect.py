@@ -96,11 +96,7 @@ def connect(address: ClusterAddress, num_cpus: int | None = None, check_package:
 
     if ray.is_initialized():
         ray.shutdown()
-    if address.kind == "client":
-        _reachable(address.host, address.port, str(address))
-    elif address.kind == "auto":
-        host, port = _local_head()
-        _reachable(host, port, f"{host}:{port}, the one recorded on this machine (or in RAY_ADDRESS),")
+    check_reachable(address)
     _init(address, num_cpus)
     try:
         nodes = [n for n in ray.nodes() if n.get("Alive")]
@@ -111,6 +107,20 @@ def connect(address: ClusterAddress, num_cpus: int | None = None, check_package:
         ray.shutdown()
         raise
     return Connection(address, cpus, len(nodes), address.kind == "local")
+
+
+def check_reachable(address: ClusterAddress | None) -> None:
+    """The cluster `address` names answers a plain TCP connection (at most REACH_TIMEOUT_S; `local` is started,
+    nothing to reach): what `connect` checks first. The commands that load models before they connect (batch,
+    sweep, eval, genea submit) call it with their arguments' checks, so that an unreachable cluster or `auto` without
+    one is one line before any work, not after the models have loaded. ClusterError otherwise."""
+    if address is None or address.kind == "local":
+        return
+    if address.kind == "client":
+        _reachable(address.host, address.port, str(address))
+    else:
+        host, port = _local_head()
+        _reachable(host, port, f"{host}:{port}, the one recorded on this machine (or in RAY_ADDRESS),")
 
 
 def require_cpus(conn: Connection, needed: float, what: str) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
-from ..cluster import add_cluster_argument, connect
+from ..cluster import add_cluster_argument, check_reachable, connect
 from ..data.beat2 import Beat2Dataset
 from ..errors import CheckpointError
 from ..metrics.fgd import default_extractors
@@ -141,6 +141,7 @@ def run_eval(args: argparse.Namespace) -> int:
     import torch
 
     methods, steps, cfgs, seeds, n_threads = check_eval(args)
+    check_reachable(args.cluster)                # before the clips are read and the models load
     if n_threads:
         torch.set_num_threads(n_threads)
     clips, policy = heldout_clips(args.data, args.train_fraction, audio_only=not args.no_audio_only,

@@ -14,7 +14,7 @@ from dataclasses import replace
 from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, load_audio
 from ..backends import SPECS, checkpoint_sources
-from ..cluster import ProgressLine, add_cluster_argument, connect
+from ..cluster import ProgressLine, add_cluster_argument, check_reachable, connect
 from ..errors import InputError
 from ..grounding.cli import add_grounding_flag, grounding_on
 from ..pipeline import GesturePipeline
@@ -75,6 +75,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     out = output_folder(args.out, "--out", p)
     language = check_language(args.language, "--language", p)
     refuse(p)
+    check_reachable(args.cluster)                # before the speech is read and the models load
     if n_threads:
         torch.set_num_threads(n_threads)
     audio = load_audio(audio_path, max_seconds=max_seconds)

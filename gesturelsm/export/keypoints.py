@@ -26,7 +26,9 @@ face 70  17-67 = the body model's 51 landmarks (iBUG 17-67: brows, nose, eyes, l
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -57,39 +59,40 @@ HAND_LEFT, HAND_RIGHT = _hand("left"), _hand("right")
 assert len(BODY_25) == 25 and len(HAND_LEFT) == 21
 
 
-def keypoints_3d(seq: MotionSequence, body=None, chunk: int = 128) -> dict[str, np.ndarray]:
-    """World-space keypoints (T, K, 3) in the OpenPose layouts: body (25), hand_left / hand_right (21),
-    face (70; NaN where SMPL-X has no point)."""
-    body = resolve_body(body)
+# frames whose keypoints export_keypoints holds at once (about 4 MB of them); a multiple of keypoints_3d's body
+# batch (128), so the streamed numbers are those of keypoints_2d over the whole motion, bit for bit
+STREAM_FRAMES = 1024
+
+
+def _keypoints_3d_chunks(seq: MotionSequence, body, chunk: int = 128) -> Iterator[dict[str, np.ndarray]]:
+    """keypoints_3d of frames [s, s + chunk) for s = 0, chunk, 2 chunk, ... (`body` resolved)."""
     ids = extra_vertex_ids(body)
     lmk_f = body.module.lmk_faces_idx.cpu().numpy().astype(np.int64)
     lmk_b = body.module.lmk_bary_coords.cpu().numpy().astype(np.float64)             # (51, 3)
     tri = body.faces[lmk_f]                                                            # (51, 3)
     T = seq.num_frames
-    out = {"body": np.empty((T, 25, 3)), "hand_left": np.empty((T, 21, 3)), "hand_right": np.empty((T, 21, 3)),
-           "face": np.full((T, 70, 3), np.nan)}
     for s in range(0, T, chunk):
         e = min(T, s + chunk)
         o = body.forward(seq.poses[s:e], seq.trans[s:e], seq.expressions[s:e], seq.betas)
         v = o.vertices.astype(np.float64)
         allj = np.concatenate([o.joints.astype(np.float64), v[:, ids]], 1)           # (B, 55 + 21, 3)
-        out["body"][s:e] = allj[:, BODY_25]
-        out["hand_left"][s:e] = allj[:, HAND_LEFT]
-        out["hand_right"][s:e] = allj[:, HAND_RIGHT]
+        out = {"body": allj[:, BODY_25], "hand_left": allj[:, HAND_LEFT], "hand_right": allj[:, HAND_RIGHT],
+               "face": np.full((e - s, 70, 3), np.nan)}
         if len(lmk_f) == 51:
-            out["face"][s:e, 17:68] = np.einsum("bkcx,kc->bkx", v[:, tri], lmk_b)
-        out["face"][s:e, 68] = allj[:, J["right_eye_smplhf"]]
-        out["face"][s:e, 69] = allj[:, J["left_eye_smplhf"]]
-    return out
+            out["face"][:, 17:68] = np.einsum("bkcx,kc->bkx", v[:, tri], lmk_b)
+        out["face"][:, 68] = allj[:, J["right_eye_smplhf"]]
+        out["face"][:, 69] = allj[:, J["left_eye_smplhf"]]
+        yield out
 
 
-def keypoints_2d(seq: MotionSequence, camera=None, size: tuple[int, int] = (512, 512), body=None, style=None
-                 ) -> tuple[dict[str, np.ndarray], object]:
-    """({layout: (T, K, 3) [x, y, c]}, camera): projected keypoints; missing / outside points are 0, 0, 0.
-    camera None: the one `render_video([seq], ..., style=style)` uses at `size` (no labels)."""
-    if camera is None:
-        camera = fit_camera([seq], body=body, style=style, size=size)
-    pts = keypoints_3d(seq, body)
+def keypoints_3d(seq: MotionSequence, body=None, chunk: int = 128) -> dict[str, np.ndarray]:
+    """World-space keypoints (T, K, 3) in the OpenPose layouts: body (25), hand_left / hand_right (21),
+    face (70; NaN where SMPL-X has no point)."""
+    parts = list(_keypoints_3d_chunks(seq, resolve_body(body), chunk))
+    return {k: np.concatenate([p[k] for p in parts]) for k in ("body", "hand_left", "hand_right", "face")}
+
+
+def _project(pts: dict[str, np.ndarray], camera) -> dict[str, np.ndarray]:
     out = {}
     for k, p in pts.items():
         finite = np.isfinite(p).all(-1)
@@ -99,7 +102,25 @@ def keypoints_2d(seq: MotionSequence, camera=None, size: tuple[int, int] = (512,
         ok = finite & (depth > camera.znear) & (xy[..., 0] >= 0) & (xy[..., 0] < camera.width) \
             & (xy[..., 1] >= 0) & (xy[..., 1] < camera.height)
         out[k] = np.where(ok[..., None], np.concatenate([xy, np.ones_like(xy[..., :1])], -1), 0.0)
-    return out, camera
+    return out
+
+
+def keypoints_2d(seq: MotionSequence, camera=None, size: tuple[int, int] = (512, 512), body=None, style=None
+                 ) -> tuple[dict[str, np.ndarray], object]:
+    """({layout: (T, K, 3) [x, y, c]}, camera): projected keypoints; missing / outside points are 0, 0, 0.
+    camera None: the one `render_video([seq], ..., style=style)` uses at `size` (no labels)."""
+    if camera is None:
+        camera = fit_camera([seq], body=body, style=style, size=size)
+    return _project(keypoints_3d(seq, body), camera), camera
+
+
+def keypoints_2d_chunks(seq: MotionSequence, camera, body=None, chunk: int = STREAM_FRAMES
+                        ) -> Iterator[dict[str, np.ndarray]]:
+    """keypoints_2d through `camera`, `chunk` frames at a time (the same numbers): memory bounded by the chunk
+    whatever the motion's length."""
+    body = resolve_body(body)
+    for s in range(0, seq.num_frames, chunk):
+        yield _project(keypoints_3d(seq.slice(s, min(seq.num_frames, s + chunk)), body), camera)
 
 
 def _frame_dict(kp: dict[str, np.ndarray], t: int, W: int, H: int) -> dict:
@@ -116,26 +137,52 @@ def _frame_dict(kp: dict[str, np.ndarray], t: int, W: int, H: int) -> dict:
 
 def export_keypoints(seq: MotionSequence, path: str | Path, camera=None, size: tuple[int, int] = (512, 512),
                      body=None, style=None) -> Path:
-    """Write OpenPose-style 2D keypoints (see the module docstring); returns the file or folder path."""
+    """Write OpenPose-style 2D keypoints (see the module docstring); returns the file or folder path.
+
+    Streamed: the keypoints are made, checked and written STREAM_FRAMES frames at a time, so memory does not grow
+    with the motion's length (an hour: 108,000 frames). A problem part way (a non-finite keypoint) removes what was
+    written: FILE.json is written under a temporary name and renamed when whole; a folder's files are removed."""
     check_motion(seq)
-    kp, cam = keypoints_2d(seq, camera, size, body, style)
-    for k, v in kp.items():
-        finite(v, f"the {k.replace('_', ' ')} keypoints")
+    body = resolve_body(body)
+    cam = camera if camera is not None else fit_camera([seq], body=body, style=style, size=size)
     W, H = cam.width, cam.height
     path = Path(path)
-    frames = (json.dumps(_frame_dict(kp, t, W, H), separators=(",", ":")) for t in range(seq.num_frames))
-    if path.suffix.lower() == ".json":        # written frame by frame (an hour of frames never in memory as lists)
+
+    def frames() -> Iterator[str]:
+        for kp in keypoints_2d_chunks(seq, cam, body):
+            for k, v in kp.items():
+                finite(v, f"the {k.replace('_', ' ')} keypoints")
+            for t in range(len(kp["body"])):
+                yield json.dumps(_frame_dict(kp, t, W, H), separators=(",", ":"))
+
+    if path.suffix.lower() == ".json":
         path.parent.mkdir(parents=True, exist_ok=True)
         doc = {"format": "openpose-1.3 per frame", "fps": seq.fps, "canvas_width": W, "canvas_height": H,
                "camera": {"eye": list(cam.eye), "target": list(cam.target), "yfov": cam.yfov,
                           "intrinsics": cam.intrinsics.tolist()}}
-        with open(path, "w") as fh:
-            fh.write(json.dumps(doc, separators=(",", ":"))[:-1] + ',"frames":[')
-            for t, fr in enumerate(frames):
-                fh.write("," * (t > 0) + fr)
-            fh.write("]}")
+        part = path.with_name(f".{path.name}.part")
+        try:
+            with open(part, "w") as fh:
+                fh.write(json.dumps(doc, separators=(",", ":"))[:-1] + ',"frames":[')
+                for t, fr in enumerate(frames()):
+                    fh.write("," * (t > 0) + fr)
+                fh.write("]}")
+            os.replace(part, path)
+        finally:
+            part.unlink(missing_ok=True)
         return path
+    made = not path.exists()
     path.mkdir(parents=True, exist_ok=True)
-    for t, fr in enumerate(frames):
-        (path / f"{path.name}_{t:012d}_keypoints.json").write_text(fr)
+    written: list[Path] = []
+    try:
+        for t, fr in enumerate(frames()):
+            f = path / f"{path.name}_{t:012d}_keypoints.json"
+            written.append(f)
+            f.write_text(fr)
+    except BaseException:
+        for f in written:
+            f.unlink(missing_ok=True)
+        if made:
+            path.rmdir()
+        raise
     return path

@@ -16,7 +16,7 @@ import contextlib
 from ..backends import SPECS, checkpoint_sources, ours_default
 from ..body import load_body_model
 from ..body.model import resolve_model_path
-from ..cluster import add_cluster_argument, connect
+from ..cluster import add_cluster_argument, check_reachable, connect
 from ..errors import GestureError, UserError
 from ..pipeline import GROUND_TRUTH, GesturePipeline
 from ..settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
@@ -93,6 +93,7 @@ def check_arguments(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     settings, raters, size, attention = check_arguments(args)
+    check_reachable(args.cluster)                # before the character and the models load
     rig = _character(args.rig)
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints),
                                            methods=settings.generators or None)

@@ -9,6 +9,7 @@ follow it through the same chained events as Generate's; Undo goes back one edit
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import gradio as gr
@@ -19,6 +20,7 @@ from gesturelsm.motion.regions import GENERATED_REGIONS
 from gesturelsm.serve.editing import editable
 from gesturelsm.serve.request import Result
 
+from .closing import PageClosed, PageWork
 from .player import component as motion_player
 from .raw_inputs import pass_through
 
@@ -93,8 +95,12 @@ class EditHandlers:
             progress=gr.Progress()):
         """Edit the shown motion; the player gets the edited payload (with the motion before it for A/B)."""
         try:
-            new = self.h.service.edit(out, method, start, end, regions, seed,
-                                      progress=lambda f, m: progress(f, desc=m))
+            with self.h.pages.running(request) as closed:      # the tab closed: stop at the next window
+                new = self.h.service.edit(out, method, start, end, regions, seed,
+                                          progress=PageWork.checked(progress, closed))
+        except PageClosed:
+            logging.getLogger("gesturelsm.app").info("a page closed during an edit: the edit stopped")
+            return gr.skip(), gr.skip(), gr.skip(), gr.skip(), gr.skip()
         except GestureError as exc:
             self.h.refuse(exc)
         self.h.mark_newest(request, new)

@@ -24,6 +24,7 @@ from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
 
+from .closing import PageWork
 from .language import language_choice
 from .layout import SCROLL, TYPED_NOTE
 from .player import component as motion_player
@@ -79,17 +80,21 @@ def run_labels(result: SweepResult) -> list[tuple[str, str]]:
             for i, r in enumerate(result.runs)]
 
 
+def _key(request: gr.Request | None) -> str:
+    return request.session_hash if request is not None else ""
+
+
 class SweepHandlers:
-    def __init__(self, service, limits: SweepLimits = PAGE_LIMITS):
+    def __init__(self, service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | None = None):
         self.service = service
         self.limits = limits
+        self.pages = pages if pages is not None else PageWork()    # the page's: a closed tab stops its sweep
         self._stop: dict[str, threading.Event] = {}
         self._lock = threading.Lock()
 
     def _flag(self, request: gr.Request | None) -> threading.Event:
-        key = request.session_hash if request is not None else ""
         with self._lock:
-            return self._stop.setdefault(key, threading.Event())
+            return self._stop.setdefault(_key(request), threading.Event())
 
     @staticmethod
     def _refuse(msg: str):
@@ -101,19 +106,31 @@ class SweepHandlers:
         stop = self._flag(request)
         stop.clear()
         try:
-            out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text, auto_text,
-                                                  language),
-                                     self.limits, progress=lambda f, m: progress(f, desc=m), cancelled=stop.is_set)
+            with self.pages.running(request) as closed:
+                out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text,
+                                                      auto_text, language), self.limits,
+                                         progress=lambda f, m: progress(f, desc=m),
+                                         cancelled=lambda: stop.is_set() or closed.is_set())
         except GestureError as exc:
+            if closed.is_set():                    # the tab closed: nobody to tell, nothing written
+                log.info("a page closed during a sweep: the sweep stopped")
+                return gr.skip(), gr.skip(), gr.skip(), gr.skip(), gr.skip()
             log.info("sweep refused: %s", " | ".join(str(exc).splitlines()))
             self._refuse(str(exc))
+        finally:
+            with self._lock:                       # a page's flag is kept only while its sweep runs
+                if self._stop.get(_key(request)) is stop:
+                    del self._stop[_key(request)]
         choices = run_labels(out.result)
         return (table_html(out.result), str(out.files["sweep.png"]), [str(p) for p in out.files.values()],
                 gr.update(choices=choices, value=choices[0][1] if choices else None),
                 PageSweep(out.result, out.folder, out.wav))
 
     def cancel(self, request: gr.Request = None) -> str:
-        self._flag(request).set()
+        with self._lock:
+            flag = self._stop.get(_key(request))
+        if flag is not None:
+            flag.set()
         return "Cancelled: the sweep stops before its next motion; nothing is written."
 
     def replot(self, state: PageSweep | None, metric: str):
@@ -142,9 +159,10 @@ def typed_note(text: str | None):
     return gr.update(value=TYPED_NOTE, visible=True)
 
 
-def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS) -> SweepHandlers:
-    """The Sweep tab (call inside `with gr.Blocks()`, after the player)."""
-    h = SweepHandlers(service, limits)
+def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | None = None) -> SweepHandlers:
+    """The Sweep tab (call inside `with gr.Blocks()`, after the player); `pages`: the page's running work, which
+    its unload stops (closing.py)."""
+    h = SweepHandlers(service, limits, pages)
     methods = [m for m in service.methods if m in service.pipeline.methods]
     shown = [m for m in ours_default() if m in methods][:3]
     with gr.Tab("Sweep", elem_id="sweep-tab"):

@@ -30,6 +30,7 @@ from gesturelsm.settings.check import cfg_bound
 from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
+from .closing import PageWork
 from .demo import Demo
 from .downloads import Downloads
 from . import words as page_words
@@ -93,6 +94,8 @@ class _Handlers:
         self.newest: OrderedDict[str, str] = OrderedDict()
         self._lock = threading.Lock()
         self.downloads = Downloads()
+        self.pages = PageWork(service.renders)      # each page's videos and running work, stopped when it closes
+        self.session_ended = self.pages.session_ended      # Gradio's unload (closing.py)
 
     def mark_newest(self, request: gr.Request | None, out: Result | None) -> None:
         if request is None or out is None:
@@ -105,11 +108,6 @@ class _Handlers:
                 self.newest.popitem(last=False)
         if before is not None and before != out.job.folder:     # newer bodies on the page: its older video goes
             self.service.renders.supersede(request.session_hash)
-
-    def session_ended(self, request: gr.Request = None) -> None:
-        """The page closed or reloaded (Gradio's unload): its videos are cancelled, waiting or rendering."""
-        if request is not None and self.service.renders.cancel(request.session_hash):
-            log.info("a page closed: its video was cancelled")
 
     def _replaced(self, request: gr.Request | None, out: Result) -> bool:
         """A newer request of the same page exists (its bodies are on screen): this one's video is not needed."""
@@ -169,7 +167,7 @@ class _Handlers:
                 grounding, language)
         req = self.request(*args, exports=False, render=False)
         try:
-            for out in self.service.stream(req, progress=lambda f, m: progress(f, desc=m)):
+            for out in self.pages.until_closed(request, progress, lambda p: self.service.stream(req, progress=p)):
                 self.mark_newest(request, out)
                 recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
                 yield (motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised,
@@ -339,7 +337,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
             service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes, characters=characters)
-        sweep_tab.add_sweep_tab(service)
+        sweep_tab.add_sweep_tab(service, pages=h.pages)
         with gr.Accordion("How it works, and the model's limits", open=False):
             gr.Markdown(HOW_IT_WORKS)
             gr.Markdown(_limits())

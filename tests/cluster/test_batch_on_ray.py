@@ -119,3 +119,55 @@ def test_a_node_removed_mid_batch_still_gives_every_video_exactly_once(ray_clust
                                                                         .iterdir())
     assert _motions(out) == _motions(local_study)
     assert not [p for p in out.rglob("*") if p.name.endswith(".part")]    # nothing half-written
+
+
+def _busy_workers() -> list[int]:
+    """Ray worker processes running a unit now (Ray titles a worker `ray::<function>` while it runs a task)."""
+    pids = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if (d / "cmdline").read_bytes().startswith(b"ray::_remote_unit"):
+                    pids.append(int(d.name))
+            except OSError:
+                continue
+    return pids
+
+
+def test_a_worker_killed_mid_batch_and_a_rerun_make_every_video_once(ray_cluster, local_study, tiny_assets,
+                                                                   speech_dir, tmp_path):
+    """A worker process making a video is killed (SIGKILL) mid-batch: its video is made again by a new worker and
+    written once, the study is the one made here; a rerun into the same folder then makes nothing and changes
+    nothing."""
+    import os
+    import signal
+
+    out = tmp_path / "study"
+    _same_salt(local_study, out)
+    killed: list[int] = []
+
+    def kill_a_busy_worker() -> None:
+        deadline = time.monotonic() + 600
+        while time.monotonic() < deadline and not killed:
+            for pid in _busy_workers():
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    continue
+                killed.append(pid)
+                return
+            time.sleep(0.05)
+
+    killer = threading.Thread(target=kill_a_busy_worker, daemon=True)
+    killer.start()
+    code, log = _batch(speech_dir, out, tiny_assets, "--cluster", "auto")
+    killer.join(60)
+    assert killed and code == 0, log
+    written = re.findall(r"(v_[0-9a-f]{10}\.mp4)  \(\d+ rendered\)", log)
+    assert len(written) == 4 and len(set(written)) == 4                   # each video written once
+    assert _motions(out) == _motions(local_study)
+    files = {p: p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+    code, log = _batch(speech_dir, out, tiny_assets, "--cluster", "auto")   # the rerun into the same folder
+    assert code == 0 and "0 video(s) to make" in log and "0 videos rendered, 4 already there" in log, log
+    assert {p: p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()} == files
+    assert not [p for p in out.rglob("*") if p.name.endswith(".part")]

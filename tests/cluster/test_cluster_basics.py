@@ -221,3 +221,30 @@ def test_bad_replica_counts_are_one_line(text, says):
     with pytest.raises(ClusterError) as err:
         parse_replicas(text)
     assert says in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("command", ["eval", "sweep", "batch"])
+def test_an_unreachable_cluster_is_said_before_any_model_loads(command, tmp_path, capsys, monkeypatch):
+    """eval, sweep and batch load their models before they connect: the cluster's address is tried with the
+    arguments' checks, so `eval --cluster ray://...` to a machine that does not answer is one line, exit 2, before
+    the clips are read or a model loads (it used to come after the models had loaded)."""
+    import soundfile as sf
+
+    from gesturelsm.cli import main
+    from gesturelsm.pipeline import GesturePipeline
+
+    from _support import speech_like
+
+    monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: pytest.fail("models")))
+    (tmp_path / "speech").mkdir()
+    sf.write(tmp_path / "speech" / "a.wav", speech_like(1.0), 16000)
+    port = _closed_port()
+    argv = {"eval": ["eval", "--data", str(tmp_path), "--methods", "gesturelsm", "--steps", "1"],
+            "sweep": ["sweep", str(tmp_path / "speech" / "a.wav"), "--methods", "gesturelsm", "--steps", "1"],
+            "batch": ["batch", "--audio-dir", str(tmp_path / "speech"), "--methods", "gesturelsm", "ddim"]}[command]
+    code = main(argv + ["--out", str(tmp_path / "out"), "--cluster", f"ray://127.0.0.1:{port}"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and err[-1] == (f"gesturelsm {command}: error: cannot reach the Ray cluster at ray://127.0.0.1:"
+                                     f"{port} (connection refused): start it with `ray start --head` there, or check "
+                                     "the address and the firewall"), err
+    assert not (tmp_path / "out").exists()

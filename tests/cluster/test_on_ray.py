@@ -64,6 +64,44 @@ def test_a_node_removed_mid_run_still_yields_every_unit_exactly_once(ray_cluster
     assert report.failed == [] and sorted(report.done) == sorted(calls)
 
 
+def test_a_worker_killed_mid_unit_runs_it_again_and_writes_it_once(ray_cluster, tmp_path):
+    """A worker process killed (SIGKILL: out of memory, a person's kill) while a unit runs on it: Ray runs the unit
+    again in a new worker, the command writes it once, and every other unit once; nothing is listed as failed."""
+    import signal
+    import threading
+    import time
+
+    starts = tmp_path / "starts.txt"
+    starts.touch()
+    killed: list[int] = []
+
+    def kill_the_worker_of_unit_2() -> None:
+        deadline = time.monotonic() + 600
+        while time.monotonic() < deadline:
+            for line in starts.read_text().splitlines():
+                x, pid = line.split()
+                if x == "12":
+                    os.kill(int(pid), signal.SIGKILL)
+                    killed.append(int(pid))
+                    return
+            time.sleep(0.02)
+
+    calls: list[str] = []
+    killer = threading.Thread(target=kill_the_worker_of_unit_2, daemon=True)
+    killer.start()
+    with connect(AUTO) as conn:
+        todo = [Unit(f"u{i}", ("sleep", 3.0 if i == 2 else 0.3, 10 + i, str(starts))) for i in range(4)]
+        report = run_units(Job(units.work, units.build, 0), todo, lambda u, r: calls.append(u.key), connection=conn)
+    killer.join(10)
+    assert killed, "unit 2 never started"
+    assert sorted(calls) == ["u0", "u1", "u2", "u3"]                   # each written once
+    started = [line.split() for line in starts.read_text().splitlines()]
+    again = [pid for x, pid in started if x == "12"]
+    assert len(again) == 2 and int(again[0]) == killed[0] and int(again[1]) != killed[0]   # run again, elsewhere
+    assert sorted(x for x, _ in started if x != "12") == ["10", "11", "13"]
+    assert report.failed == [] and sorted(report.done) == sorted(calls)
+
+
 def test_workers_without_the_package_or_with_other_code_are_refused(ray_cluster):
     import ray
 

@@ -139,3 +139,52 @@ def test_a_prefetched_transcript_goes_with_the_request(replicated, tmp_path):
     remembered = replicated._remembered(Upload(wav.name, wav.read_bytes()))
     assert remembered is not None and out.text_mode == remembered.text_mode
     assert out.timings["gesturelsm"]["transcription"] < 0.05         # found ready, not recognised again
+
+
+CLIENT = """
+import sys
+from gradio_client import Client, handle_file
+Client(sys.argv[1], verbose=False, httpx_kwargs={"timeout": 120}).predict(
+    handle_file(sys.argv[2]), "", None, ["gesturelsm"], 1, 2.0, 7, 20, False, "off", 256, False, api_name="/generate")
+"""
+
+
+def test_a_client_killed_mid_request_leaves_the_others_and_the_replicas_as_they_were(replicated, tmp_path):
+    """An API client process killed (SIGKILL) while a replica makes its request: the call ends on the replica as
+    any other (its folder removed), no replica dies, and three clients sent meanwhile each get their own motion."""
+    import subprocess
+    import sys
+
+    from gradio_client import handle_file
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(1.5, seed=5), 16000)
+    pids = _replica_pids()
+    before = {p.name for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")}
+    with served(replicated) as url:
+        client = subprocess.Popen([sys.executable, "-c", CLIENT, url, str(wav)], stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL)
+        try:
+            deadline = time.monotonic() + 600                        # its request reaches a replica
+            while not {p.name for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")} - before:
+                assert client.poll() is None, "the client ended before its request reached a replica"
+                assert time.monotonic() < deadline, "the killed client's request never reached a replica"
+                time.sleep(0.01)
+        finally:
+            client.kill()                                            # mid-request
+            client.wait()
+        jobs = [gradio_client(url).submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
+                                          "off", 256, False, api_name="/generate") for seed in (0, 1, 2)]
+        answers = [j.result(timeout=900) for j in jobs]
+    motions = []
+    for video, rows, summary, files, glb in answers:
+        npz = next(Path(f) for f in files if Path(f).name == "gesturelsm.npz")
+        with np.load(npz) as d:
+            motions.append(d["poses"].copy())
+    assert len({str(Path(a[0]).parent) for a in answers}) == 3                        # three folders
+    assert not np.allclose(motions[0], motions[1]) and not np.allclose(motions[1], motions[2])
+    deadline = time.monotonic() + 300                     # every call has ended on the replicas, the killed one's too
+    while any(SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*") for pid in pids) and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert not any(p for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*"))
+    assert _replica_pids() == pids                                   # no replica died or was replaced

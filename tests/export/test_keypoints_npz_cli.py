@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from gesturelsm.cli import main
+from gesturelsm.errors import GestureError
 from gesturelsm.export import export_keypoints, export_npz, keypoints_2d, npz_bytes
 from gesturelsm.motion import MotionSequence
 from gesturelsm.render import RenderStyle, fit_camera, render_frames
@@ -53,6 +54,44 @@ def test_keypoint_files(tmp_path, standing, body):
     assert len(person["hand_right_keypoints_2d"]) == 63 and len(person["face_keypoints_2d"]) == 210
     one = json.loads(export_keypoints(standing, tmp_path / "all.json", size=(96, 64), body=body).read_text())
     assert one["fps"] == 30 and len(one["frames"]) == 3 and one["frames"][0] == fr
+
+
+def test_keypoints_are_streamed_in_chunks_and_a_problem_part_way_leaves_nothing(tmp_path, body, monkeypatch):
+    """export_keypoints makes and writes STREAM_FRAMES frames at a time (memory bounded whatever the length: the
+    one-hour export peaked at 1.88 GB holding every frame's keypoints): the same numbers as keypoints_2d over the
+    whole motion; a non-finite keypoint in a later chunk removes what was written (file or folder)."""
+    from gesturelsm.export import keypoints as kmod
+
+    from _support import synthetic_motion
+
+    seq = synthetic_motion(frames=7, seed=2)
+    monkeypatch.setattr(kmod, "STREAM_FRAMES", 3)
+    monkeypatch.setattr(kmod.keypoints_2d_chunks, "__defaults__", (None, 3))
+    whole, cam = keypoints_2d(seq, size=(96, 64), body=body)
+    chunks = list(kmod.keypoints_2d_chunks(seq, cam, body))
+    assert [len(c["body"]) for c in chunks] == [3, 3, 1]
+    for k in whole:
+        assert np.allclose(np.concatenate([c[k] for c in chunks]), whole[k], atol=1e-4)    # float32 batches
+    doc = json.loads(export_keypoints(seq, tmp_path / "all.json", size=(96, 64), body=body).read_text())
+    assert len(doc["frames"]) == 7
+    assert np.allclose(doc["frames"][6]["people"][0]["pose_keypoints_2d"], whole["body"][6].ravel(), atol=0.006)
+    project = kmod._project
+    calls = []
+
+    def broken_later(pts, camera):                       # the second chunk's projection goes wrong
+        calls.append(1)
+        out = project(pts, camera)
+        if len(calls) == 2:
+            out["body"][0, 0, 0] = np.nan
+        return out
+
+    monkeypatch.setattr(kmod, "_project", broken_later)
+    for name in ("bad.json", "bad_folder"):
+        calls.clear()
+        with pytest.raises(GestureError, match="body keypoints hold NaN or infinite values; nothing is written"):
+            export_keypoints(seq, tmp_path / name, size=(96, 64), body=body)
+        assert len(calls) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["all.json"]     # no .part, no folder, no frame files
 
 
 def test_npz_is_beat2_and_blender_addon_readable(tmp_path, standing):
