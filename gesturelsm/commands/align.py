@@ -10,16 +10,14 @@ import sys
 import time
 from pathlib import Path
 
-from ..audio import SAMPLE_RATE, load_audio
 from ..errors import UserError
-from .aligner import AlignConfig, align_words
-from .metrics import onset_errors_ms, onset_stats
-from .normalize import tokenize
-from .textgrid import read_words, write_textgrid
+
+NAME = "align"
+HELP = "word timings for a transcript (TextGrid out), no forced aligner needed"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("align", help="word timings for a transcript (TextGrid out), no forced aligner needed",
+    p = sub.add_parser(NAME, help=HELP,
                        description="Align a transcript to speech offline (eSpeak NG + DTW) and write a TextGrid.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ogg, m4a, ...)")
     src = p.add_mutually_exclusive_group()
@@ -34,6 +32,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..align.aligner import AlignConfig, align_words
+    from ..align.normalize import tokenize
+    from ..align.textgrid import read_words
+    from ..audio import SAMPLE_RATE, load_audio
+
     text = _transcript(args, UserError)
     if not tokenize(text):
         raise UserError("the transcript has no words to align (only punctuation or spaces?)")
@@ -56,6 +59,9 @@ def run(args: argparse.Namespace) -> int:
 def output_words(words: list, duration: float, args: argparse.Namespace, reference: list | None) -> None:
     """Write the words tier to `args.out` (a TextGrid in `args.format`) or print one word a line; with a
     `reference` (words with known timings) print the onset errors. Shared by `align` and `transcribe`."""
+    from ..align.metrics import onset_errors_ms, onset_stats
+    from ..align.textgrid import write_textgrid
+
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         write_textgrid(args.out, words, duration, args.format)

@@ -1,12 +1,10 @@
-"""`gesturelsm eval` and `gesturelsm bench`.
+"""`gesturelsm eval`: the paper's metrics of generators on a BEAT2-layout folder's held-out clips.
 
     gesturelsm eval --data ../shared/data/beat2 [--checkpoints assets] [--methods ...] [--steps 1 2 4 8]
                     [--cfg 2] [--seeds 2] [--emage-weights AESKConv_240_100.bin] [--smplx SMPLX.npz] --out runs/eval
                     [--cluster local|auto|ray://HOST:PORT]     (each clip a task, docs/CLUSTER.md)
-    gesturelsm bench [--checkpoints assets] [--presets shipped paper] [--steps 1 2 4 8 20] [--repeats 3]
-                     [--quality runs/eval/eval.json] [--data ../shared/data/beat2] --out runs/bench
 
-Each writes <out>/<eval|bench>.json and .md (and bench.png) and prints the markdown table.
+It writes <out>/eval.json and eval.md and prints the markdown table (`gesturelsm bench`: bench.py).
 """
 from __future__ import annotations
 
@@ -15,26 +13,18 @@ import contextlib
 import json
 from pathlib import Path
 
-from ..backends import SPECS, checkpoint_sources, ours_default
-from ..body import load_body_model
 from ..cluster import add_cluster_argument, connect
-from ..data.beat2 import Beat2Dataset
 from ..errors import CheckpointError
-from ..metrics.fgd import default_extractors
-from ..pipeline import GesturePipeline
 from ..settings import CLI, DEFAULT_CFG, Limits, grid_problems
 from ..settings.arguments import input_file, input_folder, output_folder, refuse, threads
 from ..settings.values import from_text, method_list, real_number, whole_number
-from .bench import run_bench
-from .clips import heldout_clips
-from .evaluate import evaluate, plan_grid
-from .plot import quality_time_plot
-from .tables import bench_markdown, eval_markdown
-from .timing import check_device
+
+NAME = "eval"
+HELP = "paper metrics (FGD, BC vs GT, diversity, face error, time) on held-out data"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("eval", help="paper metrics (FGD, BC vs GT, diversity, face error, time) on held-out data",
+    p = sub.add_parser(NAME, help=HELP,
                        description="Evaluate generators on a BEAT2-layout folder's held-out clips: methods x steps x "
                                    "CFG -> markdown table (paper format) and JSON.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder (smplxflame_30/, wave16k/, textgrid/)")
@@ -57,41 +47,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_cluster_argument(p, "each held-out clip (every method, setting and seed on it)")
     p.set_defaults(func=run_eval)
 
-    b = sub.add_parser("bench", help="speed / memory on this machine: per step, AITS, RTF, end to end; plot",
-                       description="Time GestureLSM at several step counts against rectified flow and DDIM, shipped "
-                                   "and paper-size, in one run.")
-    b.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
-    b.add_argument("--presets", nargs="+", default=["shipped", "paper"], choices=["shipped", "paper"],
-                   help="model sizes to time: the shipped checkpoints and the paper's size")
-    b.add_argument("--methods", nargs="+", default=None, help="default: every generator found")
-    b.add_argument("--steps", nargs="+", default=[1, 2, 4, 8, 20], help="sampling step counts (default: 1 2 4 8 20)")
-    b.add_argument("--cfg", type=from_text, default=DEFAULT_CFG, help=f"CFG scale (default: {DEFAULT_CFG:g})")
-    b.add_argument("--repeats", type=from_text, default=3, help="timed runs per setting (default: 3)")
-    b.add_argument("--long-seconds", type=from_text, default=60.0,
-                   help="speech length for the long RTF (0: skip; default: 60)")
-    b.add_argument("--long-presets", nargs="+", default=["shipped", "paper"],
-                   help="presets timed on the long speech (RTF 60 s, peak memory); the paper size is slow on CPU")
-    b.add_argument("--device", default="auto", help="cpu, cuda or auto (cuda when present, plus cpu)")
-    b.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
-    b.add_argument("--data", default=None, help="BEAT2-layout folder: its first audio take is the test speech "
-                                                "and the end-to-end input")
-    b.add_argument("--no-video", action="store_true", help="skip the end-to-end upload-to-video timing")
-    b.add_argument("--quality", default=None, help="eval.json from `gesturelsm eval` for the quality axis")
-    b.add_argument("--metric", default="fgd_k", choices=["fgd_k", "fgd_g", "fgd_emage"],
-                   help="quality axis of the plot (from --quality)")
-    b.add_argument("--from-json", default=None, help="re-make the table and plot from an earlier bench.json "
-                                                     "(e.g. with a newer --quality) without timing anything")
-    b.add_argument("--out", default="runs/bench", help="output folder")
-    b.set_defaults(func=run_bench_cli)
 
-
-def _write(out: Path, stem: str, rep: dict, md: str) -> None:
+def write_report(out: Path, stem: str, rep: dict, md: str) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / f"{stem}.json").write_text(json.dumps(rep, indent=1, default=float))
     (out / f"{stem}.md").write_text(md + "\n")
 
 
-def _grid(args: argparse.Namespace, methods: list[str], p: list[str]) -> tuple | None:
+def checked_grid(args: argparse.Namespace, methods: list[str], p: list[str]) -> tuple | None:
     """(step counts, CFG scales) checked against every chosen method's spec (the settings' validator)."""
     found = grid_problems(methods, args.steps, args.cfg, 1, 1, Limits(), CLI, p)
     return None if found is None else found[:2]
@@ -99,9 +62,11 @@ def _grid(args: argparse.Namespace, methods: list[str], p: list[str]) -> tuple |
 
 def check_eval(args: argparse.Namespace) -> tuple:
     """(methods, steps, cfgs, seeds, threads): every argument before any work, all problems at once."""
+    from ..backends import SPECS
+
     p: list[str] = []
     methods = method_list(args.methods, list(SPECS), p, "--methods") if args.methods else None
-    grid = _grid(args, methods or list(SPECS), p)
+    grid = checked_grid(args, methods or list(SPECS), p)
     seeds = whole_number(args.seeds, "--seeds", 1, 100, p)
     n_threads = threads(args.threads, p)
     real_number(args.train_fraction, "--train-fraction", 0.0, 1.0, p)
@@ -117,28 +82,17 @@ def check_eval(args: argparse.Namespace) -> tuple:
     return methods, *grid, seeds, n_threads
 
 
-def check_bench(args: argparse.Namespace) -> tuple:
-    """(steps, cfg, repeats, long seconds, threads): every argument before any work, all problems at once."""
-    p: list[str] = []
-    methods = method_list(args.methods, list(SPECS), p, "--methods") if args.methods else None
-    grid = _grid(args, methods or ours_default(), p)
-    repeats = whole_number(args.repeats, "--repeats", 1, 1000, p)
-    long_s = real_number(args.long_seconds, "--long-seconds", 0.0, 3600.0, p)
-    n_threads = threads(args.threads, p)
-    for flag, path in (("--quality", args.quality), ("--from-json", args.from_json)):
-        if path:
-            input_file(path, flag, p)
-    if args.data:
-        input_folder(args.data, "--data", p)
-    output_folder(args.out, "--out", p)
-    refuse(p)
-    steps, cfgs = grid or ((), (None,))
-    return steps, cfgs[0], repeats, long_s, n_threads
-
-
 def run_eval(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
+
+    from ..backends import checkpoint_sources
+    from ..body import load_body_model
+    from ..evaluation.clips import heldout_clips
+    from ..evaluation.evaluate import evaluate, plan_grid
+    from ..evaluation.tables import eval_markdown
+    from ..metrics.fgd import default_extractors
+    from ..pipeline import GesturePipeline
 
     methods, steps, cfgs, seeds, n_threads = check_eval(args)
     if n_threads:
@@ -167,47 +121,7 @@ def run_eval(args: argparse.Namespace) -> int:
                 "face_vertices": bool(args.smplx), "body": str(body.path),
                 "bc_mean_speed": str(ms_path) if ms_path else "ground truth's own per-joint mean speed"})
     md = eval_markdown(rep)
-    _write(Path(args.out), "eval", rep, md)
+    write_report(Path(args.out), "eval", rep, md)
     print(md)
     print(f"\nwrote {Path(args.out) / 'eval.json'} and eval.md")
-    return 0
-
-
-def run_bench_cli(args: argparse.Namespace) -> int:
-    import torch
-
-    steps, cfg, repeats, long_seconds, n_threads = check_bench(args)
-    if n_threads:
-        torch.set_num_threads(n_threads)
-    devices = ["cpu"] + (["cuda"] if torch.cuda.is_available() else []) if args.device == "auto" else [args.device]
-    for dev in devices:
-        check_device(dev)                      # a clear line (exit 2) instead of a torch error mid-run
-    speech, e2e = None, None
-    out = Path(args.out)
-    if args.data:
-        ds = Beat2Dataset(args.data)
-        names = ds.audio_only_names + ds.names
-        if names:
-            take = ds.load(names[0])
-            speech = take.audio
-            if not args.no_video:
-                text = " ".join(w.text for w in take.words if w.end <= 10.0) if take.words else None
-                e2e = {"audio": ds.wave_dir / f"{names[0]}.wav", "text": text, "out": out / "end_to_end.mp4"}
-    quality = json.loads(Path(args.quality).read_text()) if args.quality else None
-    reports = []
-    out.mkdir(parents=True, exist_ok=True)
-    if args.from_json:
-        old = json.loads(Path(args.from_json).read_text())
-        reports, devices = old.get("devices", [old]), []
-    for dev in devices:
-        rep = run_bench(args.checkpoints, tuple(args.presets), args.methods, tuple(steps), cfg,
-                        repeats, dev, speech, long_seconds, e2e if dev == "cpu" else None,
-                        log=lambda m: print(m, flush=True), long_presets=tuple(args.long_presets))
-        reports.append(rep)
-    md = "\n\n".join(bench_markdown(r) for r in reports)
-    rep = reports[0] if len(reports) == 1 else {"devices": reports}
-    _write(out, "bench", rep, md)
-    png = quality_time_plot(reports[-1], out / "bench.png", quality, metric=args.metric)
-    print(md)
-    print(f"\nwrote {out / 'bench.json'}, bench.md and {png}")
     return 0

@@ -11,20 +11,22 @@ import argparse
 import time
 from dataclasses import dataclass
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from ..audio import load_audio
-from ..errors import GestureError
-from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
-from ..export.engine_stream import EngineStream, parse_address
-from ..features.audio import audio_channels
-from ..motion.sequence import MotionSequence
-from ..pipeline import GesturePipeline
+from ..errors import GestureError
 from ..settings import CLI, Asked, settings_problems
 from ..settings.arguments import input_file, output_file, positive, refuse, threads
 from ..settings.values import from_text, whole_number
-from .stream import LiveConfig, MotionChunk, StreamingGenerator
+
+if TYPE_CHECKING:
+    from ..export.engine_stream import EngineStream
+    from ..live.stream import LiveConfig, MotionChunk
+
+NAME = "live"
+HELP = "stream a speech file through the live generator (as if from a microphone)"
 
 
 @dataclass
@@ -41,16 +43,21 @@ class LiveRun:
         return self.audio_seconds / max(self.compute_seconds, 1e-9)
 
     def motion(self):
+        from ..motion.sequence import MotionSequence
+
         ms = [c.motion for c in self.chunks]
         return MotionSequence(np.concatenate([m.poses for m in ms]), np.concatenate([m.trans for m in ms]),
                               np.concatenate([m.expressions for m in ms]))
 
 
-def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_ms: float = 200.0,
+def run_file(pipe, audio: np.ndarray, config: LiveConfig | None = None, chunk_ms: float = 200.0,
              realtime: bool = False, engines: EngineStream | None = None) -> LiveRun:
     """Feed `audio` (N,) 16 kHz in chunks of `chunk_ms`; with `realtime` chunk k arrives (and is fed) when its last
     sample would have been spoken, else all as fast as possible (then latency is compute only). `engines`: a
     started EngineStream each committed chunk's frames are pushed to as they come (sent on its steady clock)."""
+    from ..live.stream import LiveConfig, StreamingGenerator
+
+    config = LiveConfig() if config is None else config
     n = max(1, int(round(chunk_ms * SAMPLE_RATE / 1000)))
     gen = StreamingGenerator(pipe, config)
     out: list[MotionChunk] = []
@@ -74,7 +81,9 @@ def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_m
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("live", help="stream a speech file through the live generator (as if from a microphone)",
+    from ..live.stream import LiveConfig                    # the live generator's code loads torch
+
+    p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("audio", help="speech file (any common format and rate)")
     p.add_argument("--chunk-ms", type=from_text, default=200.0, help="audio chunk size")
@@ -103,6 +112,9 @@ def add_parser(sub) -> None:
 
 def check_arguments(args: argparse.Namespace) -> tuple:
     """(config, chunk ms, threads): every argument before any work, all problems at once (InputError)."""
+    from ..export.engine_stream import parse_address
+    from ..live.stream import LiveConfig
+
     p: list[str] = []
     settings, found = settings_problems(Asked([LiveConfig.method], args.steps, cfg=args.cfg, seed=args.seed),
                                         [LiveConfig.method], names=CLI)
@@ -128,6 +140,12 @@ def check_arguments(args: argparse.Namespace) -> tuple:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..audio import load_audio
+    from ..backends import checkpoint_sources
+    from ..export.engine_stream import EngineStream, parse_address
+    from ..features.audio import audio_channels
+    from ..pipeline import GesturePipeline
+
     cfg, chunk_ms, n_threads, out = check_arguments(args)
     audio = load_audio(args.audio)
     import torch
