@@ -7,7 +7,7 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.cli import main
-from gesturelsm.edit_cli import parse_regenerate
+from gesturelsm.commands.edit import parse_regenerate
 from gesturelsm.errors import UserError
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.regions import REGIONS
