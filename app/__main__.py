@@ -2,7 +2,7 @@
 `gesturelsm serve`). `python -m app --help` lists the flags and their environment variables."""
 import sys
 
-from gesturelsm.webapp.cli import main
+from gesturelsm.commands.serve import main
 
 if __name__ == "__main__":
     sys.exit(main(prog="python -m app"))

@@ -207,7 +207,7 @@ def paced_tables(r: dict, seconds: float, take: str, chunk_ms: float) -> None:
 def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
     from gesturelsm.audio import load_audio
     from gesturelsm.body import load_body_model
-    from gesturelsm.live.cli import run_file
+    from gesturelsm.live.from_file import run_file
     from gesturelsm.metrics.amplitude import amplitude_stats
     from gesturelsm.metrics.beat import audio_beats, joint_speed
     from gesturelsm.metrics.speech_response import beat_timing, energy_following
@@ -241,7 +241,7 @@ def pooled(pipe, cfg, takes: list[str], seeds: int) -> str:
 
     from gesturelsm.audio import load_audio
     from gesturelsm.body import load_body_model
-    from gesturelsm.live.cli import run_file
+    from gesturelsm.live.from_file import run_file
     from gesturelsm.metrics.amplitude import amplitude_stats
     from gesturelsm.metrics.speech_response import energy_following
 
@@ -266,7 +266,7 @@ def feet_table(pipe, cfg, takes: list[str]) -> None:
 
     from gesturelsm.audio import load_audio
     from gesturelsm.body import load_body_model
-    from gesturelsm.live.cli import run_file
+    from gesturelsm.live.from_file import run_file
     from gesturelsm.metrics.amplitude import amplitude_stats
     from gesturelsm.metrics.feet import feet_stats
 

@@ -1,9 +1,10 @@
-"""The `gesturelsm` command line. Each subcommand lives next to the code it drives and registers here.
+"""The `gesturelsm` command line: the registry of its subcommands (gesturelsm/commands/, one module per command).
 
-A subcommand module exposes `add_parser(subparsers)` that creates its parser and sets `func=run(args)`. Every one is
-imported when this module is, so a subcommand whose import breaks fails `import gesturelsm.cli` (and every test of the
-command line) instead of quietly leaving the command out. Every option's `--help` shows its default (`WithDefaults`),
-unless its own help already says it.
+A subcommand module has `NAME`, `HELP` and `add_parser(subparsers)` that creates its parser and sets `func=run(args)`.
+Every one is imported when this module is, so a subcommand whose import breaks fails `import gesturelsm.cli` (and
+every test of the command line) instead of quietly leaving the command out. `main` builds the parser of the command
+it is given only (the others are listed by name and help line), so `gesturelsm --help` builds none and loads no
+torch. Every option's `--help` shows its default (`WithDefaults`), unless its own help already says it.
 A problem the person can fix (`errors.GestureError`: bad files, bad settings) is printed as one line and exits with
 status 2; anything else is a bug: "internal error" with its traceback on stderr, exit status 1.
 """
@@ -14,32 +15,15 @@ import re
 import sys
 import traceback
 
-from . import edit_cli, pipeline_cli
-from .align import cli as align_cli
-from .asr import cli as asr_cli
-from .body import cli as body_cli
-from .data import cli as data_cli
+from .commands import (align, batch, bench, body, data, edit, eval_tokenizer, export, genea, generate, import_reference,
+                       live, render, serve, stream, study, sweep, train, train_tokenizer, transcribe)
+from .commands import eval as eval_command
 from .errors import GestureError
-from .evaluation import cli as evaluation_cli
-from .evaluation import sweep_cli
-from .genea import cli as genea_cli
-from .export import cli as export_cli
-from .export import stream_cli
-from .generator import cli as generator_cli
-from .live import cli as live_cli
-from .reference import cli as reference_cli
-from .render import cli as render_cli
 from .settings import MISSING
-from .study import cli as batch_cli
-from .study import study_cli
-from .tokenizer import cli as tokenizer_cli
-from .webapp import cli as webapp_cli
 
 # in the order `gesturelsm --help` lists them
-SUBCOMMANDS = (body_cli, data_cli, align_cli, asr_cli, tokenizer_cli, generator_cli, pipeline_cli, edit_cli,
-               render_cli, export_cli, batch_cli, study_cli, genea_cli, evaluation_cli, sweep_cli, live_cli,
-               stream_cli, reference_cli,
-               webapp_cli)
+SUBCOMMANDS = (body, data, align, transcribe, train_tokenizer, eval_tokenizer, train, generate, edit, render, export,
+               batch, study, genea, eval_command, bench, sweep, live, stream, import_reference, serve)
 
 
 STATED = re.compile(r"\(default\b|default: ")      # a help text that says its default already
@@ -73,16 +57,27 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, formatter_class=with_defaults(formatter_class), **kwargs)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The command line's parser. `command`: only that command's parser is built (the others are listed, with their
+    help line, but answer nothing); None: every command's."""
     parser = Parser(prog="gesturelsm", description="Speech-to-gesture generation (GestureLSM).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in SUBCOMMANDS:
-        module.add_parser(sub)
+        if command is None or module.NAME == command:
+            module.add_parser(sub)
+        else:
+            sub.add_parser(module.NAME, help=module.HELP)
     return parser
 
 
+def _command(argv: list[str]) -> str:
+    """The command `argv` names: its first word that is not an option ('' when none)."""
+    return next((a for a in argv if not a.startswith("-")), "")
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command(argv))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

@@ -32,10 +32,11 @@ FLOORS: list[set[str]] = [
     {"settings"},                                              # one generation's settings, defaults, validator
     {"pipelined"},                                             # speech preparation pipelined with generation
     {"pipeline"},                                              # speech -> motion, one request flow
-    {"study", "evaluation", "pipeline_cli", "edit_cli", "live",  # what uses the pipeline (live: streaming; the
-     "genea"},                                                 # generate and edit commands; GENEA submissions)
+    {"study", "evaluation", "live", "genea"},                  # what uses the pipeline (live: streaming; GENEA
+                                                               # submissions)
     {"serve"},                                                 # one web request: checks, files, its sweep, edits
     {"webapp"},                                                # the Gradio page over serve and live
+    {"commands"},                                              # the subcommands, one module each
     {"cli"},                                                   # the command line registry
     {"__main__"},                                              # python -m gesturelsm
 ]

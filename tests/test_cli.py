@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from gesturelsm import cli
+from gesturelsm.commands import generate
 from gesturelsm.errors import InputError
 
 PACKAGE = Path(cli.__file__).resolve().parent
@@ -40,12 +41,12 @@ def test_a_subcommand_that_cannot_be_imported_breaks_the_command_line():
     """With one subcommand's module unimportable (the ModuleNotFoundError a missing dependency or a moved module
     raises), importing the command line fails with that error: the command does not quietly vanish from
     `gesturelsm --help`."""
-    code = ("import sys; sys.modules['gesturelsm.live.cli'] = None\n"
+    code = ("import sys; sys.modules['gesturelsm.commands.live'] = None\n"
             "import gesturelsm.cli\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
                          cwd=PACKAGE.parent)
     assert run.returncode != 0
-    assert "ModuleNotFoundError: import of gesturelsm.live.cli" in run.stderr, run.stderr[-2000:]
+    assert "ModuleNotFoundError: import of gesturelsm.commands.live" in run.stderr, run.stderr[-2000:]
 
 
 @pytest.fixture
@@ -54,7 +55,7 @@ def failing_generate(monkeypatch):
     def use(exc: BaseException):
         def run(args):
             raise exc
-        monkeypatch.setattr(cli.pipeline_cli, "run_generate", run)
+        monkeypatch.setattr(generate, "run_generate", run)
     return use
 
 

@@ -7,7 +7,7 @@ import pytest
 import soundfile as sf
 
 from gesturelsm.cli import main
-from gesturelsm.edit_cli import parse_regenerate
+from gesturelsm.commands.edit import parse_regenerate
 from gesturelsm.errors import UserError
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.regions import REGIONS
@@ -162,8 +162,7 @@ def test_speech_hours_longer_than_the_motion_is_refused_without_decoding_it(file
 @pytest.mark.slow
 def test_a_motion_longer_than_the_default_limit_edits_with_max_seconds(tiny_assets, tmp_path, capsys, monkeypatch):
     """A motion past the default 300 s (as `generate --max-seconds` makes them, up to an hour) is refused in one
-    line before any model loads, naming the flag; with the flag it is edited, the rest kept bit for bit. (It used
-    to be refused after the models loaded, pointing at a pipeline setting no flag of edit reached.)"""
+    line before any model loads, naming the flag; with the flag it is edited, the rest kept bit for bit."""
     from gesturelsm.pipeline import GesturePipeline
 
     from _support import synthetic_motion

@@ -28,7 +28,7 @@ def test_the_wheel_has_one_top_level_package_and_no_app(wheel):
 
 def test_the_wheel_carries_the_page_its_examples_and_the_shipped_assets(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    for path in ("gesturelsm/webapp/ui.py", "gesturelsm/webapp/cli.py", "gesturelsm/serve/service.py",
+    for path in ("gesturelsm/webapp/ui.py", "gesturelsm/commands/serve.py", "gesturelsm/serve/service.py",
                  "gesturelsm/webapp/examples/examples.json", "gesturelsm/webapp/examples/hello.wav",
                  "gesturelsm/_assets/MODEL_CARD.md", "gesturelsm/_assets/generator/gesturelsm.safetensors",
                  "gesturelsm/_assets/body/SMPLX_MANNEQUIN.npz"):
@@ -49,7 +49,7 @@ def test_the_wheel_installs_the_gesturelsm_command_with_serve(wheel):
 
 def test_gesturelsm_serve_has_the_flags_of_python_m_app():
     from gesturelsm.cli import build_parser
-    from gesturelsm.webapp.cli import build_parser as app_parser
+    from gesturelsm.commands.serve import build_parser as app_parser
 
     sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
     serve = sub.choices["serve"]

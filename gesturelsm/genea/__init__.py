@@ -1,2 +1,2 @@
 """The GENEA Leaderboard's yardstick: submission folders (submission.py, submit.py) and its objective metrics
-(metrics.py, leaderboard.py); `gesturelsm genea` (cli.py). docs/GENEA.md."""
+(metrics.py, leaderboard.py); `gesturelsm genea` (commands/genea.py). docs/GENEA.md."""

@@ -208,25 +208,20 @@ def _stop_all() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """`python -m gesturelsm.render.background --nice N render <gesturelsm render arguments>`: lower this process,
-    say so as a JSON line, then render; errors as `gesturelsm render` reports them (exit 2, one line on stderr)."""
-    import argparse
-
-    from ..errors import GestureError
-    from .cli import add_parser
-
+    say so as a JSON line, then become `python -m gesturelsm render <arguments>` (exec: the same process, so its
+    session, priority and pid stay), which reports errors as the command line does (exit 2, one line on stderr)."""
     args = list(sys.argv[1:] if argv is None else argv)
     nice = 19
     if len(args) >= 2 and args[0] == "--nice":
         nice, args = int(args[1]), args[2:]
-    print(json.dumps({"process": lower_this_process(nice)}), flush=True)
-    parser = argparse.ArgumentParser(prog="gesturelsm")
-    add_parser(parser.add_subparsers(dest="command", required=True))
-    ns = parser.parse_args(args)
-    try:
-        return int(ns.func(ns) or 0)
-    except GestureError as exc:                 # anything else is a bug: its traceback goes to stderr, exit 1
-        print(f"gesturelsm render: error: {exc}", file=sys.stderr)
+    if args[:1] != ["render"]:
+        print("usage: python -m gesturelsm.render.background [--nice N] render <gesturelsm render arguments>",
+              file=sys.stderr)
         return 2
+    print(json.dumps({"process": lower_this_process(nice)}), flush=True)
+    sys.stderr.flush()
+    os.execv(sys.executable, [sys.executable, "-m", "gesturelsm", *args])
+    return 1                                    # not reached: execv replaces this process or raises OSError
 
 
 if __name__ == "__main__":

@@ -22,10 +22,8 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..asr.languages import LANGUAGES
-from ..backends import GROUND_TRUTH, SPECS
+from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
-from ..grounding.cli import add_grounding_flag, grounding_on
-from ..motion.postprocess import SMOOTHING_WINDOWS
 from .check import CLI, MISSING, Asked, settings_problems
 from .defaults import DEFAULTS, MAX_SECONDS, Limits, Settings
 from .values import from_text, shown, whole_number
@@ -33,6 +31,8 @@ from .values import from_text, shown, whole_number
 
 def default_steps_text(setting: str | None = None) -> str:
     """"GestureLSM 8, DDIM 20, ..." for the methods a step setting drives (None: every method)."""
+    from ..backends import SPECS                                  # the method registry loads torch
+
     return ", ".join(f"{s.label} {s.default_steps}" for s in SPECS.values() if setting in (None, s.steps_setting))
 
 
@@ -65,6 +65,17 @@ def add_post_flags(p: argparse.ArgumentParser) -> None:
     add_grounding_flag(p)
 
 
+def add_grounding_flag(p: argparse.ArgumentParser) -> None:
+    """--grounding on|off: the one flag every command that makes motion carries (generate, batch, sweep)."""
+    p.add_argument("--grounding", choices=["on", "off"], default="on",
+                   help="feet on the ground: planted feet, no drift, the body on the floor (docs/GROUNDING.md); "
+                        "'off' keeps the decoder's root and legs")
+
+
+def grounding_on(args: argparse.Namespace) -> bool:
+    return getattr(args, "grounding", "on") == "on"
+
+
 def add_language_flag(p: argparse.ArgumentParser) -> None:
     """--language: the speech's language for recognition and for aligning a typed transcript."""
     p.add_argument("--language", default=DEFAULTS.language, metavar="CODE",
@@ -80,6 +91,8 @@ def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
 def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
                  available: Sequence[str] | None = None, limits: Limits = Limits()) -> Settings | None:
     """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
+    from ..backends import GROUND_TRUTH, SPECS
+
     steps = getattr(args, "steps", MISSING)
     if hasattr(args, "ddim_steps"):          # two flags: each drives only its own methods, an omitted one none
         given = {"steps": steps, "ddim_steps": args.ddim_steps}

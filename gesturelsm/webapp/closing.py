@@ -83,7 +83,7 @@ class PageWork:
 
     @property
     def pages(self) -> int:
-        """Page sessions with work running now."""
+        """Page sessions with work running."""
         with self._lock:
             return len(self._running)
 

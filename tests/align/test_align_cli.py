@@ -60,7 +60,7 @@ def _write(path, text: str):
 
 
 def test_language_takes_the_codes_of_the_other_commands_and_the_old_espeak_voice_names():
-    from gesturelsm.align.cli import language_config
+    from gesturelsm.commands.align import language_config
     from gesturelsm.align.languages import typed_alignment
 
     assert language_config("es", "hola").voices == ("es+klatt", "es+m7", "es+f3")

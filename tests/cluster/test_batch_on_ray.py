@@ -122,7 +122,7 @@ def test_a_node_removed_mid_batch_still_gives_every_video_exactly_once(ray_clust
 
 
 def _busy_workers() -> list[int]:
-    """Ray worker processes running a unit now (Ray titles a worker `ray::<function>` while it runs a task)."""
+    """Ray worker processes running a unit (Ray titles a worker `ray::<function>` while it runs a task)."""
     pids = []
     for d in Path("/proc").iterdir():
         if d.name.isdigit():

@@ -227,7 +227,7 @@ def test_bad_replica_counts_are_one_line(text, says):
 def test_an_unreachable_cluster_is_said_before_any_model_loads(command, tmp_path, capsys, monkeypatch):
     """eval, sweep and batch load their models before they connect: the cluster's address is tried with the
     arguments' checks, so `eval --cluster ray://...` to a machine that does not answer is one line, exit 2, before
-    the clips are read or a model loads (it used to come after the models had loaded)."""
+    the clips are read or a model loads."""
     import soundfile as sf
 
     from gesturelsm.cli import main

@@ -33,7 +33,7 @@ def _settings(assets: Path, workdir: Path):
 def test_too_few_cpus_for_the_replicas_is_one_line_before_loading(ray_cluster, tiny_assets, tmp_path, capsys):
     import ray
 
-    from gesturelsm.webapp.cli import main
+    from gesturelsm.commands.serve import main
 
     t0 = time.perf_counter()
     code = main(["--replicas", "3", "--cluster", "auto", "--checkpoints", str(tiny_assets), "--workdir",

@@ -15,7 +15,7 @@ import sys
 from gesturelsm.cli import main
 assert main(["batch", "--audio-dir", {speech!r}, "--methods", "gesturelsm", "ddim", "--out", {out!r}, "--raters", "1",
              "--steps", "1", "--ddim-steps", "1", "--size", "128", "--checkpoints", {assets!r}]) == 0
-from gesturelsm.webapp.cli import build_parser, page_service
+from gesturelsm.commands.serve import build_parser, page_service
 from gesturelsm.serve.config import ServiceSettings
 from gesturelsm.webapp.ui import serve_locally
 args = build_parser().parse_args(["--checkpoints", {assets!r}, "--workdir", {work!r}, "--no-warmup"])

@@ -1,4 +1,4 @@
-"""`gesturelsm sweep` (evaluation/sweep.py, sweep_report.py, sweep_cli.py) on tiny checkpoints: the table and plot
+"""`gesturelsm sweep` (evaluation/sweep.py, sweep_report.py, commands/sweep.py) on tiny checkpoints: the table and plot
 hold exactly the grid's cells, each cell's numbers are those of its motions generated alone, bad grids are refused
 with one line each and leave nothing behind, a cancelled sweep writes nothing."""
 from __future__ import annotations

@@ -175,7 +175,7 @@ def test_speech_plays_in_sync_where_there_is_an_audio_output_and_one_line_where_
 
     import soundfile as sf
     from _support import speech_like
-    from gesturelsm.export import stream_cli
+    from gesturelsm.commands import stream as stream_cli
 
     path = speaking_motion(0.5).save(tmp_path / "take.npz")
     wav = tmp_path / "speech.wav"

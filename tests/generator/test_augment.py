@@ -109,7 +109,7 @@ def test_variants_are_named_and_checked():
     assert [v.name for v in variants_for(["gain", "tempo"])] == ["tempo0.9", "tempo1.1", "gain-6", "gain+6"]
     with pytest.raises(UserError, match="unknown kind"):
         variants_for(["speed"])
-    from gesturelsm.generator.cli import add_parser
+    from gesturelsm.commands.train import add_parser
 
     p = argparse.ArgumentParser()
     add_parser(p.add_subparsers())
@@ -122,7 +122,7 @@ def test_default_off_keeps_the_training_takes_and_batches_bit_identical(tmp_path
     (the recipe before augmentation existed), so the sampler draws the same batches; with it the same two come
     first and two per variant follow."""
     from gesturelsm.data.beat2 import Beat2Dataset
-    from gesturelsm.generator.cli import training_takes
+    from gesturelsm.commands.train import training_takes
 
     seq = beat2_maker(tmp_path, "2_scott_0_1_1", 300)
     ds = Beat2Dataset(tmp_path)

@@ -86,7 +86,7 @@ def test_preset_overrides_parse_types_and_refuse_bad_values():
     import pytest
 
     from gesturelsm.errors import UserError
-    from gesturelsm.generator.cli import preset_with
+    from gesturelsm.commands.train import preset_with
 
     c = preset_with("small", ["speech_add=true", "st_layers=6", "audio_channels=8,8,8,16,16,16", "prediction=data",
                               "regions=upper,hands"])

@@ -12,7 +12,8 @@ import soundfile as sf
 
 from gesturelsm.generator.data import samples_for
 from gesturelsm.live import LiveConfig, StreamingGenerator
-from gesturelsm.live.cli import add_parser, check_arguments, run_file
+from gesturelsm.commands.live import add_parser, check_arguments
+from gesturelsm.live.from_file import run_file
 from gesturelsm.live.session import LiveManager, LiveSession
 
 from _support import speech_like

@@ -252,7 +252,7 @@ def test_batch_refuses_before_loading_models_or_starting_ray(monkeypatch, tmp_pa
     loaded and no cluster is joined (docs/CLUSTER.md: refusals come before any work)."""
     from gesturelsm.cli import main
     from gesturelsm.pipeline import GesturePipeline
-    from gesturelsm.study import cli as study_cli
+    from gesturelsm.commands import batch as study_cli
 
     def forbidden(*a, **k):
         raise AssertionError("work started before the arguments were checked")

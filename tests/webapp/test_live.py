@@ -176,7 +176,7 @@ def test_the_operators_vmc_address_gets_one_live_stream_and_a_second_visitor_is_
     from _osc import Receiver, decode_bundle
     from gesturelsm.export.engine_stream import parse_address
     from gesturelsm.live.relay import BUSY_NOTE, EngineRelay
-    from gesturelsm.webapp.cli import build_parser, engine_relay, run_demo
+    from gesturelsm.commands.serve import build_parser, engine_relay, run_demo
 
     rx = Receiver()
     try:

@@ -93,7 +93,7 @@ def _walk(node):
 def test_app_entry_flags_and_env(monkeypatch):
     from gesturelsm.errors import CheckpointError
     from gesturelsm.serve.service import GestureService
-    from gesturelsm.webapp.cli import build_parser, run_demo
+    from gesturelsm.commands.serve import build_parser, run_demo
 
     monkeypatch.setenv("GESTURELSM_PORT", "9001")
     monkeypatch.setenv("GESTURELSM_BEAT2", "/data/beat2")

@@ -14,9 +14,12 @@ from pathlib import Path
 
 from ..errors import UserError
 
+NAME = "study"
+HELP = "serve a web user study, invite raters, analyse the answers"
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("study", help="serve a web user study, invite raters, analyse the answers",
+    p = subparsers.add_parser(NAME, help=HELP,
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="study_command", metavar="ACTION", required=True)
     s = sub.add_parser("serve", help="host the study: one page per rater at /r/<token>",
@@ -65,7 +68,7 @@ def _folder(path: str) -> Path:
 
 
 def run_serve(args: argparse.Namespace) -> int:
-    from .server import serve
+    from ..study.server import serve
 
     if not 0 < args.port < 65536:
         raise UserError("--port must be from 1 to 65535")
@@ -74,7 +77,7 @@ def run_serve(args: argparse.Namespace) -> int:
 
 
 def run_invite(args: argparse.Namespace) -> int:
-    from .design import base_url, invite
+    from ..study.design import base_url, invite
 
     folder = _folder(args.study_dir)
     if args.n < 1:
@@ -89,7 +92,7 @@ def run_invite(args: argparse.Namespace) -> int:
 
 
 def run_results(args: argparse.Namespace) -> int:
-    from .results import Rule, analyse, markdown, write
+    from ..study.results import Rule, analyse, markdown, write
 
     for name in ("mismatch_pass", "repeat_pass"):
         if not 0 <= getattr(args, name) <= 1:

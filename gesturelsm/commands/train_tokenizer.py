@@ -1,21 +1,20 @@
-"""`gesturelsm train-tokenizer` and `gesturelsm eval-tokenizer`."""
+"""`gesturelsm train-tokenizer`: the per-region RVQ-VAE tokenizers, trained on a BEAT2-layout folder."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
-from ..checkpoint import load_checkpoint
-from ..constants import ASSETS
-from ..data.split import split_features
 from ..errors import UserError
-from ..motion.regions import GENERATED_REGIONS
-from .evaluate import evaluate_folder, format_report
-from .model import KIND, RVQVAE
-from .train import TrainConfig, train_region, tune_decoder
+
+
+NAME = "train-tokenizer"
+HELP = "train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train-tokenizer", help="train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder",
+    from ..motion.regions import GENERATED_REGIONS          # the regions' declaration loads torch
+
+    p = sub.add_parser(NAME, help=HELP,
                        description="Train one RVQ-VAE motion tokenizer per body region on a BEAT2-layout folder's "
                                    "training share; checkpoints and resume state go to the run folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder (smplxflame_30/ ...)")
@@ -41,20 +40,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="with --decoder-only: weight of the L1 loss on the second difference (jitter), default 2")
     p.set_defaults(func=run_train)
 
-    e = sub.add_parser("eval-tokenizer", help="held-out reconstruction quality of trained tokenizers",
-                       description="Encode and decode a BEAT2-layout folder's held-out motion with trained "
-                                   "tokenizers and report the reconstruction error per region.")
-    e.add_argument("--data", required=True, help="BEAT2-layout folder")
-    e.add_argument("--ckpt", default=str(ASSETS / "tokenizer"),
-                   help="folder with <region>.safetensors (default: shipped)")
-    e.add_argument("--train-fraction", type=float, default=0.8,
-                   help="without a split file: the first fraction of each take is training, the rest held out")
-    e.add_argument("--model", help="body model for joint positions (default: built-in mannequin)")
-    e.add_argument("--json", help="also write the numbers as JSON here")
-    e.set_defaults(func=run_eval)
-
 
 def run_train(args: argparse.Namespace) -> int:
+    from ..data.split import split_features
+    from ..tokenizer.train import TrainConfig, train_region
+
     if args.window % 4:
         raise UserError(f"--window must be a multiple of 4 (got {args.window})")
     if args.steps <= 0 or args.batch_size <= 0:
@@ -78,7 +68,11 @@ def run_train(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_tune_decoder(args: argparse.Namespace, split, cfg: TrainConfig, out: Path) -> int:
+def run_tune_decoder(args: argparse.Namespace, split, cfg, out: Path) -> int:
+    from ..checkpoint import load_checkpoint
+    from ..tokenizer.model import KIND, RVQVAE
+    from ..tokenizer.train import tune_decoder
+
     src = Path(args.decoder_only)
     missing = [r for r in args.regions if not (src / f"{r}.safetensors").exists()]
     if missing:
@@ -100,14 +94,4 @@ def run_tune_decoder(args: argparse.Namespace, split, cfg: TrainConfig, out: Pat
         if args.ship:
             path = model.save(Path(args.ship) / f"{region}.safetensors", half=True, meta=meta)
             print(f"shipped {path} ({path.stat().st_size / 1e6:.1f} MB)")
-    return 0
-
-
-def run_eval(args: argparse.Namespace) -> int:
-    report = evaluate_folder(args.data, args.ckpt, args.train_fraction, args.model)
-    print(format_report(report))
-    if args.json:
-        import json
-
-        Path(args.json).write_text(json.dumps(report, indent=2))
     return 0

@@ -17,6 +17,9 @@ from gesturelsm.cluster import cluster_argument, parse_cluster, replicas_argumen
 from gesturelsm.errors import GestureError
 from gesturelsm.serve.config import QUEUE_SIZE, ServiceSettings
 
+NAME = "serve"
+HELP = "serve the web demo (as `python -m app` in a checkout)"
+
 DESCRIPTION = """`{prog}`: start the web demo on http://127.0.0.1:7860 (built-in mannequin, shipped checkpoints).
 
 Every flag has an environment variable (flag wins): GESTURELSM_HOST, GESTURELSM_PORT, GESTURELSM_SMPLX_MODEL,
@@ -103,7 +106,7 @@ def build_parser(prog: str = "python -m app") -> argparse.ArgumentParser:
 
 def add_parser(subparsers) -> None:
     """`gesturelsm serve`: the `gesturelsm` command line's entry to the demo."""
-    p = subparsers.add_parser("serve", help="serve the web demo (as `python -m app` in a checkout)",
+    p = subparsers.add_parser(NAME, help=HELP,
                               description=DESCRIPTION.format(prog="gesturelsm serve"),
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p).set_defaults(func=lambda args: run_demo(args, "gesturelsm serve"))
@@ -225,7 +228,7 @@ def _serve(service, args: argparse.Namespace, stages: Stages, engines=None) -> N
                    "of it (--no-warmup skips it)")
         service.warmup()
     stages.say("building the page")
-    from .ui import build_demo
+    from gesturelsm.webapp.ui import build_demo
 
     demo = build_demo(service, max(1, args.queue_size), engines)
     try:                                                     # a stop from here on closes the page

@@ -12,18 +12,16 @@ import sys
 import time
 from pathlib import Path
 
-from ..align import read_words
-from ..align.cli import output_words
-from ..audio import SAMPLE_RATE, load_audio
+from ..asr.languages import AUTO, CHOICES, LANGUAGES
 from ..errors import UserError
-from .model import RecognizerUnavailable
-from .languages import AUTO, CHOICES, LANGUAGES
-from .source import language_said
-from .transcribe import AUDIO_ONLY_NOTE, transcribe
+from .align import output_words
+
+NAME = "transcribe"
+HELP = "recognise speech offline, words with times (TextGrid out)"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("transcribe", help="recognise speech offline, words with times (TextGrid out)",
+    p = sub.add_parser(NAME, help=HELP,
                        description="Transcribe speech offline and time the words: English with Whisper tiny.en and "
                                    "our aligner (eSpeak NG + DTW); other languages with Whisper base and its own word "
                                    "times (docs/TRANSCRIPTION.md).")
@@ -41,6 +39,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..align import read_words
+    from ..asr.model import RecognizerUnavailable
+    from ..asr.source import language_said
+    from ..asr.transcribe import AUDIO_ONLY_NOTE, transcribe
+    from ..audio import SAMPLE_RATE, load_audio
+
     if args.out is not None and args.out.suffix.lower() != ".textgrid":
         raise UserError(f"--out must end in .TextGrid (got {args.out.name})")
     language = args.language.strip().lower()

@@ -1,27 +1,32 @@
-"""`gesturelsm train` (generator). `gesturelsm generate` is the pipeline's command: pipeline_cli.py."""
+"""`gesturelsm train`: a generator (GestureLSM or a baseline) trained over frozen tokenizers on a BEAT2-layout folder.
+`gesturelsm generate` (generate.py) runs what it trained."""
 from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..align.words import Word
+from typing import TYPE_CHECKING
+
 from ..constants import ASSETS, FPS, SAMPLE_RATE
-from ..data.beat2 import Beat2Dataset
 from ..errors import UserError
-from ..features.text import TextEmbedder
-from ..flows import METHODS
-from ..motion.regions import GENERATED_REGIONS
-from ..tokenizer.model import RVQVAE
-from .augment import KINDS, Variant, augmented_takes, variants_for
-from .config import PRESETS
-from .data import TakeTensors, build_take
-from .distributed import check_launch
-from .train import GenTrainConfig, train_generator
+
+if TYPE_CHECKING:
+    from ..data.beat2 import Beat2Dataset
+    from ..features.text import TextEmbedder
+    from ..generator.augment import Variant
+    from ..generator.data import TakeTensors
+    from ..tokenizer.model import RVQVAE
+
+NAME = "train"
+HELP = "train a generator (GestureLSM or a baseline) on a BEAT2-layout folder"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train a generator (GestureLSM or a baseline) on a BEAT2-layout folder",
+    from ..flows import METHODS                          # the methods' and the variants' declarations load torch
+    from ..generator.augment import KINDS
+
+    p = sub.add_parser(NAME, help=HELP,
                        description="Train a speech-to-latent generator for one sampling method (GestureLSM's "
                                    "shortcut flow or a baseline) over frozen tokenizers, on a BEAT2-layout folder.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder")
@@ -64,6 +69,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run_train(args: argparse.Namespace) -> int:
     import torch
 
+    from ..data.beat2 import Beat2Dataset
+    from ..features.text import TextEmbedder
+    from ..generator.augment import variants_for
+    from ..generator.distributed import check_launch
+    from ..generator.train import GenTrainConfig, train_generator
+    from ..motion.regions import GENERATED_REGIONS
+    from ..tokenizer.model import RVQVAE
+
     check_launch(args.device)              # refuse e.g. more torchrun processes than GPUs before loading anything
     tok_dir = Path(args.tokenizers)
     missing = [r for r in GENERATED_REGIONS if not (tok_dir / f"{r}.safetensors").exists()]
@@ -103,6 +116,10 @@ def training_takes(ds: Beat2Dataset, tokenizers: dict[str, RVQVAE], emb: TextEmb
     """(training, held-out) tensors of every take with motion and audio: the split file's parts, or the first
     `train_fraction` of each take for training and the rest held out. Training takes come as [take, mirror]
     per take, then 2 per augmentation variant (none by default, which keeps the list and so the batches exact)."""
+    from ..align.words import Word
+    from ..generator.augment import augmented_takes
+    from ..generator.data import build_take
+
     train, held = [], []
     for name in ds.names:
         take = ds.load(name)
@@ -138,6 +155,8 @@ def training_takes(ds: Beat2Dataset, tokenizers: dict[str, RVQVAE], emb: TextEmb
 def preset_with(preset: str, overrides: list[str]):
     """A named GeneratorConfig preset with FIELD=VALUE overrides (values parsed as the field's type)."""
     import dataclasses
+
+    from ..generator.config import PRESETS
 
     if preset not in PRESETS:
         raise UserError(f"unknown preset {preset!r}; choose from {', '.join(PRESETS)}")

@@ -8,73 +8,25 @@
 from __future__ import annotations
 
 import argparse
-import time
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..audio import load_audio
-from ..errors import GestureError
-from ..backends import checkpoint_sources
 from ..constants import SAMPLE_RATE
-from ..export.engine_stream import EngineStream, parse_address
-from ..features.audio import audio_channels
-from ..motion.sequence import MotionSequence
-from ..pipeline import GesturePipeline
+from ..errors import GestureError
 from ..settings import CLI, Asked, settings_problems
 from ..settings.arguments import input_file, output_file, positive, refuse, threads
 from ..settings.values import from_text, whole_number
-from .stream import LiveConfig, MotionChunk, StreamingGenerator
+
+NAME = "live"
+HELP = "stream a speech file through the live generator (as if from a microphone)"
 
 
-@dataclass
-class LiveRun:
-    chunks: list[MotionChunk]
-    latencies: np.ndarray          # (n_audio_chunks,) s: motion available - chunk arrival
-    audio_seconds: float
-    wall_seconds: float
-    compute_seconds: float
-
-    @property
-    def real_time_factor(self) -> float:
-        """Audio seconds per second of generation work (> 1: faster than real time)."""
-        return self.audio_seconds / max(self.compute_seconds, 1e-9)
-
-    def motion(self):
-        ms = [c.motion for c in self.chunks]
-        return MotionSequence(np.concatenate([m.poses for m in ms]), np.concatenate([m.trans for m in ms]),
-                              np.concatenate([m.expressions for m in ms]))
-
-
-def run_file(pipe, audio: np.ndarray, config: LiveConfig = LiveConfig(), chunk_ms: float = 200.0,
-             realtime: bool = False, engines: EngineStream | None = None) -> LiveRun:
-    """Feed `audio` (N,) 16 kHz in chunks of `chunk_ms`; with `realtime` chunk k arrives (and is fed) when its last
-    sample would have been spoken, else all as fast as possible (then latency is compute only). `engines`: a
-    started EngineStream each committed chunk's frames are pushed to as they come (sent on its steady clock)."""
-    n = max(1, int(round(chunk_ms * SAMPLE_RATE / 1000)))
-    gen = StreamingGenerator(pipe, config)
-    out: list[MotionChunk] = []
-    t0 = time.perf_counter()
-    for a in range(0, len(audio), n):
-        chunk = audio[a:a + n]
-        arrival = None
-        if realtime:
-            arrival = t0 + (a + len(chunk)) / SAMPLE_RATE
-            time.sleep(max(0.0, arrival - time.perf_counter()))
-        new = gen.feed(chunk, arrival)
-        out += new
-        for c in new if engines is not None else ():
-            engines.push(c.motion)
-    last = gen.finish()
-    out += last
-    for c in last if engines is not None else ():
-        engines.push(c.motion)
-    lat = np.array([x for c in out for x in c.latencies])
-    return LiveRun(out, lat, len(audio) / SAMPLE_RATE, time.perf_counter() - t0, gen.compute_s)
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("live", help="stream a speech file through the live generator (as if from a microphone)",
+    from ..live.stream import LiveConfig                    # the live generator's code loads torch
+
+    p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("audio", help="speech file (any common format and rate)")
     p.add_argument("--chunk-ms", type=from_text, default=200.0, help="audio chunk size")
@@ -105,6 +57,9 @@ def add_parser(sub) -> None:
 
 def check_arguments(args: argparse.Namespace) -> tuple:
     """(config, chunk ms, threads): every argument before any work, all problems at once (InputError)."""
+    from ..export.engine_stream import parse_address
+    from ..live.stream import LiveConfig
+
     p: list[str] = []
     settings, found = settings_problems(Asked([LiveConfig.method], args.steps, cfg=args.cfg, seed=args.seed),
                                         [LiveConfig.method], names=CLI)
@@ -130,6 +85,13 @@ def check_arguments(args: argparse.Namespace) -> tuple:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..audio import load_audio
+    from ..backends import checkpoint_sources
+    from ..export.engine_stream import EngineStream, parse_address
+    from ..features.audio import audio_channels
+    from ..live.from_file import run_file
+    from ..pipeline import GesturePipeline
+
     cfg, chunk_ms, n_threads, out = check_arguments(args)
     audio = load_audio(args.audio)
     import torch

@@ -14,15 +14,19 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..body.model import resolve_body
+from typing import TYPE_CHECKING
+
 from ..errors import UserError
-from ..motion.sequence import MotionSequence
-from ..render.style import STYLES, parse_size
-from . import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
+
+if TYPE_CHECKING:
+    from ..motion.sequence import MotionSequence
+
+NAME = "export"
+HELP = "export a motion to BVH / GLB / 2D keypoints / ARKit face CSV / BEAT2 npz"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("export", help="export a motion to BVH / GLB / 2D keypoints / ARKit face CSV / BEAT2 npz",
+    p = subparsers.add_parser(NAME, help=HELP,
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("motion", help="BEAT2-layout .npz motion file")
     p.add_argument("--bvh", help="write a BVH (SMPL-X skeleton, 30 fps)")
@@ -49,6 +53,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..body.model import resolve_body
+    from ..export import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
+    from ..motion.sequence import MotionSequence
+    from ..render.style import STYLES, parse_size
+
     arkit = getattr(args, "arkit", None)
     if not any((args.bvh, args.glb, args.keypoints, args.npz, arkit)):
         raise UserError("nothing to export: give at least one of --bvh, --glb, --keypoints, --arkit, --npz")
@@ -110,8 +119,8 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def _run_rig(args: argparse.Namespace, seq: MotionSequence) -> int:
     """--rig: the motion on the user's character, as its own animated file and / or its skeleton's BVH."""
+    from ..export.rig import export_rig_bvh, export_rig_glb
     from ..retarget import load_character, retarget_motion
-    from .rig import export_rig_bvh, export_rig_glb
 
     if args.keypoints or args.npz or getattr(args, "arkit", None) or not (args.glb or args.bvh):
         raise UserError("with --rig, give --glb OUT.glb (or .vrm) and / or --bvh OUT.bvh (export --keypoints, "

@@ -13,21 +13,23 @@ import contextlib
 import json
 from pathlib import Path
 
-from ..backends import SPECS, checkpoint_sources
 from ..cluster import add_cluster_argument, connect
+from ..genea.submission import SAMPLES
 from ..settings import DEFAULT_METHOD
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
                                   cli_settings, input_file, input_folder, output_file, output_folder, positive, refuse)
 from ..settings.values import from_text, whole_number
-from .leaderboard import EMAGE_FILE, MEAN_SPEED_FILE, evaluate
-from .metrics import HEADERS, KEYS
-from .submission import SAMPLES
 
 MAX_SAMPLES = 100
+NAME = "genea"
+HELP = "GENEA Leaderboard: submission folders and its objective metrics"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("genea", help="GENEA Leaderboard: submission folders and its objective metrics",
+    from ..backends import SPECS                            # the method registry and the metrics load torch
+    from ..genea.leaderboard import EMAGE_FILE, MEAN_SPEED_FILE
+
+    p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.set_defaults(func=lambda args: (p.print_help(), 0)[1])
     gsub = p.add_subparsers(dest="genea_command", metavar="COMMAND")
@@ -70,7 +72,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_submit(args: argparse.Namespace) -> int:
-    from .submit import submit
+    from ..backends import checkpoint_sources
+    from ..genea.submit import submit
 
     p: list[str] = []
     settings = cli_settings(args, [args.method], p)
@@ -92,6 +95,8 @@ def run_submit(args: argparse.Namespace) -> int:
 
 
 def run_metrics(args: argparse.Namespace) -> int:
+    from ..genea.leaderboard import EMAGE_FILE, evaluate
+
     p: list[str] = []
     gen = input_folder(args.generated, "GENERATED_DIR", p)
     human = input_folder(args.human, "HUMAN_DIR", p)
@@ -120,6 +125,8 @@ def run_metrics(args: argparse.Namespace) -> int:
 
 def table(values: dict, caption: str) -> str:
     """The leaderboard's columns, in its order, as a Markdown table ('-' where a column was left out)."""
+    from ..genea.metrics import HEADERS, KEYS
+
     cells = [("-" if values.get(k) is None else f"{values[k]:.4g}") for k in KEYS]
     return "\n".join([f"| {' | '.join(HEADERS[k] for k in KEYS)} |", "|" + "---|" * len(KEYS),
                       f"| {' | '.join(cells)} |", f"({caption})"])

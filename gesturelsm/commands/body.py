@@ -8,12 +8,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .mannequin import DEFAULT_PATH, write_mannequin
-from .model import load_body_model
+NAME = "body"
+HELP = "build or check the SMPL-X body model"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("body", help="build or check the SMPL-X body model",
+    p = subparsers.add_parser(NAME, help=HELP,
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="body_command", metavar="ACTION", required=True)
     b = sub.add_parser("build", help="rebuild the built-in mannequin npz",
@@ -31,6 +31,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 def run_build(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from ..body.mannequin import DEFAULT_PATH, write_mannequin
+
     path = write_mannequin(args.out or DEFAULT_PATH)
     with np.load(path) as d:
         V, F = len(d["v_template"]), len(d["f"])
@@ -39,6 +41,8 @@ def run_build(args: argparse.Namespace) -> int:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    from ..body.model import load_body_model
+
     body = load_body_model(args.model)   # BodyModelError (a ValueError) -> one clear line, exit 2
     J = body.rest_joints()
     print(f"model:     {body.path}")

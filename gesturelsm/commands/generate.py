@@ -1,4 +1,4 @@
-"""`gesturelsm generate` (speech -> motion npz): the command line of the pipeline (pipeline.py), one floor above it.
+"""`gesturelsm generate` (speech -> motion npz): the command line of the pipeline (pipeline.py).
 
 Every argument is checked before any work (the settings' validator, `gesturelsm.settings`); while it works it says
 what it does on stderr (reading, transcribing, each window), shows the words it recognised, and reports the time
@@ -12,18 +12,18 @@ import argparse
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from .align.textgrid import read_words
-from .audio import load_audio
-from .backends import SPECS, checkpoint_sources
-from .constants import MAX_MOTION_SECONDS, SAMPLE_RATE
-from .export.rig import export_rig
-from .pipeline import GenerationResult, GesturePipeline, with_speech
-from .pipelined import HIDDEN, WAITING
-from .retarget import check_usable, load_character
-from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                 cli_settings, input_file, output_file, positive, refuse, say)
+from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
+from ..settings import DEFAULT_METHOD, Settings
+from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
+                                  cli_settings, input_file, output_file, positive, refuse, say)
+
+if TYPE_CHECKING:
+    from ..pipeline import GenerationResult
+
+NAME = "generate"
+HELP = "generate SMPL-X gestures for a speech file"
 
 
 GENERATE = """`gesturelsm generate`: speech -> one method's motion as a BEAT2-layout npz (SMPL-X, 30 fps).
@@ -37,7 +37,9 @@ Then `gesturelsm render out.npz --audio speech.wav --out out.mp4` shows it."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    g = sub.add_parser("generate", help="generate SMPL-X gestures for a speech file", description=GENERATE,
+    from ..backends import SPECS                            # the method registry loads torch
+
+    g = sub.add_parser(NAME, help=HELP, description=GENERATE,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("audio", help="speech file (wav, flac, mp3, ogg, m4a ...)")
     src = g.add_mutually_exclusive_group()
@@ -83,6 +85,13 @@ def check_arguments(args: argparse.Namespace) -> Checked:
 
 
 def run_generate(args: argparse.Namespace) -> int:
+    from ..align.textgrid import read_words
+    from ..audio import load_audio
+    from ..backends import checkpoint_sources
+    from ..export.rig import export_rig
+    from ..pipeline import GesturePipeline, with_speech
+    from ..retarget import check_usable, load_character
+
     t0 = time.perf_counter()
     a = check_arguments(args)
     rig = load_character(a.rig) if a.rig else None               # a bad character stops before the work
@@ -133,6 +142,8 @@ def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: fl
 
 def hidden_transcription(timings: dict[str, float]) -> str | None:
     """"transcription 3.10 s, 2.40 s of it (77 %) hidden under generation" for pipelined speech, else None."""
+    from ..pipelined import HIDDEN, WAITING
+
     if HIDDEN not in timings:
         return None
     tr, hid = timings.get("transcription", 0.0), timings[HIDDEN]

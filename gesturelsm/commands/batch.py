@@ -13,24 +13,22 @@ from __future__ import annotations
 import argparse
 import contextlib
 
-from ..backends import SPECS, checkpoint_sources, ours_default
-from ..body import load_body_model
-from ..body.model import resolve_model_path
 from ..cluster import add_cluster_argument, check_reachable, connect
 from ..errors import GestureError, UserError
-from ..pipeline import GROUND_TRUTH, GesturePipeline
 from ..settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
                                   input_folder, output_folder, refuse)
 from ..settings.values import from_text, real_number, whole_number
-from .batch import find_audio, make_study
-from .design import MODES, Design
+from ..study.design import MODES
 
 MAX_RATERS = 10_000
+NAME = "batch"
+HELP = "render blinded user-study videos, their key and the study's design and links (resumable)"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("batch", help="render blinded user-study videos, their key and the study's design and "
-                              "links (resumable)", description=__doc__,
+    from ..backends import GROUND_TRUTH, SPECS, ours_default          # the method registry loads torch
+
+    p = subparsers.add_parser(NAME, help=HELP, description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--audio-dir", required=True, help="folder of speech files (wav, flac, mp3, ...)")
     p.add_argument("--methods", nargs="+", default=ours_default(),
@@ -63,6 +61,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def check_arguments(args: argparse.Namespace):
     """(settings, raters, size, attention), every problem at once before any work (InputError)."""
+    from ..backends import GROUND_TRUTH
+    from ..study.batch import find_audio
+
     p: list[str] = []
     settings = cli_settings(args, args.methods, p)
     attention = real_number(args.attention, "--attention", 0.0, 1.0, p)
@@ -92,6 +93,13 @@ def check_arguments(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..backends import checkpoint_sources
+    from ..body import load_body_model
+    from ..body.model import resolve_model_path
+    from ..pipeline import GesturePipeline
+    from ..study.batch import make_study
+    from ..study.design import Design
+
     settings, raters, size, attention = check_arguments(args)
     check_reachable(args.cluster)                # before the character and the models load
     rig = _character(args.rig)

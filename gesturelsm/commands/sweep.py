@@ -11,29 +11,28 @@ import contextlib
 import sys
 from dataclasses import replace
 
-from ..align.textgrid import read_words
-from ..audio import SAMPLE_RATE, load_audio
-from ..backends import SPECS, checkpoint_sources
 from ..cluster import ProgressLine, add_cluster_argument, check_reachable, connect
+from ..constants import SAMPLE_RATE
 from ..errors import InputError
-from ..grounding.cli import add_grounding_flag, grounding_on
-from ..pipeline import GesturePipeline
-from ..settings.arguments import (add_language_flag, add_max_seconds_flag, input_file, output_folder, positive, refuse,
-                                  say, threads)
+from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, grounding_on,
+                                  input_file, output_folder, positive, refuse, say, threads)
 from ..settings.check import check_language
 from ..settings.values import from_text
-from .sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, check_grid, run_sweep, sweep_grid
-from .sweep_report import PLOT_METRICS, markdown_text, write_sweep
 
-LIMITS = SweepLimits()
+NAME = "sweep"
+HELP = "steps x CFG x seeds on one speech: time and motion statistics, table and plot"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("sweep", help="steps x CFG x seeds on one speech: time and motion statistics, table and plot",
+    from ..evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits      # the sweep's code loads torch
+    from ..evaluation.sweep_report import PLOT_METRICS
+
+    limits = SweepLimits()
+    p = sub.add_parser(NAME, help=HELP,
                        description="Generate every combination of methods, step counts and CFG scales once per seed "
                                    "from one speech (features computed once), measure each motion (docs/SWEEP.md) "
                                    "and write sweep.csv, sweep.md, sweep.json and sweep.png (a statistic against "
-                                   f"generation time). Size bound: {LIMITS.describe()}.")
+                                   f"generation time). Size bound: {limits.describe()}.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ...)")
     p.add_argument("--methods", nargs="+", default=None, help="default: every method the checkpoints provide")
     p.add_argument("--steps", nargs="+", default=list(DEFAULT_STEPS),
@@ -49,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     add_grounding_flag(p)
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
-    p.add_argument("--max-work", type=from_text, default=LIMITS.max_work,
+    p.add_argument("--max-work", type=from_text, default=limits.max_work,
                    help="most seconds of motion to generate in all (combinations x seeds x speech seconds)")
     add_max_seconds_flag(p)
     p.add_argument("--threads", type=from_text, default=None, help="torch threads (default: torch's choice)")
@@ -60,6 +59,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_sweep_cli(args: argparse.Namespace) -> int:
     import torch
+
+    from ..align.textgrid import read_words
+    from ..audio import load_audio
+    from ..backends import SPECS, checkpoint_sources
+    from ..evaluation.sweep import SweepLimits, check_grid, run_sweep, sweep_grid
+    from ..evaluation.sweep_report import markdown_text, write_sweep
+    from ..pipeline import GesturePipeline
+
+    limits = SweepLimits()
 
     p: list[str] = []
     grid = None
@@ -82,7 +90,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=args.methods,
                                            max_seconds=max_seconds)
     grid = replace(grid, methods=tuple(dict.fromkeys(args.methods or pipe.methods)))
-    check_grid(pipe, grid, len(audio) / SAMPLE_RATE, SweepLimits(LIMITS.max_cells, LIMITS.max_seeds, max_work))
+    check_grid(pipe, grid, len(audio) / SAMPLE_RATE, SweepLimits(limits.max_cells, limits.max_seeds, max_work))
     words = read_words(textgrid) if textgrid else None
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
                                  progress=say, language=language)

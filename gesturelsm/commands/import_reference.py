@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import argparse
 
-from .importer import import_reference
+NAME = "import-reference"
+HELP = "convert the authors' released GestureLSM files (safely) to our checkpoints"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("import-reference",
-                       help="convert the authors' released GestureLSM files (safely) to our checkpoints",
+    p = sub.add_parser(NAME, help=HELP,
                        description="Reads shortcut_reflow.bin / new_540_diffusion.bin / meanflow.pth, "
                                    "net_300000_{upper,hands,lower}.pth, vocab.pkl and mean_std/*.npy under DIR "
                                    "without executing pickled code, and writes safetensors checkpoints.")
@@ -20,6 +20,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..reference.importer import import_reference
+
     for path in import_reference(args.dir, args.out, heads=args.heads):
         print(f"wrote {path}")
     return 0

@@ -17,23 +17,16 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .align.textgrid import read_words
-from .align.words import Word
-from .audio import AudioTooLongError, load_audio
-from .backends import SPECS, checkpoint_sources
-from .body.model import resolve_body
-from .constants import MAX_MOTION_SECONDS, SAMPLE_RATE
-from .errors import UserError
-from .export import export_bvh, export_glb
-from .export.rig import export_rig
-from .motion.editing import EditError, edit_spec, fit_speech, keyframe
-from .motion.regions import GENERATED_REGIONS
-from .motion.sequence import MotionSequence
-from .pipeline import GesturePipeline
-from .retarget import check_usable, load_character
-from .settings import DEFAULT_METHOD, Settings
-from .settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                 cli_settings, input_file, output_file, positive, refuse, say)
+from typing import TYPE_CHECKING
+
+from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
+from ..errors import UserError
+from ..settings import DEFAULT_METHOD, Settings
+from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
+                                  cli_settings, input_file, output_file, positive, refuse, say)
+
+if TYPE_CHECKING:
+    from ..motion.sequence import MotionSequence
 
 SPEECH_SLACK = 60.0             # seconds of speech beyond the motion decoded at most (to say how far apart they are)
 _FRAME = re.compile(r"[0-9]+")                                 # ASCII digits: str.isdigit() takes "²" and "٣"
@@ -41,10 +34,15 @@ _SECONDS = re.compile(r"\s*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?\s*"
 # REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
 # gets its own message (outside the speech, unknown region) rather than this syntax's
 _RANGE = re.compile(r"^\s*([^@]+)@\s*(-?[0-9.]+)\s*-\s*(-?[0-9.]+)\s*$")
+NAME = "edit"
+HELP = "regenerate body regions of a motion over time ranges, keep the rest"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    g = sub.add_parser("edit", help="regenerate body regions of a motion over time ranges, keep the rest",
+    from ..backends import SPECS                            # the method registry and the regions load torch
+    from ..motion.regions import GENERATED_REGIONS
+
+    g = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     g.add_argument("motion", help="the motion to edit (BEAT2-layout .npz, e.g. written by `gesturelsm generate`)")
     g.add_argument("audio", help="the speech the motion goes with (wav, flac, mp3, ...)")
@@ -142,6 +140,8 @@ def parse_regenerate(items: list[str]) -> dict[str, list[tuple[float, float]]]:
             raise UserError(f"--regenerate {item!r}: {m.group(2)}-{m.group(3)} is not a range of seconds") from None
         regions = [r.strip().lower() for r in m.group(1).split(",") if r.strip()]
         if not regions:
+            from ..motion.regions import GENERATED_REGIONS
+
             raise UserError(f"--regenerate {item!r}: name the regions before @ ({', '.join(GENERATED_REGIONS)}), "
                             "e.g. upper,hands@3.0-6.0")
         for region in regions:
@@ -174,10 +174,18 @@ def keyframe_syntax(item: str) -> tuple[str | int, float]:
 
 def parse_keyframes(items: list[str], motion: MotionSequence) -> list:
     """['pose.npz:120@4.5', '40@6'] -> keyframes (a bare FRAME is a frame of `motion`)."""
+    from ..motion.editing import keyframe
+
     return [keyframe(t, source, current=motion) for source, t in map(keyframe_syntax, items)]
 
 
 def run_edit(args: argparse.Namespace) -> int:
+    from ..audio import AudioTooLongError, load_audio
+    from ..backends import SPECS
+    from ..motion.editing import EditError, edit_spec, fit_speech
+    from ..motion.sequence import MotionSequence
+    from ..retarget import check_usable, load_character
+
     t0 = time.perf_counter()
     a = check_arguments(args)
     rig = load_character(a.rig) if a.rig else None                  # a bad character stops before the work
@@ -196,23 +204,11 @@ def run_edit(args: argparse.Namespace) -> int:
         raise EditError(f"{a.audio.name} is more than {SPEECH_SLACK:g} s longer than the motion "
                         f"({motion.duration:.2f} s): give the speech the motion was made from") from None
     fit_speech(audio, motion.num_frames)                             # the speech is the motion's (or nearly)
-    words = read_words(a.textgrid) if a.textgrid else None
-    if words is None and args.text is None and not args.no_transcribe and motion.words:
-        words = [Word(w, s, e) for w, s, e in motion.words if e > s]     # the words it was made with
-        say(0.0, f"using the {len(words)} word timings kept in {a.motion.name} (--text or --textgrid to change them)")
+    words = _words(a, args, motion)
     say(0.0, f"loading the models ({args.method})")
-    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
-                                           max_seconds=a.max_seconds)
-    st = a.settings
-    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
-                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
-                    post=st.post, progress=say, language=st.language)
+    res = _edited(a, args, motion, audio, keys, words)
     path = res.motion.save(a.out)
-    done = [p for p in (rig and export_rig(res.motion, rig, path, grounding=st.post.grounding),
-                        a.bvh and export_bvh(res.motion, a.bvh, body=resolve_body(None)),
-                        a.glb and export_glb(res.motion, a.glb, body=resolve_body(None))) if p]
-    for p in done:
-        print(f"wrote {p}")
+    _exports(a, res.motion, path, rig)
     for w in res.warnings:
         print(f"warning: {w}")
     asked = "; ".join(f"{r} {', '.join(f'{x:g}-{y:g} s' for x, y in rr)}" for r, rr in a.regenerate.items())
@@ -221,3 +217,42 @@ def run_edit(args: argparse.Namespace) -> int:
     stages = ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items())
     print(f"timings: {stages}; total {time.perf_counter() - t0:.1f}s")
     return 0
+
+
+def _words(a: Checked, args: argparse.Namespace, motion: MotionSequence) -> list | None:
+    """--textgrid's words, else (without --text or --no-transcribe) the words kept in the motion file."""
+    from ..align.textgrid import read_words
+    from ..align.words import Word
+
+    words = read_words(a.textgrid) if a.textgrid else None
+    if words is None and args.text is None and not args.no_transcribe and motion.words:
+        words = [Word(w, s, e) for w, s, e in motion.words if e > s]     # the words it was made with
+        say(0.0, f"using the {len(words)} word timings kept in {a.motion.name} (--text or --textgrid to change them)")
+    return words
+
+
+def _edited(a: Checked, args: argparse.Namespace, motion: MotionSequence, audio, keys: list, words: list | None):
+    """The edit the arguments ask for (the models loaded for its method)."""
+    from ..backends import checkpoint_sources
+    from ..pipeline import GesturePipeline
+
+    pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
+                                           max_seconds=a.max_seconds)
+    st = a.settings
+    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
+                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
+                    post=st.post, progress=say, language=st.language)
+    return res
+
+
+def _exports(a: Checked, motion: MotionSequence, path: Path, rig) -> None:
+    """--rig, --bvh and --glb of the edited motion."""
+    from ..body.model import resolve_body
+    from ..export import export_bvh, export_glb
+    from ..export.rig import export_rig
+
+    done = [p for p in (rig and export_rig(motion, rig, path, grounding=a.settings.post.grounding),
+                        a.bvh and export_bvh(motion, a.bvh, body=resolve_body(None)),
+                        a.glb and export_glb(motion, a.glb, body=resolve_body(None))) if p]
+    for p in done:
+        print(f"wrote {p}")

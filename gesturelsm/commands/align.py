@@ -13,19 +13,20 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..audio import SAMPLE_RATE, load_audio
+from ..align.languages import AUTO, CHOICES
 from ..errors import UserError
-from . import tts
-from .aligner import AlignConfig, align_words
-from .languages import AUTO, CHOICES, typed_alignment
-from .metrics import onset_errors_ms, onset_stats
-from .normalize import tokenize
-from .textgrid import read_words, write_textgrid
+
+if TYPE_CHECKING:
+    from ..align.aligner import AlignConfig
+
+NAME = "align"
+HELP = "word timings for a transcript (TextGrid out), no forced aligner needed"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("align", help="word timings for a transcript (TextGrid out), no forced aligner needed",
+    p = sub.add_parser(NAME, help=HELP,
                        description="Align a transcript to speech offline (eSpeak NG + DTW) and write a TextGrid.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ogg, m4a, ...)")
     src = p.add_mutually_exclusive_group()
@@ -43,6 +44,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..align.aligner import align_words
+    from ..align.normalize import tokenize
+    from ..align.textgrid import read_words
+    from ..audio import SAMPLE_RATE, load_audio
+
     text = _transcript(args, UserError)
     if not tokenize(text):
         raise UserError("the transcript has no words to align (only punctuation or spaces?)")
@@ -69,7 +75,11 @@ def run(args: argparse.Namespace) -> int:
 def language_config(value: str, text: str) -> AlignConfig:
     """How `--language VALUE` reads `text`: a language code (CHOICES) with its eSpeak NG voice, else an eSpeak NG
     voice name as it is (with a +variant or not); UserError naming the codes for anything else. Where eSpeak NG is
-    missing a name cannot be checked and goes on as before (the aligner then spreads the words and says why)."""
+    missing a name cannot be checked and is used as given (the aligner then spreads the words and says why)."""
+    from ..align import tts
+    from ..align.aligner import AlignConfig
+    from ..align.languages import typed_alignment
+
     code = value.strip().lower()
     if code in CHOICES:
         return typed_alignment(code, text)
@@ -88,6 +98,9 @@ def language_config(value: str, text: str) -> AlignConfig:
 def output_words(words: list, duration: float, args: argparse.Namespace, reference: list | None) -> None:
     """Write the words tier to `args.out` (a TextGrid in `args.format`) or print one word a line; with a
     `reference` (words with known timings) print the onset errors. Shared by `align` and `transcribe`."""
+    from ..align.metrics import onset_errors_ms, onset_stats
+    from ..align.textgrid import write_textgrid
+
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         write_textgrid(args.out, words, duration, args.format)

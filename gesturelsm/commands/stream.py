@@ -15,14 +15,11 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
-from ..audio import load_audio
 from ..constants import SAMPLE_RATE
 from ..errors import UserError
-from ..motion.sequence import MotionSequence
-from .engine_stream import EngineStream, parse_address
 
+NAME = "stream"
+HELP = "play a motion in real time to VTuber apps / Unity / Unreal (VMC, Live Link)"
 PLAYER_GRACE_S = 2.0
 PLAYERS = (("paplay", []), ("aplay", ["-q"]), ("afplay", []),
            ("ffplay", ["-nodisp", "-autoexit", "-loglevel", "quiet"]))
@@ -59,7 +56,7 @@ def _stop_player(p: subprocess.Popen, grace: float) -> None:
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("stream", help="play a motion in real time to VTuber apps / Unity / Unreal (VMC, Live Link)",
+    p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("motion", help="BEAT2-layout .npz motion file")
     p.add_argument("--vmc", help="send VMC protocol bundles to HOST:PORT (receivers listen on 39539)")
@@ -79,8 +76,12 @@ def _speech_player(path: str, say) -> tuple[list[str], str] | None:
     if out is None:
         say("no audio output on this machine (no sound card or sound server): streaming the motion without speech")
         return None
-    audio = load_audio(path)
+    import numpy as np
     import soundfile
+
+    from ..audio import load_audio
+
+    audio = load_audio(path)
     fd, wav = tempfile.mkstemp(suffix=".wav", prefix="gesturelsm_speech_")
     os.close(fd)
     soundfile.write(wav, np.asarray(audio, np.float32), SAMPLE_RATE)
@@ -88,6 +89,9 @@ def _speech_player(path: str, say) -> tuple[list[str], str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..export.engine_stream import EngineStream, parse_address
+    from ..motion.sequence import MotionSequence
+
     vmc = parse_address(args.vmc, "--vmc") if args.vmc else None
     livelink = parse_address(args.livelink, "--livelink") if args.livelink else None
     if vmc is None and livelink is None:

@@ -15,12 +15,13 @@ import warnings
 from pathlib import Path
 
 from ..errors import UserError
-from . import STYLES, RenderError, parse_size, render_frames, render_video
-from .frames import RenderWarning
+
+NAME = "render"
+HELP = "render motion(s) with the speech to an mp4 (offscreen, CPU)"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser("render", help="render motion(s) with the speech to an mp4 (offscreen, CPU)",
+    p = subparsers.add_parser(NAME, help=HELP,
                               description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("motions", nargs="+", help="BEAT2-layout .npz motion file(s); several are shown side by side")
     p.add_argument("--audio", help="speech file (wav, flac, mp3, ...) played with the video; omit for silence")
@@ -66,8 +67,11 @@ def _gen_times(values: list[str] | None) -> list[float | None] | None:
     return out
 
 
-def run(args: argparse.Namespace) -> int:
+def _style(args: argparse.Namespace):
+    """--style with --size, --background, --floor and --supersample over it."""
     from dataclasses import replace
+
+    from ..render import STYLES, parse_size
 
     if args.style not in STYLES:
         raise UserError(f"--style {args.style!r}: choose from {', '.join(STYLES)}")
@@ -78,6 +82,14 @@ def run(args: argparse.Namespace) -> int:
         style = replace(style, floor=args.floor)
     if args.supersample:
         style = replace(style, supersample=args.supersample)
+    return style
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..render import RenderError, render_frames, render_video
+    from ..render.frames import RenderWarning
+
+    style = _style(args)
     # default labels: file names when several motions are compared; none for a single one (its framing
     # then equals the keypoint export's camera)
     labels = None if args.no_labels else (args.labels or ([Path(m).stem for m in args.motions]

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import argparse
 
-from ..constants import SAMPLE_RATE
-from .beat2 import Beat2Dataset
+NAME = "data"
+HELP = "inspect a BEAT2-layout dataset folder"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("data", help="inspect a BEAT2-layout dataset folder", description=__doc__)
+    p = sub.add_parser(NAME, help=HELP, description=__doc__)
     s = p.add_subparsers(dest="data_command", metavar="ACTION", required=True)
     info = s.add_parser("info", help="list takes, durations, transcripts and splits",
                         description="Check a BEAT2-layout folder and list its takes: frames, seconds of motion and "
@@ -19,6 +19,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_info(args: argparse.Namespace) -> int:
+    from ..constants import SAMPLE_RATE
+    from ..data.beat2 import Beat2Dataset
+
     ds = Beat2Dataset(args.root, speakers=args.speakers)
     print(f"{ds.root}: {len(ds.names)} motion takes, {len(ds.audio_only_names)} audio-only takes")
     print(f"{'take':<28}{'frames':>8}{'seconds':>9}{'audio s':>9}{'words':>7}  split")
