@@ -141,11 +141,27 @@ def pytest_configure(config):
 
 
 # A tiny but complete set of checkpoints (4 tokenizers + 3 generators) built from synthetic motion, so the whole
-# pipeline runs in tests without ../shared or the shipped assets. Built once per test process and shared by every
-# test that needs checkpoints (pipeline, app, study, evaluation): tests only read it.
+# pipeline runs in tests without ../shared or the shipped assets. Built once per test run and shared by every test
+# that needs checkpoints (pipeline, app, study, evaluation): tests only read it. With pytest-xdist the first worker
+# to ask builds it in the run's shared temporary folder under a file lock and the others read the same files (the
+# build is seeded, so each worker built the same checkpoints before, at ~20 s of two busy cores each).
 @pytest.fixture(scope="session")
 def tiny_assets(tmp_path_factory) -> Path:
-    return build_tiny_assets(tmp_path_factory.mktemp("assets"), steps=20, batch_size=8, warmup=5)
+    def build(root: Path) -> Path:
+        return build_tiny_assets(root, steps=20, batch_size=8, warmup=5)
+
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        return build(tmp_path_factory.mktemp("assets"))
+    from filelock import FileLock
+
+    shared = tmp_path_factory.getbasetemp().parent      # this run's folder, above every worker's own
+    done = shared / "tiny-assets"
+    with FileLock(str(shared / "tiny-assets.lock")):
+        if not done.is_dir():
+            part = Path(tempfile.mkdtemp(prefix="tiny-assets-", dir=shared))
+            build(part)
+            part.rename(done)                            # whole or absent: a failed build leaves no folder behind
+    return done
 
 
 @pytest.fixture(scope="session")
