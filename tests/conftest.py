@@ -138,14 +138,42 @@ def pytest_configure(config):
 
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     torch.set_num_threads(int(os.environ["OMP_NUM_THREADS"]))
+    # `--dist loadgroup` hands out groups in the order the workers collected them (pytest_collection_modifyitems puts
+    # the heavy ones first), not sorted by their number of tests, which sent groups of a few long tests (the shipped
+    # network's) last, to one worker while the other had nothing left to do.
+    if getattr(config.option, "dist", None) == "loadgroup" and hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+def once_per_run(tmp_path_factory, name: str, build) -> Path:
+    """`build(folder)` fills a new folder once per test run; its folder. Alone: in this process's temporary folder.
+    With pytest-xdist the first worker to ask builds it in the run's temporary folder (above every worker's own)
+    under a file lock and the others wait for it and read the same files, so two workers never build the same
+    read-only thing twice on the 2 cores."""
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        folder = tmp_path_factory.mktemp(name)
+        build(folder)
+        return folder
+    from filelock import FileLock
+
+    shared = tmp_path_factory.getbasetemp().parent
+    done = shared / name
+    with FileLock(str(shared / f"{name}.lock")):
+        if not done.is_dir():
+            part = Path(tempfile.mkdtemp(prefix=f"{name}-", dir=shared))
+            build(part)
+            part.rename(done)                            # whole or absent: a failed build leaves no folder behind
+    return done
 
 
 # A tiny but complete set of checkpoints (4 tokenizers + 3 generators) built from synthetic motion, so the whole
-# pipeline runs in tests without ../shared or the shipped assets. Built once per test process and shared by every
-# test that needs checkpoints (pipeline, app, study, evaluation): tests only read it.
+# pipeline runs in tests without ../shared or the shipped assets. Built once per test run (once_per_run; seeded, so
+# every worker built the same checkpoints before, ~20 s of a busy core each) and shared by every test that needs
+# checkpoints (pipeline, app, study, evaluation): tests only read it.
 @pytest.fixture(scope="session")
 def tiny_assets(tmp_path_factory) -> Path:
-    return build_tiny_assets(tmp_path_factory.mktemp("assets"), steps=20, batch_size=8, warmup=5)
+    return once_per_run(tmp_path_factory, "tiny-assets",
+                        lambda root: build_tiny_assets(root, steps=20, batch_size=8, warmup=5))
 
 
 @pytest.fixture(scope="session")
@@ -224,21 +252,23 @@ def shipped_pipe():
 
 
 # The wheel `pip wheel` builds from a copy of the checkout's packaging inputs (so the checkout gets no build/ or
-# egg-info folders), once per test process: tests/test_packaging.py reads it, tests/test_constants.py installs it.
+# egg-info folders), once per test run (once_per_run): tests/test_packaging.py reads it, tests/test_constants.py
+# installs it.
 @pytest.fixture(scope="session")
 def built_wheel(tmp_path_factory) -> Path:
-    src = tmp_path_factory.mktemp("src")
-    for name in ("setup.py", "pyproject.toml", "README.md"):
-        shutil.copy2(REPO / name, src / name)
-    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules", "*.egg-info")
-    for name in ("gesturelsm", "assets"):
-        shutil.copytree(REPO / name, src / name, ignore=ignore)
-    out = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "wheel", "--no-deps",
-                    "--no-build-isolation", "--no-index", "-q", "-w", str(out), str(src)],
-                   check=True, cwd=src, capture_output=True)
-    shutil.rmtree(src)                          # nothing to fall back on but what the wheel carries
-    (found,) = out.glob("gesturelsm-*.whl")
+    def build(out: Path) -> None:
+        src = Path(tempfile.mkdtemp(prefix="wheel-src-", dir=out.parent))
+        for name in ("setup.py", "pyproject.toml", "README.md"):
+            shutil.copy2(REPO / name, src / name)
+        ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "node_modules", "*.egg-info")
+        for name in ("gesturelsm", "assets"):
+            shutil.copytree(REPO / name, src / name, ignore=ignore)
+        subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "wheel", "--no-deps",
+                        "--no-build-isolation", "--no-index", "-q", "-w", str(out), str(src)],
+                       check=True, cwd=src, capture_output=True)
+        shutil.rmtree(src)                      # nothing to fall back on but what the wheel carries
+
+    (found,) = once_per_run(tmp_path_factory, "wheel", build).glob("gesturelsm-*.whl")
     return found
 
 
@@ -257,6 +287,13 @@ HEAVY_FIXTURES = {
 }
 
 
+# `--dist loadgroup` schedules by the group that pytest-xdist appends to each test's node id ("...::test@group").
+# pytest-xdist 3.8 writes it to `item._nodeid`, which pytest 9.2's structured node ids no longer read
+# (pytest-dev/pytest-xdist#1386), so no group reached the scheduler: a module's tests were spread over both workers
+# (module fixtures built twice), both workers drove Chromium at once and each started its own Ray cluster. With
+# structured ids (`item._id`) the group is appended here; tryfirst so that older pytest, where xdist's own hook
+# works, finds the markers in place when it runs.
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     parallel = config.pluginmanager.hasplugin("xdist")
     for item in items:
@@ -270,6 +307,46 @@ def pytest_collection_modifyitems(config, items):
             group = ("browser" if item.get_closest_marker("browser") else
                      "ray" if "ray_cluster" in getattr(item, "fixturenames", ()) else item.nodeid.split("::")[0])
             item.add_marker(pytest.mark.xdist_group(group))
+    if parallel and os.environ.get("PYTEST_XDIST_WORKER") and config.getvalue("loadgroup"):
+        heavy_first(items)
+        for item in items:
+            if hasattr(item, "_id") and "@" not in item.nodeid.rpartition("]")[2]:
+                from _pytest.nodeid import NodeId
+
+                item._id = NodeId.parse(f"{item.nodeid}@{item.get_closest_marker('xdist_group').args[0]}")
+
+
+def heavy_first(items) -> None:
+    """Reorder the collection by group, the heaviest groups first (tests keep their order inside a group), so that
+    with two workers the long groups start early and the short ones fill in at the end (longest first is the classic
+    rule for balancing jobs over machines; a group of one long test handed out last kept one worker busy alone). A
+    group's weight, in rough seconds: its test count plus SLOW_WEIGHT per test marked slow or browser, or what
+    MEASURED_SECONDS says if that is more."""
+    def group(item) -> str:
+        return item.get_closest_marker("xdist_group").args[0]
+
+    weight: dict[str, float] = dict(MEASURED_SECONDS)
+    counted: dict[str, int] = {}
+    for item in items:
+        heavy = item.get_closest_marker("slow") or item.get_closest_marker("browser")
+        counted[group(item)] = counted.get(group(item), 0) + (SLOW_WEIGHT if heavy else 1)
+    for g, w in counted.items():
+        weight[g] = max(weight.get(g, 0), w)
+    order = {g: i for i, g in enumerate(dict.fromkeys(group(item) for item in items))}
+    items.sort(key=lambda item: (-weight[group(item)], order[group(item)]))
+
+
+SLOW_WEIGHT = 20
+# The groups whose longest tests took over 100 s together in one `make test` (--durations=60) on the 2-core machine
+# shared with other work (2026-12-02): the figures are high (the videos render at nice 19 and waited for the other
+# work), and only set the order in which groups are handed out.
+MEASURED_SECONDS = {
+    "tests/serve/test_service.py": 1398, "tests/reference/test_reference_app.py": 1254, "ray": 720,
+    "tests/live/test_stream.py": 617, "browser": 487, "tests/serve/test_hardening.py": 455,
+    "tests/serve/test_shipped.py": 359, "tests/render/test_background.py": 262, "tests/webapp/test_api_schema.py": 212,
+    "tests/generator/test_shipped.py": 178, "tests/serve/test_app_process.py": 158,
+    "tests/generator/test_training.py": 153, "tests/webapp/test_handlers.py": 114,
+}
 
 
 @pytest.fixture

@@ -27,20 +27,26 @@ DEFAULT_SIZE = 384                                       # pixels per body in th
 STAGES = ("features", "alignment", "transcription", "sampling", "decoding", "rendering")      # seconds each
 
 
+def _column(name: str, unit: str):
+    """A field of `TimingRow` whose heading says its unit once, so its cells are bare numbers: "sampling (s)"."""
+    return field(metadata={"column": f"{name} ({unit})"})
+
+
 @dataclass(frozen=True)
 class TimingRow:
     """One row of the page's timing table: a method, the ground truth or the whole request (`method` is the label
     shown); seconds per stage, the generation time and the real-time factor (speech seconds per generation second).
+    Each column's heading says its unit once ("sampling (s)", "real-time factor (×)"); the cells are plain numbers.
     None: a cell left empty."""
     method: str
-    features: float | None
-    alignment: float | None
-    transcription: float | None
-    sampling: float | None
-    decoding: float | None
-    rendering: float | None
-    generation: float | None
-    real_time_factor: float | None = field(metadata={"column": "real-time factor"})
+    features: float | None = _column("features", "s")
+    alignment: float | None = _column("alignment", "s")
+    transcription: float | None = _column("transcription", "s")
+    sampling: float | None = _column("sampling", "s")
+    decoding: float | None = _column("decoding", "s")
+    rendering: float | None = _column("rendering", "s")
+    generation: float | None = _column("generation", "s")
+    real_time_factor: float | None = _column("real-time factor", "×")
 
     def cells(self) -> list:
         """The row as the table shows it, in TIMING_COLUMNS order."""

@@ -293,8 +293,8 @@ def _output_column(service: GestureService) -> tuple:
         video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
     summary = gr.Markdown(elem_id="summary", label="summary")
     table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
-                         label="Timing per method and stage (seconds; real-time factor = speech seconds per "
-                               "generation second)")
+                         label="Timing per method and stage (each heading gives its unit; real-time factor = "
+                               "speech seconds per generation second)")
     stats = stats_view.component()                 # motion statistics per method, filled after the player starts
     files = gr.File(label="Downloads: npz (BEAT2 / SMPL-X), BVH, GLB, keypoints, ARKit face CSV",
                     file_count="multiple", elem_id="downloads")

@@ -15,8 +15,14 @@ from gesturelsm.serve.request import TIMING_COLUMNS, EditTiming, RenderJob, Resu
 
 
 def test_the_columns_the_page_and_the_api_show():
-    assert TIMING_COLUMNS == ["method", "features", "alignment", "transcription", "sampling", "decoding", "rendering",
-                              "generation", "real-time factor"]
+    """Each heading says its unit once (seconds, or a factor); the cells under it are plain numbers, no units."""
+    assert TIMING_COLUMNS == ["method", "features (s)", "alignment (s)", "transcription (s)", "sampling (s)",
+                              "decoding (s)", "rendering (s)", "generation (s)", "real-time factor (×)"]
+    edit = EditTiming("GestureLSM, edit 1", {"sampling": 0.2}, 0.3, rendering=1.0)
+    rows = timing_rows(TIMINGS, ground_truth=True, duration=10.0, render_s=6.0, edits=(edit,))
+    for r in rows:
+        label, *numbers = r.cells()
+        assert isinstance(label, str) and all(v is None or type(v) is float for v in numbers), r.cells()
 
 
 TIMINGS = {"gesturelsm": {"features": 0.1, "alignment": 2.0, "transcription": 3.0, "sampling": 0.3, "decoding": 0.1},
