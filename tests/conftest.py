@@ -338,7 +338,7 @@ def heavy_first(items) -> None:
 
 SLOW_WEIGHT = 20
 # The groups whose longest tests took over 100 s together in one `make test` (--durations=60) on the 2-core machine
-# shared with other work (2026-12-02): the figures are high (the videos render at nice 19 and waited for the other
+# shared with other work: the figures are high (the videos render at nice 19 and waited for the other
 # work), and only set the order in which groups are handed out.
 MEASURED_SECONDS = {
     "tests/serve/test_service.py": 1398, "tests/reference/test_reference_app.py": 1254, "ray": 720,
