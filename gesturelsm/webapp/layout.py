@@ -7,6 +7,8 @@ scripts/page_screenshots.py).
 """
 from __future__ import annotations
 
+from gesturelsm.serve.request import TIMING_COLUMNS
+
 # Shown by a transcript box when speech is uploaded or recorded while the box holds words the visitor typed (words
 # the page recognised for earlier speech are cleared instead, ui.py): typed words are never used silently for other
 # speech.
@@ -15,6 +17,11 @@ TYPED_NOTE = ("The transcript box holds words typed before this speech was chose
 
 TABLE_BOXES = ("#timings", "#motion-stats-box", "#sweep-table-box")
 
+# The timing table's columns (`#timings`: the method, then each stage of TIMING_COLUMNS): the labels
+# ("whole request, 5.1 s of speech, ...") wrap in a narrow first column and the stages take what their headings need,
+# so the whole table fits the 800 px results column of a 1280 px window instead of scrolling the stages out of sight.
+TIMING_WIDTHS = ["136px"] + ["auto"] * (len(TIMING_COLUMNS) - 1)
+
 # the wrapper of a wide HTML table: it scrolls sideways inside its column instead of running off the page
 SCROLL = 'class="gesturelsm-scroll" style="overflow-x: auto; max-width: 100%;"'
 
@@ -22,6 +29,10 @@ PAGE_CSS = """
 /* tables of numbers: compact, headings break between words only (never "featur / es"), wide ones scroll inside */
 #timings table, #motion-stats-box table, #sweep-table-box table { font-size: 13px; }
 #timings th, #timings td, #timings th *, #timings td * { font-size: 13px !important; }
+#timings th, #timings td { padding: 0 !important; }          /* the cell's own box pads: 4px 6px below */
+#timings th .cell-wrap, #timings td .cell-wrap { padding: 4px 6px !important; font-family: var(--font) !important; }
+#timings .cell-menu-button { display: none !important; }  /* the read-only table's column menu took a heading's room */
+#timings .header-content { min-width: 0 !important; gap: 0 !important; }
 #timings th, #timings th * { white-space: normal !important; }   /* between words: "real-time / factor" */
 #timings th, #timings th *, #motion-stats-box th, #motion-stats-box th *, #sweep-table-box th, #sweep-table-box th * {
   word-break: normal !important; overflow-wrap: normal !important; hyphens: manual !important;
@@ -60,9 +71,11 @@ TABLES_JS = """(boxes) => boxes.flatMap((sel) => [...document.querySelectorAll(`
             for (let m = re.exec(n.data); m; m = re.exec(n.data)) {
                 const range = document.createRange();
                 range.setStart(n, m.index); range.setEnd(n, m.index + m[0].length);
-                const tops = new Set([...range.getClientRects()].filter((r) => r.width > 0)
-                                     .map((r) => Math.round(r.top)));
-                if (tops.size > 1) broken.push(`${m[0]} (in "${th.innerText.replace(/\\s+/g, ' ')}")`);
+                const rects = [...range.getClientRects()].filter((r) => r.width > 0);
+                const tops = new Set(rects.map((r) => Math.round(r.top)));
+                const edge = th.getBoundingClientRect();        // a word running past its cell is clipped there
+                const out = rects.some((r) => r.right > edge.right + 1 || r.left < edge.left - 1);
+                if (tops.size > 1 || out) broken.push(`${m[0]} (in "${th.innerText.replace(/\\s+/g, ' ')}")`);
             }
         }
     }

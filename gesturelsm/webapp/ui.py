@@ -28,6 +28,7 @@ from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.check import cfg_bound
 
 from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
+from .layout import TIMING_WIDTHS as WIDTHS
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .closing import PageWork
@@ -292,7 +293,7 @@ def _output_column(service: GestureService) -> tuple:
                        elem_id="video-box") if motion_player.BUNDLE.exists() else contextlib.nullcontext()):
         video = gr.Video(label="Gestures with your speech", show_label=False, elem_id="video", autoplay=False)
     summary = gr.Markdown(elem_id="summary", label="summary")
-    table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True,
+    table = gr.Dataframe(headers=TIMING_COLUMNS, interactive=False, elem_id="timings", wrap=True, column_widths=WIDTHS,
                          label="Timing per method and stage (each heading gives its unit; real-time factor = "
                                "speech seconds per generation second)")
     stats = stats_view.component()                 # motion statistics per method, filled after the player starts

@@ -193,3 +193,5 @@ def test_tables_fit_their_column_or_scroll_and_the_idle_body_stands(page_url, sp
             for t in tables:
                 assert not t["cut"], f"{w}x{h}: the table in {t['box']} is cut ({t})"
                 assert not t["broken"], f"{w}x{h}: headings of {t['box']} break inside words: {t['broken']}"
+            timing = next(t for t in tables if t["box"] == "#timings")
+            assert not timing["scrolls"], f"{w}x{h}: every stage of the timing table is in view ({timing})"
