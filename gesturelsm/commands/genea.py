@@ -13,7 +13,7 @@ import contextlib
 import json
 from pathlib import Path
 
-from ..cluster import add_cluster_argument, connect
+from ..cluster import add_cluster_argument, check_reachable, connect
 from ..genea.submission import SAMPLES
 from ..settings import DEFAULT_METHOD
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
@@ -84,6 +84,7 @@ def run_submit(args: argparse.Namespace) -> int:
         input_folder(args.textgrids, "--textgrids", p)
     output_folder(args.out, "--out", p)
     refuse(p)
+    check_reachable(args.cluster)                # one line before anything is read or loaded
     if samples != SAMPLES:
         print(f"note: the leaderboard asks a non-deterministic system for {SAMPLES} samples per speech file; "
               f"this makes {samples}")

@@ -223,11 +223,11 @@ def test_bad_replica_counts_are_one_line(text, says):
     assert says in str(err.value) and "\n" not in str(err.value)
 
 
-@pytest.mark.parametrize("command", ["eval", "sweep", "batch"])
+@pytest.mark.parametrize("command", ["eval", "sweep", "batch", "genea"])
 def test_an_unreachable_cluster_is_said_before_any_model_loads(command, tmp_path, capsys, monkeypatch):
-    """eval, sweep and batch load their models before they connect: the cluster's address is tried with the
-    arguments' checks, so `eval --cluster ray://...` to a machine that does not answer is one line, exit 2, before
-    the clips are read or a model loads."""
+    """eval, sweep, batch and genea submit load their models or read their speech before they connect: the
+    cluster's address is tried with the arguments' checks, so `eval --cluster ray://...` to a machine that does not
+    answer is one line, exit 2, before the clips are read or a model loads."""
     import soundfile as sf
 
     from gesturelsm.cli import main
@@ -241,7 +241,8 @@ def test_an_unreachable_cluster_is_said_before_any_model_loads(command, tmp_path
     port = _closed_port()
     argv = {"eval": ["eval", "--data", str(tmp_path), "--methods", "gesturelsm", "--steps", "1"],
             "sweep": ["sweep", str(tmp_path / "speech" / "a.wav"), "--methods", "gesturelsm", "--steps", "1"],
-            "batch": ["batch", "--audio-dir", str(tmp_path / "speech"), "--methods", "gesturelsm", "ddim"]}[command]
+            "batch": ["batch", "--audio-dir", str(tmp_path / "speech"), "--methods", "gesturelsm", "ddim"],
+            "genea": ["genea", "submit", str(tmp_path / "speech"), "--samples", "1"]}[command]
     code = main(argv + ["--out", str(tmp_path / "out"), "--cluster", f"ray://127.0.0.1:{port}"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and err[-1] == (f"gesturelsm {command}: error: cannot reach the Ray cluster at ray://127.0.0.1:"
