@@ -161,7 +161,7 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     page.locator("#transcript textarea").fill("hello there everyone")
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)  # uploaded
     page.locator("#generate").click()
-    show_video(page, 60000)
+    show_video(page, 240000)     # the video renders at nice 19: it waits for any other work
     played = page.evaluate("""async () => {
         const v = document.querySelector('#video video');
         v.muted = false;
@@ -211,7 +211,7 @@ def test_browser_microphone_recording_generates(playwright, app_url):
         recorded = time.monotonic() - started            # a loaded machine answers the clicks later
         page.locator("#speech [aria-label='Play']").wait_for(timeout=20000)     # the recording is in the player
         page.locator("#generate").click()
-        show_video(page, 120000)
+        show_video(page, 240000)
         duration = page.evaluate("""async () => { const v = document.querySelector('#video video');
             if (v.readyState < 1) await new Promise(r => v.addEventListener('loadedmetadata', r, {once: true}));
             return v.duration; }""")
@@ -239,7 +239,7 @@ def test_browser_fills_the_transcript_box_with_the_recognised_words(browser, app
     page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
     page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=20000)
     page.locator("#generate").click()
-    show_video(page, 120000)
+    show_video(page, 240000)
     box = page.locator("#transcript textarea")
     page.wait_for_function("() => document.querySelector('#transcript textarea').value.length > 0", timeout=20000)
     said = box.input_value().lower()
