@@ -192,6 +192,11 @@ class PendingWords:
             raise Restart()
 
     @property
+    def error(self) -> BaseException | None:
+        """What the words thread raised (None: nothing, or not finished)."""
+        return self._error
+
+    @property
     def done(self) -> bool:
         """The words are finished (settle() returns at once)."""
         return self._done
