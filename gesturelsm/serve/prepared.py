@@ -51,16 +51,27 @@ class PreparedUploads:
 
     def prepared(self, path: str, settings: Hashable, prepare: Callable[[], tuple[SpeechInput, list[str]]]
                  ) -> tuple[SpeechInput, list[str]]:
-        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`."""
+        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`; speech whose
+        words' recognition failed is forgotten and prepared once more (the error is said if it fails again)."""
         key = file_key(path)
-        return prepare() if key is None else self.speech.get((key, settings), prepare)
-
-    def forget(self, path: str, settings: Hashable) -> None:
-        """Drop the upload's prepared speech for these settings (its words could not be recognised)."""
-        key = file_key(path)
-        if key is not None:
+        if key is None:
+            return prepare()
+        got = self.speech.get((key, settings), prepare)
+        if got[0].stream is not None and got[0].stream.error is not None:
             self.speech.forget((key, settings))
+            got = self.speech.get((key, settings), prepare)
+        return got
 
+        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`; speech whose
+        words' recognition failed is forgotten and prepared once more (the error is said if it fails again)."""
+        key = file_key(path)
+        if key is None:
+            return prepare()
+        got = self.speech.get((key, settings), prepare)
+        if got[0].stream is not None and got[0].stream.error is not None:
+            self.speech.forget((key, settings))
+            got = self.speech.get((key, settings), prepare)
+        return got
     def clear(self) -> None:
         self.audio.clear()
         self.speech.clear()

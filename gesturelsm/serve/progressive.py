@@ -2,7 +2,8 @@
 
 `stream_request(service, req)` yields `Result`s: the first once the speech is prepared (no motion yet, every method
 `pending`; automatic words may still be being recognised: the first method's generation starts on the windows whose
-words are final, gesturelsm/pipelined.py, and the results say the finished speech's text mode once they are known), then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
+words are final, gesturelsm/pipelined.py, and the results say the finished speech's text mode once they are known),
+then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
 far in the page's order, their timing rows and notes (the methods made ahead of the click, `serve/ahead.py`, come in
 the first result); the last is what `GestureService.run` returns before the video
 and the downloads. A method that fails does not stop the others: the result names it in `failed` (method -> the

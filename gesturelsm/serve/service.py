@@ -232,12 +232,8 @@ class GestureService:
                stream: bool = False) -> tuple[Plan, SpeechInput, list[str]]:
         """Checks (`check`), then the speech prepared once for every method (the transcript typed, from the TextGrid,
         recognised or none, as the request says), and notes for the page; for an upload, what its prefetch prepared
-        (`serve/prepared.py`), else prepared here and remembered. Automatic English words are recognised window by
-        window on a thread (`GesturePipeline.prepare_speech(stream=True)`, gesturelsm/pipelined.py), so the speech
-        is remembered as soon as its audio features are ready: with `stream` the speech comes back while its words
-        may still be recognised (generation joins them, window by window: the same motion), else once they are
-        known (`GesturePipeline.settled`). Words whose recognition failed are forgotten, so the next call tries
-        again."""
+        (`serve/prepared.py`), else prepared here and remembered. Automatic words are recognised on a thread: with
+        `stream` the speech may come back before them (generation joins them), else once they are known."""
         path = None
         if audio is None:
             req, plan, audio = self.load(req, extra)
@@ -260,17 +256,9 @@ class GestureService:
                                                   transcribe=plan.settings.transcribe,
                                                   language=plan.settings.language, stream=True)
             return speech, notes
-        if path is None:
-            speech, notes = prepare()
-        else:
-            key = self._speech_key(req, plan)
-            speech, notes = self.uploads.prepared(path, key, prepare)
-            if speech.stream is not None and speech.stream.error is not None and not fresh:
-                self.uploads.forget(path, key)           # its recognition failed: try again (and say why, if again)
-                fresh.clear()
-                speech, notes = self.uploads.prepared(path, key, prepare)
-            if not fresh:  # prepared at the upload: its stages' times are the ones spent then, and said so
-                notes = [*notes, SPEECH_AHEAD]
+        speech, notes = prepare() if path is None else self.uploads.prepared(path, self._speech_key(req, plan), prepare)
+        if path is not None and not fresh:  # prepared at the upload: its stages' times are the ones spent then, said so
+            notes = [*notes, SPEECH_AHEAD]
         return plan, speech if stream else self.pipeline.settled(speech), notes
 
     def sweep(self, req: SweepRequest, limits: SweepLimits = SweepLimits(), progress: Progress | None = None,
