@@ -115,7 +115,7 @@ def stream_request(service, req: Request, progress: Progress | None = None,
 
 def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None) -> Iterator[Result]:
     started = time.perf_counter()
-    prog = progress or (lambda f, m: None)
+    prog = rising(progress) if progress else (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
     plan, speech, notes = service.speech(req, audio, prog, stream=True)   # its words may still be recognised
@@ -146,6 +146,17 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
             raise MethodFailed("; ".join(f"{label(m)}: {grow.failed[m]}" for m in grow.slots
                                          if m in grow.failed))
         raise InputError("Nothing to show: choose a generator method.")
+
+
+def rising(progress: Progress) -> Progress:
+    """`progress` that never goes back: a method whose words, recognised alongside its generation, turn out not to be
+    the ones to use is made again (gesturelsm/pipelined.py `Restart`); the bar stays where it was meanwhile."""
+    top = [0.0]
+
+    def say(f: float, message: str) -> None:
+        top[0] = max(top[0], f)
+        progress(top[0], message)
+    return say
 
 
 def known(speech: SpeechInput) -> SpeechInput:

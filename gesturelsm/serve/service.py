@@ -251,10 +251,12 @@ class GestureService:
             fresh.append(True)
             words, notes = self._words(req, seconds)
             prog(0.02, "reading speech")
+            live = [True]                                # the words' thread says nothing once this returns
             speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m),
+                                                  progress=lambda f, m: live[0] and prog(0.02 + 0.1 * f, m),
                                                   transcribe=plan.settings.transcribe,
                                                   language=plan.settings.language, stream=True)
+            live[0] = False
             return speech, notes
         speech, notes = prepare() if path is None else self.uploads.prepared(path, self._speech_key(req, plan), prepare)
         if path is not None and not fresh:  # prepared at the upload: its stages' times are the ones spent then, said so
