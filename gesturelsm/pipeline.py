@@ -334,8 +334,8 @@ class GesturePipeline:
         if pending is None:
             return out, speech, early
         speech = pending.settle()
-        out = out if out is not None and pending.valid else make(speech)
-        return out, speech, overlap_timings(pending, t0, out.timings)
+        out, again = (out, False) if out is not None and pending.valid else (make(speech), True)
+        return out, speech, overlap_timings(pending, t0, out.timings, again)
 
     # ---- editing -----------------------------------------------------------------------------------------
     @torch.no_grad()

@@ -37,9 +37,13 @@ PENDING_MODE = "automatic transcript (being recognised)"
 WAITING, HIDDEN = "waiting for words", "transcription hidden"
 
 
-def overlap_timings(pending: "PendingWords", started: float, timings: dict[str, float]) -> dict[str, float]:
+def overlap_timings(pending: "PendingWords", started: float, timings: dict[str, float], again: bool = False
+                    ) -> dict[str, float]:
     """Pipelined speech: how long generation (started at `started`, perf_counter) waited for words, taken out of its
-    sampling time, and how much of the transcription ran while generation worked (hidden under it)."""
+    sampling time, and how much of the transcription ran while generation worked (hidden under it). `again`: the
+    motion was made again on the finished speech (pipelined.Restart): its sampling time is its own, nothing hidden."""
+    if again:
+        return {WAITING: pending.waited, HIDDEN: 0.0}
     before = max(0.0, started - pending.started)                 # the words thread ran alone before generation
     hidden = max(0.0, min(pending.transcription_s, pending.transcription_s + pending.text_seconds - pending.waited
                           - before))
@@ -190,6 +194,11 @@ class PendingWords:
             raise self._error
         if self._done and not self.valid:
             raise Restart()
+
+    @property
+    def error(self) -> BaseException | None:
+        """What the words thread raised (None: nothing, or not finished)."""
+        return self._error
 
     @property
     def done(self) -> bool:

@@ -72,6 +72,11 @@ class Recent(Generic[V]):
             with self._lock:
                 self._running.pop(key).set()
 
+    def forget(self, key: Hashable) -> None:
+        """Drop the result of `key` (the next `get` computes it again)."""
+        with self._lock:
+            self._done.pop(key, None)
+
     def __len__(self) -> int:
         return len(self._done)
 

@@ -5,7 +5,10 @@ the TextGrid or the transcription choice change): the file is decoded and the sp
 request will ask for it (audio features, the transcript typed / from the TextGrid / recognised, word timings and word
 features: `GesturePipeline.prepare_speech`). Both are remembered here, the decoded audio by the file (path, size,
 modification time) and the prepared speech by the file and the transcript settings, so Generate finds them ready:
-its click path neither decodes nor transcribes again. A request that arrives while its upload is still being
+its click path neither decodes nor transcribes again. Automatic English words are recognised window by window on a
+thread (gesturelsm/pipelined.py): the speech is remembered as soon as its audio features are ready, and a click
+while the upload's words are still being recognised joins that recognition (generation starts on the first windows
+whose words are final) instead of waiting for all of it. A request that arrives while its upload is still being
 prepared waits for that work instead of doing it twice (`asr.source.Recent`); one whose transcript settings changed
 since reuses the decoded audio and prepares the speech for the new settings.
 """
@@ -48,10 +51,27 @@ class PreparedUploads:
 
     def prepared(self, path: str, settings: Hashable, prepare: Callable[[], tuple[SpeechInput, list[str]]]
                  ) -> tuple[SpeechInput, list[str]]:
-        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`."""
+        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`; speech whose
+        words' recognition failed is forgotten and prepared once more (the error is said if it fails again)."""
         key = file_key(path)
-        return prepare() if key is None else self.speech.get((key, settings), prepare)
+        if key is None:
+            return prepare()
+        got = self.speech.get((key, settings), prepare)
+        if got[0].stream is not None and got[0].stream.error is not None:
+            self.speech.forget((key, settings))
+            got = self.speech.get((key, settings), prepare)
+        return got
 
+        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`; speech whose
+        words' recognition failed is forgotten and prepared once more (the error is said if it fails again)."""
+        key = file_key(path)
+        if key is None:
+            return prepare()
+        got = self.speech.get((key, settings), prepare)
+        if got[0].stream is not None and got[0].stream.error is not None:
+            self.speech.forget((key, settings))
+            got = self.speech.get((key, settings), prepare)
+        return got
     def clear(self) -> None:
         self.audio.clear()
         self.speech.clear()

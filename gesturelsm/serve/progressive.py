@@ -1,7 +1,9 @@
 """One request's result as it grows, for the page that shows each method the moment its motion exists.
 
 `stream_request(service, req)` yields `Result`s: the first once the speech is prepared (no motion yet, every method
-`pending`), then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
+`pending`; automatic words may still be being recognised: the first method's generation starts on the windows whose
+words are final, gesturelsm/pipelined.py, and the results say the finished speech's text mode once they are known),
+then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
 far in the page's order, their timing rows and notes (the methods made ahead of the click, `serve/ahead.py`, come in
 the first result); the last is what `GestureService.run` returns before the video
 and the downloads. A method that fails does not stop the others: the result names it in `failed` (method -> the
@@ -113,10 +115,10 @@ def stream_request(service, req: Request, progress: Progress | None = None,
 
 def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None) -> Iterator[Result]:
     started = time.perf_counter()
-    prog = progress or (lambda f, m: None)
+    prog = rising(progress) if progress else (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
-    plan, speech, notes = service.speech(req, audio, prog)
+    plan, speech, notes = service.speech(req, audio, prog, stream=True)   # its words may still be recognised
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
     if audio is None:
         run = service.ahead.take(service.motion_key(req, plan))
@@ -132,17 +134,38 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
                 grow.notes = grow.notes + [MADE_AHEAD]
             grow.ahead.append(x.method)
             grow.ahead_s = run.seconds(x)
+        grow.speech = known(grow.speech)
         grow.add(x)
         if i + 1 >= ready:
             yield grow.result()
     if not grow.result().motions:
-        errors = [x.error for x in grow.made.values() if x.error is not None]
+        errors = list({id(x.error): x.error for x in grow.made.values() if x.error is not None}.values())
         if len(errors) == 1 and isinstance(errors[0], GestureError):
             raise errors[0]
         if errors:
             raise MethodFailed("; ".join(f"{label(m)}: {grow.failed[m]}" for m in grow.slots
                                          if m in grow.failed))
         raise InputError("Nothing to show: choose a generator method.")
+
+
+def rising(progress: Progress) -> Progress:
+    """`progress` that never goes back: a method whose words, recognised alongside its generation, turn out not to be
+    the ones to use is made again (gesturelsm/pipelined.py `Restart`); the bar stays where it was meanwhile."""
+    top = [0.0]
+
+    def say(f: float, message: str) -> None:
+        top[0] = max(top[0], f)
+        progress(top[0], message)
+    return say
+
+
+def known(speech: SpeechInput) -> SpeechInput:
+    """The finished speech once its words are known (what the results say: text mode, transcript, warnings; edits
+    reuse it); speech whose words are still being recognised, or could not be, as it is."""
+    pending = speech.stream
+    if pending is None or not pending.done or pending.error is not None:
+        return speech
+    return pending.settle()
 
 
 def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iterator[Made]:

@@ -120,13 +120,13 @@ class GestureService:
         Generate only generates (`serve/prepared.py`); then, with `ahead` (the request the page's settings make at
         this moment), its motion is made in the background for a click that asks for the same (`serve/ahead.py`).
         Never raises: a file or settings that cannot be used are left for the request to refuse with its message.
-        Returns whether the speech is ready."""
+        Returns whether the speech is ready (automatic words may still be being recognised on their thread)."""
         if not audio_path:
             return False
         try:
             self.speech(Request(audio_path, text=text or "", textgrid_path=textgrid_path, transcribe=transcribe,
                                 language=ahead.language if ahead is not None else DEFAULTS.language),
-                         None, lambda f, m: None)
+                         None, lambda f, m: None, stream=True)     # the motion made ahead joins the words as they come
         except GestureError as exc:                      # the request refuses it with this message
             log.info("upload not prepared %s: %s", Path(audio_path).name, " | ".join(str(exc).splitlines()))
             return False
@@ -152,7 +152,7 @@ class GestureService:
 
         def make(run):
             torch.set_num_threads(self.settings.threads)
-            _, speech, _ = self.speech(req, None, lambda f, m: None)     # prepared by the prefetch
+            _, speech, _ = self.speech(req, None, lambda f, m: None, stream=True)   # prepared by the prefetch
             return self.pipeline.generate_each(speech, plan, progress=run.check, body=self.body, keep_going=True)
         return self.ahead.start(self.motion_key(req, plan), make, ", ".join(plan.methods))
 
@@ -228,11 +228,12 @@ class GestureService:
         except AudioError as exc:
             raise AudioError(f"The audio could not be read: {exc}") from None
 
-    def speech(self, req: Request, audio: np.ndarray | None, prog: Progress, extra: list[str] | None = None
-               ) -> tuple[Plan, SpeechInput, list[str]]:
+    def speech(self, req: Request, audio: np.ndarray | None, prog: Progress, extra: list[str] | None = None,
+               stream: bool = False) -> tuple[Plan, SpeechInput, list[str]]:
         """Checks (`check`), then the speech prepared once for every method (the transcript typed, from the TextGrid,
         recognised or none, as the request says), and notes for the page; for an upload, what its prefetch prepared
-        (`serve/prepared.py`), else prepared here and remembered."""
+        (`serve/prepared.py`), else prepared here and remembered. Automatic words are recognised on a thread: with
+        `stream` the speech may come back before them (generation joins them), else once they are known."""
         path = None
         if audio is None:
             req, plan, audio = self.load(req, extra)
@@ -250,17 +251,17 @@ class GestureService:
             fresh.append(True)
             words, notes = self._words(req, seconds)
             prog(0.02, "reading speech")
+            live = [True]                                # the words' thread says nothing once this returns
             speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                                  progress=lambda f, m: prog(0.02 + 0.1 * f, m),
+                                                  progress=lambda f, m: live[0] and prog(0.02 + 0.1 * f, m),
                                                   transcribe=plan.settings.transcribe,
-                                                  language=plan.settings.language)
+                                                  language=plan.settings.language, stream=True)
+            live[0] = False
             return speech, notes
-        if path is None:
-            return (plan, *prepare())
-        speech, notes = self.uploads.prepared(path, self._speech_key(req, plan), prepare)
-        if not fresh:      # prepared at the upload: its stages' times are the ones spent then, and said so
+        speech, notes = prepare() if path is None else self.uploads.prepared(path, self._speech_key(req, plan), prepare)
+        if path is not None and not fresh:  # prepared at the upload: its stages' times are the ones spent then, said so
             notes = [*notes, SPEECH_AHEAD]
-        return plan, speech, notes
+        return plan, speech if stream else self.pipeline.settled(speech), notes
 
     def sweep(self, req: SweepRequest, limits: SweepLimits = SweepLimits(), progress: Progress | None = None,
               cancelled: Callable[[], bool] | None = None) -> SweepOutcome:
