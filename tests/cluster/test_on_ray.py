@@ -4,6 +4,8 @@ failures listed, and a node removed mid-run without losing or repeating a unit."
 from __future__ import annotations
 
 import os
+import time
+from pathlib import Path
 
 import pytest
 
@@ -14,6 +16,10 @@ from gesturelsm.errors import ClusterError
 import _cluster_support as units
 
 AUTO = parse_cluster("auto")
+
+
+def _lines(path: Path) -> list[str]:
+    return path.read_text().splitlines() if path.exists() else []
 
 
 def _ray_is_down() -> bool:
@@ -37,8 +43,8 @@ def test_join_run_units_on_both_nodes_and_list_failures(ray_cluster):
 
 
 def test_a_node_removed_mid_run_still_yields_every_unit_exactly_once(ray_cluster, tmp_path):
-    """The first unit is short: when its result arrives, the other node is inside a long one, which dies with its
-    node, runs again on the node left, and is written once."""
+    """The first unit is short: after its result arrives and both nodes are inside a long one, the worker node is
+    removed; its unit dies with it, runs again on the node left, and is written once."""
     worker_node = next(iter(ray_cluster.worker_nodes))
     calls: list[str] = []
     pids: list[int] = []
@@ -46,7 +52,11 @@ def test_a_node_removed_mid_run_still_yields_every_unit_exactly_once(ray_cluster
     def write(unit, result):
         calls.append(unit.key)
         pids.append(result[1])
-        if len(calls) == 1:                       # the other node is busy with a unit: take it away
+        if len(calls) == 1:                       # once both nodes are inside a long unit, take one node away
+            deadline = time.monotonic() + 120     # (a loaded machine starts the second node's unit late)
+            while sum(line.split()[0] != "10" for line in _lines(starts)) < 2:
+                assert time.monotonic() < deadline, "the two nodes never both ran a long unit"
+                time.sleep(0.01)
             ray_cluster.remove_node(worker_node, allow_graceful=False)
 
     try:
