@@ -62,16 +62,6 @@ class PreparedUploads:
             got = self.speech.get((key, settings), prepare)
         return got
 
-        """(speech, notes) of the upload for these transcript `settings`: remembered, else `prepare()`; speech whose
-        words' recognition failed is forgotten and prepared once more (the error is said if it fails again)."""
-        key = file_key(path)
-        if key is None:
-            return prepare()
-        got = self.speech.get((key, settings), prepare)
-        if got[0].stream is not None and got[0].stream.error is not None:
-            self.speech.forget((key, settings))
-            got = self.speech.get((key, settings), prepare)
-        return got
     def clear(self) -> None:
         self.audio.clear()
         self.speech.clear()
