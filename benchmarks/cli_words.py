@@ -1,4 +1,4 @@
-"""`gesturelsm generate` without a transcript against the same command given the words' timings (#56). Markdown out.
+"""`gesturelsm generate` without a transcript against the same command given the words' timings. Markdown out.
 
     NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/cli_words.py [--take 2_scott_0_3_3] [--rounds 3]
 

@@ -1,4 +1,4 @@
-"""What the bounded look-ahead of the text features costs (#56): the same speech, words and seeds with the words
+"""What the bounded look-ahead of the text features costs: the same speech, words and seeds with the words
 encoded in bounded context (the default: 2-s blocks, 10 s before, 2 s after; features/text.py) and in the context of
 the whole transcript (the earlier encoding). Markdown out.
 

@@ -1,4 +1,4 @@
-"""Speech preparation pipelined with generation (#56): the automatic words of a speech are recognised and timed
+"""Speech preparation pipelined with generation: the automatic words of a speech are recognised and timed
 window by window on a thread (asr/windows.py, asr/transcribe.py `english_pieces`), their text features built as they
 come (features/text.py `WordFeatureStream`: bounded look-ahead), and generation conditions each of its windows as soon
 as the words it reads are final, while later speech is still being recognised.

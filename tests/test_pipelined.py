@@ -1,4 +1,4 @@
-"""Speech preparation pipelined with generation (#56): the words recognised window by window on a thread, each
+"""Speech preparation pipelined with generation: the words recognised window by window on a thread, each
 generation window conditioned as soon as its words are final; the same motion, bit for bit, as the one-shot path."""
 from __future__ import annotations
 

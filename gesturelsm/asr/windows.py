@@ -1,5 +1,5 @@
 """Where speech is cut into recognition windows, so that its words can be recognised and timed window by window while
-the motion of the first windows is already being generated (#56).
+the motion of the first windows is already being generated.
 
 Whisper reads 30 s at a time and pads shorter audio to 30 s, so every window costs one encoder pass whatever its
 length: the first window is short (FIRST_WINDOW_S, so the words the first generation window needs, up to ~8 s with
