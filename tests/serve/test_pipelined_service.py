@@ -1,4 +1,4 @@
-"""The page's click joins the upload's pipelined speech preparation (#56, gesturelsm/serve/service.py `speech`,
+"""The page's click joins the upload's pipelined speech preparation (gesturelsm/serve/service.py `speech`,
 serve/progressive.py): the upload's words are recognised window by window on a thread, the click does not wait for
 all of them (generation of the first method works on the first windows while later ones are still recognised), the
 recogniser runs once for the upload and the click, and every method's motion is the one-shot path's, bit for bit."""
