@@ -211,3 +211,46 @@ def test_a_deferred_measurement_takes_the_default_and_is_not_kept(measuring, mon
     assert kernels.choices() == [] and not measuring.exists()
     monkeypatch.setattr(choice, "compare", FakeCompare(2.0, 1.0))
     assert kernels.taken("linear", ("a",), pair)                             # asked again later: measured
+
+
+@pytest.mark.parametrize("ahead,want", [(40, [True] * 40), (20, [False] * 20)])
+def test_known_work_ahead_decides_a_cached_path_at_its_start(measuring, monkeypatch, ahead, want):
+    """A path costing 0.05 s once and saving 0.0025 s a call (break-even after 20 calls): work that announces 40
+    calls saves 0.1 s, PAYBACK (2) times the cost, and takes it from its first call; work of 20 calls would only
+    break even and takes the default throughout, even past the 20th call, where counting alone would switch."""
+    monkeypatch.setattr(choice, "compare", FakeCompare(0.005, 0.0025, once=0.05))
+    kernels.taken("linear", ("a",), pair)
+    choice.forget()
+    with kernels.expect(ahead):
+        runs = [kernels.taken("linear", ("a",), pair) for _ in range(ahead)]
+    assert runs == want
+
+
+def test_work_after_enough_calls_takes_the_cached_path_from_its_start(measuring, monkeypatch):
+    """A long-lived process (a server): requests too short to pay alone add up; once the calls made have passed
+    the break-even point, the next request takes the path from its first call, and keeps it."""
+    monkeypatch.setattr(choice, "compare", FakeCompare(0.005, 0.0025, once=0.05))
+    kernels.taken("linear", ("a",), pair)
+    choice.forget()
+    requests = []
+    for _ in range(4):
+        with kernels.expect(8):
+            requests.append([kernels.taken("linear", ("a",), pair) for _ in range(8)])
+    assert requests == [[False] * 8, [False] * 8, [False] * 8, [True] * 8]          # 24 calls made >= 20
+
+
+def test_a_cached_trace_is_recorded_at_once_for_work_that_pays_for_it(measuring, monkeypatch):
+    monkeypatch.setenv("GESTURELSM_KERNELS", "measure")
+    monkeypatch.setattr(choice, "compare", FakeCompare(0.2, 0.1, once=0.3))
+    model = accelerate(Tiny())
+    x = torch.randn(4, 8)
+    with torch.no_grad():
+        traced_or_eager(model, (x,), "tiny")
+        choice.forget()
+        recorded = []
+        real_trace = torch.jit.trace
+        monkeypatch.setattr(torch.jit, "trace", lambda *a, **k: recorded.append(1) or real_trace(*a, **k))
+        run = traced_or_eager(model, (x,), "tiny")
+        with kernels.expect(6):                                          # saves 0.6 s = 2 x 0.3 s
+            run(x)
+        assert recorded == [1]

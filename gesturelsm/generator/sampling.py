@@ -22,6 +22,7 @@ import torch.nn.functional as F
 from ..constants import Progress
 from ..flows import Held, make_method, sample_windows, sampled_windows, window_layout
 from ..flows.base import inpainting
+from ..kernels import expect
 from ..tokenizer.model import quantize_regions
 from .data import samples_for
 from .model import GestureGenerator
@@ -81,8 +82,9 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
             f = inpainting(f, method, win.known[None].to(dev), win.mask[None].to(dev), noise)
         return method.sample(f, noise, steps, cfg_scale)[0]                                 # (R, t, D) scaled
 
-    out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress,
-                         held=held)
+    with expect(len(todo) * steps):                            # the trunk's calls ahead (kernels.choice.Switch)
+        out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress,
+                             held=held)
     return out[:, :L] * std
 
 

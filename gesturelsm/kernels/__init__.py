@@ -16,7 +16,8 @@ thread count in a small cache file (cache.py), so later processes measure nothin
 process (1 s + 10 % of its running time, GESTURELSM_KERNELS_BUDGET; what has no time left is measured by a later
 call or run) and says so in one line on stderr; each choice keeps the fast path's one-time cost (tracing, weight
 reorders, oneDNN's kernel generation), and a process that reads it from the cache takes the path only once its calls
-have paid for that cost, so a one-shot command does not pay for paths it cannot use enough.
+have paid for that cost (or at once, when the caller's `expect` says its work will), so a one-shot command does not
+pay for paths it cannot use enough.
 
 GESTURELSM_ONEDNN=0 turns every fast path off (every swapped module then computes exactly what the module it
 replaced computes); GESTURELSM_KERNELS forces choices instead of measuring (`all`, `none` or a list of paths;
@@ -31,7 +32,7 @@ the null condition's keys, traced graphs) until a weight changes.
 """
 from __future__ import annotations
 
-from .choice import PATHS, Choice, choices, decide, forced, forget, probe_seconds, taken, told
+from .choice import PATHS, Choice, choices, decide, expect, forced, forget, probe_seconds, taken, told
 from .ops import (WeightsCache, bucket, channels_last_1d, conv1d_as_2d, conv1d_as_2d_add_, conv_add_available,
                   fast_path, linear, onednn_enabled, onednn_linear_available)
 from .swap import FastConv1d, FastLinear, FastLinearGELU, LinearGELU, accelerate, faster_version_of
@@ -39,5 +40,5 @@ from .trace import traced_or_eager
 
 __all__ = ["PATHS", "Choice", "FastConv1d", "FastLinear", "FastLinearGELU", "LinearGELU", "WeightsCache",
            "accelerate", "bucket", "channels_last_1d", "choices", "conv1d_as_2d", "conv1d_as_2d_add_", "decide",
-           "conv_add_available", "fast_path", "faster_version_of", "forced", "forget", "linear", "onednn_enabled",
-           "onednn_linear_available", "probe_seconds", "taken", "told", "traced_or_eager"]
+           "conv_add_available", "expect", "fast_path", "faster_version_of", "forced", "forget", "linear",
+           "onednn_enabled", "onednn_linear_available", "probe_seconds", "taken", "told", "traced_or_eager"]

@@ -24,7 +24,10 @@ kernels) that a long-lived process pays once and a one-shot command pays every t
 (`once`, the fast side's first call beyond its steady time and beyond the default's first call) with the time a
 call saves; a process that reads a choice from the cache takes the fast path only once the calls it has made at
 that shape would have saved its one-time cost (ski rental: a short process stays on the default, a long one switches
-and gains), so a one-shot command pays at most about that cost again for a path it cannot use enough.
+and gains), so a one-shot command pays at most about that cost again for a path it cannot use enough. Where the
+caller knows the work ahead (`expect`: a sampler's windows x steps), nothing is paid for nothing: the path is taken
+at once when that work saves PAYBACK times its one-time cost, and otherwise not before the work is over (a process
+whose earlier work already passed the break-even point, a server, takes it at the start of its next work).
 
 GESTURELSM_KERNELS forces the choice instead (nothing is measured or read from disk): `all` takes every path
 where it is available, `none` none, a comma list (`linear,trace`) those named. Tests set it, so they do not
@@ -40,9 +43,10 @@ import sys
 import threading
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Callable, Hashable
+from typing import Callable, Hashable, Iterator
 
 import torch
 
@@ -60,6 +64,8 @@ MIN_REPEATS = 3      # ... at least this many when the time left to measure is s
 MIN_ROUND_S = 2e-4   # a round repeats a short call until it lasts about this long (timer and call overhead)
 BUDGET_S = 1.0       # seconds a process may spend measuring at once (GESTURELSM_KERNELS_BUDGET) ...
 SHARE = 0.1          # ... plus this share of the wall time since its first choice
+PAYBACK = 2.0        # known work ahead takes a cached path at once when it saves this many times its one-time cost
+                     # (the measured cost undercounts: the trunk's trace costs about 1.5x it in a fresh process)
 
 Pair = Callable[[], tuple[Callable[[], object], Callable[[], object]]]
 
@@ -92,7 +98,8 @@ _memory: dict[tuple[int, str, Hashable], Choice] = {}
 _disk: dict[str, dict[str, dict]] | None = None         # the cache file's sections, read once per process
 _spent = [0.0]                                          # wall seconds spent measuring in this process
 _depth = [0]                                            # measurements in progress (nested ones run in warm-ups)
-_calls: dict[tuple[int, str, Hashable], int] = {}       # calls made at a cached choice that has to pay off first
+_switches: dict[tuple[int, str, Hashable], "Switch"] = {}   # cached choices that have to pay off first
+_ahead = threading.local()                              # .work: (token, calls) of the caller's `expect`
 _started: list[float] = []                              # when this process first asked for a choice
 _outer: list[float] = [0.0]                             # when the measurement in progress (depth 1) began
 _told: list[str] = []                                   # the line said when measuring began (once per process)
@@ -196,15 +203,54 @@ def taken(path: str, key: Hashable, pair: Pair) -> bool:
     got = decide(path, key, pair)
     if got is None or not got.taken:
         return False
-    need = got.break_even()
-    if need == 0:
+    if got.break_even() == 0:
         return True
     slot = (torch.get_num_threads(), path, key)
-    done = _calls.get(slot, 0)
-    if done >= need:
-        return True
-    _calls[slot] = done + 1
-    return False
+    if slot not in _switches:
+        _switches[slot] = Switch(got)
+    return _switches[slot].take()
+
+
+@contextmanager
+def expect(calls: int) -> Iterator[None]:
+    """The work inside makes about `calls` calls at each shape it uses (a sampler: windows x steps). Cached fast
+    paths with a one-time cost are then decided for the whole work at its start (Switch), not by counting calls."""
+    before = getattr(_ahead, "work", None)
+    _ahead.work = (object(), max(0, int(calls)))
+    try:
+        yield
+    finally:
+        _ahead.work = before
+
+
+class Switch:
+    """When a fast path read from the cache, with a one-time cost, starts being taken in this process. Inside an
+    `expect` it is decided once per work: at once if the work ahead saves PAYBACK times the cost or the calls made
+    before it have passed the break-even point, else not during that work. Outside one: ski rental, from the call
+    at which the calls made would have paid for the cost (Choice.break_even)."""
+
+    def __init__(self, choice: Choice):
+        self.choice, self.need = choice, choice.break_even()
+        self.calls, self.on = 0, False
+        self.work: object = None
+        self.verdict = False
+
+    def take(self) -> bool:
+        if self.on:
+            return True
+        work = getattr(_ahead, "work", None)
+        if work is None:
+            self.on = self.calls >= self.need
+        else:
+            token, ahead = work
+            if token is not self.work:
+                self.work = token
+                self.verdict = (self.calls >= self.need
+                                or ahead * self.choice.saving >= PAYBACK * self.choice.once)
+            self.on = self.verdict
+        if not self.on:
+            self.calls += 1
+        return self.on
 
 
 def decide(path: str, key: Hashable, pair: Pair) -> Choice | None:
@@ -316,6 +362,6 @@ def forget() -> None:
         _memory.clear()
         _disk = None
         _spent[0] = 0.0
-        _calls.clear()
+        _switches.clear()
         _started.clear()
         _told.clear()

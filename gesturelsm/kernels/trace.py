@@ -13,14 +13,15 @@ from typing import Callable
 import torch
 import torch.nn as nn
 
-from .choice import decide
+from .choice import Switch, decide
 
 
 def traced_or_eager(module: nn.Module, args: tuple[torch.Tensor, ...], name: str) -> Callable[..., torch.Tensor]:
     """`module` itself or its trace for inputs of these shapes, whichever was measured faster (`name` and the
     shapes key the choice). Made once per shape by the caller and kept; a module the tracer cannot record runs as
     it is. A trace chosen by another process (read from the cache) is recorded only once this process has called
-    it often enough to pay for the recording (choice.Choice.break_even); until then the module runs as it is."""
+    it often enough to pay for the recording, or at once when the work ahead will (choice.Switch); until then the
+    module runs as it is."""
     made: list[Callable[..., torch.Tensor]] = []
 
     def record() -> Callable[..., torch.Tensor]:
@@ -32,16 +33,12 @@ def traced_or_eager(module: nn.Module, args: tuple[torch.Tensor, ...], name: str
     got = decide("trace", key, lambda: ((lambda: module(*args)), (lambda: record()(*args))))
     if got is None or not got.taken:
         return module
-    need = got.break_even()
-    if need == 0:
+    if got.break_even() == 0:
         return record()
-    calls = [0]
+    switch = Switch(got)
 
     def run(*a: torch.Tensor) -> torch.Tensor:                  # read from the cache: recorded once it pays off
-        if calls[0] >= need:
-            return record()(*a)
-        calls[0] += 1
-        return module(*a)
+        return record()(*a) if switch.take() else module(*a)
     return run
 
 
