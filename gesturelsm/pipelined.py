@@ -107,11 +107,18 @@ def with_words(speech: SpeechInput, words: list | None, mode: str, transcript: s
 
 
 def automatic_speech(speech: SpeechInput, auto: AutomaticWords, transcription_s: float) -> SpeechInput:
-    """`speech` with the automatic words `auto` (one-shot and pipelined alike)."""
+    """`speech` with the automatic words `auto` (one-shot and pipelined alike); `transcription_s`: the seconds this
+    call waited for them (words recognised earlier keep the time their recognition took then, marked `earlier`)."""
     transcript = auto.transcript.text if auto.transcript is not None and auto.words else None
-    speech = replace(speech, timings={**speech.timings, "transcription": transcription_s})
+    speech = replace(speech, timings={**speech.timings, "transcription": recognition_seconds(auto, transcription_s)},
+                     earlier=("transcription",) if auto.earlier else ())
     return with_words(speech, auto.words, auto.text_mode, transcript, auto.warnings,
                       ready_points_of(auto, speech.audio, speech.num_frames))
+
+
+def recognition_seconds(auto: AutomaticWords, waited: float) -> float:
+    """The transcription stage's time: what recognising `auto` took when it ran earlier, else the `waited` seconds."""
+    return auto.seconds if auto.earlier and auto.seconds > 0 else waited
 
 
 class PendingWords:
@@ -166,9 +173,11 @@ class PendingWords:
                 ready_points_of(auto, self.base.audio, self.base.num_frames) == self.ready_points
             if self.valid:
                 transcript = auto.transcript.text if auto.transcript is not None else None
-                base = replace(self.base, timings={**self.base.timings, "transcription": self.transcription_s,
+                base = replace(self.base, timings={**self.base.timings,
+                                                   "transcription": recognition_seconds(auto, self.transcription_s),
                                                    "features": self.base.timings.get("features", 0.0)
-                                                   + self.text_seconds})
+                                                   + self.text_seconds},
+                               earlier=("transcription",) if auto.earlier else ())
                 self._final = replace(base, words=list(auto.words), word_features=torch.from_numpy(
                     self.features.features.copy()), has_word=torch.from_numpy(self.features.has_word.copy()),
                     text_mode=auto.text_mode, warnings=list(base.warnings) + list(auto.warnings),

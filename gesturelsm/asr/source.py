@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from typing import Callable, Generic, Hashable, TypeVar
@@ -91,6 +92,8 @@ class AutomaticWords:
     text_mode: str                   # said to the user
     transcript: Transcript | None    # None when the recogniser is not installed
     warnings: list[str] = field(default_factory=list)
+    seconds: float = 0.0             # wall seconds the recognition took, when and wherever it ran
+    earlier: bool = False            # recognised before this call (remembered, or prefetched by another process)
 
 
 RECENT: Recent[AutomaticWords] = Recent(8)
@@ -109,9 +112,17 @@ def automatic_words(audio_16k: np.ndarray, remember: bool = True, language: str 
     y = np.ascontiguousarray(audio_16k, np.float32).reshape(-1)
     more = [on_piece] if on_piece else []
     if not remember:
-        return _recognised(y, language, *more)
-    got = RECENT.get((*_key(y), language), lambda: _recognised(y, language, *more))
-    return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings))
+        return _timed(y, language, *more)
+    here = []
+    got = RECENT.get((*_key(y), language), lambda: here.append(1) or _timed(y, language, *more))
+    return replace(got, words=list(got.words) if got.words is not None else None, warnings=list(got.warnings),
+                   earlier=not here)
+
+
+def _timed(audio_16k: np.ndarray, language: str = AUTO, *on_piece: Callable[[Piece], None]) -> AutomaticWords:
+    t0 = time.perf_counter()
+    got = _recognised(audio_16k, language, *on_piece)
+    return replace(got, seconds=time.perf_counter() - t0)
 
 
 def remember_words(audio_16k: np.ndarray, words: AutomaticWords, language: str = AUTO) -> None:

@@ -39,6 +39,9 @@ class SpeechInput:
     # Pipelined speech (gesturelsm.pipelined.PendingWords): the words are still being recognised; `stream.wait(n)`
     # blocks until the word features of frames [0, n) are final. None: everything is final.
     stream: object | None = None
+    # Stages (keys of `timings`) done before this speech was prepared, their times the ones spent then: the words
+    # recognised at the upload by another process (the page's replicas), or remembered from an earlier request.
+    earlier: tuple[str, ...] = ()
 
     @property
     def duration(self) -> float:

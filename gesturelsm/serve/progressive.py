@@ -34,6 +34,8 @@ MADE_AHEAD = ("Made ahead: generation started after the upload with these settin
               "before the click: its rows say \"made ahead\").")
 SPEECH_AHEAD = ("The speech was prepared when it was uploaded, before Generate was clicked (audio features, word "
                 "timings, the automatic transcript): the table shows the time each took then.")
+WORDS_AHEAD = ("The words were recognised before Generate was clicked (at the upload, or for an earlier request of the "
+               "same speech): the table shows the time their transcription took then.")
 
 
 class MethodFailed(GestureError):
@@ -90,12 +92,13 @@ class Growing:
         timings = {m: dict(r.timings) for m, r in gens.items()}
         ahead = tuple(m for m in self.ahead if m in motions)
         speech_ahead = SPEECH_AHEAD in self.notes
-        rows = timing_rows(timings, has_gt, sp.duration, None, ahead, speech_ahead)
+        words_ahead = "transcription" in sp.earlier and not speech_ahead
+        rows = timing_rows(timings, has_gt, sp.duration, None, ahead, speech_ahead, words_ahead=words_ahead)
         warnings = list(sp.warnings)
         for x in self.made.values():
             warnings += [w for w in x.warnings if w not in warnings]
         warnings += [f"{label(m)}: {self.failed[m]}" for m in self.slots if m in self.failed]
-        warnings += self.notes
+        warnings += self.notes + ([WORDS_AHEAD] if words_ahead else [])
         take = self.made[GROUND_TRUTH].take if has_gt else None
         pending = tuple(m for m in self.slots if m not in self.made)
         return Result(None, rows, (), None, sp.text_mode, tuple(warnings), take, self.ready_s, self.ready_s, timings,

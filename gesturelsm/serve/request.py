@@ -192,14 +192,15 @@ def _shared(timings: Mapping[str, Mapping[str, float]], stage: str) -> float | N
 
 def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float,
                 render_s: float | None, made_ahead: Sequence[str] = (), speech_ahead: bool = False,
-                edits: Sequence[EditTiming] = ()) -> tuple[TimingRow, ...]:
+                edits: Sequence[EditTiming] = (), words_ahead: bool = False) -> tuple[TimingRow, ...]:
     """The timing table: a row per generator (its own stages and generation time, "(made ahead)" when it was made
     before the click), the ground truth's, one per edit (its own stages and video), then the whole request's.
 
     Every figure is the time the work took where it was spent: the speech's stages (features, alignment,
     transcription) are done once for all methods and shown in each row as they took, also when they were done at the
-    upload (the whole request's row says so); the video is one render of all the methods side by side, so its time
-    is the whole request's (an edit's video is the edit's row's), never split over the methods. The whole request's
+    upload or its words recognised before the click (the whole request's row says which); the video is one render of
+    all the methods side by side, so its time is the whole request's (an edit's video is the edit's row's), never
+    split over the methods. The whole request's
     generation is the work of all its methods (the speech's features once, each method's sampling and decoding), so
     it is never below one method's."""
     rows = []
@@ -218,7 +219,8 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
                               _cell(e.rendering), round(g, 3), None))
     features = _shared(timings, "features") or 0.0
     whole = features + sum(g - timings[m].get("features", 0.0) for m, g in gens.items())
-    where = ", speech prepared at the upload" if speech_ahead else ""
+    where = ", speech prepared at the upload" if speech_ahead else ", words recognised earlier" if words_ahead \
+        else ""
     where += ", motion made ahead" if made_ahead else ""
     rows.append(TimingRow(f"whole request, {duration:.1f} s of speech{where}",
                           _cell(_shared(timings, "features")), _cell(_shared(timings, "alignment")),
@@ -248,4 +250,6 @@ def with_render_time(result: Result, render_s: float, ready: float) -> Result:
 def result_rows(result: Result):
     """The timing table of `result` (`request.timing_rows`) from what it holds."""
     return timing_rows(result.timings, result.ground_truth is not None, result.job.speech_seconds,
-                       result.render_seconds, result.made_ahead, result.speech_ahead, result.edit_timings)
+                       result.render_seconds, result.made_ahead, result.speech_ahead, result.edit_timings,
+                       words_ahead=not result.speech_ahead and result.speech is not None
+                       and "transcription" in result.speech.earlier)

@@ -132,3 +132,23 @@ def test_transcribe_cli_refuses_non_speech_with_one_line(recognizer, german, tmp
     sf.write(wav, np.zeros(SR, np.float32), SR)
     assert main(["transcribe", str(wav)]) == 2
     assert "no speech" in capsys.readouterr().err
+
+
+def test_words_recognised_earlier_keep_the_time_their_recognition_took(monkeypatch):
+    """The transcription stage is timed where it ran: a remembered answer, or one another process recognised (the
+    page's replicas prefetch it at the upload), says `earlier` and keeps that recognition's seconds."""
+    import gesturelsm.asr.source as source
+
+    monkeypatch.setattr(source, "_recognised", lambda y, language="auto": source.AutomaticWords([], "fake", None))
+    source.RECENT.clear()
+    y = np.random.default_rng(1).normal(size=16000).astype(np.float32)
+    first = source.automatic_words(y)
+    again = source.automatic_words(y)
+    assert not first.earlier and first.seconds > 0
+    assert again.earlier and again.seconds == first.seconds
+    other = y + np.float32(1e-3)
+    source.remember_words(other, source.AutomaticWords([], "fake", None, seconds=2.5))
+    got = source.automatic_words(other)
+    assert got.earlier and got.seconds == 2.5
+    assert not source.automatic_words(other, remember=False).earlier
+    source.RECENT.clear()

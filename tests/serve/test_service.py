@@ -392,3 +392,26 @@ def test_every_download_carries_the_grounded_motion(service, speech_wav, tmp_pat
         assert got[name] == want[True] and want[True] != want[False], name
     arkit = export_arkit(seqs[True], tmp_path / "face.csv", body=service.body)     # the face: not touched by grounding
     assert got["gesturelsm_arkit.csv"] == arkit.read_bytes()
+
+
+def test_words_recognised_by_another_process_show_that_recognitions_time(service, speech_wav, tmp_path):
+    """With replicas, the front end has an upload's words recognised (on a replica) while the visitor chooses the
+    settings and sends them with the request: the table shows the time that recognition took, not the ~0 s of
+    finding it here, and says the words were recognised earlier."""
+    import shutil
+
+    from gesturelsm.asr.source import RECENT, AutomaticWords
+    from gesturelsm.audio import load_audio
+    from gesturelsm.serve.progressive import WORDS_AHEAD
+
+    wav = tmp_path / "fresh_upload.wav"                  # a path no earlier request prepared
+    shutil.copy(speech_wav, wav)
+    RECENT.clear()
+    service.pipeline.remember_transcript(load_audio(str(wav)), 16000,
+                                         AutomaticWords([], "automatic transcript (prefetched)", None, seconds=7.25))
+    try:
+        out = service.run(Request(str(wav), steps=1, exports=False, render=False))
+    finally:
+        RECENT.clear()
+    assert [r.transcription for r in out.rows[:-1]] == [7.25] and out.rows[-1].transcription == 7.25
+    assert out.rows[-1].method.endswith("of speech, words recognised earlier") and WORDS_AHEAD in out.warnings
