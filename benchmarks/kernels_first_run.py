@@ -1,6 +1,7 @@
 """The fast kernels on a machine's first run and in one-shot commands: whole `gesturelsm generate` processes.
 
     .venv/bin/python benchmarks/kernels_first_run.py [--rounds 3] [--short 10] [--long 62] [--threads 1]
+                                                     [--only first|one-shot]
 
 Wall clock of the whole process (start-up, model loading, generation, writing), medians over --rounds, the two
 sides of each comparison run in turn (A B A B ...) so that load from other processes hits both alike:
@@ -77,6 +78,7 @@ def main() -> int:
     ap.add_argument("--short", type=float, default=10.0)
     ap.add_argument("--long", type=float, default=62.0)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--only", choices=("first", "one-shot"), help="run one of the two comparisons")
     args = ap.parse_args()
     if not TAKE.exists():
         print(f"{TAKE} is absent: the held-out speech lives in ../shared", file=sys.stderr)
@@ -101,9 +103,10 @@ def main() -> int:
         def warm(r: int) -> float:
             return run(short, folder / "b.npz", dict(env, GESTURELSM_KERNELS_CACHE=str(warm_cache)))[0]
 
-        print(f"1. first run vs warm, {args.short:g} s of speech", flush=True)
-        a, b = pairs(args.rounds, first, warm)
-        rows.append((f"{args.short:g} s of speech: first run (empty cache) / warm cache", a, b, "<= 1.20"))
+        if args.only != "one-shot":
+            print(f"1. first run vs warm, {args.short:g} s of speech", flush=True)
+            a, b = pairs(args.rounds, first, warm)
+            rows.append((f"{args.short:g} s of speech: first run (empty cache) / warm cache", a, b, "<= 1.20"))
 
         def fast(r: int) -> float:
             return run(long, folder / "c.npz", dict(env, GESTURELSM_KERNELS_CACHE=str(warm_cache)))[0]
@@ -112,9 +115,11 @@ def main() -> int:
             return run(long, folder / "d.npz", dict(env, GESTURELSM_KERNELS_CACHE=str(warm_cache),
                                                      GESTURELSM_ONEDNN="0"))[0]
 
-        print(f"2. one-shot, {args.long:g} s of speech: fast paths vs GESTURELSM_ONEDNN=0", flush=True)
-        a, b = pairs(args.rounds, fast, plain)
-        rows.append((f"{args.long:g} s of speech, one-shot: fast paths / GESTURELSM_ONEDNN=0", a, b, "<= 1.03"))
+        if args.only != "first":
+            print(f"2. one-shot, {args.long:g} s of speech: fast paths vs GESTURELSM_ONEDNN=0", flush=True)
+            a, b = pairs(args.rounds, fast, plain)
+            rows.append((f"{args.long:g} s of speech, one-shot: fast paths / GESTURELSM_ONEDNN=0", a, b,
+                         "<= 1.03"))
     print()
     print("| comparison | A median s | B median s | A / B | bar | runs A | runs B |")
     print("|---|---|---|---|---|---|---|")
