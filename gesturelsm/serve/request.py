@@ -20,6 +20,7 @@ import numpy as np
 from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
 from ..pipeline import Plan, SpeechInput, generation_seconds
+from ..pipelined import HIDDEN
 from ..settings import DEFAULTS, MISSING
 
 VIDEO_SIZES = (256, 384, 512, 640)
@@ -190,6 +191,9 @@ def _shared(timings: Mapping[str, Mapping[str, float]], stage: str) -> float | N
     return max(values) if values else None
 
 
+HIDDEN_ROW = "of the transcription, hidden under generation"
+
+
 def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, duration: float,
                 render_s: float | None, made_ahead: Sequence[str] = (), speech_ahead: bool = False,
                 edits: Sequence[EditTiming] = (), words_ahead: bool = False) -> tuple[TimingRow, ...]:
@@ -202,7 +206,8 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
     all the methods side by side, so its time is the whole request's (an edit's video is the edit's row's), never
     split over the methods. The whole request's
     generation is the work of all its methods (the speech's features once, each method's sampling and decoding), so
-    it is never below one method's."""
+    it is never below one method's. Where the words were recognised while the first method was generated (pipelined
+    speech), a row before the whole request's says how much of the transcription ran hidden under that generation."""
     rows = []
     gens = {}
     for m, t in timings.items():
@@ -217,6 +222,9 @@ def timing_rows(timings: Mapping[str, Mapping[str, float]], ground_truth: bool, 
         g = generation_seconds(e.stages)
         rows.append(TimingRow(e.label, *(_cell(e.stages.get(k)) for k in STAGES[:-1]),
                               _cell(e.rendering), round(g, 3), None))
+    hidden = _shared(timings, HIDDEN)
+    if hidden:
+        rows.append(TimingRow(HIDDEN_ROW, None, None, round(hidden, 3), None, None, None, None, None))
     features = _shared(timings, "features") or 0.0
     whole = features + sum(g - timings[m].get("features", 0.0) for m, g in gens.items())
     where = ", speech prepared at the upload" if speech_ahead else ", words recognised earlier" if words_ahead \

@@ -104,3 +104,18 @@ def test_a_growing_result_says_what_is_ready_after_the_click():
     assert "**Generating:** GestureLSM..." in none_yet.summary and "0.0 s" not in none_yet.summary
     one = _result(pending=("ddim",), motion_seconds=1.26, motions={"gesturelsm": object()})
     assert "**Ready 1.3 s after the click:** GestureLSM. **Generating:** DDIM..." in one.summary
+
+
+def test_transcription_hidden_under_generation_is_a_row_of_its_own():
+    """Words recognised while the first method was generated: the table says how much of the transcription ran
+    hidden under generation, in a row of its own before the whole request's; it is not generation time."""
+    from gesturelsm.pipelined import HIDDEN, WAITING
+
+    timings = {"gesturelsm": {**TIMINGS["gesturelsm"], HIDDEN: 1.75, WAITING: 0.5}, "ddim": TIMINGS["ddim"]}
+    rows = timing_rows(timings, ground_truth=False, duration=10.0, render_s=None)
+    assert [r.method for r in rows] == ["GestureLSM", "DDIM", "of the transcription, hidden under generation",
+                                        "whole request, 10.0 s of speech"]
+    assert rows[2].cells() == ["of the transcription, hidden under generation", None, None, 1.75, None, None, None,
+                               None, None]
+    assert rows[0].generation == pytest.approx(0.5)
+    assert "hidden" not in " ".join(r.method for r in timing_rows(TIMINGS, False, 10.0, None))
