@@ -97,10 +97,6 @@ def closer(browser, url: str, wav: Path) -> None:
 
 
 def main() -> int:
-    from playwright.sync_api import sync_playwright
-
-    from app.screenshot import CHROMIUM_ARGS
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--long", type=float, default=60.0)
@@ -111,20 +107,13 @@ def main() -> int:
         folder = Path(tmp)
         long, short = cut(args.long, folder), cut(args.short, folder)
         (folder / "work").mkdir()
-        with served_app(REPO, folder / "work") as app, sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=chromium(), args=CHROMIUM_ARGS)
-            try:
-                visitor(browser, app.url, short)                             # warm: the first render pays set-up
-                for r in range(args.rounds):
-                    for case in (("alone", "behind a closed tab") if r % 2 == 0 else
-                                 ("behind a closed tab", "alone")):
-                        if case != "alone":
-                            closer(browser, app.url, long)
-                        times[case].append(visitor(browser, app.url, short))
-                        print(f"  round {r + 1}, {case}: files {times[case][-1][0]:.1f} s, "
-                              f"mp4 {times[case][-1][1]:.1f} s", flush=True)
-            finally:
-                browser.close()
+        try:
+            run_rounds(args, folder, long, short, times)
+        except Exception:
+            for log in folder.glob("server-*.log"):                      # what the server said, before it goes
+                print(f"--- {log.name} (last lines)\n" + "\n".join(log.read_text().splitlines()[-40:]),
+                      file=sys.stderr)
+            raise
     rows = Rows(["case", "click -> files, median s", "click -> mp4, median s", "mp4 runs s", "files before mp4"])
     for case, got in times.items():
         rows.add(case, f"{statistics.median(f for f, _ in got):.1f}", f"{statistics.median(v for _, v in got):.1f}",
@@ -136,6 +125,27 @@ def main() -> int:
     print(f"\nmp4 behind a closed tab / alone: {ratio:.2f} (bar <= 2.0); {args.rounds} rounds, "
           f"load average {os.getloadavg()[0]:.1f} at the end.")
     return 0
+
+
+def run_rounds(args, folder: Path, long: Path, short: Path, times: dict) -> None:
+    from playwright.sync_api import sync_playwright
+
+    from app.screenshot import CHROMIUM_ARGS
+
+    with served_app(REPO, folder / "work") as app, sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=chromium(), args=CHROMIUM_ARGS)
+        try:
+            visitor(browser, app.url, short)                             # warm: the first render pays set-up
+            for r in range(args.rounds):
+                for case in (("alone", "behind a closed tab") if r % 2 == 0 else
+                             ("behind a closed tab", "alone")):
+                    if case != "alone":
+                        closer(browser, app.url, long)
+                    times[case].append(visitor(browser, app.url, short))
+                    print(f"  round {r + 1}, {case}: files {times[case][-1][0]:.1f} s, "
+                          f"mp4 {times[case][-1][1]:.1f} s", flush=True)
+        finally:
+            browser.close()
 
 
 def chromium() -> str:
