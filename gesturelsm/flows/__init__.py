@@ -30,10 +30,10 @@ if TYPE_CHECKING:
     from .timesteps import sample_t
     from .windows import Held, sample_windows, sampled_windows, window_layout
 
-    METHODS: dict[str, type]
+    METHODS: dict[str, type[Method]]
 
 
-def _classes() -> dict[str, type]:
+def _classes() -> dict[str, type[Method]]:
     """{method key: its class}, in the order of `FACTS`."""
     from .ddim import DDIM
     from .rectified import RectifiedFlow
@@ -53,7 +53,7 @@ def __getattr__(name: str) -> Any:
     return value
 
 
-def _methods() -> dict[str, type]:
+def _methods() -> dict[str, type[Method]]:
     return globals().get("METHODS") or __getattr__("METHODS")
 
 
