@@ -97,3 +97,20 @@ def test_the_twins_agree_at_exactly_zero_and_exactly_pi():
     xyzw = R.matrix_to_quaternion_xyzw(M_n)
     assert np.allclose(R.quaternion_xyzw_to_matrix(xyzw), M_n, atol=1e-12)
     assert np.allclose(R.quaternion_xyzw_to_matrix(R.axis_angle_to_quaternion_xyzw(aa)), M_n, atol=1e-12)
+
+
+def test_continuous_quaternions_flip_each_frame_against_the_flipped_previous_one():
+    def one_frame_at_a_time(q):
+        q = q.copy()
+        for t in range(1, len(q)):
+            q[t] = np.where((q[t] * q[t - 1]).sum(-1, keepdims=True) < 0, -q[t], q[t])
+        return q
+
+    q = np.random.default_rng(7).normal(size=(200, 5, 4)).astype(np.float32)
+    q[40, 2], q[41, 2], q[42, 2] = [1, 0, 0, 0], [0, 1, 0, 0], [0, -1, 0, 0]      # a dot product of exactly 0
+    got = R.continuous_quaternions(q)
+    assert got.dtype == q.dtype and np.array_equal(got, one_frame_at_a_time(q))
+    assert ((got[1:] * got[:-1]).sum(-1) >= 0).all()
+    from gesturelsm.export import glb
+
+    assert glb.continuous_quaternions is R.continuous_quaternions
