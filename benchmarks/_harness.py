@@ -9,6 +9,11 @@ medians, and one row format (a markdown table row and a JSON record of the same 
     print(rows.markdown())                            # | setting | median s | min s | ...
     Path("out.json").write_text(rows.json())          # [{"setting": "8 steps", "median s": "0.41", ...}]
 
+A script whose runs are not one call each times them with `Stopwatch` (`with Stopwatch() as sw: ...; sw.seconds`);
+one that prints its rows as they come prints `rows.header()` once and `rows.last()` after each `add`. `json_flag`
+gives a script the `--json FILE` option and `save_json` writes its tables there (one table: its records; several: a
+record list per table name).
+
 The data: $GESTURELSM_SHARED when set, else ../shared beside the checkout (the BEAT2 sample and the characters;
 never copied into the repository). Scripts run as `python benchmarks/NAME.py`, which puts this folder on sys.path.
 """
@@ -91,12 +96,51 @@ class Rows:
             raise ValueError(f"{len(cells)} cells for {len(self.columns)} columns")
         self.rows.append([str(c) for c in cells])
 
+    def header(self) -> str:
+        """The column names and the separator line."""
+        return row(self.columns) + "\n|" + "---|" * len(self.columns)
+
+    def last(self) -> str:
+        """The row added last, as a markdown line."""
+        return row(self.rows[-1])
+
     def markdown(self) -> str:
-        lines = [row(self.columns), "|" + "---|" * len(self.columns)]
-        return "\n".join(lines + [row(r) for r in self.rows])
+        return "\n".join([self.header()] + [row(r) for r in self.rows])
+
+    def records(self) -> list[dict[str, str]]:
+        return [dict(zip(self.columns, r)) for r in self.rows]
 
     def json(self) -> str:
-        return json.dumps([dict(zip(self.columns, r)) for r in self.rows], indent=2)
+        return json.dumps(self.records(), indent=2)
+
+
+class Stopwatch:
+    """Wall seconds of a `with` block (perf_counter): `with Stopwatch() as sw: ...` then `sw.seconds`; inside the
+    block, `sw.elapsed` is the time so far."""
+
+    def __enter__(self) -> "Stopwatch":
+        self.start, self.seconds = time.perf_counter(), float("nan")
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.seconds = time.perf_counter() - self.start
+
+    @property
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.start
+
+
+def json_flag(parser) -> None:
+    """The `--json FILE` option: also write the script's table(s) as JSON."""
+    parser.add_argument("--json", metavar="FILE", default=None, help="also write the table(s) as JSON to FILE")
+
+
+def save_json(path: str | Path | None, tables: Rows | dict[str, Rows]) -> None:
+    """Write one table's records, or {name: records} of several tables, to `path` (nothing when it is None)."""
+    if path is None:
+        return
+    data = tables.records() if isinstance(tables, Rows) else {k: t.records() for k, t in tables.items()}
+    Path(path).write_text(json.dumps(data, indent=2) + "\n")
 
 
 def row(cells: Sequence[object]) -> str:
@@ -104,5 +148,5 @@ def row(cells: Sequence[object]) -> str:
     return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
-__all__ = ["BEAT2", "CHARACTERS", "REPO", "Rows", "SHARED", "Timing", "row", "set_threads", "take_motion", "take_wav",
-           "timed"]
+__all__ = ["BEAT2", "CHARACTERS", "REPO", "Rows", "SHARED", "Stopwatch", "Timing", "json_flag", "row", "save_json",
+           "set_threads", "take_motion", "take_wav", "timed"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from _harness import Rows, Stopwatch
 
 
 def simultaneous(pipe, audio: np.ndarray, cfg, streams: int, chunk_ms: float) -> list[dict]:
@@ -16,11 +17,11 @@ def simultaneous(pipe, audio: np.ndarray, cfg, streams: int, chunk_ms: float) ->
     n = int(round(chunk_ms * SAMPLE_RATE / 1000))
     manager = LiveManager(pipe, max_sessions=streams, config=cfg)
     sessions = [manager.open() for _ in range(streams)]
-    t0 = time.perf_counter()
-    for a in range(0, len(audio), n):
-        time.sleep(max(0.0, t0 + (a + n) / SAMPLE_RATE - time.perf_counter()))
-        for s in sessions:
-            s.feed(audio[a:a + n])
+    with Stopwatch() as clock:
+        for a in range(0, len(audio), n):
+            time.sleep(max(0.0, (a + n) / SAMPLE_RATE - clock.elapsed))
+            for s in sessions:
+                s.feed(audio[a:a + n])
     out = []
     time.sleep(0.5)                                              # the last window's compute
     for s in sessions:
@@ -33,13 +34,16 @@ def simultaneous(pipe, audio: np.ndarray, cfg, streams: int, chunk_ms: float) ->
 
 
 
-def simultaneous_table(rows: list[dict], seconds: float, chunk_ms: float) -> None:
-    print(f"| {len(rows)} live sessions at once ({seconds:.0f} s each, {chunk_ms:.0f} ms chunks) | latency median / "
-          "p90 (s) | median, last quarter (s) | real-time factor | frames behind at the end | dropped |")
-    print("|---|---|---|---|---|---|")
+def simultaneous_table(rows: list[dict], seconds: float, chunk_ms: float) -> Rows:
+    """The sessions' table (printed, and returned for a JSON copy)."""
+    table = Rows([f"{len(rows)} live sessions at once ({seconds:.0f} s each, {chunk_ms:.0f} ms chunks)",
+                  "latency median / p90 (s)", "median, last quarter (s)", "real-time factor",
+                  "frames behind at the end", "dropped"])
     for i, r in enumerate(rows):
         lat = r["lat"]
-        print(f"| session {i + 1}{' (' + r['error'] + ')' if r['error'] else ''} | {np.median(lat):.3f} / "
-              f"{np.percentile(lat, 90):.3f} | {np.median(lat[3 * len(lat) // 4:]):.3f} | {r['rtf']:.2f} | "
-              f"{r['behind_frames']:.0f} | {r['dropped']} |")
+        table.add(f"session {i + 1}{' (' + r['error'] + ')' if r['error'] else ''}",
+                  f"{np.median(lat):.3f} / {np.percentile(lat, 90):.3f}", f"{np.median(lat[3 * len(lat) // 4:]):.3f}",
+                  f"{r['rtf']:.2f}", f"{r['behind_frames']:.0f}", r["dropped"])
+    print(table.markdown())
     print()
+    return table

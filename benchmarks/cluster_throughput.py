@@ -4,7 +4,8 @@ on 1 and on 2 Ray Serve replicas (`python -m app --replicas N`), at a fixed offe
 
     .venv/bin/python benchmarks/cluster_throughput.py [--speeches 4] [--methods gesturelsm ddim] [--size 256]
                                                       [--batch-rounds 1] [--requests 8] [--rate 6]
-                                                      [--replicas 0 1 2] [--skip-batch]
+                                                      [--replicas 0 1 2] [--skip-batch] [--threads N]
+                                                      [--json FILE]
 
 Inputs: the page's example speech (eSpeak NG, ~5 s each; the batch cycles through them under new names), the
 shipped checkpoints, the built-in mannequin. Batch: every video of speeches x methods, from an empty folder, wall
@@ -35,8 +36,9 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _harness import REPO, Rows, Stopwatch, json_flag, save_json, set_threads
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "gesturelsm" / "webapp" / "examples"
+EXAMPLES = REPO / "gesturelsm" / "webapp" / "examples"
 
 
 def cpu_name() -> str:
@@ -58,23 +60,22 @@ def speech_folder(root: Path, n: int) -> Path:
 def batch(speech: Path, out: Path, methods: list[str], size: int, *extra: str) -> float:
     from gesturelsm.cli import main
 
-    t0 = time.perf_counter()
-    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+    with Stopwatch() as clock, contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
         code = main(["batch", "--audio-dir", str(speech), "--methods", *methods, "--out", str(out), "--raters", "1",
                      "--design", "rating",
                      "--size", str(size), *extra])
     if code != 0:
         raise SystemExit(f"gesturelsm batch {' '.join(extra)} failed with status {code}")
-    return time.perf_counter() - t0
+    return clock.seconds
 
 
 def ray_start_seconds() -> float:
     """What `--cluster local` costs before any video: starting Ray and checking its workers."""
     from gesturelsm.cluster import connect, parse_cluster
 
-    t0 = time.perf_counter()
-    connect(parse_cluster("local")).close()
-    return time.perf_counter() - t0
+    with Stopwatch() as clock:
+        connect(parse_cluster("local")).close()
+    return clock.seconds
 
 
 def batch_rows(args, root: Path) -> list[tuple]:
@@ -110,22 +111,22 @@ def offered_load(url: str, wav: Path, requests: int, rate: float, size: int) -> 
     from gradio_client import Client, handle_file
 
     latencies: list[float] = [float("nan")] * requests
-    t0 = time.perf_counter()
 
-    def one(i: int) -> None:
-        time.sleep(max(0.0, t0 + i * 60.0 / rate - time.perf_counter()))
-        start = time.perf_counter()
-        client = Client(url, verbose=False, httpx_kwargs={"timeout": 1800})
-        client.predict(handle_file(str(wav)), "", None, ["gesturelsm"], 8, 2.0, i, 20, False, "light", size, False,
-                       api_name="/generate")
-        latencies[i] = time.perf_counter() - start
+    def one(i: int, load: Stopwatch) -> None:
+        time.sleep(max(0.0, i * 60.0 / rate - load.elapsed))
+        with Stopwatch() as clock:
+            client = Client(url, verbose=False, httpx_kwargs={"timeout": 1800})
+            client.predict(handle_file(str(wav)), "", None, ["gesturelsm"], 8, 2.0, i, 20, False, "light", size,
+                           False, api_name="/generate")
+        latencies[i] = clock.seconds
 
-    threads = [threading.Thread(target=one, args=(i,)) for i in range(requests)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    return latencies, time.perf_counter() - t0
+    with Stopwatch() as load:
+        threads = [threading.Thread(target=one, args=(i, load)) for i in range(requests)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    return latencies, load.seconds
 
 
 def app_row(replicas: int, args, work: Path) -> tuple:
@@ -135,15 +136,15 @@ def app_row(replicas: int, args, work: Path) -> tuple:
     from gesturelsm.webapp.ui import serve_locally
 
     settings = ServiceSettings(workdir=str(work / f"app{replicas}"), render_nice=0)
-    t0 = time.perf_counter()
-    if replicas:
-        from gesturelsm.serve.replicated import ReplicatedService
+    with Stopwatch() as clock:
+        if replicas:
+            from gesturelsm.serve.replicated import ReplicatedService
 
-        service = ReplicatedService.start(settings, parse_replicas(str(replicas)), parse_cluster("local"))
-    else:
-        service = GestureService.from_settings(settings)
-        service.warmup()
-    start = time.perf_counter() - t0
+            service = ReplicatedService.start(settings, parse_replicas(str(replicas)), parse_cluster("local"))
+        else:
+            service = GestureService.from_settings(settings)
+            service.warmup()
+    start = clock.seconds
     try:
         demo, url = serve_locally(service)
         try:
@@ -171,23 +172,33 @@ def main() -> None:
     p.add_argument("--replicas", type=int, nargs="*", default=[0, 1, 2],
                    help="0: the demo in this process; none given: no web part")
     p.add_argument("--skip-batch", action="store_true")
+    p.add_argument("--threads", type=int, default=None, help="torch's math threads here (default: torch's choice)")
+    json_flag(p)
     args = p.parse_args()
+    if args.threads:
+        set_threads(args.threads)
     print(f"machine: {cpu_name()}, {os.cpu_count()} cores; load average at start {os.getloadavg()[0]:.1f}\n")
+    tables: dict[str, Rows] = {}
     with tempfile.TemporaryDirectory(prefix="cluster-bench-") as tmp:
         root = Path(tmp)
         if not args.skip_batch:
-            print(f"| batch: {args.speeches} speeches x {', '.join(args.methods)}, {args.size} px | videos | seconds "
-                  "| videos per minute |\n|---|---|---|---|")
+            table = tables["batch"] = Rows([f"batch: {args.speeches} speeches x {', '.join(args.methods)}, "
+                                            f"{args.size} px", "videos", "seconds", "videos per minute"])
+            print(table.header())
             for name, n, s, vpm in batch_rows(args, root):
-                print(f"| {name} | {n} | {s:.1f} | {vpm:.2f} |", flush=True)
+                table.add(name, n, f"{s:.1f}", f"{vpm:.2f}")
+                print(table.last(), flush=True)
         if args.replicas:
-            print(f"\n| web: {args.requests} x /generate at {args.rate:g} per minute, {args.size} px, ~5 s speech "
-                  "| start s | requests per minute | p50 latency s | p95 latency s | MB per replica |\n"
-                  "|---|---|---|---|---|---|")
-        for n in args.replicas:
-            name, start, rpm, p50, p95, mb = app_row(n, args, root)
-            print(f"| {name} | {start:.0f} | {rpm:.2f} | {p50:.1f} | {p95:.1f} | {mb:.0f} |", flush=True)
+            table = tables["web"] = Rows([f"web: {args.requests} x /generate at {args.rate:g} per minute, "
+                                          f"{args.size} px, ~5 s speech", "start s", "requests per minute",
+                                          "p50 latency s", "p95 latency s", "MB per replica"])
+            print("\n" + table.header())
+            for n in args.replicas:
+                name, start, rpm, p50, p95, mb = app_row(n, args, root)
+                table.add(name, f"{start:.0f}", f"{rpm:.2f}", f"{p50:.1f}", f"{p95:.1f}", f"{mb:.0f}")
+                print(table.last(), flush=True)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
+    save_json(args.json, tables)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """How fast, and in how much memory, hostile uploads are refused. Each case runs in a fresh
 Python process (so the peak RSS is that case alone) and prints one markdown row.
 
-    PYTHONPATH=.:tests .venv/bin/python benchmarks/hostile_uploads.py [--hours 10] [--max-seconds 300]
+    PYTHONPATH=.:tests .venv/bin/python benchmarks/hostile_uploads.py [--hours 10] [--max-seconds 300] [--json FILE]
 
 Cases: a FLAC of N hours of silence whose header states its length / says "unknown length" (decoding
 then stops at the limit); an HLS playlist naming a server file; a TextGrid of 200k intervals and a
@@ -12,15 +12,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+from _harness import REPO, Rows, json_flag, save_json
 
 CASE = r"""
-import json, sys, time
+import json, sys
 
 
 def peak_mb():
@@ -33,35 +34,36 @@ def peak_mb():
 
 
 from pathlib import Path
+from _harness import Stopwatch
 from gesturelsm.serve.checks import textgrid_words
 from gesturelsm.align.textgrid import read_result
 from gesturelsm.audio import load_audio
 from gesturelsm.serve.limits import transcript_problems
 kind, path, max_s = sys.argv[1], sys.argv[2], float(sys.argv[3])
-t0 = time.perf_counter()                      # imports are not timed
-try:
-    if kind == "audio":
-        load_audio(path, max_seconds=max_s)
-    elif kind == "textgrid":
-        words, problems, _ = textgrid_words(path, 2.0)
-        if problems:
-            raise ValueError(problems[0])
-    elif kind == "textgrid-unbounded":
-        read_result(path)
-    elif kind == "transcript":
-        problems = transcript_problems(Path(path).read_text(), 2.0)
-        if problems:
-            raise ValueError(problems[0])
-    outcome = "accepted"
-except Exception as exc:
-    outcome = f"refused ({type(exc).__name__})"
-print(json.dumps({"outcome": outcome, "seconds": time.perf_counter() - t0,
+with Stopwatch() as clock:                   # imports are not timed
+    try:
+        if kind == "audio":
+            load_audio(path, max_seconds=max_s)
+        elif kind == "textgrid":
+            words, problems, _ = textgrid_words(path, 2.0)
+            if problems:
+                raise ValueError(problems[0])
+        elif kind == "textgrid-unbounded":
+            read_result(path)
+        elif kind == "transcript":
+            problems = transcript_problems(Path(path).read_text(), 2.0)
+            if problems:
+                raise ValueError(problems[0])
+        outcome = "accepted"
+    except Exception as exc:
+        outcome = f"refused ({type(exc).__name__})"
+print(json.dumps({"outcome": outcome, "seconds": clock.seconds,
                   "peak_mb": peak_mb()}))
 """
 
 
 def run_case(kind: str, path: Path, max_seconds: float) -> dict:
-    env = {"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin"}
+    env = {"PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "benchmarks")]), "PATH": "/usr/bin:/bin"}
     proc = subprocess.run([sys.executable, "-c", CASE, kind, str(path), str(max_seconds)], capture_output=True,
                           text=True, cwd=REPO, env=env, timeout=900)
     if proc.returncode:
@@ -73,6 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--hours", type=float, default=10.0)
     p.add_argument("--max-seconds", type=float, default=300.0)
+    json_flag(p)
     args = p.parse_args(argv)
     sys.path.insert(0, str(REPO / "tests"))
     from _hostile import playlist_naming, silent_flac
@@ -99,13 +102,14 @@ def main(argv: list[str] | None = None) -> int:
             ("transcript, 50k words, 2 s of speech", "transcript", words),
         ]
         print(f"limit {args.max_seconds:g} s; each case in a fresh process; peak = max RSS of that process")
-        print("| case | file size | outcome | seconds | peak MB |")
-        print("|---|---|---|---|---|")
+        table = Rows(["case", "file size", "outcome", "seconds", "peak MB"])
+        print(table.header())
         for name, kind, path in cases:
             r = run_case(kind, path, args.max_seconds)
-            size = path.stat().st_size
-            print(f"| {name} | {size / 1024:.0f} KB | {r['outcome']} | {r['seconds']:.2f} | {r['peak_mb']:.0f} |",
-                  flush=True)
+            table.add(name, f"{path.stat().st_size / 1024:.0f} KB", r["outcome"], f"{r['seconds']:.2f}",
+                      f"{r['peak_mb']:.0f}")
+            print(table.last(), flush=True)
+    save_json(args.json, table)
     return 0
 
 

@@ -1,6 +1,7 @@
 """Load on the study server: N raters answering at once over loopback against SQLite (the default database).
 
     .venv/bin/python benchmarks/study_load.py [--raters 50] [--speeches 4] [--methods 3] [--timeout 300]
+                                              [--json FILE]
 
 A study folder with tiny silent videos (key, design, N links, as `gesturelsm batch` writes them) is made in a
 temporary folder and served by `gesturelsm.study.server.serve` in its own process (uvicorn). Every rater is a
@@ -26,6 +27,7 @@ from itertools import product
 from pathlib import Path
 
 import numpy as np
+from _harness import Rows, Stopwatch, json_flag, save_json
 
 
 def make_study(root: Path, speeches: int, methods: int, raters: int) -> Path:
@@ -70,9 +72,9 @@ def rater_run(port: int, token: str, lat: list[float], errors: list[str], counts
                 if r.status != 206:
                     errors.append(f"video {i} {side}: {r.status}")
             body = dict(session=session, trial=i, choice="left", played=True)
-            t0 = time.perf_counter()
-            status, nxt = post("answer", body)
-            lat.append(time.perf_counter() - t0)
+            with Stopwatch() as clock:
+                status, nxt = post("answer", body)
+            lat.append(clock.seconds)
             if status != 200:
                 errors.append(f"answer {i}: {status} {nxt}")
                 return
@@ -92,6 +94,7 @@ def main() -> int:
     ap.add_argument("--speeches", type=int, default=4)
     ap.add_argument("--methods", type=int, default=3)
     ap.add_argument("--timeout", type=float, default=300)
+    json_flag(ap)
     args = ap.parse_args()
     from gesturelsm.study import db
     from gesturelsm.study.design import read_raters
@@ -116,12 +119,12 @@ def main() -> int:
             counts = dict(completed=0, replays_refused=0)
             threads = [threading.Thread(target=rater_run, args=(port, r.token, lat, errors, counts), daemon=True)
                        for r in raters]
-            t0 = time.perf_counter()
-            for t in threads:
-                t.start()
-            for t in threads:
-                t.join(max(0.0, args.timeout - (time.perf_counter() - t0)))
-            wall = time.perf_counter() - t0
+            with Stopwatch() as clock:
+                for t in threads:
+                    t.start()
+                for t in threads:
+                    t.join(max(0.0, args.timeout - clock.elapsed))
+            wall = clock.seconds
             hung = sum(t.is_alive() for t in threads)
         finally:
             server.terminate()
@@ -133,12 +136,13 @@ def main() -> int:
     ms = np.array(lat) * 1000
     print(f"{args.raters} raters at once, {len(want) // args.raters} trials each, SQLite, loopback "
           f"(one run; the machine may be shared)\n")
-    print("| answers | wall s | answers/s | p50 ms | p95 ms | max ms | lost | doubled | replays refused | "
-          "completed | errors | hung |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    print(f"| {len(lat)} | {wall:.1f} | {len(lat) / wall:.0f} | {np.percentile(ms, 50):.1f} | "
-          f"{np.percentile(ms, 95):.1f} | {ms.max():.1f} | {lost} | {doubled} | {counts['replays_refused']} | "
-          f"{counts['completed']} / {args.raters} | {len(errors)} | {hung} |")
+    table = Rows(["answers", "wall s", "answers/s", "p50 ms", "p95 ms", "max ms", "lost", "doubled", "replays refused",
+                  "completed", "errors", "hung"])
+    table.add(len(lat), f"{wall:.1f}", f"{len(lat) / wall:.0f}", f"{np.percentile(ms, 50):.1f}",
+              f"{np.percentile(ms, 95):.1f}", f"{ms.max():.1f}", lost, doubled, counts["replays_refused"],
+              f"{counts['completed']} / {args.raters}", len(errors), hung)
+    print(table.markdown())
+    save_json(args.json, table)
     for e in errors[:5]:
         print("error:", e)
     return 0 if not (lost or doubled or errors or hung) else 1

@@ -1,7 +1,7 @@
 """The study server while another program holds its database's write lock: what each kind of request answers,
 and how soon.
 
-    .venv/bin/python benchmarks/study_locked_db.py [--hold 8] [--repo PATH]
+    .venv/bin/python benchmarks/study_locked_db.py [--hold 8] [--repo PATH] [--json FILE]
 
 A study folder with tiny silent videos (as in study_load.py) is served by `gesturelsm study serve` in its own
 process. Once a rater has opened the study, this process takes the SQLite write lock (BEGIN IMMEDIATE) and holds
@@ -27,18 +27,19 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _harness import Rows, Stopwatch, json_flag, save_json
 from study_load import make_study
 
 
 def request(port: int, method: str, path: str, body: dict | None = None, headers: dict | None = None) -> dict:
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
-    t0 = time.perf_counter()
     try:
-        conn.request(method, path, json.dumps(body) if body is not None else None,
-                     {**({"Content-Type": "application/json"} if body is not None else {}), **(headers or {})})
-        r = conn.getresponse()
-        raw = r.read()
-        ms = (time.perf_counter() - t0) * 1000
+        with Stopwatch() as clock:
+            conn.request(method, path, json.dumps(body) if body is not None else None,
+                         {**({"Content-Type": "application/json"} if body is not None else {}), **(headers or {})})
+            r = conn.getresponse()
+            raw = r.read()
+        ms = clock.seconds * 1000
         try:
             data = json.loads(raw)
             is_json, message = True, data.get("error", "") if isinstance(data, dict) else ""
@@ -68,6 +69,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--hold", type=float, default=8.0, help="seconds the write lock is held")
     ap.add_argument("--repo", help="serve from this checkout (PYTHONPATH) instead of the installed package")
+    json_flag(ap)
     args = ap.parse_args()
     from gesturelsm.study.design import read_raters
 
@@ -94,17 +96,17 @@ def main() -> int:
             holder = sqlite3.connect(folder / "responses.sqlite", isolation_level=None, timeout=30,
                                      check_same_thread=False)
             holder.execute("BEGIN IMMEDIATE")
-            t_lock = time.perf_counter()
-            threading.Timer(args.hold, lambda: holder.execute("ROLLBACK")).start()
-            time.sleep(0.5)
-            results: dict[str, dict] = {}
-            threads = [threading.Thread(target=lambda k=k, c=c: results.__setitem__(k, request(port, *c)))
-                       for k, c in calls.items()]
-            for t in threads:
-                t.start()
-            for t in threads:
-                t.join()
-            time.sleep(max(0.0, args.hold + 0.2 - (time.perf_counter() - t_lock)))
+            with Stopwatch() as lock:
+                threading.Timer(args.hold, lambda: holder.execute("ROLLBACK")).start()
+                time.sleep(0.5)
+                results: dict[str, dict] = {}
+                threads = [threading.Thread(target=lambda k=k, c=c: results.__setitem__(k, request(port, *c)))
+                           for k, c in calls.items()]
+                for t in threads:
+                    t.start()
+                for t in threads:
+                    t.join()
+                time.sleep(max(0.0, args.hold + 0.2 - lock.elapsed))
             holder.close()
             results["the same answer after the lock is released"] = request(port, *calls["answer (POST .../answer)"])
         finally:
@@ -112,10 +114,11 @@ def main() -> int:
             server.wait(30)
     print(f"write lock held by another program for {args.hold:g} s; requests sent 0.5 s into it"
           f"{' (served from ' + args.repo + ')' if args.repo else ''}; one run, the machine may be shared\n")
-    print("| request | status | JSON body | ms | message |")
-    print("|---|---|---|---|---|")
+    table = Rows(["request", "status", "JSON body", "ms", "message"])
     for k, r in results.items():
-        print(f"| {k} | {r['status']} | {'yes' if r['json'] else 'no'} | {r['ms']:.0f} | {r['message'][:70]} |")
+        table.add(k, r["status"], "yes" if r["json"] else "no", f"{r['ms']:.0f}", r["message"][:70])
+    print(table.markdown())
+    save_json(args.json, table)
     return 0
 
 

@@ -1,6 +1,7 @@
 """Non-English speech: gestures from the audio only vs with the recognised words (markdown out).
 
     NUMBA_CACHE_DIR=.venv/numba-cache .venv/bin/python benchmarks/transcribe_gestures_languages.py [--seeds 2]
+                                                  [--threads N] [--json FILE]
 
 No real Japanese, Chinese, Spanish or German speech is stored here, so the clips are eSpeak NG's (three sentences per
 language, about 15 s; Chinese is eSpeak's Mandarin spoken from pinyin, which Whisper base identifies as Chinese).
@@ -15,18 +16,17 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
+from _harness import REPO, Rows, json_flag, save_json, set_threads
 
-REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from gesturelsm.align import tts  # noqa: E402
-from gesturelsm.asr.source import automatic_words  # noqa: E402
-from gesturelsm.audio import resample  # noqa: E402
-from gesturelsm.evaluation.motion_stats import SpeechContext, motion_statistics, speaker_reference, stats_body  # noqa: E402
-from gesturelsm.pipeline import GesturePipeline  # noqa: E402
+from gesturelsm.align import tts
+from gesturelsm.asr.source import automatic_words
+from gesturelsm.audio import resample
+from gesturelsm.evaluation.motion_stats import SpeechContext, motion_statistics, speaker_reference, stats_body
+from gesturelsm.pipeline import GesturePipeline
 
 CLIPS = {
     "ja": ("ja", ["きのう わたしは ともだちと いっしょに えきの ちかくの レストランで ひるごはんを たべました",
@@ -62,13 +62,16 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--languages", nargs="+", default=list(CLIPS))
+    ap.add_argument("--threads", type=int, default=None, help="torch's math threads (default: torch's choice)")
+    json_flag(ap)
     args = ap.parse_args()
+    if args.threads:
+        set_threads(args.threads)
     pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"])
     ref = speaker_reference()
     body = stats_body()
-    print("| language | clip (s) | recognised | transcript | " + " | ".join(f"{k} audio-only / words" for k in KEYS)
-          + " |")
-    print("|---|---|---|---|" + "---|" * len(KEYS))
+    table = Rows(["language", "clip (s)", "recognised", "transcript", *(f"{k} audio-only / words" for k in KEYS)])
+    print(table.header())
     for lang in args.languages:
         voice, sentences = CLIPS[lang]
         y = clip(voice, sentences)
@@ -84,8 +87,10 @@ def main() -> None:
                      for s in range(args.seeds)]
             rows[name] = {k: float(np.nanmean([st[k] for st in stats])) for k in KEYS}
         said = (words.transcript or (auto.warnings[0] if auto.warnings else ""))[:60].replace("|", "/")
-        cells = " | ".join(f"{rows['audio'][k]:.3f} / {rows['words'][k]:.3f}" for k in KEYS)
-        print(f"| {lang} ({voice}) | {len(y) / 16000:.1f} | {words.text_mode} | {said} | {cells} |", flush=True)
+        table.add(f"{lang} ({voice})", f"{len(y) / 16000:.1f}", words.text_mode, said,
+                  *(f"{rows['audio'][k]:.3f} / {rows['words'][k]:.3f}" for k in KEYS))
+        print(table.last(), flush=True)
+    save_json(args.json, table)
     if ref:
         print("\nspeaker's row: " + ", ".join(f"{k} {ref.statistics[k]:.3f}" for k in KEYS))
 

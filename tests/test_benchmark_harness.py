@@ -1,5 +1,5 @@
 """benchmarks/_harness.py: the data path (GESTURELSM_SHARED, else ../shared), the thread count, a timer with medians and
-one row format; and every benchmark script takes the shared data and its thread count from it."""
+one row format; and every benchmark script runs through it (takes the shared data and its thread count from it)."""
 from __future__ import annotations
 
 import ast
@@ -8,6 +8,8 @@ import json
 import statistics
 import sys
 from pathlib import Path
+
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 BENCHMARKS = REPO / "benchmarks"
@@ -69,3 +71,33 @@ def test_every_script_takes_the_data_path_and_threads_from_the_harness():
         known = {a.name for n in nodes if isinstance(n, ast.ImportFrom) for a in n.names}        # _harness's, or
         known |= {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
         assert used <= known, (path.name, used - known)                     # another script's, or its own name
+
+
+def test_rows_as_they_come_stopwatch_and_json(monkeypatch, tmp_path):
+    h = _harness(monkeypatch, None)
+    rows = h.Rows(["case", "seconds"])
+    rows.add("a", "0.10")
+    assert rows.header() == "| case | seconds |\n|---|---|" and rows.last() == "| a | 0.10 |"
+    rows.add("b", 2)
+    assert rows.markdown() == rows.header() + "\n| a | 0.10 |\n| b | 2 |"
+    with h.Stopwatch() as sw:
+        assert sw.elapsed >= 0
+    assert sw.seconds >= 0
+    h.save_json(tmp_path / "one.json", rows)
+    assert json.loads((tmp_path / "one.json").read_text()) == [{"case": "a", "seconds": "0.10"},
+                                                               {"case": "b", "seconds": "2"}]
+    h.save_json(tmp_path / "two.json", {"first": rows, "second": h.Rows(["x"])})
+    assert json.loads((tmp_path / "two.json").read_text()) == {"first": rows.records(), "second": []}
+    h.save_json(None, rows)                                               # no --json: nothing written
+
+
+SCRIPTS = [pytest.param(p.name, marks=pytest.mark.skip(reason="its table and timer are its own"))
+           if p.name == "player_latency.py" else p.name
+           for p in sorted(BENCHMARKS.glob("*.py")) if not p.name.startswith("_")]
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_every_script_runs_through_the_harness(name):
+    tree = ast.parse((BENCHMARKS / name).read_text())
+    nodes = list(ast.walk(tree))
+    assert any(isinstance(n, ast.ImportFrom) and n.module == "_harness" for n in nodes), f"{name} skips _harness"

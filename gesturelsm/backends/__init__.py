@@ -3,33 +3,41 @@
 `BACKENDS` maps each method's key to its registry line: the method's spec (`spec.MethodSpec`: label, colour, default
 and maximum steps, which step setting drives it, CFG bound, regions, whether it can inpaint) and how its checkpoint
 is found and loaded. `SPECS` reads the specs from it (a live view: a line added to `BACKENDS` is seen everywhere),
-`load_backends` builds the backends found in a list of checkpoint files and folders. A new method = a backend
-module in this folder (or, for one of ours, a sampler in `flows/`) and one line below.
+`load_backends` builds the backends found in a list of checkpoint files and folders. A new method = a backend module
+in this folder (or, for one of ours, a sampler in `flows/`) and one line below. The registry loads no torch (its
+lines, lines.py, import a backend's code when they load it): the command line's parsers list the methods without it.
 """
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
-from typing import Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
-import torch
-
-from ..constants import ASSETS
+from ..constants import ASSETS, Progress
 from ..errors import CheckpointError, InputError
-from ..flows import DDIM, RectifiedFlow, Shortcut
+from ..flows.facts import DDIM_FACTS, RECTIFIED_FLOW_FACTS, SHORTCUT_FACTS
 from ..reference.config import REGIONS as AUTHORS_REGIONS
-from .authors import RVQ_FILE, Authors
-from .base import Backend, BackendKind, BackendOutput, Progress, SpeechInput
-from .ours import FlowBackend, Ours
+from .lines import RVQ_FILE, Authors, Ours
 from .spec import GROUND_TRUTH, GROUND_TRUTH_LABEL, MAX_CFG, STEPS_SETTINGS, Bounds, MethodSpec
+
+if TYPE_CHECKING:
+    import torch
+
+    from .base import Backend, BackendKind, BackendOutput, SpeechInput
+    from .ours import FlowBackend
+
+# the backends' code (torch), imported on first use: the registry itself (BACKENDS, SPECS) loads no torch
+_HOME = {"Backend": "base", "BackendKind": "base", "BackendOutput": "base", "SpeechInput": "base",
+         "FlowBackend": "ours"}
 
 # Inpainting (holding known latents while sampling the rest): every sampler that visits intermediate times of a
 # known forward process can. Ours: flows.base.inpainting (the live mode holds its seed with it). The authors'
 # shortcut and diffusion samplers walk the same straight path / DDIM schedule. MeanFlow's default is one step from
 # pure noise, where the known part carries no information.
 BACKENDS: dict[str, BackendKind] = {b.spec.key: b for b in (
-    Ours(MethodSpec("gesturelsm", "GestureLSM", "#d62728", 8, Shortcut.facts.max_steps, inpainting=True)),
-    Ours(MethodSpec("rectified_flow", "Rectified flow", "#1f77b4", 8, RectifiedFlow.facts.max_steps, inpainting=True)),
-    Ours(MethodSpec("ddim", "DDIM", "#2ca02c", 20, DDIM.facts.max_steps, "ddim_steps", inpainting=True)),
+    Ours(MethodSpec("gesturelsm", "GestureLSM", "#d62728", 8, SHORTCUT_FACTS.max_steps, inpainting=True)),
+    Ours(MethodSpec("rectified_flow", "Rectified flow", "#1f77b4", 8, RECTIFIED_FLOW_FACTS.max_steps, inpainting=True)),
+    Ours(MethodSpec("ddim", "DDIM", "#2ca02c", 20, DDIM_FACTS.max_steps, "ddim_steps", inpainting=True)),
     Authors(MethodSpec("gesturelsm_authors", "GestureLSM (authors' weights)", "#9467bd", 2, 128,
                        regions=AUTHORS_REGIONS, imported=True, inpainting=True), "shortcut"),
     Authors(MethodSpec("meanflow_authors", "MeanFlow (authors' weights)", "#8c564b", 1, 128,
@@ -131,7 +139,17 @@ def checkpoint_sources(path: str | Path | None) -> list[Path]:
 
 def flow_backends(tokenizers: dict, generators: dict) -> dict[str, Backend]:
     """Our backends from models already in memory ({method: GestureGenerator} on shared tokenizers)."""
+    from .ours import FlowBackend
+
     return {k: FlowBackend(method_spec(k), g, tokenizers) for k, g in generators.items()}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
+    globals()[name] = value
+    return value
 
 
 __all__ = ["BACKENDS", "GROUND_TRUTH", "GROUND_TRUTH_LABEL", "MAX_CFG", "SPECS", "STEPS_SETTINGS", "Backend",

@@ -8,25 +8,21 @@ reference_<sampler>.safetensors per method.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from pathlib import Path
 
 import torch
 
-from ..errors import CheckpointError, InputError
+from ..errors import InputError
 from ..flows import Held
 from ..motion.editing import EditSpec, Keyframe
 from ..motion.regions import REGIONS as MOTION_REGIONS
 from ..motion.sequence import MotionSequence
 from ..reference.config import LATENT_SCALE, REGIONS
-from ..reference.convert import load_generator, load_rvqs
 from ..reference.model import ReferenceGenerator
 from ..reference.runner import FACE_NOTE, LONG_AUDIO_NOTE, ReferenceBundle, generate_reference
 from .base import BackendOutput, Progress, SpeechInput
 from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
 from .spec import MethodSpec
 
-RVQ_FILE = "reference_rvq.safetensors"
 
 
 class AuthorsBackend:
@@ -70,26 +66,4 @@ class AuthorsBackend:
         return middle_latent(self.bundle.rvqs[region].encode(self.bundle.normalise(region, x)[None]) / LATENT_SCALE)
 
 
-@dataclass(frozen=True)
-class Authors:
-    """Registry line of one of the authors' methods: its spec (their released settings) and its sampler's file."""
-    spec: MethodSpec
-    sampler: str                     # "shortcut" | "meanflow" | "diffusion": reference_<sampler>.safetensors
-
-    def checkpoint(self, root: Path) -> Path:
-        return root / f"reference_{self.sampler}.safetensors"
-
-    def root_of(self, file: Path) -> Path:
-        return file.parent
-
-    def load(self, file: Path, device: str | torch.device, shared: dict) -> AuthorsBackend:
-        root = self.root_of(file)
-        if ("reference", root) not in shared:
-            if not (root / RVQ_FILE).exists():
-                raise CheckpointError(f"{file}: {RVQ_FILE} is missing beside it (write both with "
-                                      "`gesturelsm import-reference`)")
-            shared["reference", root] = ReferenceBundle(*load_rvqs(root / RVQ_FILE))
-        return AuthorsBackend(self.spec, shared["reference", root], *load_generator(file))
-
-
-__all__ = ["Authors", "AuthorsBackend", "RVQ_FILE"]
+__all__ = ["AuthorsBackend"]

@@ -7,7 +7,6 @@ generator/<method>.safetensors.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import torch
@@ -88,22 +87,4 @@ class FlowBackend:
         return middle_latent(tok.encode(tok.normalizer.normalize(x.to(device))[None])).cpu()
 
 
-@dataclass(frozen=True)
-class Ours:
-    """Registry line of one of our methods (a sampler of the flows registry, `flows.METHODS`, under the same key)."""
-    spec: MethodSpec
-
-    def checkpoint(self, root: Path) -> Path:
-        return root / "generator" / f"{self.spec.key}.safetensors"
-
-    def root_of(self, file: Path) -> Path:
-        return file.parent.parent
-
-    def load(self, file: Path, device: str | torch.device, shared: dict) -> FlowBackend:
-        root = self.root_of(file)
-        if ("tokenizers", root) not in shared:
-            shared["tokenizers", root] = load_tokenizers(root / "tokenizer", device)
-        return FlowBackend(self.spec, GestureGenerator.load(file).to(device), shared["tokenizers", root])
-
-
-__all__ = ["FlowBackend", "Ours", "load_tokenizers"]
+__all__ = ["FlowBackend", "load_tokenizers"]

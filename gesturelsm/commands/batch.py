@@ -26,7 +26,7 @@ HELP = "render blinded user-study videos, their key and the study's design and l
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    from ..backends import GROUND_TRUTH, SPECS, ours_default          # the method registry loads torch
+    from ..backends import GROUND_TRUTH, SPECS, ours_default
 
     p = subparsers.add_parser(NAME, help=HELP, description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -39,7 +39,7 @@ HELP = "regenerate body regions of a motion over time ranges, keep the rest"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..backends import SPECS                            # the method registry and the regions load torch
+    from ..backends import SPECS
     from ..motion.regions import GENERATED_REGIONS
 
     g = sub.add_parser(NAME, help=HELP,

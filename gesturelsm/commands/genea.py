@@ -26,8 +26,8 @@ HELP = "GENEA Leaderboard: submission folders and its objective metrics"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..backends import SPECS                            # the method registry and the metrics load torch
-    from ..genea.leaderboard import EMAGE_FILE, MEAN_SPEED_FILE
+    from ..backends import SPECS
+    from ..genea.files import EMAGE_FILE, MEAN_SPEED_FILE
 
     p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

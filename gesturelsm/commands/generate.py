@@ -37,7 +37,7 @@ Then `gesturelsm render out.npz --audio speech.wav --out out.mp4` shows it."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..backends import SPECS                            # the method registry loads torch
+    from ..backends import SPECS
 
     g = sub.add_parser(NAME, help=HELP, description=GENERATE,
                        formatter_class=argparse.RawDescriptionHelpFormatter)

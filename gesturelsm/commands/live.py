@@ -24,7 +24,7 @@ HELP = "stream a speech file through the live generator (as if from a microphone
 
 
 def add_parser(sub) -> None:
-    from ..live.stream import LiveConfig                    # the live generator's code loads torch
+    from ..live.config import LiveConfig
 
     p = sub.add_parser(NAME, help=HELP,
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -58,7 +58,7 @@ def add_parser(sub) -> None:
 def check_arguments(args: argparse.Namespace) -> tuple:
     """(config, chunk ms, threads): every argument before any work, all problems at once (InputError)."""
     from ..export.engine_stream import parse_address
-    from ..live.stream import LiveConfig
+    from ..live.config import LiveConfig
 
     p: list[str] = []
     settings, found = settings_problems(Asked([LiveConfig.method], args.steps, cfg=args.cfg, seed=args.seed),

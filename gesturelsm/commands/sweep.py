@@ -24,8 +24,7 @@ HELP = "steps x CFG x seeds on one speech: time and motion statistics, table and
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits      # the sweep's code loads torch
-    from ..evaluation.sweep_report import PLOT_METRICS
+    from ..evaluation.sweep_limits import DEFAULT_CFGS, DEFAULT_STEPS, PLOT_METRICS, SweepLimits
 
     limits = SweepLimits()
     p = sub.add_parser(NAME, help=HELP,

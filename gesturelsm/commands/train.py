@@ -23,8 +23,8 @@ HELP = "train a generator (GestureLSM or a baseline) on a BEAT2-layout folder"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..flows import METHODS                          # the methods' and the variants' declarations load torch
-    from ..generator.augment import KINDS
+    from ..flows import FACTS as METHODS                 # the methods' facts, in registry order
+    from ..generator.variant_kinds import KINDS
 
     p = sub.add_parser(NAME, help=HELP,
                        description="Train a speech-to-latent generator for one sampling method (GestureLSM's "

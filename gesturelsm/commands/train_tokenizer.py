@@ -12,7 +12,7 @@ HELP = "train the per-region RVQ-VAE tokenizers on a BEAT2-layout folder"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    from ..motion.regions import GENERATED_REGIONS          # the regions' declaration loads torch
+    from ..motion.regions import GENERATED_REGIONS
 
     p = sub.add_parser(NAME, help=HELP,
                        description="Train one RVQ-VAE motion tokenizer per body region on a BEAT2-layout folder's "

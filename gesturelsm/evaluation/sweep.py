@@ -27,29 +27,15 @@ from ..cluster import Connection, Files, Job, Stopped, Unit, run_units
 from ..constants import Progress
 from ..errors import GestureError, InputError
 from ..pipeline import GesturePipeline, SpeechInput
-from ..settings import CLI, DEFAULT_CFG, Limits, Names, PostProcess, grid_problems
+from ..settings import CLI, Limits, Names, PostProcess, grid_problems
 from ..settings.values import method_list
+from .sweep_limits import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
 
 
 class SweepCancelled(GestureError):
     """The sweep was stopped on request; nothing was written."""
-
-
-@dataclass(frozen=True)
-class SweepLimits:
-    max_cells: int = 72                 # (method, steps, CFG) combinations
-    max_seeds: int = 4
-    max_work: float = 1500.0            # seconds of motion generated in all: cells x seeds x speech seconds
-
-    def describe(self) -> str:
-        return (f"at most {self.max_cells} combinations, {self.max_seeds} seeds, and {self.max_work:g} s of motion in "
-                f"all (combinations x seeds x speech seconds)")
-
-
-DEFAULT_STEPS = (1, 2, 4, 8)          # a sweep's step counts and CFG scales when none are given (page and CLI)
-DEFAULT_CFGS = (1.0, DEFAULT_CFG, 3.0)
 
 
 @dataclass(frozen=True)

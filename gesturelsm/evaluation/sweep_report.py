@@ -16,9 +16,11 @@ from ..errors import InputError
 from .motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from ..backends import color, label
 from .sweep import SweepResult
+from .sweep_limits import PLOT_METRICS
 
 FILES = ("sweep.csv", "sweep.md", "sweep.json", "sweep.png")
-PLOT_METRICS = tuple(s.key for s in (*STATISTICS, SEED_SPREAD))
+if PLOT_METRICS != tuple(s.key for s in (*STATISTICS, SEED_SPREAD)):
+    raise ImportError("sweep_limits.PLOT_METRICS must list the keys of motion_stats.STATISTICS and SEED_SPREAD")
 MARKERS = "osD^vP*X"
 
 

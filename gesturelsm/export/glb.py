@@ -28,7 +28,7 @@ import torch
 from ..body.model import resolve_body
 from ..errors import InputError
 from ..motion.rotations import axis_angle_to_matrix
-from ..motion.rotations import matrix_to_quaternion_xyzw
+from ..motion.rotations import continuous_quaternions, matrix_to_quaternion_xyzw
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS, PARENTS
 from .guard import animation_times, check_motion, finite
@@ -40,15 +40,6 @@ ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
 
 
 CHUNK = 4096                                # frames converted at once by the writers
-
-
-def continuous_quaternions(q: np.ndarray) -> np.ndarray:
-    """(T, ..., 4): flip signs so consecutive frames have a non-negative dot product (no long-way slerp)."""
-    q = q.copy()
-    for t in range(1, len(q)):
-        flip = (q[t] * q[t - 1]).sum(-1, keepdims=True) < 0
-        q[t] = np.where(flip, -q[t], q[t])
-    return q
 
 
 def top_k_weights(W: np.ndarray, k: int = 4) -> tuple[np.ndarray, np.ndarray]:

@@ -26,6 +26,7 @@ import numpy as np
 from ..body.model import resolve_body
 from ..constants import FPS
 from ..motion.rotations import axis_angle_to_quaternion_xyzw as axis_angle_to_quaternion
+from ..motion.rotations import continuous_quaternions
 from ..motion.sequence import MotionSequence
 from ..motion.skeleton import NUM_JOINTS
 from .glb import export_glb
@@ -47,7 +48,7 @@ def used_expressions(body, max_expressions: int = MAX_EXPRESSIONS) -> list[int]:
 def motion_arrays(seq: MotionSequence, body) -> dict[str, np.ndarray]:
     """The player's arrays for `seq` on `body`: rotations (T, 55, 4), root (T, 3), expressions (T, E)."""
     T = seq.num_frames
-    quats = _continuous(axis_angle_to_quaternion(full_poses(seq, body).reshape(T, NUM_JOINTS, 3)))
+    quats = continuous_quaternions(axis_angle_to_quaternion(full_poses(seq, body).reshape(T, NUM_JOINTS, 3)))
     quats = quats.astype(np.float32)                                                       # (T, 55, 4)
     pelvis = body.rest_joints(seq.betas).astype(np.float64)[0]                             # (3,)
     root = (seq.trans.astype(np.float64) + pelvis).astype(np.float32)                      # (T, 3)
@@ -55,14 +56,6 @@ def motion_arrays(seq: MotionSequence, body) -> dict[str, np.ndarray]:
     expr = seq.expressions[:, used].astype(np.float32) if used else np.zeros((T, 0), np.float32)
     return {"rotations": quats, "root": root, "expressions": expr}
 
-
-
-def _continuous(q: np.ndarray) -> np.ndarray:
-    """(T, J, 4): `glb.continuous_quaternions` vectorised: flip a frame's sign where its dot product with the
-    previous (already flipped) frame would be negative, i.e. by the running product of the step signs."""
-    step = np.where((q[1:] * q[:-1]).sum(-1) < 0, -1.0, 1.0)                              # (T-1, J)
-    sign = np.concatenate([np.ones((1,) + step.shape[1:]), np.cumprod(step, 0)])           # (T, J)
-    return q * sign[..., None]
 
 
 def motion_record(seq: MotionSequence, body, start: int = 0, meta: dict | None = None) -> MotionRecord:

@@ -15,6 +15,8 @@ from typing import Callable, ClassVar, Protocol
 
 import torch
 
+from .facts import MethodFacts
+
 ModelFn = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]
 
 
@@ -22,18 +24,6 @@ ModelFn = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor], tor
 class LossResult:
     loss: torch.Tensor               # scalar to minimise
     logs: dict[str, float]           # parts of the loss for progress bars
-
-
-@dataclass(frozen=True)
-class MethodFacts:
-    """The sampling maths' facts of a method, beside it (what people see of it and the settings it runs with
-    are in its backend registry line, `gesturelsm.backends`)."""
-    key: str                         # the name in checkpoints, the CLI and the API, e.g. "gesturelsm"
-    max_steps: int                   # the most steps its sampler can take (shortcut: d down to 1/128; DDIM: its
-                                     # training steps)
-    samples_with: str                # what its sampler asks the model function for: "velocity" | "data" (x1); a
-                                     # network's own output is its checkpoint's GeneratorConfig.prediction
-    uses_step_size: bool             # whether the network's d input is meaningful
 
 
 class Method(Protocol):

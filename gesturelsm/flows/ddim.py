@@ -14,8 +14,7 @@ from typing import ClassVar
 import torch
 
 from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, guided
-
-NUM_TRAIN_STEPS = 1000
+from .facts import DDIM_FACTS, NUM_TRAIN_STEPS
 
 
 def cosine_alpha_bar(num_steps: int = NUM_TRAIN_STEPS, s: float = 0.008) -> torch.Tensor:
@@ -31,8 +30,7 @@ def model_time(k: torch.Tensor) -> torch.Tensor:
 
 @dataclass
 class DDIM(FactsMixin):
-    facts: ClassVar[MethodFacts] = MethodFacts(
-        key="ddim", max_steps=NUM_TRAIN_STEPS, samples_with="data", uses_step_size=False)
+    facts: ClassVar[MethodFacts] = DDIM_FACTS
     alpha_bar: torch.Tensor = field(default_factory=cosine_alpha_bar)
 
     def loss(self, f: ModelFn, x1: torch.Tensor, cond_drop_p: float = 0.1,

@@ -12,13 +12,13 @@ from typing import ClassVar
 import torch
 
 from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, euler_sample, flow_loss
+from .facts import RECTIFIED_FLOW_FACTS
 from .timesteps import sample_t
 
 
 @dataclass
 class RectifiedFlow(FactsMixin):
-    facts: ClassVar[MethodFacts] = MethodFacts(
-        key="rectified_flow", max_steps=128, samples_with="velocity", uses_step_size=False)
+    facts: ClassVar[MethodFacts] = RECTIFIED_FLOW_FACTS
     time_sampler: str = "uniform"
     loss_space: str = "velocity"           # velocity | data (see base.flow_loss)
 

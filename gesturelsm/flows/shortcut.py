@@ -24,13 +24,13 @@ from typing import ClassVar
 import torch
 
 from .base import FactsMixin, LossResult, MethodFacts, ModelFn, bcast, drop_mask, euler_sample, flow_loss
+from .facts import SHORTCUT_FACTS
 from .timesteps import sample_t
 
 
 @dataclass
 class Shortcut(FactsMixin):
-    facts: ClassVar[MethodFacts] = MethodFacts(
-        key="gesturelsm", max_steps=128, samples_with="velocity", uses_step_size=True)
+    facts: ClassVar[MethodFacts] = SHORTCUT_FACTS
     alpha: float = 2.0
     beta: float = 1.2
     time_sampler: str = "beta"             # beta | uniform | logit_normal (ablation)

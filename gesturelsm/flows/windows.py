@@ -88,7 +88,7 @@ def sample_windows(num_latents: int, t: int, s: int, first_seed: torch.Tensor, s
     held = held.padded(starts[-1] + t) if held is not None else None
     out, seed_lat = None, first_seed
     for i, st in enumerate(starts):
-        if i not in todo:
+        if held is not None and i not in todo:           # only held windows are skipped
             x = held.known[:, st:st + t].clone()
         else:
             x = sample(i, st, seed_lat, g).cpu()
@@ -104,4 +104,5 @@ def sample_windows(num_latents: int, t: int, s: int, first_seed: torch.Tensor, s
         seed_lat = x[:, t - s:]
         if progress:
             progress((i + 1) / len(starts), f"window {i + 1}/{len(starts)}")
+    assert out is not None                                          # a layout has at least one window
     return held.full().hold(out) if held is not None else out      # exact again after the cross-fades

@@ -14,12 +14,11 @@ from ..body import resolve_body
 from ..errors import InputError
 from ..metrics.emage_fgd import SkeletonConvEncoder, emage_features, load_emage_weights
 from ..motion.rotations import axis_angle_to_rot6d
+from .files import EMAGE_FILE, MEAN_SPEED_FILE
 from .metrics import (KEYS, Pairing, beat_alignment, motion_beats, pair_folders, pose_metrics, read_poses,
                       sample_diversity, semantic_weights, speech_onsets, srgr_rate, l1_sum)
 from .metrics import fit as _fit
 
-EMAGE_FILE = "AESKConv_240_100.bin"
-MEAN_SPEED_FILE = "mean_vel_smplxflame_30.npy"
 FGD_EPS = 1e-6
 
 

@@ -28,11 +28,11 @@ from ..motion.rotations import axis_angle_to_matrix, matrix_to_quaternion, quate
 from ..motion.sequence import MotionSequence
 from ..tokenizer.model import RVQVAE
 from .data import TakeTensors, build_take, samples_for
+from .variant_kinds import KINDS
 
 TEMPO_RATES = (0.9, 1.1)          # speech rate: 1.1 = 10 % faster (the clip is 1/1.1 as long)
 PITCH_SEMITONES = (-2.0, 2.0)
 GAIN_DB = (-6.0, 6.0)
-KINDS = ("tempo", "pitch", "gain")
 
 
 @dataclass(frozen=True)

@@ -120,7 +120,7 @@ class CrossBlock(nn.Module):
         self.mlp = MLP(dim, ffn)
         self.drop = DropPath(drop_path)
 
-    def kv(self, cond: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    def kv(self, cond: torch.Tensor) -> tuple[torch.Tensor, ...]:
         return self.attn.project_kv(self.norm_c(cond))
 
     def forward(self, x: torch.Tensor, kv) -> torch.Tensor:  # x: (B, R*t, dim)

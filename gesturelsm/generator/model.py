@@ -10,7 +10,7 @@ Shapes (B batch, R regions, t = 32 latent frames per 128-frame window, D latent 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, Iterable, NamedTuple, cast
 
 import torch
 import torch.nn as nn
@@ -68,7 +68,8 @@ class SpeechContext(NamedTuple):
         """Row-wise: `null` where drop (B,), else self (null may have batch 1 and broadcasts)."""
         kv = [tuple(torch.where(drop.reshape(-1, *[1] * (c.dim() - 1)), u, c) for c, u in zip(kv_c, kv_u))
               for kv_c, kv_u in zip(self.kv, null.kv)]
-        frames = None if self.frames is None else torch.where(drop.reshape(-1, 1, 1), null.frames, self.frames)
+        frames = None if self.frames is None else torch.where(drop.reshape(-1, 1, 1), cast(torch.Tensor, null.frames),
+                                                              self.frames)
         return SpeechContext(kv, frames)
 
 
@@ -105,7 +106,7 @@ class Denoiser(nn.Module):
 
     def context(self, cond: torch.Tensor) -> SpeechContext:
         """(B, t, cond_dim) speech features -> what forward() reads of them."""
-        return SpeechContext([blk.kv(cond) for blk in self.cross],
+        return SpeechContext([blk.kv(cond) for blk in cast("Iterable[CrossBlock]", self.cross)],
                              self.speech_in(cond) if self.speech_in is not None else None)
 
     def forward(self, x: torch.Tensor, t: torch.Tensor, d: torch.Tensor, seed: torch.Tensor,
@@ -181,6 +182,10 @@ class _Trunk(nn.Module):
 
 
 class GestureGenerator(nn.Module):
+    latent_std: torch.Tensor          # buffers: (R,) and (R, s, D)
+    neutral_seed: torch.Tensor
+    meta: dict[str, Any]              # a loaded checkpoint's metadata besides its config
+
     def __init__(self, config: GeneratorConfig, method: str = "gesturelsm"):
         super().__init__()
         self.config, self.method = config, method

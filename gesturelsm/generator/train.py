@@ -97,6 +97,7 @@ def _batch_loss(method, net, model: GestureGenerator, ema: GestureGenerator, b, 
         if world > 1:  # DDP needs the whole forward inside the wrapped module's call
             return net(x, t, d, None, b.seed[r], drop,
                        speech=(b.audio[r], b.words[r], b.has_word[r], b.has_text[r]))
+        assert cond is not None                    # encoded above when world == 1
         return net(x, t, d, cond[r], b.seed[r], drop)
 
     teacher = None
@@ -106,7 +107,7 @@ def _batch_loss(method, net, model: GestureGenerator, ema: GestureGenerator, b, 
         def teacher(x, t, d, drop, rows=None):
             r = slice(None) if rows is None else rows
             return ema(x, t, d, ema_cond[r], b.seed[r], drop)
-    return method.loss(f, b.x1, tc.cond_drop, generator=g, **({"teacher": teacher} if teacher else {}))
+    return method.loss(f, b.x1, tc.cond_drop, generator=g, **({"teacher": teacher} if teacher is not None else {}))
 
 
 @torch.no_grad()
@@ -146,7 +147,7 @@ def train_generator(takes: list[TakeTensors], heldout: list[TakeTensors], tokeni
         step = st["step"]
         if rank == 0:
             log(f"resumed {out_path.name} at step {step}")
-    net = model
+    net: torch.nn.Module = model
     if world > 1:
         net = torch.nn.parallel.DistributedDataParallel(model,
                                                         device_ids=[device.index] if device.type == "cuda" else None)

@@ -3,7 +3,7 @@ ops.py where they are measured faster (same parameter tensors, same state_dict k
 registers a model's own faster blocks (the same function with less arithmetic)."""
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, TypeVar
 
 import torch
 import torch.nn as nn
@@ -82,7 +82,10 @@ def _fuse_gelu_pairs(seq: nn.Sequential) -> None:
             seq._modules[b] = nn.Identity()
 
 
-def accelerate(model: nn.Module) -> nn.Module:
+M = TypeVar("M", bound=nn.Module)
+
+
+def accelerate(model: M) -> M:
     """Swap, in place, every nn.Linear for FastLinear, every LinearGELU (and nn.Linear + nn.GELU pair inside an
     nn.Sequential) for FastLinearGELU, every plain zero-padded nn.Conv1d for FastConv1d, and every module whose
     class has a registered faster subclass (`faster_version_of`) for that subclass. The same parameter tensors stay

@@ -76,7 +76,7 @@ class EditSpec:
         f = np.zeros(num_latents * LATENT_FRAMES, bool)
         for a, b in self.ranges.get(region, ()):
             f[max(0, _frame(a) - LATENT_FRAMES):_frame(b) + LATENT_FRAMES] = True
-        return f.reshape(num_latents, LATENT_FRAMES).any(1)
+        return np.asarray(f.reshape(num_latents, LATENT_FRAMES).any(1))
 
     def pinned(self, key: Keyframe) -> tuple[str, ...]:
         """The regions `key` pins: those of KEY_REGIONS regenerated at its frame."""

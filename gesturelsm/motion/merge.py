@@ -70,7 +70,7 @@ def edit_weights(original: MotionSequence, generated: MotionSequence, spec: Edit
 
 def _blend_joints(out: np.ndarray, gen: np.ndarray, joints: tuple[int, ...], w: np.ndarray) -> None:
     """In place on (T, 55, 3) `out`: the joints move w of the way to `gen` where 0 < w < 1, take `gen` where w == 1."""
-    j = list(joints)
+    j = np.asarray(joints, np.intp)
     full, part = w >= 1.0, (w > 0) & (w < 1.0)
     out[np.ix_(full, j)] = gen[np.ix_(full, j)]
     if part.any():

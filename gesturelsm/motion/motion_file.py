@@ -29,10 +29,12 @@ and what to change.
 """
 from __future__ import annotations
 
+import io
 import zipfile
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 import torch
@@ -94,10 +96,13 @@ def read_motion_file(path: str | Path) -> MotionData:
         return _Reader(zf, name).read()
 
 
+Header = tuple[tuple[int, ...], bool, np.dtype]       # an .npy member's shape, Fortran order and dtype
+
+
 class _Reader:
     def __init__(self, zf: zipfile.ZipFile, name: str) -> None:
         self.zf, self.name = zf, name
-        self.members = {}
+        self.members: dict[str, zipfile.ZipInfo] = {}
         for info in zf.infolist():
             key = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
             self.members.setdefault(key, info)
@@ -106,7 +111,16 @@ class _Reader:
         return MotionFileError(f"{self.name}: {message}")
 
     # ---- headers ------------------------------------------------------------------------------------------
-    def header(self, key: str) -> tuple[tuple[int, ...], bool, np.dtype] | None:
+    def required(self, key: str) -> Header:
+        """`header(key)` of an array every motion file has (poses, trans)."""
+        head = self.header(key)
+        if head is None:
+            has = ", ".join(sorted(self.members)[:12]) or "no arrays"
+            raise self.fail(f"missing array '{key}' (has: {has}); a motion file is a BEAT2-layout .npz with "
+                            "'poses' (T, 165) and 'trans' (T, 3)")
+        return head
+
+    def header(self, key: str) -> Header | None:
         """(shape, fortran_order, dtype) of member `key` from its .npy header only; None when absent."""
         info = self.members.get(key)
         if info is None:
@@ -137,7 +151,8 @@ class _Reader:
         count = int(np.prod(shape, dtype=np.int64))
         nbytes = count * dtype.itemsize
         try:
-            with self.zf.open(self.members[key]) as fh:
+            with self.zf.open(self.members[key]) as member:
+                fh = cast(io.BufferedIOBase, member)       # a ZipExtFile: it reads into a buffer
                 version = np.lib.format.read_magic(fh)
                 (np.lib.format.read_array_header_1_0 if version == (1, 0)
                  else np.lib.format.read_array_header_2_0)(fh)
@@ -175,14 +190,10 @@ class _Reader:
 
     # ---- the file ---------------------------------------------------------------------------------------------
     def read(self) -> MotionData:
-        heads = {}
-        for key in ("poses", "trans"):
-            heads[key] = self.header(key)
-            if heads[key] is None:
-                has = ", ".join(sorted(self.members)[:12]) or "no arrays"
-                raise self.fail(f"missing array '{key}' (has: {has}); a motion file is a BEAT2-layout .npz with "
-                                "'poses' (T, 165) and 'trans' (T, 3)")
-        pshape = heads["poses"][0]
+        heads: dict[str, Header | None] = {}
+        poses_head = heads["poses"] = self.required("poses")
+        trans_head = heads["trans"] = self.required("trans")
+        pshape = poses_head[0]
         if len(pshape) != 2 or pshape[1] != NUM_POSE:
             raise self.fail(f"'poses' has shape {pshape}, expected (T, 165) axis-angle of the 55 SMPL-X joints")
         T = pshape[0]
@@ -191,23 +202,24 @@ class _Reader:
         if T > MAX_FRAMES:
             raise self.fail(f"'poses' has {T:,} frames; the limit is {MAX_FRAMES:,} ({MAX_MOTION_SECONDS / 60:g} "
                             f"minutes at {FPS} fps)")
-        if heads["trans"][0] != (T, 3):
-            raise self.fail(f"'trans' has shape {heads['trans'][0]}, expected ({T}, 3)")
+        if trans_head[0] != (T, 3):
+            raise self.fail(f"'trans' has shape {trans_head[0]}, expected ({T}, 3)")
         for key, shape_ok, expected in (
                 ("expressions", lambda s: len(s) == 2 and s[0] == T and s[1] <= MAX_EXPRESSIONS,
                  f"({T}, 100)"),
                 ("betas", lambda s: len(s) == 1 and s[0] <= MAX_BETAS or len(s) == 2 and s[0] == 1
                  and s[1] <= MAX_BETAS, "(300,)")):
-            heads[key] = self.header(key)
-            if heads[key] is not None and not shape_ok(heads[key][0]):
-                raise self.fail(f"'{key}' has shape {heads[key][0]}, expected {expected}")
+            head = heads[key] = self.header(key)
+            if head is not None and not shape_ok(head[0]):
+                raise self.fail(f"'{key}' has shape {head[0]}, expected {expected}")
         rate = self.rate()
         if T / rate > MAX_MOTION_SECONDS + 1e-9:
             raise self.fail(f"the motion is {T / rate:,.0f} s long ({T:,} frames at {rate:g} fps); the limit is "
                             f"{MAX_MOTION_SECONDS:g} s")
         for key in ("poses", "trans", "expressions", "betas"):      # every header checked: now the dtypes
-            if heads[key] is not None and (heads[key][2].kind != "f" or heads[key][2].itemsize > 8):
-                raise self.fail(f"'{key}' holds {_kind(heads[key][2])}; a motion's {key} must be real "
+            head = heads[key]
+            if head is not None and (head[2].kind != "f" or head[2].itemsize > 8):
+                raise self.fail(f"'{key}' holds {_kind(head[2])}; a motion's {key} must be real "
                                 "floating-point numbers (float32 or float64)")
         transcript, words = self.speech(T / rate)
         poses = self.floats("poses", heads["poses"], "poses")

@@ -13,10 +13,12 @@ Feature layout (per frame):
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import torch
+from typing import TYPE_CHECKING
 
 from .skeleton import JOINT_NAMES, NUM_JOINTS
+
+if TYPE_CHECKING:
+    import torch
 
 ROT_DIM = NUM_JOINTS * 6          # 330
 TRANS_OFFSET = ROT_DIM            # 330
@@ -62,7 +64,7 @@ REGIONS: dict[str, Region] = {
 }
 GENERATED_REGIONS: tuple[str, ...] = tuple(n for n, r in REGIONS.items() if r.generated)
 
-_IDENTITY_6D = torch.tensor([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+_IDENTITY_6D = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)          # the identity rotation in 6D
 
 
 def split_regions(x: torch.Tensor, names: tuple[str, ...] = GENERATED_REGIONS) -> dict[str, torch.Tensor]:
@@ -76,6 +78,8 @@ def join_regions(parts: dict[str, torch.Tensor]) -> torch.Tensor:
     Regions that are absent and not generated (eyes) get the identity rotation; a missing generated
     region is an error, so nothing is silently dropped.
     """
+    import torch                                      # the regions' table itself loads no torch (command help)
+
     ref = next(iter(parts.values()))
     out = torch.zeros(*ref.shape[:-1], FEATURE_DIM, dtype=ref.dtype, device=ref.device)
     for name, region in REGIONS.items():
@@ -84,7 +88,7 @@ def join_regions(parts: dict[str, torch.Tensor]) -> torch.Tensor:
                 raise ValueError(f"region {name!r} has {parts[name].shape[-1]} dims, expected {region.dim}")
             out[..., list(region.columns)] = parts[name]
         elif not region.generated:
-            ident = _IDENTITY_6D.to(out)
+            ident = torch.tensor(_IDENTITY_6D, dtype=out.dtype, device=out.device)
             for j in region.joints:
                 out[..., 6 * j:6 * j + 6] = ident
         else:

@@ -226,3 +226,19 @@ def quaternion_xyzw_to_matrix(q) -> np.ndarray:
         1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
         2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
         2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1).reshape(q.shape[:-1] + (3, 3))
+
+
+def continuous_quaternions(q: np.ndarray) -> np.ndarray:
+    """(T, ..., 4) quaternions, each frame's sign flipped where its dot product with the previous frame (as flipped)
+    is negative, so consecutive frames never interpolate the long way round. Vectorised over frames: a frame's sign
+    is the running product of the steps' signs, started again at a frame whose dot product is exactly 0 (kept as
+    it is)."""
+    q = np.asarray(q)
+    if len(q) < 2:
+        return q.copy()
+    d = (q[1:] * q[:-1]).sum(-1)                                                     # (T - 1, ...) before flips
+    signs = np.concatenate([np.ones((1,) + d.shape[1:]), np.cumprod(np.where(d < 0, -1.0, 1.0), 0)])
+    frame = np.arange(len(q)).reshape((-1,) + (1,) * (d.ndim - 1))
+    start = np.maximum.accumulate(np.where(np.concatenate([np.zeros((1,) + d.shape[1:], bool), d == 0]), frame, 0), 0)
+    signs = signs * np.take_along_axis(signs, start, 0)
+    return q * signs[..., None].astype(q.dtype)

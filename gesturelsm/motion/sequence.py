@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -103,7 +104,8 @@ class MotionSequence:
         if not path.name.endswith(".npz"):
             path = path.with_name(path.name + ".npz")
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez(path, **self.npz_arrays())
+        arrays: dict[str, Any] = self.npz_arrays()
+        np.savez(path, **arrays)
         return path
 
     # ---- features ---------------------------------------------------------------------------------

@@ -1,6 +1,8 @@
 """Reconstruction quality of a region tokenizer on held-out motion (`gesturelsm eval-tokenizer`)."""
 from __future__ import annotations
 
+from typing import Any
+
 import torch
 
 from ..body import load_body_model
@@ -113,7 +115,8 @@ def evaluate_folder(data_root, ckpt_dir, train_fraction: float = 0.8, body_model
 
     split = split_features(data_root, train_fraction)
     rest = torch.as_tensor(load_body_model(body_model).rest_joints(), dtype=torch.float32)
-    out = {"data": split.policy, "heldout_frames": sum(h.shape[0] for h in split.heldout), "regions": {}}
+    out: dict[str, Any] = {"data": split.policy, "heldout_frames": sum(h.shape[0] for h in split.heldout),
+                           "regions": {}}
     for path in sorted(Path(ckpt_dir).glob("*.safetensors")):
         model = RVQVAE.load(path)
         if model.region in REGIONS:

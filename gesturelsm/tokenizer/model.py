@@ -167,7 +167,7 @@ class RVQVAE(nn.Module):
         if unexpected or [m for m in missing if not _is_training_buffer(m)]:
             raise CheckpointError(f"{path}: weights do not match the config (missing {missing}, "
                                   f"unexpected {unexpected})")
-        for layer in model.rvq.layers:  # a shipped (inference-only) file has no EMA state
+        for layer in model.rvq.quantizers:  # a shipped (inference-only) file has no EMA state
             layer.initted.fill_(True)
         return accelerate(model.eval())
 

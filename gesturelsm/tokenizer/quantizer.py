@@ -14,6 +14,7 @@ encoder through the straight-through estimator; a commitment loss pulls encoder 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import torch
 import torch.nn as nn
@@ -32,6 +33,10 @@ class QuantizedResult:
 
 class EMAQuantizer(nn.Module):
     """One layer: G independent codebooks of K codes of dim d, vectorised over groups."""
+    codebook: torch.Tensor          # buffers (G, K, d), (G, K), (G, K, d), () bool
+    cluster_size: torch.Tensor
+    embed_sum: torch.Tensor
+    initted: torch.Tensor
 
     def __init__(self, codebook_size: int, dim: int, groups: int = 1, decay: float = 0.99,
                  dead_threshold: float = 1.0, eps: float = 1e-5):
@@ -122,6 +127,11 @@ class ResidualVQ(nn.Module):
     def num_quantizers(self) -> int:
         return len(self.layers)
 
+    @property
+    def quantizers(self) -> list[EMAQuantizer]:
+        """The layers, typed."""
+        return cast("list[EMAQuantizer]", list(self.layers))
+
     def forward(self, x: torch.Tensor, num_layers: int | None = None) -> QuantizedResult:
         """x: (N, D). `num_layers` uses only the first k layers; in training, quantizer dropout picks k."""
         L, G = self.num_quantizers, self.groups
@@ -136,7 +146,7 @@ class ResidualVQ(nn.Module):
         perplexity = torch.zeros(L, device=x.device)
         usage = torch.zeros(L, device=x.device)
         commit = x.new_zeros(())
-        for i, layer in enumerate(self.layers[:k]):
+        for i, layer in enumerate(self.quantizers[:k]):
             c, q = layer(residual)
             codes[:, i] = c
             if torch.is_grad_enabled():    # the commitment loss only matters for training
@@ -156,7 +166,7 @@ class ResidualVQ(nn.Module):
     def codes_to_quantized(self, codes: torch.Tensor) -> torch.Tensor:
         """(N, L, G) codes (-1 = layer unused) -> (N, D) sum of the chosen codes."""
         out = torch.zeros(codes.shape[0], self.groups, self.dim // self.groups, device=codes.device)
-        for i, layer in enumerate(self.layers[: codes.shape[1]]):
+        for i, layer in enumerate(self.quantizers[: codes.shape[1]]):
             c = codes[:, i]
             out = out + layer.lookup(c.clamp_min(0)) * (c >= 0).unsqueeze(-1).to(out)
         return out.reshape(codes.shape[0], -1)
@@ -164,7 +174,7 @@ class ResidualVQ(nn.Module):
 
 def same_shape(rvqs: list[ResidualVQ]) -> bool:
     """Whether quantizers have the same layers, groups, codebook size and code dim (and can be stacked)."""
-    return len({(q.num_quantizers, q.groups, q.layers[0].codebook_size, q.layers[0].dim) for q in rvqs}) == 1
+    return len({(q.num_quantizers, q.groups, q.quantizers[0].codebook_size, q.quantizers[0].dim) for q in rvqs}) == 1
 
 
 @torch.no_grad()
@@ -176,14 +186,14 @@ def quantize_stacked(rvqs: list[ResidualVQ], xs: list[torch.Tensor]) -> list[tor
     of 5 ops. Nearest codes by the same `nearest_codes` as EMAQuantizer.assign."""
     if not same_shape(rvqs):
         raise ValueError("quantizers of different shapes cannot be stacked")
-    N, G, d = xs[0].shape[0], rvqs[0].groups, rvqs[0].layers[0].dim
+    N, G, d = xs[0].shape[0], rvqs[0].groups, rvqs[0].quantizers[0].dim
     nG = len(rvqs) * G
     xa = torch.cat([torch.cat([x.reshape(N, G, d).transpose(0, 1) for x in xs]),
                     xs[0].new_ones(nG, N, 1)], -1)                          # (nG, N, d + 1): [residual, 1]
     total = xs[0].new_zeros(nG, N, d)
     rows = torch.arange(nG, device=xa.device)[:, None]
     for i in range(rvqs[0].num_quantizers):
-        cb = torch.cat([q.layers[i].codebook for q in rvqs])                            # (nG, K, d)
+        cb = torch.cat([q.quantizers[i].codebook for q in rvqs])                       # (nG, K, d)
         q = cb[rows, nearest_codes(xa, cb)]                                              # (nG, N, d)
         xa[..., :d] -= q
         total += q

@@ -94,8 +94,8 @@ def train_region(region: str, split: Split, cfg: TrainConfig, out_dir: Path, log
         step += 1
         bar.update(1)
         if step % 20 == 0 or step == cfg.steps:
-            resets = sum(layer.num_resets for layer in model.rvq.layers)
-            for layer in model.rvq.layers:
+            resets = sum(layer.num_resets for layer in model.rvq.quantizers)
+            for layer in model.rvq.quantizers:
                 layer.num_resets = 0
             bar.set_postfix(loss=f"{out.recon_loss.item():.4f}", ppl=f"{out.quant.perplexity[0].item():.0f}",
                             use=f"{out.quant.usage[:out.quant.num_layers].mean().item():.2f}", dead=resets)

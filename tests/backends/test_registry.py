@@ -11,7 +11,8 @@ import pytest
 from _support import speech_like
 from gesturelsm.backends import BACKENDS, MAX_CFG, SPECS, checkpoint_sources, method_spec
 from gesturelsm.backends.authors import AuthorsBackend
-from gesturelsm.backends.ours import FlowBackend, Ours
+from gesturelsm.backends.lines import Ours
+from gesturelsm.backends.ours import FlowBackend
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import CheckpointError, InputError
 from gesturelsm.flows import METHODS

@@ -78,3 +78,39 @@ def test_the_old_names_are_the_one_module():
     assert glb.matrix_to_quaternion_xyzw is R.matrix_to_quaternion_xyzw
     assert player_payload.axis_angle_to_quaternion is R.axis_angle_to_quaternion_xyzw
     assert merge.slerp_axis_angle is R.slerp_axis_angle
+
+
+def test_the_twins_agree_at_exactly_zero_and_exactly_pi():
+    rng = np.random.default_rng(6)
+    axis = rng.normal(size=(50, 3))
+    axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+    aa = np.concatenate([np.zeros((1, 3)), axis * np.pi, np.eye(3) * np.pi])       # the identity, half turns
+    M_t = R.axis_angle_to_matrix(torch.from_numpy(aa)).numpy()
+    M_n = R.axis_angle_to_matrix_np(aa)
+    assert np.allclose(M_n, M_t, atol=1e-12)
+    assert np.allclose(M_n[0], np.eye(3))
+    back_n = R.matrix_to_axis_angle_np(M_n)
+    back_t = R.matrix_to_axis_angle(torch.from_numpy(M_n)).numpy()
+    assert np.allclose(np.linalg.norm(back_n[1:], axis=-1), np.pi, atol=1e-6)      # a half turn stays one
+    assert np.allclose(R.axis_angle_to_matrix_np(back_n), M_n, atol=1e-6)           # (its axis's sign is free)
+    assert np.allclose(R.axis_angle_to_matrix_np(back_t), M_n, atol=1e-6)
+    xyzw = R.matrix_to_quaternion_xyzw(M_n)
+    assert np.allclose(R.quaternion_xyzw_to_matrix(xyzw), M_n, atol=1e-12)
+    assert np.allclose(R.quaternion_xyzw_to_matrix(R.axis_angle_to_quaternion_xyzw(aa)), M_n, atol=1e-12)
+
+
+def test_continuous_quaternions_flip_each_frame_against_the_flipped_previous_one():
+    def one_frame_at_a_time(q):
+        q = q.copy()
+        for t in range(1, len(q)):
+            q[t] = np.where((q[t] * q[t - 1]).sum(-1, keepdims=True) < 0, -q[t], q[t])
+        return q
+
+    q = np.random.default_rng(7).normal(size=(200, 5, 4)).astype(np.float32)
+    q[40, 2], q[41, 2], q[42, 2] = [1, 0, 0, 0], [0, 1, 0, 0], [0, -1, 0, 0]      # a dot product of exactly 0
+    got = R.continuous_quaternions(q)
+    assert got.dtype == q.dtype and np.array_equal(got, one_frame_at_a_time(q))
+    assert ((got[1:] * got[:-1]).sum(-1) >= 0).all()
+    from gesturelsm.export import glb
+
+    assert glb.continuous_quaternions is R.continuous_quaternions
