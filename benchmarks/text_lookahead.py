@@ -75,6 +75,9 @@ def timing(data: Path, take: str, repeats: int) -> int:
         return 2
     set_threads(1)
     emb, words, y = TextEmbedder.shared(), read_words(tg), load_audio(wav)
+    if not emb.available:
+        print(emb.error, file=sys.stderr)
+        return 2
     T = len(y) * FPS // SAMPLE_RATE
     finals = [c / SAMPLE_RATE for c in recognition_cuts(y)[1:-1]] + [math.inf]
 
