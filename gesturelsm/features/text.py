@@ -93,6 +93,7 @@ class TextEmbedder:
         self._model = None
         self._tok = None
         self.error: str | None = None
+        self._loading = threading.Lock()        # one load, whichever thread asks first (the others wait for it)
 
     @classmethod
     def shared(cls) -> "TextEmbedder":
@@ -104,6 +105,11 @@ class TextEmbedder:
     def _load(self) -> None:
         if self._model is not None or self.error:
             return
+        with self._loading:
+            if self._model is None and not self.error:
+                self._load_now()
+
+    def _load_now(self) -> None:
         try:
             os.environ.setdefault("HF_HUB_OFFLINE", "1")
             os.environ.setdefault("TRANSFORMERS_OFFLINE", "1")

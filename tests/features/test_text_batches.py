@@ -74,3 +74,18 @@ def test_batched_blocks_equal_one_plain_pass_per_block_up_to_float_rounding():
         plain = np.stack([h[[i for i, w in enumerate(ids) if w == local]].mean(0).numpy() for local in k])
         assert np.allclose(got, plain, rtol=0, atol=1e-4)
     assert np.array_equal(emb.embed_in_context(contexts[2], keeps[2]), batched[2])
+
+
+def test_threads_asking_for_the_encoder_at_once_load_it_once(monkeypatch):
+    """`gesturelsm generate` loads the encoder on a thread while the pipeline's warm-up asks for it too."""
+    if not _embedder().available:
+        pytest.skip("text encoder not installed")
+    emb, loads = TextEmbedder(), []
+    real = emb._load_now
+    monkeypatch.setattr(emb, "_load_now", lambda: (loads.append(1), real()))
+    threads = [threading.Thread(target=lambda: emb.available) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert emb.available and loads == [1]
