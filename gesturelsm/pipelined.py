@@ -35,6 +35,9 @@ PENDING_MODE = "automatic transcript (being recognised)"
 
 
 WAITING, HIDDEN = "waiting for words", "transcription hidden"
+# torch's math threads on the words thread (the recogniser keeps its own): generation works on the other thread, and
+# two math threads each on two cores cost more than they give (benchmarks/cli_words.py, docs/BENCHMARKS.md)
+WORDS_THREADS = 1
 
 
 def overlap_timings(pending: "PendingWords", started: float, timings: dict[str, float], again: bool = False
@@ -162,6 +165,8 @@ class PendingWords:
             self._cond.notify_all()
 
     def _run(self) -> None:
+        threads = torch.get_num_threads()
+        torch.set_num_threads(WORDS_THREADS)          # the text encoder here: generation has the other core
         try:
             auto = self.recognise(self.base.audio, language=self.language, on_piece=self._piece)
             self.transcription_s = time.perf_counter() - self.started - self.text_seconds
@@ -189,6 +194,7 @@ class PendingWords:
         except BaseException as exc:  # handed to the generating thread
             self._error = exc
         finally:
+            torch.set_num_threads(threads)
             with self._cond:
                 self._done = True
                 self._cond.notify_all()

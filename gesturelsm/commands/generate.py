@@ -9,6 +9,7 @@ transcription was hidden under generation.
 from __future__ import annotations
 
 import argparse
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -99,8 +100,11 @@ def run_generate(args: argparse.Namespace) -> int:
         check_usable(rig, draw=False)
     words = read_words(a.textgrid) if a.textgrid else None
     say(0.0, f"loading the models ({args.method})")
+    recognised = words is None and not args.text and a.settings.transcribe
+    preload = preloading(text=recognised or words is not None or bool(args.text), recogniser=recognised)
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
                                            max_seconds=a.max_seconds)
+    preload.join()
     t1 = time.perf_counter()
     audio = load_audio(a.audio, max_seconds=a.max_seconds)
     say(0.05, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
@@ -121,6 +125,27 @@ def run_generate(args: argparse.Namespace) -> int:
         print(f"warning: {w}")
     report(res, a.settings, path, end_to_end, t1 - t0, time.perf_counter() - t0)
     return 0
+
+
+def preloading(text: bool, recogniser: bool) -> threading.Thread:
+    """A started thread that loads the text encoder (`text`) and the speech recogniser (`recogniser`) while the
+    generator loads (each mostly on one core); join it before the speech is prepared. What fails to load here is
+    reported where it is used."""
+    from ..asr import model
+    from ..features.text import TextEmbedder
+
+    def load() -> None:
+        if text:
+            TextEmbedder.shared().available
+        if recogniser and model.available():
+            try:
+                model.load_model()
+            except Exception:  # reported by the recognition that needs it
+                pass
+
+    thread = threading.Thread(target=load, name="gesturelsm-preload", daemon=True)
+    thread.start()
+    return thread
 
 
 def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: float, loading: float,
