@@ -7,7 +7,8 @@ truth is looked up.
 from .check import CLI, MISSING, PAGE, Asked, Names, check_method_settings, checked, grid_problems, settings_problems
 from .defaults import (DEFAULT_CFG, DEFAULT_METHOD, DEFAULTS, MAX_SECONDS, MIN_SECONDS, SEED_MAX, Limits, PostProcess,
                        Settings)
-from .fields import Setting, motion_values, page_params, setting, settings_of
+from .fields import Setting, motion_values, setting
+from .schema import page_params, settings_of
 from .plan import Plan
 
 __all__ = ["Asked", "CLI", "DEFAULTS", "DEFAULT_CFG", "DEFAULT_METHOD", "Limits", "MAX_SECONDS", "MIN_SECONDS",

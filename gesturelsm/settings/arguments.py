@@ -1,6 +1,6 @@
-"""The command line's side of the settings: the generation flags every command shares, with their defaults from
-each setting's field (`fields.py`) and the method specs (shown in `--help`), and the checks of the other arguments (input files, output
-paths, thread counts), so a command refuses bad arguments with one line before it loads a model or reads speech.
+"""The command line's side of the settings: the generation flags every command shares, made from each setting's
+field (`fields.py`: flag, default, help) and the method specs (shown in `--help`), and the checks of the other
+arguments (input files, output paths, thread counts), so a command refuses bad arguments with one line before it loads a model or reads speech.
 
     add_settings_flags(parser, steps="one")            # --steps --cfg --seed
     add_post_flags(parser)                             # --smoothing --stand-in-place
@@ -24,7 +24,8 @@ from typing import Any, Sequence
 from ..errors import InputError
 from .check import CLI, MISSING, Asked, settings_problems
 from .defaults import MAX_SECONDS, Limits, Settings
-from .fields import Setting, named, settings_of
+from .fields import Setting
+from .schema import named, settings_of
 from .values import from_text, shown, whole_number
 
 
@@ -197,6 +198,7 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_flag", "add_language_flag", "cli_asked", "add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings",
+__all__ = ["add_flag", "add_language_flag", "cli_asked", "add_max_seconds_flag", "add_post_flags", "add_settings_flags",
+           "cli_settings",
            "default_steps_text", "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

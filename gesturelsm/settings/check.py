@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from ..errors import InputError
 from .defaults import Limits, Settings
-from .fields import CLI, MISSING, PAGE, Asked, Names, named, settings_of
+from .fields import MISSING
+from .schema import CLI, PAGE, Asked, Names, named, settings_of
 from .values import check_language, method_list, number_list, real_number, whole_number
 
 if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings

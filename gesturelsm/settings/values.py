@@ -150,4 +150,5 @@ def check_language(value: Any, field: str, problems: list[str]) -> str | None:
     return code
 
 
-__all__ = ["check_language", "choice", "from_text", "whole_in", "method_list", "number_list", "one_of", "real_number", "shown", "switch", "whole_number"]
+__all__ = ["check_language", "choice", "from_text", "whole_in",
+           "method_list", "number_list", "one_of", "real_number", "shown", "switch", "whole_number"]
