@@ -1,6 +1,7 @@
 """The command line's side of the settings: the generation flags every command shares, made from each setting's
 field (`fields.py`: flag, default, help) and the method specs (shown in `--help`), and the checks of the other
-arguments (input files, output paths, thread counts), so a command refuses bad arguments with one line before it loads a model or reads speech.
+arguments (input files, output paths, thread counts), so a command refuses bad arguments with one line before it
+loads a model or reads speech.
 
     add_settings_flags(parser, steps="one")            # --steps --cfg --seed
     add_post_flags(parser)                             # --smoothing --stand-in-place
