@@ -103,7 +103,7 @@ def cli_asked(args: argparse.Namespace, methods: Sequence[str] | None, cls: type
 
 def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
                  available: Sequence[str] | None = None, limits: Limits = Limits(),
-                 cls: type = Settings) -> Settings | None:
+                 cls: type | None = None) -> Settings | None:
     """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
     from ..backends import GROUND_TRUTH, SPECS
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 from ..errors import InputError
 from .defaults import Limits, Settings
 from .fields import MISSING
-from .schema import CLI, PAGE, Asked, Names, named, settings_of
+from .schema import CLI, PAGE, Asked, Names, named, settings_class, settings_of
 from .values import check_language, method_list, number_list, real_number, whole_number
 
 if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings
@@ -111,10 +111,11 @@ def _built(cls: type, values: Mapping[str, Any]) -> Any:
 
 def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
                       default_methods: Sequence[str] | None = None,
-                      cls: type = Settings) -> tuple[Settings | None, list[str]]:
+                      cls: type | None = None) -> tuple[Settings | None, list[str]]:
     """(the settings, []) or (None, every problem, one line each). `available`: the methods that may be chosen (the
     loaded ones, ground truth where a BEAT2 folder is set); `default_methods` when none were sent; `cls`: the settings
     object, whose fields say what is checked (each its own check; methods, steps and CFG against the methods)."""
+    cls = settings_class(cls)
     known = {s.name for s in settings_of(cls)}
     if asked.names() - known:
         raise TypeError(f"not settings: {sorted(asked.names() - known)}")

@@ -10,9 +10,14 @@ from .defaults import Settings
 from .fields import MISSING, Setting, walk
 
 
+def settings_class(cls: type | None = None) -> type:
+    """`cls`, or the shipped settings object (`Settings`) where None."""
+    return Settings if cls is None else cls
+
+
 def settings_of(cls: type | None = None) -> tuple[Setting, ...]:
     """Every setting of the settings object `cls` (default: the shipped `Settings`), in its fields' order."""
-    return tuple(s for _, s in walk(Settings if cls is None else cls))
+    return tuple(s for _, s in walk(settings_class(cls)))
 
 
 def named(name: str, cls: type | None = None) -> Setting:
@@ -84,4 +89,4 @@ class Asked:
         return "Asked(" + ", ".join(f"{k}={v!r}" for k, v in self._values.items() if v is not MISSING) + ")"
 
 
-__all__ = ["Asked", "CLI", "Names", "PAGE", "named", "page_params", "settings_of"]
+__all__ = ["Asked", "CLI", "Names", "PAGE", "named", "page_params", "settings_class", "settings_of"]
