@@ -157,8 +157,7 @@ class _Handlers:
         sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
         moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
         and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
-        the request and progress only to positional parameters: `page_handler`.) `words`: the page's recognised
-        words (words.py)."""
+        the request and progress only to positional parameters.) `words`: the page's recognised words (words.py)."""
         sent = {**sent, "text": page_words.own_words(sent["audio"], sent["text"], words)}
         req, audio = self.request(sent, exports=False, render=False), sent["audio"]
         try:
