@@ -24,6 +24,7 @@ import time
 from typing import Callable, Hashable, Iterator
 
 from ..pipeline import Made, Plan
+from ..settings import motion_values
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -35,10 +36,9 @@ class Cancelled(BaseException):
 
 def motion_key(upload: Hashable, speech: Hashable, plan: Plan) -> Hashable:
     """What a request's motion depends on: the upload (`prepared.file_key`), the transcript settings it was prepared
-    for, and the plan (methods, steps, CFG, seed, post-processing, where ground truth is looked up)."""
-    s = plan.settings
-    return (upload, speech, tuple(s.methods), tuple(sorted(s.steps.items())), float(s.cfg), int(s.seed), s.post,
-            bool(s.transcribe), plan.beat2, plan.filename)
+    for, and the plan: every setting that changes the motion (`settings.motion_values`: methods, steps, CFG, seed,
+    post-processing, ...) and where ground truth is looked up."""
+    return (upload, speech, motion_values(plan.settings), plan.beat2, plan.filename)
 
 
 class Run:

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..align import TextGridError, read_result
-from ..settings import MISSING, PAGE, Asked, Limits, Settings, settings_problems
+from ..settings import MISSING, PAGE, Asked, Limits, Settings, settings_of, settings_problems
 from ..settings.values import one_of, switch, whole_number
 from . import limits
 from .limits import transcript_problems
@@ -25,10 +25,8 @@ def check_request(req: Any, available: Sequence[str], limits_: Limits, sizes: Se
                   ) -> tuple[Any, Settings | None, list[str]]:
     """(request with normalised values, its settings, problems). `available`: the methods a visitor may choose;
     `limits_`: the server's (speech length, step caps)."""
-    settings, p = settings_problems(Asked(req.methods, req.steps, req.ddim_steps, req.cfg, req.seed,
-                                          req.stand_in_place, req.smoothing, req.transcribe, req.grounding,
-                                          getattr(req, "language", MISSING)), available,
-                                    limits_, PAGE)
+    asked = Asked(**{s.name: getattr(req, s.name, MISSING) for s in settings_of()})     # each setting by its name
+    settings, p = settings_problems(asked, available, limits_, PAGE)
     size = whole_number(req.size, "Video size", min(sizes), max(sizes), p)
     if size is not None:
         size = one_of(size, "Video size", sizes, p)

@@ -11,7 +11,7 @@
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields, make_dataclass, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -21,7 +21,7 @@ from ..backends import GROUND_TRUTH_LABEL, label
 from ..motion.sequence import MotionSequence
 from ..pipeline import Plan, SpeechInput, generation_seconds
 from ..pipelined import HIDDEN
-from ..settings import DEFAULTS, MISSING
+from ..settings import settings_of
 
 VIDEO_SIZES = (256, 384, 512, 640)
 DEFAULT_SIZE = 384                                       # pixels per body in the page's video
@@ -57,25 +57,26 @@ class TimingRow:
 TIMING_COLUMNS = [f.metadata.get("column", f.name) for f in fields(TimingRow)]
 
 
-@dataclass
-class Request:
-    """One request as sent; the settings fields take whatever arrived (`Asked`), MISSING: the default."""
-    audio_path: str | None
-    text: str = ""
-    textgrid_path: str | None = None
-    methods: Sequence[str] = DEFAULTS.methods
-    steps: Mapping[str, Any] | Any = MISSING  # {method: steps}, or one value (for "Steps" methods when ddim_steps
-    ddim_steps: Any = MISSING                 # is given too); MISSING: each method's own default
-    cfg: float = DEFAULTS.cfg
-    seed: int = DEFAULTS.seed
-    stand_in_place: bool = DEFAULTS.post.stand_in_place
-    smoothing: str = DEFAULTS.post.smoothing
-    size: int = DEFAULT_SIZE
-    exports: bool = True
-    transcribe: bool = DEFAULTS.transcribe   # automatic transcript when neither text nor TextGrid is given
-    render: bool = True                      # False: motions only (the page's player); GestureService.render later
-    grounding: bool = DEFAULTS.post.grounding   # feet on the ground (gesturelsm.grounding)
-    language: str = DEFAULTS.language        # the speech's language (auto: English, else the one identified)
+REQUEST_DOC = """One request as sent: the speech, its transcript or TextGrid, every setting of the settings object
+by its name (`gesturelsm.settings.fields`: whatever arrived, checked into `Asked` by name; a setting's own default,
+or MISSING, when not sent), the video size, and whether to export and render (False: motions only, for the page's
+player; `GestureService.render` later). `steps`: {method: steps}, or one value (for "Steps" methods when
+`ddim_steps` is given too); MISSING: each method's own default."""
+
+
+def request_class(cls: type | None = None) -> type:
+    """The request's dataclass, one field per setting of the settings object `cls` (default: the shipped one)."""
+    own_first = [("audio_path", "str | None"), ("text", str, field(default="")),
+                 ("textgrid_path", "str | None", field(default=None))]
+    settings = [(s.name, Any, field(default=s.default)) for s in settings_of(cls)]
+    own_last = [("size", int, field(default=DEFAULT_SIZE)), ("exports", bool, field(default=True)),
+                ("render", bool, field(default=True))]
+    made = make_dataclass("Request", [*own_first, *settings, *own_last], namespace={"__doc__": REQUEST_DOC})
+    made.__module__ = __name__
+    return made
+
+
+Request = request_class()
 
 
 @dataclass(frozen=True, eq=False)

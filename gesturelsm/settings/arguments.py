@@ -1,6 +1,7 @@
-"""The command line's side of the settings: the generation flags every command shares, with their defaults from
-`DEFAULTS` and the method specs (shown in `--help`), and the checks of the other arguments (input files, output
-paths, thread counts), so a command refuses bad arguments with one line before it loads a model or reads speech.
+"""The command line's side of the settings: the generation flags every command shares, made from each setting's
+field (`fields.py`: flag, default, help) and the method specs (shown in `--help`), and the checks of the other
+arguments (input files, output paths, thread counts), so a command refuses bad arguments with one line before it
+loads a model or reads speech.
 
     add_settings_flags(parser, steps="one")            # --steps --cfg --seed
     add_post_flags(parser)                             # --smoothing --stand-in-place
@@ -21,11 +22,11 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from ..asr.languages import LANGUAGES
-from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
 from .check import CLI, MISSING, Asked, settings_problems
-from .defaults import DEFAULTS, MAX_SECONDS, Limits, Settings
+from .defaults import MAX_SECONDS, Limits, Settings
+from .fields import Setting
+from .schema import named, settings_of
 from .values import from_text, shown, whole_number
 
 
@@ -36,9 +37,16 @@ def default_steps_text(setting: str | None = None) -> str:
     return ", ".join(f"{s.label} {s.default_steps}" for s in SPECS.values() if setting in (None, s.steps_setting))
 
 
-def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
+def add_flag(p: Any, s: Setting) -> None:
+    """The flag of one setting, with its default, its argparse options and its help (`fields.Setting`)."""
+    options = {"default": s.default, **s.argparse}
+    p.add_argument(s.flag, help=s.help.format(default=s.default), **options)
+
+
+def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one", cls: type | None = None) -> None:
     """The step flags (`steps`: "one": --steps for the chosen method; "two": --steps and --ddim-steps as the page's
-    two sliders; "none": the command adds its own), --cfg and --seed. Numbers are read as text and checked by
+    two sliders; "none": the command adds its own), then the flag of every setting that goes with them (--cfg,
+    --seed, and any setting added to the settings object `cls`). Numbers are read as text and checked by
     `cli_settings`."""
     if steps == "one":
         p.add_argument("--steps", type=from_text, default=MISSING,
@@ -49,38 +57,29 @@ def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one") -> None:
                             f"{default_steps_text('steps')})")
         p.add_argument("--ddim-steps", type=from_text, default=MISSING,
                        help=f"sampling steps of the diffusion methods (default: {default_steps_text('ddim_steps')})")
-    p.add_argument("--cfg", type=from_text, default=DEFAULTS.cfg,
-                   help=f"classifier-free guidance scale (default: {DEFAULTS.cfg:g})")
-    p.add_argument("--seed", type=from_text, default=DEFAULTS.seed,
-                   help=f"generation seed: the same seed gives the same motion (default: {DEFAULTS.seed})")
+    for s in settings_of(cls):
+        if s.cli == "settings":
+            add_flag(p, s)
 
 
 def add_post_flags(p: argparse.ArgumentParser) -> None:
     """--smoothing, --stand-in-place and --grounding: the post-processing of every motion (`PostProcess`)."""
-    p.add_argument("--smoothing", default=DEFAULTS.post.smoothing, choices=list(SMOOTHING_WINDOWS),
-                   help="smoothing of the finished motion (a Savitzky-Golay filter over 0 / 5 / 9 / 15 frames); "
-                        "'off' writes the raw model output "
-                        f"(default: {DEFAULTS.post.smoothing})")
-    p.add_argument("--stand-in-place", action="store_true", help="remove horizontal root movement")
-    add_grounding_flag(p)
+    for name in ("smoothing", "stand_in_place", "grounding"):
+        add_flag(p, named(name))
 
 
 def add_grounding_flag(p: argparse.ArgumentParser) -> None:
     """--grounding on|off: the one flag every command that makes motion carries (generate, batch, sweep)."""
-    p.add_argument("--grounding", choices=["on", "off"], default="on",
-                   help="feet on the ground: planted feet, no drift, the body on the floor (docs/GROUNDING.md); "
-                        "'off' keeps the decoder's root and legs")
+    add_flag(p, named("grounding"))
 
 
 def grounding_on(args: argparse.Namespace) -> bool:
-    return getattr(args, "grounding", "on") == "on"
+    return named("grounding").from_cli(getattr(args, "grounding", "on"))
 
 
 def add_language_flag(p: argparse.ArgumentParser) -> None:
     """--language: the speech's language for recognition and for aligning a typed transcript."""
-    p.add_argument("--language", default=DEFAULTS.language, metavar="CODE",
-                   help="the speech's language: auto (English first, else the language the multilingual recogniser "
-                        f"identifies) or one of {' '.join(LANGUAGES)} (default: {DEFAULTS.language})")
+    add_flag(p, named("language"))
 
 
 def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
@@ -88,24 +87,28 @@ def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
                    help=f"longest speech accepted, seconds (default: {MAX_SECONDS:g})")
 
 
-def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
-                 available: Sequence[str] | None = None, limits: Limits = Limits()) -> Settings | None:
-    """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
-    from ..backends import GROUND_TRUTH, SPECS
+def cli_asked(args: argparse.Namespace, methods: Sequence[str] | None, cls: type | None = None) -> Asked:
+    """The settings a command's flags sent (those it has; the others MISSING), by each setting's flag."""
+    from ..backends import SPECS
 
+    values = {s.name: s.from_cli(getattr(args, s.dest)) for s in settings_of(cls)
+              if s.name not in ("methods", "steps", "ddim_steps") and hasattr(args, s.dest)}
     steps = getattr(args, "steps", MISSING)
     if hasattr(args, "ddim_steps"):          # two flags: each drives only its own methods, an omitted one none
         given = {"steps": steps, "ddim_steps": args.ddim_steps}
         steps = {m: given[SPECS[m].steps_setting] for m in methods or () if m in SPECS
                  and given[SPECS[m].steps_setting] is not MISSING}
-    asked = Asked(methods=MISSING if methods is None else list(methods), steps=steps,
-                  cfg=getattr(args, "cfg", MISSING), seed=getattr(args, "seed", MISSING),
-                  stand_in_place=getattr(args, "stand_in_place", MISSING),
-                  smoothing=getattr(args, "smoothing", MISSING),
-                  transcribe=not args.no_transcribe if hasattr(args, "no_transcribe") else MISSING,
-                  grounding=grounding_on(args) if hasattr(args, "grounding") else MISSING,
-                  language=getattr(args, "language", MISSING))
-    settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI)
+    return Asked(methods=MISSING if methods is None else list(methods), steps=steps, **values)
+
+
+def cli_settings(args: argparse.Namespace, methods: Sequence[str] | None, problems: list[str],
+                 available: Sequence[str] | None = None, limits: Limits = Limits(),
+                 cls: type | None = None) -> Settings | None:
+    """The settings from a command's flags (those it has), checked by the one validator; None after adding problems."""
+    from ..backends import GROUND_TRUTH, SPECS
+
+    asked = cli_asked(args, methods, cls)
+    settings, found = settings_problems(asked, list(available or [*SPECS, GROUND_TRUTH]), limits, CLI, cls=cls)
     problems += found
     return settings
 
@@ -196,6 +199,7 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_language_flag", "add_max_seconds_flag", "add_post_flags", "add_settings_flags", "cli_settings",
+__all__ = ["add_flag", "add_language_flag", "cli_asked", "add_max_seconds_flag", "add_post_flags", "add_settings_flags",
+           "cli_settings",
            "default_steps_text", "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]

@@ -6,72 +6,22 @@ API, `gesturelsm generate / sweep / batch / eval / live`, the study batch and th
 
 Values are checked as sent (`values.py`) against each chosen method's spec (`gesturelsm.backends.SPECS`: steps from
 1 to its max_steps, CFG from 0 to its max_cfg) and the entry point's `Limits` (a server's step caps); fields are
-named as the entry point shows them (`PAGE`: "Steps", `CLI`: "--steps").
+named as the entry point shows them (`PAGE`: "Steps", `CLI`: "--steps"). What it checks is each field of the settings
+object (`fields.py`): a field added there with its check is checked, named and defaulted here with no other edit.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
-from ..asr.languages import CHOICES
-from ..constants import SMOOTHING_WINDOWS
 from ..errors import InputError
-from .defaults import DEFAULTS, SEED_MAX, Limits, PostProcess, Settings
-from .values import method_list, number_list, one_of, real_number, shown, switch, whole_number
+from .defaults import Limits, Settings
+from .fields import MISSING
+from .schema import CLI, PAGE, Asked, Names, named, settings_class, settings_of
+from .values import check_language, method_list, number_list, real_number, whole_number
 
 if TYPE_CHECKING:           # the methods' registry (and torch with it) is loaded on first use, not with the settings
     from ..backends import MethodSpec
-
-
-class _Missing:
-    def __repr__(self) -> str:
-        return "MISSING"
-
-    def __reduce__(self) -> str:
-        """Pickled by name: a request sent to another process (a Ray Serve replica) keeps its fields MISSING."""
-        return "MISSING"
-
-
-MISSING: Any = _Missing()           # a field the entry point did not receive: its default is used
-
-
-@dataclass(frozen=True)
-class Names:
-    """How an entry point names each setting in its messages."""
-    methods: str
-    steps: str
-    ddim_steps: str
-    cfg: str
-    seed: str
-    stand_in_place: str
-    smoothing: str
-    grounding: str
-    transcribe: str
-    language: str = "Language"
-
-
-PAGE = Names("Methods", "Steps", "DDIM steps", "CFG scale", "Seed", "Stand in place", "Smoothing",
-             "Feet on the ground", "Automatic transcription")
-CLI = Names("--methods", "--steps", "--ddim-steps", "--cfg", "--seed", "--stand-in-place", "--smoothing",
-            "--grounding", "--no-transcribe", "--language")
-
-
-@dataclass(frozen=True)
-class Asked:
-    """Settings exactly as an entry point received them. `steps`: one value for every chosen method, or for those its
-    "steps" setting drives when `ddim_steps` is given too (the page's two sliders, `--steps` / `--ddim-steps`), or
-    {method: value}. A MISSING field takes its default (a method's own steps, `DEFAULTS` for the rest); None is a
-    value that was sent empty, and is refused."""
-    methods: Any = MISSING
-    steps: Any = MISSING
-    ddim_steps: Any = MISSING
-    cfg: Any = MISSING
-    seed: Any = MISSING
-    stand_in_place: Any = MISSING
-    smoothing: Any = MISSING
-    transcribe: Any = MISSING
-    grounding: Any = MISSING
-    language: Any = MISSING
 
 
 def _given(value: Any, default: Any) -> Any:
@@ -135,8 +85,8 @@ def cfg_bound(methods: Sequence[str]) -> float:
 
 
 def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
-    """A seed: a whole number from 0 to SEED_MAX, never rounded."""
-    return whole_number(value, names.seed, 0, SEED_MAX, problems)
+    """A seed: a whole number from 0 to SEED_MAX, never rounded (the settings' own check of it)."""
+    return named("seed").check(value, names.seed, problems)
 
 
 def checked_seed(value: Any, names: Names = PAGE) -> int:
@@ -148,43 +98,49 @@ def checked_seed(value: Any, names: Names = PAGE) -> int:
     return seed
 
 
-def check_post(asked: Asked, names: Names, problems: list[str]) -> PostProcess | None:
-    n = len(problems)
-    in_place = switch(_given(asked.stand_in_place, DEFAULTS.post.stand_in_place), names.stand_in_place, problems)
-    smoothing = one_of(_given(asked.smoothing, DEFAULTS.post.smoothing), names.smoothing, SMOOTHING_WINDOWS, problems)
-    grounding = switch(_given(asked.grounding, DEFAULTS.post.grounding), names.grounding, problems)
-    return None if len(problems) > n else PostProcess(in_place, smoothing, grounding)
+def _built(cls: type, values: Mapping[str, Any]) -> Any:
+    """`cls` (the settings object, or one nested in it) made from the checked values by field name."""
+    kwargs = {}
+    for f in dataclasses.fields(cls):
+        if "setting" in f.metadata:
+            kwargs[f.name] = values[f.name]
+        elif dataclasses.is_dataclass(f.default):
+            kwargs[f.name] = _built(type(f.default), values)
+    return cls(**kwargs)
 
 
 def settings_problems(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
-                      default_methods: Sequence[str] = DEFAULTS.methods) -> tuple[Settings | None, list[str]]:
+                      default_methods: Sequence[str] | None = None,
+                      cls: type | None = None) -> tuple[Settings | None, list[str]]:
     """(the settings, []) or (None, every problem, one line each). `available`: the methods that may be chosen (the
-    loaded ones, ground truth where a BEAT2 folder is set); `default_methods` when none were sent."""
+    loaded ones, ground truth where a BEAT2 folder is set); `default_methods` when none were sent; `cls`: the settings
+    object, whose fields say what is checked (each its own check; methods, steps and CFG against the methods)."""
+    cls = settings_class(cls)
+    known = {s.name for s in settings_of(cls)}
+    if asked.names() - known:
+        raise TypeError(f"not settings: {sorted(asked.names() - known)}")
     p: list[str] = []
-    methods = method_list(_given(asked.methods, list(default_methods)), list(available), p, names.methods)
-    steps = check_steps(asked, methods or [], limits, names, p)
-    cfg = real_number(_given(asked.cfg, DEFAULTS.cfg), names.cfg, 0.0, cfg_bound(methods or []), p)
-    seed = seed_problems(_given(asked.seed, DEFAULTS.seed), names, p)
-    post = check_post(asked, names, p)
-    transcribe = switch(_given(asked.transcribe, DEFAULTS.transcribe), names.transcribe, p)
-    language = check_language(_given(asked.language, DEFAULTS.language), names.language, p)
+    values: dict[str, Any] = {}
+    methods: list[str] = []
+    for s in settings_of(cls):
+        sent = getattr(asked, s.name)
+        if s.name == "methods":
+            default = list(default_methods if default_methods is not None else s.default)
+            methods = method_list(default if sent is MISSING else sent, list(available), p, names.of(s)) or []
+            values["methods"] = tuple(methods)
+        elif s.name == "steps":
+            values["steps"] = check_steps(asked, methods, limits, names, p)
+        elif s.name == "cfg":
+            values["cfg"] = real_number(_given(sent, s.default), names.of(s), 0.0, cfg_bound(methods), p)
+        elif s.check is not None and not s.merged:
+            values[s.name] = s.check(_given(sent, s.default), names.of(s), p)
     if p:
         return None, p
-    return Settings(tuple(methods), steps, cfg, seed, post, transcribe, language), []
-
-
-def check_language(value: Any, field: str, problems: list[str]) -> str | None:
-    """"auto" or one of the recogniser's language codes (asr.languages.LANGUAGES), as sent (any case, spaces)."""
-    code = value.strip().lower() if isinstance(value, str) else value
-    if code not in CHOICES:
-        problems.append(f"{field} must be auto or a language code such as en, ja, zh, es, de, fr "
-                        f"(got {shown(value)}; the list: gesturelsm transcribe --help).")
-        return None
-    return code
+    return _built(cls, values), []
 
 
 def checked(asked: Asked, available: Sequence[str], limits: Limits = Limits(), names: Names = PAGE,
-            default_methods: Sequence[str] = DEFAULTS.methods) -> Settings:
+            default_methods: Sequence[str] | None = None) -> Settings:
     """The settings, or an InputError with every problem, one per line."""
     settings, problems = settings_problems(asked, available, limits, names, default_methods)
     if problems:
@@ -220,5 +176,5 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_language", "check_method_settings",
-           "check_post", "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems",
+           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems",
            "settings_problems", "steps_per_method"]

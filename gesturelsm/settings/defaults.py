@@ -5,15 +5,19 @@ their `--help`, the Gradio API, the study batch), and the limits an entry point 
              post=PostProcess(stand_in_place=False, smoothing="light"))
 
 A method missing from `steps` runs its spec's default steps (`gesturelsm.backends.SPECS`); every value is checked by
-`gesturelsm.settings.check` before a settings object is made from what a person sent.
+`gesturelsm.settings.check` before a settings object is made from what a person sent. Each field says what it is to
+every entry point (`fields.setting`: its label, flag, page parameter, check, whether it changes the motion); the
+flags, the validator, the page's and the API's parameters, the request and the made-ahead key are made from that.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Mapping
 
-from ..asr.languages import AUTO
-from ..constants import DEFAULT_SMOOTHING, MAX_SECONDS
+from ..asr.languages import AUTO, LANGUAGES
+from ..constants import DEFAULT_SMOOTHING, MAX_SECONDS, SMOOTHING_WINDOWS
+from .fields import Setting, setting
+from .values import check_language, choice, from_text, switch, whole_in
 
 if TYPE_CHECKING:           # the settings load no torch: the methods' registry and the motion code on first use
     from ..backends import MethodSpec
@@ -24,15 +28,27 @@ DEFAULT_CFG = 2.0                    # the paper's guidance scale
 SEED_MAX = 2 ** 32 - 1               # numpy's and torch's seed range
 MIN_SECONDS = 0.5                    # shorter speech has no gesture to follow
 
+# the page's second step slider (the diffusion methods'): checked into `Settings.steps` with --steps / "Steps"
+DDIM_STEPS = Setting("ddim_steps", "DDIM steps", "--ddim-steps", "ddim_steps", page=7, cli=None, merged=True)
+
 
 @dataclass(frozen=True)
 class PostProcess:
     """What is done to every finished motion, each method's and ground truth's alike: stand in place, then smoothing
     (`motion/postprocess.py`), then feet on the ground (`gesturelsm.grounding`). With stand in place and grounding
     both on, the root stays on the spot horizontally and the legs plant the feet under it."""
-    stand_in_place: bool = False         # the root's horizontal movement removed
-    smoothing: str = DEFAULT_SMOOTHING   # motion.postprocess.SMOOTHING_WINDOWS
-    grounding: bool = True               # planted feet, no drift, the body on the floor (docs/GROUNDING.md)
+    stand_in_place: bool = setting(False, label="Stand in place", flag="--stand-in-place", param="in_place", page=8,
+                                   check=switch, cli="post", help="remove horizontal root movement",
+                                   argparse={"action": "store_true"})          # the root's horizontal movement removed
+    smoothing: str = setting(DEFAULT_SMOOTHING, label="Smoothing", flag="--smoothing", param="smoothing", page=9,
+                             check=choice(SMOOTHING_WINDOWS), cli="post", argparse={"choices": list(SMOOTHING_WINDOWS)},
+                             help="smoothing of the finished motion (a Savitzky-Golay filter over 0 / 5 / 9 / 15 "
+                                  "frames); 'off' writes the raw model output (default: {default})")
+    grounding: bool = setting(True, label="Feet on the ground", flag="--grounding", param="grounding", page=12,
+                              check=switch, cli="post", argparse={"choices": ["on", "off"], "default": "on"},
+                              from_cli=lambda v: v == "on",
+                              help="feet on the ground: planted feet, no drift, the body on the floor "
+                                   "(docs/GROUNDING.md); 'off' keeps the decoder's root and legs")
 
     def apply(self, motion: MotionSequence, body=None) -> tuple[MotionSequence, str | None]:
         """The motion post-processed (grounded on `body`, default the mannequin or $GESTURELSM_SMPLX_MODEL), and why
@@ -51,13 +67,24 @@ class PostProcess:
 class Settings:
     """One generation's settings: which methods, their steps, guidance, seed, post-processing, transcription and the
     speech's language."""
-    methods: tuple[str, ...] = (DEFAULT_METHOD,)     # method keys and/or GROUND_TRUTH, in the order shown
-    steps: Mapping[str, int] = field(default_factory=dict)    # per method; missing: its spec's default_steps
-    cfg: float = DEFAULT_CFG
-    seed: int = 0
+    methods: tuple[str, ...] = setting((DEFAULT_METHOD,), label="Methods", flag="--methods", param="methods", page=3,
+                                       cli=None)      # method keys and/or GROUND_TRUTH, in the order shown
+    steps: Mapping[str, int] = setting(factory=dict, label="Steps", flag="--steps", param="steps", page=4, cli=None,
+                                       also=(DDIM_STEPS,))     # per method; missing: its spec's default_steps
+    cfg: float = setting(DEFAULT_CFG, label="CFG scale", flag="--cfg", param="cfg", page=5,
+                         argparse={"type": from_text}, help="classifier-free guidance scale (default: {default:g})")
+    seed: int = setting(0, label="Seed", flag="--seed", param="seed", page=6, check=whole_in(0, SEED_MAX),
+                        argparse={"type": from_text},
+                        help="generation seed: the same seed gives the same motion (default: {default})")
     post: PostProcess = PostProcess()
-    transcribe: bool = True              # recognise the speech when neither a transcript nor word timings are given
-    language: str = AUTO                 # the speech's language (asr.languages.CHOICES): AUTO hears English first
+    transcribe: bool = setting(True, label="Automatic transcription", flag="--no-transcribe", param="auto_text",
+                               page=11, check=switch, cli=None, from_cli=lambda v: not v)
+    # recognise the speech when neither a transcript nor word timings are given (each command words --no-transcribe)
+    language: str = setting(AUTO, label="Language", flag="--language", param="language", page=13, check=check_language,
+                            cli="language", argparse={"metavar": "CODE"},
+                            help="the speech's language: auto (English first, else the language the multilingual "
+                                 f"recogniser identifies) or one of {' '.join(LANGUAGES)} (default: {{default}})")
+    # the speech's language (asr.languages.CHOICES): AUTO hears English first
 
     def steps_for(self, method: str) -> int:
         from ..backends import method_spec

@@ -10,7 +10,11 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
+
+from ..asr.languages import CHOICES
+
+Check = Callable[[Any, str, list], Any]       # (value, field, problems) -> the normalised value, or None
 
 
 def shown(value: Any) -> str:
@@ -125,4 +129,26 @@ def method_list(value: Any, available: list[str], problems: list[str], field: st
     return list(dict.fromkeys(value))
 
 
-__all__ = ["from_text", "method_list", "number_list", "one_of", "real_number", "shown", "switch", "whole_number"]
+def whole_in(lo: int, hi: int) -> Check:
+    """The check of a whole number from `lo` to `hi`."""
+    return lambda value, field, problems: whole_number(value, field, lo, hi, problems)
+
+
+def choice(choices: Iterable) -> Check:
+    """The check of one of `choices`."""
+    options = list(choices)
+    return lambda value, field, problems: one_of(value, field, options, problems)
+
+
+def check_language(value: Any, field: str, problems: list[str]) -> str | None:
+    """"auto" or one of the recogniser's language codes (asr.languages.LANGUAGES), as sent (any case, spaces)."""
+    code = value.strip().lower() if isinstance(value, str) else value
+    if code not in CHOICES:
+        problems.append(f"{field} must be auto or a language code such as en, ja, zh, es, de, fr "
+                        f"(got {shown(value)}; the list: gesturelsm transcribe --help).")
+        return None
+    return code
+
+
+__all__ = ["check_language", "choice", "from_text", "whole_in",
+           "method_list", "number_list", "one_of", "real_number", "shown", "switch", "whole_number"]

@@ -24,7 +24,7 @@ from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
-from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings import DEFAULTS, page_params, settings_of
 from gesturelsm.settings.check import cfg_bound
 
 from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
@@ -37,6 +37,7 @@ from .downloads import Downloads
 from . import words as page_words
 from .language import language_choice
 from .live_character import LiveCharacters
+from .page_params import control, make_request, page_handler
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
 
@@ -119,14 +120,10 @@ class _Handlers:
         return newest is not None and newest != out.job.folder
 
     @staticmethod
-    def request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, *,
-                exports: bool, render: bool = True) -> Request:
-        """Values exactly as sent: the service checks and normalises every field (gesturelsm.serve.checks)."""
-        return Request(audio_path=audio, text=text, textgrid_path=textgrid, methods=methods, steps=steps,
-                       ddim_steps=ddim_steps, cfg=cfg, seed=seed, stand_in_place=in_place, grounding=grounding,
-                       smoothing=smoothing, size=size, exports=exports, transcribe=auto_text, render=render,
-                       language=language)
+    def request(sent: dict, *, exports: bool, render: bool = True) -> Request:
+        """Values exactly as sent, by the page's parameters: the service checks and normalises every field
+        (gesturelsm.serve.checks)."""
+        return make_request(sent, exports=exports, render=render)
 
     @staticmethod
     def refuse(exc: GestureError):
@@ -144,29 +141,25 @@ class _Handlers:
     def download_files(out: Result):
         return [str(p) for p in out.downloads], (str(out.glb) if out.glb else None)
 
-    def prefetch(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, words=None) -> None:
+    @page_handler("words", optional_from="grounding")
+    def prefetch(self, sent: dict, words=None) -> None:
         """Speech uploaded or recorded (or its transcript or settings changed): decode it and prepare the speech
         (features, transcript, word timings) while the visitor chooses the settings, so Generate only generates
         (serve/prepared.py), then make the motion the settings on screen ask for, for a click that asks for the same
         (serve/ahead.py). Silent: the request reports problems."""
-        text = page_words.own_words(audio, text, words)
-        ahead = self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                             auto_text, grounding, language, exports=False, render=False)
-        self.service.prefetch(audio, text or "", textgrid, bool(auto_text), ahead=ahead)
+        sent = {**sent, "text": page_words.own_words(sent["audio"], sent["text"], words)}
+        ahead = self.request(sent, exports=False, render=False)
+        self.service.prefetch(sent["audio"], sent["text"] or "", sent["textgrid"], bool(ahead.transcribe), ahead=ahead)
 
-    def show_motion(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                    auto_text, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language, character=None,
-                    words=None, request: gr.Request = None, progress=gr.Progress()):
+    @page_handler("character", "words", optional_from="grounding", request=True, progress=True)
+    def show_motion(self, sent: dict, character=None, words=None, request: gr.Request = None, progress=None):
         """The page's button: the motions for the in-browser player, timings, summary and the recognised transcript,
         sent again each time a method is made (`GestureService.stream`: the player shows every method's body the
         moment its motion exists, on the page session's `character` when one is loaded); the video (`show_video`)
         and the downloads (`add_exports`) follow in chained events. (Parameters are named, not *args: Gradio passes
         the request and progress only to positional parameters.) `words`: the page's recognised words (words.py)."""
-        text = page_words.own_words(audio, text, words)
-        args = (audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
-                grounding, language)
-        req = self.request(*args, exports=False, render=False)
+        sent = {**sent, "text": page_words.own_words(sent["audio"], sent["text"], words)}
+        req, audio = self.request(sent, exports=False, render=False), sent["audio"]
         try:
             for out in self.pages.until_closed(request, progress, lambda p: self.service.stream(req, progress=p)):
                 self.mark_newest(request, out)
@@ -206,12 +199,10 @@ class _Handlers:
             remember(files)
         return files, glb, out.summary, self._kept(request, out)
 
-    def generate(self, audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size,
-                 auto_text=DEFAULTS.transcribe, grounding=DEFAULTS.post.grounding, language=DEFAULTS.language,
-                 progress=gr.Progress()):
+    @page_handler(optional_from="auto_text", progress=True)
+    def generate(self, sent: dict, progress=None):
         """The API (`/generate`): everything in one call."""
-        out = self._run(self.request(audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing,
-                                     size, auto_text, grounding, language, exports=True), progress)
+        out = self._run(self.request(sent, exports=True), progress)
         return (str(out.video), out.table, out.summary, *self.download_files(out))
 
 
@@ -239,7 +230,8 @@ def _methods_info(methods: list[str]) -> str | None:
 
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr.Markdown]:
     """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
-    specs); returns the request's inputs in `_Handlers.request` order, the button, the Character upload, the note."""
+    specs); returns the request's inputs in the handlers' order (`page_params`), the button, the Character upload,
+    the note."""
     choices = [(label(m), m) for m in service.methods]
     shown = [m for m in ours_default() if m in service.methods][:3]
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
@@ -271,12 +263,15 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr
         smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULTS.post.smoothing, label="Smoothing"))
         size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=DEFAULT_SIZE,
                                            label="Video size"), VIDEO_SIZES)
+        controls = dict(audio=audio, text=text, textgrid=textgrid, methods=methods, steps=steps, cfg=cfg, seed=seed,
+                        ddim_steps=ddim_steps, in_place=in_place, smoothing=smoothing, size=size, auto_text=auto_text,
+                        grounding=grounding, language=language)
+        controls |= {s.param: control(s) for s in settings_of() if s.param not in controls}   # a setting's own
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
     ex = _examples()
     if ex:
         gr.Examples(ex, inputs=[audio, text], label="Examples (synthetic speech, with transcripts)")
-    return ([audio, text, textgrid, methods, steps, cfg, seed, ddim_steps, in_place, smoothing, size, auto_text,
-             grounding, language], button, character, note)
+    return [controls[p] for p in page_params()], button, character, note
 
 
 def _output_column(service: GestureService) -> tuple:

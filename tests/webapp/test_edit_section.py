@@ -12,8 +12,14 @@ import pytest
 
 from _support import quiet
 from gesturelsm.motion import MotionSequence
+from gesturelsm.settings import PAGE, Asked, settings_problems
 from gesturelsm.webapp.edit_section import EditHandlers
 from gesturelsm.webapp.ui import _Handlers, build_demo
+
+
+def checked_seed_message(seed) -> str:
+    """What the settings' validator says of `seed` as Generate's seed."""
+    return settings_problems(Asked(seed=seed), ["gesturelsm"], names=PAGE)[1][0]
 
 
 def _inputs(wav) -> tuple:
@@ -59,6 +65,10 @@ def test_edit_downloads_and_undo_through_the_page_handlers(service, speech_wav):
         e.undo(first, request=page)
     with pytest.raises(gr.Error, match="Choose at least one body region"):
         e.run(first, "gesturelsm", 0.5, 1.5, [], 1, request=page, progress=quiet)
+    for seed in (1.5, 2**40):               # the settings' validator's message, as Generate's seed gets it
+        with pytest.raises(gr.Error) as refused:
+            e.run(first, "gesturelsm", 0.5, 1.5, ["upper"], seed, request=page, progress=quiet)
+        assert refused.value.message == checked_seed_message(seed)
 
 
 def test_gradio_hands_the_edit_events_the_page_session():
