@@ -7,12 +7,12 @@ then one per method made, fastest first (`GesturePipeline.run_order`), each hold
 far in the page's order, their timing rows and notes (the methods made ahead of the click, `serve/ahead.py`, come in
 the first result); the last is what `GestureService.run` returns before the video
 and the downloads. With `previews` (the page) the methods are made on a thread of their own and, until the first
-method's motion is made, a result comes each time another of its windows is decoded, holding that raw motion so far
-in `previews` (serve/preview.py; made ahead or not, the same): the page's first body moves before its method is
-finished; the motions in `motions` are always the finished ones. A method that fails does not stop the others: the
-result names it in `failed` (method -> the visitor's line) and in a note; only when no method is made is its error
-raised. A failure that is not one of the errors a visitor can fix (a `GestureError`) is logged with its traceback and
-shown as a failure on the server.
+method's motion is made, a result comes each time its decoded windows have doubled (the first at once), holding that
+raw motion so far in `previews` (serve/preview.py; made ahead or not, the same): the page's first body moves before
+its method is finished; the motions in `motions` are always the finished ones. A method that fails does not stop the
+others: the result names it in `failed` (method -> the visitor's line) and in a note; only when no method is made is
+its error raised. A failure that is not one of the errors a visitor can fix (a `GestureError`) is logged with its
+traceback and shown as a failure on the server.
 """
 from __future__ import annotations
 
@@ -146,13 +146,14 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
         yield grow.result()
     events = _events(service, plan, speech, run, prog) if previews else \
         (("made", x) for x in _made(service, plan, speech, run, prog))
-    i = -1
+    i, shown = -1, 0
     for kind, x in events:
         if kind == "preview":
-            if not grow.moving() and i + 1 >= ready:
+            if not grow.moving() and i + 1 >= ready and not 0 < shown <= x.num_frames < 2 * shown:
                 making = next((m for m in service.pipeline.run_order(plan) if m != GROUND_TRUTH and
                                m not in grow.made), None)
-                if making is not None:
+                if making is not None:                   # each shown preview at least doubles the one before
+                    shown = x.num_frames
                     yield grow.result((making, x))
             continue
         i += 1

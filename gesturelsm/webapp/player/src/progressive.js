@@ -25,7 +25,8 @@ function fetchRecord(url) {
 
 // A new request: the speech starts loading, the slots are built (the bodies ready at once join straight away).
 function begin(p, payload) {
-  const req = { id: payload.id, joined: new Set(), done: new Set(), failed: new Set(), urls: [], marks: p.measure ? { start: performance.now() } : null };
+  const req = { id: payload.id, joined: new Set(), done: new Set(), failed: new Set(), urls: [],
+    marks: p.measure ? { start: performance.now() } : null };
   const was = p.clock ? { t: p.clock.currentTime || 0, paused: p.clock.paused } : (p.request && p.request.resume);
   req.resume = payload.resume ? was || null : null;
   p.request = req;
