@@ -14,7 +14,7 @@ import torch
 from ..errors import CheckpointError
 from ..generator.model import GestureGenerator
 from ..generator.data import encode_regions
-from ..generator.sampling import decode_latents, generate_latents
+from ..generator.sampling import decode_latents, generate_latents, window_decoder
 from ..motion.editing import EditSpec, Keyframe
 from ..motion.regions import GENERATED_REGIONS, REGIONS, join_regions
 from ..motion.sequence import MotionSequence
@@ -47,7 +47,8 @@ class FlowBackend:
         lat = generate_latents(self.model, speech.channels, speech.word_features, speech.has_word,
                                speech.words is not None, speech.num_frames, steps, cfg, seed, progress,
                                ready_points=speech.ready_points,
-                               wait=speech.stream.wait if speech.stream is not None else None)
+                               wait=speech.stream.wait if speech.stream is not None else None,
+                               on_window=window_decoder(self.tokenizers, speech.num_frames))   # previews, if asked
         timings = {"sampling": time.perf_counter() - t0}
         t1 = time.perf_counter()
         device = next(self.model.parameters()).device

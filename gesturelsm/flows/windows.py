@@ -76,11 +76,13 @@ def sampled_windows(num_latents: int, t: int, s: int, held: Held | None = None) 
 
 @torch.no_grad()
 def sample_windows(num_latents: int, t: int, s: int, first_seed: torch.Tensor, sample: WindowSampler, seed: int,
-                   crossfade: bool = True, progress: Progress | None = None, held: Held | None = None) -> torch.Tensor:
+                   crossfade: bool = True, progress: Progress | None = None, held: Held | None = None,
+                   on_window: Callable[[int, torch.Tensor], None] | None = None) -> torch.Tensor:
     """(B, starts[-1] + t, ...) latents for `num_latents` (or more: whole windows), on the CPU. `sample` is called
     once per window, in order, with the window's seed (the last `s` latents of the window before, or
     `first_seed`) and one CPU generator seeded with `seed` for all windows' noise. `held`: known latents (module
-    docstring); windows with nothing unknown are not sampled."""
+    docstring); windows with nothing unknown are not sampled. `on_window(n, out)` after each window: the first `n`
+    latents of `out` are final (no later window's cross-fade reaches them); it must only read `out`."""
     starts = window_layout(num_latents, t, s)
     g = torch.Generator(device="cpu").manual_seed(int(seed))
     ramp = torch.arange(1, s + 1, dtype=torch.float32) / (s + 1)    # weight of the new window in the overlap
@@ -102,6 +104,8 @@ def sample_windows(num_latents: int, t: int, s: int, first_seed: torch.Tensor, s
                 out[:, st:st + s] = out[:, st:st + s] * (1 - w) + x[:, :s] * w
             out[:, st + s:st + t] = x[:, s:]
         seed_lat = x[:, t - s:]
+        if on_window is not None:
+            on_window(starts[i + 1] if i + 1 < len(starts) else starts[-1] + t, out)
         if progress:
             progress((i + 1) / len(starts), f"window {i + 1}/{len(starts)}")
     assert out is not None                                          # a layout has at least one window

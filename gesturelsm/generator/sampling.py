@@ -9,12 +9,18 @@ padded with silence and cropped.
 Edits hold known latents (`held`: the input motion's latents where it is kept, poses pinned by keyframes): only the
 windows with latents to regenerate are sampled, and in those the known latents are held to their values noised to
 each step's time (flows/base.py `inpainting`), so the regenerated ones are sampled in their context.
+
+Previews: inside `window_previews(listener)` a generation on this thread (not an edit) decodes its latents as each
+window makes them final (`WindowDecoder`, the raw motion of the first windows, before any post-processing) and hands
+them to the listener while the later windows are sampled; the latents and the motion returned are the same as without.
 """
 from __future__ import annotations
 
 import bisect
+import contextlib
 import math
-from typing import Callable, Sequence
+import threading
+from typing import Callable, Iterator, Protocol, Sequence
 
 import torch
 import torch.nn.functional as F
@@ -32,14 +38,16 @@ from .model import GestureGenerator
 def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: torch.Tensor, has_word: torch.Tensor,
                      has_text: bool, num_frames: int, steps: int = 8, cfg_scale: float = 2.0, seed: int = 0,
                      progress: Progress | None = None, cond_batch: int = 16, held: Held | None = None,
-                     ready_points: Sequence[int] = (), wait: Callable[[int], None] | None = None) -> torch.Tensor:
+                     ready_points: Sequence[int] = (), wait: Callable[[int], None] | None = None,
+                     on_window: Callable[[torch.Tensor], None] | None = None) -> torch.Tensor:
     """audio_ch (2, N) 16 kHz channels; words (T, 384); has_word (T,). -> (R, ceil(T/4), D) un-scaled latents.
     The speech condition and its contexts are computed for up to `cond_batch` windows at a time (one batched call
     instead of one per window; the windows' denoising stays sequential because each seeds the next), in groups that
     do not straddle a `ready_points` frame count (`cond_groups`). `held`: known un-scaled latents (R, ceil(T/4), D)
     and where they are known (mask broadcastable to them). `wait(n)`: called before a group's condition is computed
     with the frames it reads; returns when `words` and `has_word` are final there (pipelined speech: they are read
-    only then, never copied before)."""
+    only then, never copied before). `on_window(latents)`: after each window, the un-scaled latents (R, n, D) that
+    are final so far (a copy; not for edits), e.g. a `WindowDecoder`."""
     c = model.config
     t, s = c.window_latents, c.seed_latents
     method = make_method(model.method)
@@ -82,9 +90,11 @@ def generate_latents(model: GestureGenerator, audio_ch: torch.Tensor, words: tor
             f = inpainting(f, method, win.known[None].to(dev), win.mask[None].to(dev), noise)
         return method.sample(f, noise, steps, cfg_scale)[0]                                 # (R, t, D) scaled
 
+    hook = None if on_window is None or held is not None else \
+        (lambda n, out: on_window(out[:, :min(n, L)] * std))
     with expect(len(todo) * steps):                            # the trunk's calls ahead (kernels.choice.Switch)
         out = sample_windows(L, t, s, model.neutral_seed.cpu(), sample, seed, crossfade=True, progress=progress,
-                             held=held)
+                             held=held, on_window=hook)
     return out[:, :L] * std
 
 
@@ -125,3 +135,59 @@ def decode_latents(tokenizers: dict, latents: torch.Tensor, num_frames: int, chu
             pieces[r].append(y[4 * (a - lo):4 * (a - lo) + 4 * min(chunk, L - a)])
     return {region: t.normalizer.denormalize(torch.cat(p)[:num_frames])
             for (region, t), p in zip(tokenizers.items(), pieces)}
+
+
+class PreviewListener(Protocol):
+    """What `window_previews` hands the decoded windows to."""
+
+    def wanted(self) -> bool:
+        """Whether previews are still wanted (False: nothing more is decoded for them)."""
+
+    def show(self, parts: dict[str, torch.Tensor]) -> None:
+        """The raw decoded motion so far: {region: (frames, C) features}, from frame 0, growing call by call."""
+
+
+_listening = threading.local()
+
+
+@contextlib.contextmanager
+def window_previews(listener: PreviewListener) -> Iterator[None]:
+    """Inside: our generators on this thread hand `listener` their motion window by window (module docstring)."""
+    before = getattr(_listening, "listener", None)
+    _listening.listener = listener
+    try:
+        yield
+    finally:
+        _listening.listener = before
+
+
+def window_decoder(tokenizers: dict, num_frames: int) -> "WindowDecoder | None":
+    """The `on_window` of a generation on this thread: a `WindowDecoder` for the listener of `window_previews`, None
+    outside one."""
+    listener = getattr(_listening, "listener", None)
+    return None if listener is None else WindowDecoder(tokenizers, num_frames, listener)
+
+
+class WindowDecoder:
+    """Decodes the final latents of a generation as they grow, only the new ones each time (with `margin` latents of
+    context before them), and shows the listener the raw motion so far. The last frames of a call are decoded without
+    the context after them, so they may differ a little from the whole motion's decoding: a preview only."""
+
+    def __init__(self, tokenizers: dict, num_frames: int, listener: PreviewListener, margin: int = 16):
+        self.tokenizers, self.num_frames, self.listener, self.margin = tokenizers, num_frames, listener, margin
+        self.pieces: dict[str, list[torch.Tensor]] = {r: [] for r in tokenizers}
+        self.done = 0
+
+    @torch.no_grad()
+    def __call__(self, latents: torch.Tensor) -> None:
+        n = latents.shape[1]
+        if n <= self.done or 4 * n >= self.num_frames or not self.listener.wanted():
+            return                                    # the whole motion: it is finished moments later
+        lo = max(0, self.done - self.margin)
+        device = next(next(iter(self.tokenizers.values())).parameters()).device
+        parts = decode_latents(self.tokenizers, latents[:, lo:n].to(device), 4 * (n - lo))
+        for region, y in parts.items():
+            self.pieces[region].append(y[4 * (self.done - lo):].cpu())
+        self.done = n
+        frames = min(self.num_frames, 4 * n)
+        self.listener.show({r: torch.cat(p)[:frames] for r, p in self.pieces.items()})

@@ -23,8 +23,10 @@ import threading
 import time
 from typing import Callable, Hashable, Iterator
 
+from ..generator.sampling import window_previews
 from ..pipeline import Made, Plan
 from ..settings import motion_values
+from .preview import Preview
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -55,11 +57,24 @@ class Run:
         self.taken = False
         self._cond = threading.Condition()
         self.thread: threading.Thread | None = None
+        self.preview = Preview(self._cond)     # the first method's windows as they are made (serve/preview.py)
+        self.said: tuple[float, str] | None = None   # the last progress of a run made for a click (`say`)
+        self.error: BaseException | None = None      # what stopped a run made for a click
 
     def add(self, x: Made) -> None:
         with self._cond:
             self.made.append(x)
             self.made_at.append(time.perf_counter())
+            if x.motion is not None:
+                self.preview.stop()
+            self._cond.notify_all()
+
+    def say(self, f: float, message: str) -> None:
+        """A progress callback for a run made for a click: stops it when cancelled, else keeps what it says for the
+        thread that reads the run."""
+        self.check()
+        with self._cond:
+            self.said = (f, message)
             self._cond.notify_all()
 
     def seconds(self, x: Made) -> float | None:
@@ -141,8 +156,9 @@ class Ahead:
             run.check()
             run.started_at = time.perf_counter()
             log.info("making motion ahead: %s", run.what)
-            for x in make(run):                    # its windows check for cancelling (make's progress: run.check)
-                run.add(x)
+            with window_previews(run.preview):     # the first method shown as its windows come
+                for x in make(run):                # its windows check for cancelling (make's progress: run.check)
+                    run.add(x)
         except Cancelled:                          # only a run no click has taken is cancelled
             failed = True
             log.info("motion made ahead was cancelled after %d method(s)", len(run.made))

@@ -6,13 +6,18 @@ words are final, gesturelsm/pipelined.py, and the results say the finished speec
 then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
 far in the page's order, their timing rows and notes (the methods made ahead of the click, `serve/ahead.py`, come in
 the first result); the last is what `GestureService.run` returns before the video
-and the downloads. A method that fails does not stop the others: the result names it in `failed` (method -> the
-visitor's line) and in a note; only when no method is made is its error raised. A failure that is not one of the
-errors a visitor can fix (a `GestureError`) is logged with its traceback and shown as a failure on the server.
+and the downloads. With `previews` (the page) the methods are made on a thread of their own and, until the first
+method's motion is made, a result comes each time its decoded windows have doubled (the first at once), holding that
+raw motion so far in `previews` (serve/preview.py; made ahead or not, the same): the page's first body moves before
+its method is finished; the motions in `motions` are always the finished ones. A method that fails does not stop the
+others: the result names it in `failed` (method -> the visitor's line) and in a note; only when no method is made is
+its error raised. A failure that is not one of the errors a visitor can fix (a `GestureError`) is logged with its
+traceback and shown as a failure on the server.
 """
 from __future__ import annotations
 
 import logging
+import threading
 import time
 from dataclasses import replace
 from typing import Iterator
@@ -23,7 +28,10 @@ import torch
 from ..constants import Progress
 from ..backends import GROUND_TRUTH_LABEL, label
 from ..errors import GestureError, InputError
+from ..generator.sampling import window_previews
+from ..motion.sequence import MotionSequence
 from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
+from .ahead import Cancelled, Run
 from .request import RenderJob, Request, Result, timing_rows
 
 log = logging.getLogger("gesturelsm.app")
@@ -79,7 +87,12 @@ class Growing:
             self.slots.remove(x.method)
         self.ready_s = time.perf_counter() - self.started
 
-    def result(self) -> Result:
+    def moving(self) -> bool:
+        """Whether a method's motion is made (the page's first body moves on it: no more previews)."""
+        return any(x.motion is not None for x in self.made.values())
+
+    def result(self, preview: tuple[str, MotionSequence] | None = None) -> Result:
+        """The result so far; `preview`: (method, raw motion so far) of the method being made."""
         made = {m: self.made[m] for m in self.slots if m in self.made and self.made[m].motion is not None}
         motions = {m: x.motion for m, x in made.items()}
         gens = {m: x.result for m, x in made.items() if x.result is not None}
@@ -105,18 +118,21 @@ class Growing:
                       motions, sp.transcript, job, speech=sp, plan=self.plan, pending=pending,
                       failed={m: self.failed[m] for m in self.slots if m in self.failed},
                       slots=tuple((m, slot_label(m, self.plan)) for m in self.slots), made_ahead=ahead,
-                      ahead_seconds=self.ahead_s if ahead else None, speech_ahead=speech_ahead)
+                      ahead_seconds=self.ahead_s if ahead else None, speech_ahead=speech_ahead,
+                      previews=dict([preview]) if preview is not None and preview[0] in pending else {})
 
 
 def stream_request(service, req: Request, progress: Progress | None = None,
-                   audio: np.ndarray | None = None) -> Iterator[Result]:
-    """The request's result after the speech is prepared and after each method (module docstring); `service` is the
-    `GestureService` whose checks, prepared speech, motion made ahead, pipeline and request folders it uses."""
+                   audio: np.ndarray | None = None, previews: bool = False) -> Iterator[Result]:
+    """The request's result after the speech is prepared and after each method, with `previews` also as the first
+    method's windows come (module docstring); `service` is the `GestureService` whose checks, prepared speech, motion
+    made ahead, pipeline and request folders it uses."""
     with service.ahead.generating():                     # no motion is made ahead while a request generates
-        yield from _stream(service, req, progress, audio)
+        yield from _stream(service, req, progress, audio, previews)
 
 
-def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None) -> Iterator[Result]:
+def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None,
+            previews: bool = False) -> Iterator[Result]:
     started = time.perf_counter()
     prog = rising(progress) if progress else (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
@@ -131,7 +147,19 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
     ready = len(run.made) if run is not None else 0      # made before the click: shown at once, in one result
     if GROUND_TRUTH not in plan.methods and not ready:   # else the take's lookup comes first and settles its slot
         yield grow.result()
-    for i, x in enumerate(_made(service, plan, speech, run, prog)):
+    events = _events(service, plan, speech, run, prog) if previews else \
+        (("made", x) for x in _made(service, plan, speech, run, prog))
+    i, shown = -1, 0
+    for kind, x in events:
+        if kind == "preview":
+            if not grow.moving() and i + 1 >= ready and not 0 < shown <= x.num_frames < 2 * shown:
+                making = next((m for m in service.pipeline.run_order(plan) if m != GROUND_TRUTH and
+                               m not in grow.made), None)
+                if making is not None:                   # each shown preview at least doubles the one before
+                    shown = x.num_frames
+                    yield grow.result((making, x))
+            continue
+        i += 1
         if run is not None and any(x is y for y in run.made):
             if MADE_AHEAD not in grow.notes:
                 grow.notes = grow.notes + [MADE_AHEAD]
@@ -186,3 +214,82 @@ def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iter
         plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
     yield from service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
                                               body=service.body, keep_going=True)
+
+
+def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Progress) -> Iterator[tuple]:
+    """`_made` with previews: ("made", Made) for each method and ("preview", MotionSequence) for each window of the
+    first method as it comes, read from the run made ahead when there is one, else from a run on a thread of its own
+    (`own_run`: its progress is said here, in the request's thread); that run is stopped if the reader stops."""
+    todo = list(plan.methods)
+    if run is not None:
+        for kind, x in read(run):
+            if kind == "made":
+                if x.method in todo:
+                    todo.remove(x.method)
+                prog(0.12 + 0.5 * (1 - len(todo) / len(plan.methods)), f"{label(x.method)} made")
+            if kind != "progress":
+                yield kind, x
+        if not todo:
+            return
+        plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
+    own = own_run(service, plan, speech)
+    try:
+        for kind, x in read(own):
+            if kind == "progress":
+                prog(0.12 + 0.5 * x[0], x[1])
+            else:
+                yield kind, x
+        if own.error is not None:
+            raise own.error
+    finally:
+        own.cancelled.set()                              # a closed page: it stops at its next window
+        own.thread.join()
+
+
+def own_run(service, plan: Plan, speech: SpeechInput) -> Run:
+    """`plan`'s methods made on a thread of its own at the server's math threads, the first one's windows shown as
+    they come (`Run.preview`); what stops it (other than cancelling) is kept in `Run.error`."""
+    run = Run(None, what=", ".join(plan.methods))
+    run.taken = True
+    threads = service.settings.threads
+
+    def work() -> None:
+        failed = False
+        try:
+            torch.set_num_threads(threads)
+            with window_previews(run.preview):
+                for x in service.pipeline.generate_each(speech, plan, progress=run.say, body=service.body,
+                                                        keep_going=True):
+                    run.add(x)
+        except Cancelled:
+            failed = True
+        except BaseException as exc:  # handed to the request's thread
+            run.error, failed = exc, True
+        finally:
+            run.finish(failed)
+    run.thread = threading.Thread(target=work, name="gesturelsm-generate", daemon=True)
+    run.thread.start()
+    return run
+
+
+def read(run: Run) -> Iterator[tuple]:
+    """What `run` makes as it makes it: ("made", Made) for each method, ("preview", MotionSequence) for each new
+    preview of the method being made, ("progress", (fraction, message)) for each `Run.say`; ends with the run."""
+    i, seen, said = 0, 0, None
+    cond = run.preview.cond
+    while True:
+        with cond:
+            while i >= len(run.made) and not run.done and run.preview.version == seen and run.said is said:
+                cond.wait()
+            if i < len(run.made):
+                event, i = ("made", run.made[i]), i + 1
+            elif run.said is not said:
+                said = run.said
+                event = ("progress", said)
+            elif run.preview.version != seen:
+                seen = run.preview.version
+                event = None if run.preview.stopped else ("preview", run.preview.motion)
+            else:
+                return
+        if event is not None:
+            yield event

@@ -131,6 +131,8 @@ class Result:
     speech_ahead: bool = False               # the speech was prepared at the upload, before the click
     render_seconds: float | None = None      # the generation's video's own render time (None: not rendered)
     edit_timings: tuple[EditTiming, ...] = ()   # each edit's own timings, oldest first
+    previews: Mapping[str, MotionSequence] = field(default_factory=dict, repr=False)  # raw first windows of a
+    # method still being made, by method (serve/preview.py; a result that grows, for the page's player)
 
     @property
     def table(self) -> list[list]:

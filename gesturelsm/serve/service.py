@@ -285,15 +285,15 @@ class GestureService:
         prog(1.0, "done")
         return result
 
-    def stream(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None
-               ) -> Iterator[Result]:
+    def stream(self, req: Request, progress: Progress | None = None, audio: np.ndarray | None = None,
+               previews: bool = True) -> Iterator[Result]:
         """The request's result as each method is made, fastest first, without the video and the downloads
-        (`serve/progressive.py`): the page shows every body the moment its motion exists. A service that makes its
-        results elsewhere (a subclass with its own `run` and no `stream` of its own: the replicas' front end) gives
-        one result, once `run` has made every method."""
+        (`serve/progressive.py`): the page shows every body the moment its motion exists (`previews`: the first
+        method's raw windows too). A service that makes its results elsewhere (a subclass with its own `run` and no
+        `stream` of its own: the replicas' front end) gives one result, once `run` has made every method."""
         if type(self).run is not GestureService.run and type(self).stream is GestureService.stream:
             return iter([self.run(req, progress, audio)])
-        return stream_request(self, req, progress, audio)
+        return stream_request(self, req, progress, audio, previews)
 
     def edit(self, result: Result | None, method: str, start: float | None, end: float | None, regions, seed,
              progress: Progress | None = None) -> Result:

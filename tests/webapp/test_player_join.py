@@ -1,7 +1,9 @@
 """Bodies that join a running clock (gesturelsm/webapp/player/src/progressive.js, MotionPlayer.join / fail), in
 headless Chromium on the player bundle alone (no app): the page's payload for one request arrives again as its
 methods finish; the first body starts the speech, a later one joins at the current time (the speech does not restart
-or jump, every body shows the frame of the same speech position), a failed method says why while the others play.
+or jump, every body shows the frame of the same speech position), a failed method says why while the others play; a
+method's motion that grows while it is made (body entries with `partial`, handed over as a slow generation would)
+moves from its first windows on, each longer one and then the finished motion replacing its frames on the same clock.
 Skips, saying why, without chromium or the player bundle (scripts/setup.sh builds it with npm)."""
 from __future__ import annotations
 
@@ -100,3 +102,57 @@ def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
     for k in range(2):                                          # both bodies show that frame of their own motion
         np.testing.assert_allclose(shown[k], rotations[k][f], atol=1e-6)
     assert np.abs(shown[0] - shown[1]).max() > 1e-3
+
+
+def _growing(first: str | None, frames: int | None = None, second: str | None = None) -> dict:
+    one = {"label": "Alpha 8 steps CFG 2", "method": "m0", "body": "/body.glb", "motion": first, "expressions": 0}
+    if frames is not None:
+        one.update(partial=True, frames=frames)
+    two = {"label": "Beta 8 steps CFG 2", "method": "m1", "body": "/body.glb", "motion": second, "expressions": 0}
+    return {"id": "req-1", "fps": 30, "frames": T, "duration": T / 30, "audio": "/speech.wav", "bodies": [one, two]}
+
+
+def test_the_first_body_moves_on_its_first_windows_and_ends_on_the_finished_motion(tmp_path):
+    import numpy as np
+
+    from gesturelsm.export.motion_codec import MotionRecord, encode
+    from gesturelsm.webapp.player.component import BUNDLE
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+    files, rotations = _files(tmp_path)
+    raw = rotations[1]                                   # the partial motions: other frames than the finished m0
+    for n in (60, 150):
+        rec = MotionRecord(raw[:n].copy(), np.zeros((n, 3), np.float32), np.zeros((n, 0), np.float32), fps=30)
+        files[f"/m0-upto-{n}.bin"] = (encode(rec), "application/octet-stream")
+    frames = "window.player.frames()"
+
+    with routed_page(files) as page:
+        page.evaluate("""async () => { const m = await import('/player.js');
+            window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
+        page.evaluate("(p) => { window.player.load(p); }", _growing(None))
+        page.wait_for_function("() => window.player.element.querySelectorAll('.mp-label').length === 2",
+                               timeout=30000)
+        page.evaluate("(p) => { window.player.load(p); }", _growing("/m0-upto-60.bin", 60))
+        page.wait_for_function("() => window.player.element.dataset.state === 'playing'", timeout=30000)
+        assert page.evaluate(f"() => {frames}") == 60 and page.evaluate(STATE)["bodies"] == 1   # before it is made
+        page.evaluate("(p) => { window.player.load(p); }", _growing("/m0-upto-150.bin", 150))
+        page.wait_for_function(f"() => {frames} === 150", timeout=30000)
+        grown = page.evaluate(STATE)
+        assert grown["state"] == "playing" and grown["bodies"] == 1
+        page.evaluate("(p) => { window.player.load(p); }", _growing("/m0.bin", None, "/m1.bin"))
+        page.wait_for_function(f"() => window.player.element.dataset.bodies === '2' && {frames} === {T}",
+                               timeout=30000)
+        page.wait_for_function("() => window.player.clock.currentTime > 2.5", timeout=30000)
+        page.evaluate("() => window.player.pause()")
+        page.wait_for_function("""() => { const p = window.player;
+            return p.element.dataset.state === 'paused'
+              && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                               timeout=10000)
+        end = page.evaluate(STATE)
+        shown = np.asarray(page.evaluate("() => window.player.jointRotations(0)"))
+        length = page.evaluate("() => Number(window.player.range.max)")
+    assert end["t"] >= grown["t"] and length == pytest.approx(T / 30)                # one clock, the full length
+    np.testing.assert_allclose(shown, rotations[0][end["frame"]], atol=1e-6)         # the finished motion's frame

@@ -70,7 +70,9 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     still growing (serve/progressive.py) every method shown has a body entry, with its motion file once it is made
     (`motion`) or why it failed (`error`); files already written for the request are not written again. For an
     edited result, `compare` is the edited method's motion before the edit (the player's A/B), beside the
-    character's `METHOD:before`."""
+    character's `METHOD:before`. A method still being made whose first windows are decoded (`Result.previews`, on the
+    mannequin) has a body entry with `partial` set and the motion so far (`frames` of them), replaced by its finished
+    motion once it is made."""
     import soundfile as sf
 
     slots = list(out.slots) or list(zip(out.motions, out.job.labels))
@@ -88,8 +90,11 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
                        names=[f"player-{order.index(k)}-{k}.bin" for k in made])
     ready = {b["method"]: b for b in p["bodies"]}
     rest = body_url(service)
-    p["bodies"] = [ready.get(m) or {"label": label, "method": m, "body": rest, "motion": None, "expressions": 0,
-                                    **({"error": out.failed[m]} if m in out.failed else {})} for m, label in slots]
+    growing = {} if character is not None else previews(service, out, folder, order)
+    p["bodies"] = [ready.get(m) or growing.get(m) or {"label": label, "method": m, "body": rest, "motion": None,
+                                                      "expressions": 0,
+                                                      **({"error": out.failed[m]} if m in out.failed else {})}
+                   for m, label in slots]
     p["frames"] = p["frames"] or int(round(out.job.speech_seconds * p["fps"]))
     p["duration"] = p["frames"] / p["fps"]
     motions, edited = {m: out.motions[m] for m in made}, edited_method(out)
@@ -101,3 +106,18 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     if character is not None:           # from the first payload on: the slots are built on the character
         p["character"] = page_character(character, motions, folder, file_url, service.body, out.job.grounding)
     return p
+
+
+def previews(service: GestureService, out: Result, folder: Path, order: list[str]) -> dict[str, dict]:
+    """Body entries of the methods still being made whose raw first windows the result holds: each preview written
+    once (player-I-METHOD-upto-FRAMES.bin) and marked `partial`."""
+    bodies = {}
+    for m, seq in out.previews.items():
+        if m in out.motions or m not in order:
+            continue
+        i = order.index(m)
+        path = folder / f"player-{i}-{m}-upto-{seq.num_frames}.bin"
+        p = player_payload([seq], [dict(out.slots).get(m, m)], [m], service.body, folder,
+                           service.workdir / "player-bodies", url=file_url, names=[path.name])
+        bodies[m] = {**p["bodies"][0], "partial": True, "frames": seq.num_frames}
+    return bodies

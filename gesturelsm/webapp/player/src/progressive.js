@@ -5,6 +5,10 @@
 // restarts); the first one starts the speech from its beginning. On the visitor's character (payload.character) a
 // method's frames come inside the payload (character.methods, there whenever its body has `motion`), and its
 // motion file is drawn only if the character cannot be loaded.
+// A body entry with `partial` holds the motion of a method still being made, its first windows as decoded so far
+// (gesturelsm/serve/preview.py): the body joins on it and moves, and each later payload's longer motion (another
+// file) replaces its frames on the same clock, until the entry without `partial` brings the finished motion, which
+// replaces them for good (a file fetched late is dropped when a newer one of its slot was asked for since).
 // A payload with `resume` (an edit or an undo: the same speech, another request folder) keeps the time on screen and
 // play / pause: its first body starts the speech where the previous one was. A payload with `compare` (an edit) loads
 // the motion before the edit for the A/B button once the edited body has joined.
@@ -21,7 +25,8 @@ function fetchRecord(url) {
 
 // A new request: the speech starts loading, the slots are built (the bodies ready at once join straight away).
 function begin(p, payload) {
-  const req = { id: payload.id, joined: new Set(), failed: new Set(), marks: p.measure ? { start: performance.now() } : null };
+  const req = { id: payload.id, joined: new Set(), done: new Set(), failed: new Set(), urls: [],
+    marks: p.measure ? { start: performance.now() } : null };
   const was = p.clock ? { t: p.clock.currentTime || 0, paused: p.clock.paused } : (p.request && p.request.resume);
   req.resume = payload.resume ? was || null : null;
   p.request = req;
@@ -51,17 +56,33 @@ async function start(p, req) {
 }
 
 function allIn(p, req) {
-  if (!req.marks || !p.measure || req.joined.size + req.failed.size < p.payload.bodies.length) return;
+  if (!req.marks || !p.measure || req.done.size + req.failed.size < p.payload.bodies.length) return;
   req.marks.all = performance.now() - req.marks.start;
   p.element.dataset.marks = JSON.stringify(req.marks);
 }
 
-// Body i of the request: its motion fetched and decoded (not on the character), then it joins.
+// Body i (moving) shows `record` from now on: its frames replaced on the same clock (a partial motion that grew, or
+// the finished motion after it).
+function replaceMotion(p, i, record) {
+  p.records[i] = record;
+  p.bodies[i].frames = 0;
+  p.appendRecord(i, record, p.specs[i].motion);
+  p.shown = -1; p.dirty = true;
+}
+
+// Body i of the request: its motion fetched and decoded (not on the character), then it joins, or, already moving
+// on a partial motion, its frames are replaced by these.
 async function arrive(p, req, payload, i) {
   const b = payload.bodies[i];
   const record = await fetchRecord(b.motion);              // drawn unless the character is on screen
-  if (!(await req.slots) || p.request !== req) return;       // a newer request replaced this one
+  if (!(await req.slots) || p.request !== req || req.urls[i] !== b.motion) return;   // replaced since
   if (req.marks && req.marks.motion === undefined) req.marks.motion = performance.now() - req.marks.start;
+  if (!b.partial) req.done.add(i);
+  if (req.joined.has(i)) {
+    replaceMotion(p, i, record);
+    if (!b.partial) allIn(p, req);
+    return;
+  }
   p.join(i, record, payload.character);
   p.setRange(...(p.editRange || []));                      // the edit range drawn against the frames now in
   const first = req.joined.size === 0;
@@ -77,12 +98,13 @@ export async function loadPayload(p, payload) {
   p.payload = payload;
   const pending = [];
   payload.bodies.forEach((b, i) => {
-    if (req.joined.has(i) || req.failed.has(i) || (req.asked && req.asked.has(i))) return;
+    if (req.failed.has(i) || (req.asked && req.asked.has(i)) || (b.motion && req.urls[i] === b.motion)) return;
     if (b.error) {
       req.failed.add(i);
       req.slots.then((ok) => { if (ok && p.request === req) { p.fail(i, b.error); allIn(p, req); } });
     } else if (b.motion) {
-      (req.asked = req.asked || new Set()).add(i);
+      if (!b.partial) (req.asked = req.asked || new Set()).add(i);   // the finished motion: nothing after it
+      req.urls[i] = b.motion;
       pending.push(arrive(p, req, payload, i));
     }
   });
