@@ -135,7 +135,7 @@ def wrong_motions(service, wav: Path, r: Round, steps: int) -> list[int]:
 
 def one_round(service, url: str, wav: Path, n: int, args, seed0: int) -> list[str]:
     """A round of `n` clients; returns its table row's cells."""
-    front = Path(service.settings.workdir)
+    front = service.workdir
     before = set(front.glob("req-*"))
     rss0 = status_mb(os.getpid(), "VmRSS")
     r = crowd(url, wav, n, args.steps, not args.no_kill, seed0)
