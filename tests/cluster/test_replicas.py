@@ -230,7 +230,7 @@ def test_twelve_clients_on_two_replicas_one_killed_each_gets_its_own_motion(repl
         outcomes = [_outcome(j) for j in jobs]
         after_kill = gradio_client(url).predict(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, 999, 20,
                                                 False, "off", 256, False, api_name="/generate")
-    made = set(front.glob("req-*")) - before
+        made = set(front.glob("req-*")) - before                    # (the page's close empties the folder)
     refused = [str(o) for o in outcomes if isinstance(o, Exception)]
     assert refused == [], refused                                   # the killed replica's request was made again
     here = GestureService(replicated.pipeline, replicated.settings, replicated.body)
