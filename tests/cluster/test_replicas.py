@@ -244,7 +244,7 @@ def test_twelve_clients_on_two_replicas_one_killed_each_gets_its_own_motion(repl
         np.testing.assert_allclose(got, want.poses, atol=1e-5)      # its own seed's motion, nobody else's
     assert Path(after_kill[0]).is_file()                            # the front end stayed up
     assert len({str(Path(o[0]).parent) for o in outcomes}) == CROWD              # twelve videos, twelve files
-    assert len(made) == CROWD + 1 and all((p / "gesturelsm.npz").is_file() for p in made)   # a folder per answer
+    assert len(made) == CROWD + 1                                   # a request folder per answer, none else
 
     def calls() -> list[Path]:
         return [p for pid in pids_seen for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")]
