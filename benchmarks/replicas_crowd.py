@@ -13,7 +13,10 @@ of them is killed (SIGKILL). Then each answer is checked: its motion must be the
 client's seed (never another client's), else the client's error must be one line without a traceback. Reported: the
 answers and refusals, wall time first submit to last answer, p50 / max latency, request folders made here against
 answers, call folders left on the replicas and whether the dead replica's folder is gone once its replacement runs,
-the front end's resident memory before and after (VmRSS, and its peak VmHWM) and the largest replica's. The next
+the front end's resident memory before and after (VmRSS; its peak VmHWM; its private part RssAnon, without the
+pages of Ray's shared object store it read the replies from) and the largest replica's. The clients and the check
+of their motions run in the front end's process too (their threads, their downloads), so its figures are an upper
+bound on the server's own. The next
 count starts once two replicas are alive again.
 """
 from __future__ import annotations
@@ -137,10 +140,11 @@ def one_round(service, url: str, wav: Path, n: int, args, seed0: int) -> list[st
     """A round of `n` clients; returns its table row's cells."""
     front = service.workdir
     before = set(front.glob("req-*"))
-    rss0 = status_mb(os.getpid(), "VmRSS")
+    me = os.getpid()
+    rss0, anon0 = status_mb(me, "VmRSS"), status_mb(me, "RssAnon")
     r = crowd(url, wav, n, args.steps, not args.no_kill, seed0)
     made = len(set(front.glob("req-*")) - before)
-    rss1, hwm = status_mb(os.getpid(), "VmRSS"), status_mb(os.getpid(), "VmHWM")
+    rss1, anon1, hwm = status_mb(me, "VmRSS"), status_mb(me, "RssAnon"), status_mb(me, "VmHWM")
     wrong = wrong_motions(service, wav, r, args.steps) if args.check else []
     lines = sorted({msg for msg in r.refusals.values()})
     traceback = sum("Traceback" in m or "\n" in m.strip() for m in r.refusals.values())
@@ -152,7 +156,7 @@ def one_round(service, url: str, wav: Path, n: int, args, seed0: int) -> list[st
     return [n, "yes" if r.killed else "no", len(r.answers), f"{len(r.refusals)} ({traceback} multi-line)",
             f"{len(wrong)}" if args.check else "not checked", f"{r.wall:.0f}", f"{statistics.median(lat):.0f}",
             f"{max(lat):.0f}", f"{made}", "none" if left else "some", "yes" if gone else "NO",
-            "yes" if replaced else "NO", f"{rss0:.0f} -> {rss1:.0f} (peak {hwm:.0f})",
+            "yes" if replaced else "NO", f"{rss0:.0f} -> {rss1:.0f} (peak {hwm:.0f}; private {anon0:.0f} -> {anon1:.0f})",
             f"{max(status_mb(p, 'VmRSS') for p in replica_pids()):.0f}"]
 
 
