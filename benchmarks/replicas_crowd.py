@@ -156,7 +156,8 @@ def one_round(service, url: str, wav: Path, n: int, args, seed0: int) -> list[st
     return [n, "yes" if r.killed else "no", len(r.answers), f"{len(r.refusals)} ({traceback} multi-line)",
             f"{len(wrong)}" if args.check else "not checked", f"{r.wall:.0f}", f"{statistics.median(lat):.0f}",
             f"{max(lat):.0f}", f"{made}", "none" if left else "some", "yes" if gone else "NO",
-            "yes" if replaced else "NO", f"{rss0:.0f} -> {rss1:.0f} (peak {hwm:.0f}; private {anon0:.0f} -> {anon1:.0f})",
+            "yes" if replaced else "NO",
+            f"{rss0:.0f} -> {rss1:.0f} (peak {hwm:.0f}; private {anon0:.0f} -> {anon1:.0f})",
             f"{max(status_mb(p, 'VmRSS') for p in replica_pids()):.0f}"]
 
 
