@@ -188,3 +188,69 @@ def test_a_client_killed_mid_request_leaves_the_others_and_the_replicas_as_they_
         time.sleep(0.5)
     assert not any(p for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*"))
     assert _replica_pids() == pids                                   # no replica died or was replaced
+
+
+CROWD = 12                                  # API clients at once on the two replicas (benchmarks/replicas_crowd.py: 20)
+
+
+def _outcome(job):
+    """A client's answer, or the one line it was refused with (never a traceback)."""
+    try:
+        return job.result(timeout=1800)                              # bounds a hang; never reached when all is well
+    except Exception as exc:                                        # gradio_client's AppError: the server's gr.Error
+        return exc
+
+
+def test_twelve_clients_on_two_replicas_one_killed_each_gets_its_own_motion(replicated, tmp_path):
+    """Twelve API clients at once, each with its own seed, and a replica killed while both make a request: every
+    client gets the motion this process makes for its seed (the killed replica's request made again on the other),
+    in a folder of its own; the front end keeps serving; no call folder is left on the replicas, the dead one's goes
+    with it; one request folder here per answer."""
+    from gradio_client import handle_file
+
+    from gesturelsm.serve.request import Request
+    from gesturelsm.serve.service import GestureService
+
+    wav = tmp_path / "speech.wav"
+    sf.write(wav, speech_like(1.5, seed=6), 16000)
+    pids = _replica_pids()
+    killed = sorted(p.name for p in SCRATCH_ROOT.glob(f"replica-{pids[0]}-*"))
+    front = replicated.workdir
+    before = set(front.glob("req-*"))
+    seeds = list(range(100, 100 + CROWD))
+    with served(replicated) as url:
+        clients = [gradio_client(url) for _ in seeds]
+        jobs = [c.submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False, "off", 256, False,
+                         api_name="/generate") for c, seed in zip(clients, seeds)]
+        deadline = time.monotonic() + 600
+        while not all(any(SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")) for pid in pids):
+            assert time.monotonic() < deadline, "the two replicas never both had a request"
+            time.sleep(0.01)
+        os.kill(pids[0], signal.SIGKILL)                            # mid-request, with ten more waiting
+        outcomes = [_outcome(j) for j in jobs]
+        after_kill = gradio_client(url).predict(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, 999, 20,
+                                                False, "off", 256, False, api_name="/generate")
+        made = set(front.glob("req-*")) - before                    # (the page's close empties the folder)
+    refused = [str(o) for o in outcomes if isinstance(o, Exception)]
+    assert refused == [], refused                                   # the killed replica's request was made again
+    here = GestureService(replicated.pipeline, replicated.settings, replicated.body)
+    for seed, (video, rows, summary, files, glb) in zip(seeds, outcomes):
+        assert Path(video).is_file()
+        npz = next(Path(f) for f in files if Path(f).name == "gesturelsm.npz")
+        with np.load(npz) as d:
+            got = d["poses"].copy()
+        want = here.run(Request(str(wav), methods=["gesturelsm"], steps=1, cfg=2.0, seed=seed, smoothing="off",
+                                render=False, exports=False, transcribe=False)).motions["gesturelsm"]
+        np.testing.assert_allclose(got, want.poses, atol=1e-5)      # its own seed's motion, nobody else's
+    assert Path(after_kill[0]).is_file()                            # the front end stayed up
+    assert len({str(Path(o[0]).parent) for o in outcomes}) == CROWD              # twelve videos, twelve files
+    assert len(made) == CROWD + 1                                   # a request folder per answer, none else
+
+    def calls() -> list[Path]:
+        return [p for pid in pids_seen for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")]
+
+    deadline = time.monotonic() + 300                               # the replacement removes the dead one's folder
+    while time.monotonic() < deadline and (any(SCRATCH_ROOT.glob(killed[0])) or calls()):
+        time.sleep(1)
+    assert not any(SCRATCH_ROOT.glob(killed[0])) and calls() == []
+    assert len(_replica_pids()) == 2 and pids[0] not in _replica_pids()
