@@ -60,7 +60,8 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
         key = (setting, repr(value))
         groups.setdefault(key, []).append(m)
         values[key] = value
-    steps, found = {}, []
+    steps: dict[str, Any] = {}
+    found: list[str] = []
     for key, ms in groups.items():
         field, value = getattr(names, key[0]), values[key]
         highs = {m: limits.max_steps(method_spec(m)) for m in ms}
@@ -86,14 +87,16 @@ def cfg_bound(methods: Sequence[str]) -> float:
 
 def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
     """A seed: a whole number from 0 to SEED_MAX, never rounded (the settings' own check of it)."""
-    return named("seed").check(value, names.seed, problems)
+    check = named("seed").check
+    assert check is not None                           # the seed's field always has its check
+    return check(value, names.seed, problems)
 
 
 def checked_seed(value: Any, names: Names = PAGE) -> int:
     """A seed sent alone (the page's Edit), checked as the settings' seed is: the int, or an InputError."""
     p: list[str] = []
     seed = seed_problems(value, names, p)
-    if p:
+    if p or seed is None:
         raise InputError("\n".join(p))
     return seed
 
@@ -143,7 +146,7 @@ def checked(asked: Asked, available: Sequence[str], limits: Limits = Limits(), n
             default_methods: Sequence[str] | None = None) -> Settings:
     """The settings, or an InputError with every problem, one per line."""
     settings, problems = settings_problems(asked, available, limits, names, default_methods)
-    if problems:
+    if problems or settings is None:
         raise InputError("\n".join(problems))
     return settings
 
@@ -172,7 +175,9 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
         real_number(c, names.cfg, 0.0, cfg_bound(methods), found)
     problems += list(dict.fromkeys(found))
     count = whole_number(seeds, "Seeds" if names is PAGE else "--seeds", 1, max_seeds, problems)
-    return None if len(problems) > n else (step_list, cfg_list, count)
+    if len(problems) > n or step_list is None or cfg_list is None or count is None:
+        return None
+    return step_list, cfg_list, count
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_language", "check_method_settings",
