@@ -153,7 +153,7 @@ def decay(pipe, data, seeds: list[int], cfg: float, window: int = 128) -> None:
             with sampling_options(model, seed_latents=None if bank is None else bank[k % len(bank)]):
                 for c in data.clips:
                     res = pipe.generate(pipe.prepare_speech(c.audio, 16000), steps=8, cfg=cfg, seed=k,
-                                        method="gesturelsm")
+                                        method="gesturelsm", output="raw")
                     up = (wrist_heights(data.joints(res.motion)) > RAISED_M).any(1)     # (T,) a wrist raised
                     first.append(up[:window]), after.append(up[window:])
         f, a = np.concatenate(first), np.concatenate(after)

@@ -70,12 +70,12 @@ def in_process(wav: Path, textgrid: Path, rounds: int) -> list[str]:
 
     pipe = GesturePipeline.from_pretrained(methods=["gesturelsm"])
     y, words = load_audio(wav), read_words(textgrid)
-    ways = {"words given": lambda: pipe.generate(pipe.prepare_speech(y, words=words)),
-            "one-shot (recognise, then generate)": lambda: pipe.generate(pipe.prepare_speech(y)),
-            "pipelined (two threads)": lambda: pipe.generate(y)}
+    ways = {"words given": lambda: pipe.generate(pipe.prepare_speech(y, words=words), output="raw"),
+            "one-shot (recognise, then generate)": lambda: pipe.generate(pipe.prepare_speech(y), output="raw"),
+            "pipelined (two threads)": lambda: pipe.generate(y, output="raw")}
     times: dict[str, list[float]] = {k: [] for k in ways}
     hidden: list[float] = []
-    pipe.generate(y[:16000 * 5], transcribe=False)                      # warm
+    pipe.generate(y[:16000 * 5], transcribe=False, output="raw")                      # warm
     for _ in range(rounds):
         for name, fn in ways.items():
             RECENT.clear()

@@ -69,14 +69,14 @@ def measure(pipe, speech, method: str, rounds: int) -> dict:
     from gesturelsm.motion.editing import edit_spec
 
     steps = pipe.spec(method).default_steps
-    motion = pipe.generate(speech, steps=steps, method=method).motion
+    motion = pipe.generate(speech, steps=steps, method=method, output="raw").motion
     mid = speech.duration / 2
     ask = {"upper": [(mid - EDIT_SECONDS / 2, mid + EDIT_SECONDS / 2)], "hands": [(mid - EDIT_SECONDS / 2,
                                                                                   mid + EDIT_SECONDS / 2)]}
     pipe.edit(motion, speech, ask, method=method, steps=steps)                  # warm: traces, caches
     gen, edit = [], []
     for _ in range(rounds):
-        gen.append(timed(lambda: pipe.generate(speech, steps=steps, method=method, seed=1)))
+        gen.append(timed(lambda: pipe.generate(speech, steps=steps, method=method, seed=1, output="raw")))
         edit.append(timed(lambda: pipe.edit(motion, speech, ask, method=method, steps=steps, seed=1)))
     L = -(-motion.num_frames // 4)
     t, s = 32, 4

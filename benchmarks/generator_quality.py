@@ -143,7 +143,7 @@ def silence_ratio(pipe: GesturePipeline, body, gapped_speech: list, speeds: dict
     in_gap, with_speech = [], []
     for i, gsp, gaps in gapped_speech:
         for seed in range(seeds):
-            res = pipe.generate(gsp, steps=steps, cfg=cfg, seed=seed, method=method)
+            res = pipe.generate(gsp, steps=steps, cfg=cfg, seed=seed, method=method, output="raw")
             v0, v1 = speeds[i, seed], upper_speed(body.joints(res.motion.poses, res.motion.trans))
             for a, b in gaps:
                 sl = slice(int((a + 1) * 30), int(b * 30))
@@ -160,7 +160,7 @@ def method_row(pipe: GesturePipeline, body, h: Heldout, speech: list, gapped_spe
     speeds = {}                                                      # (clip, seed) -> upper-body speed
     for i, sp in enumerate(speech):
         for seed in range(seeds):
-            res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method)
+            res = pipe.generate(sp, steps=steps, cfg=cfg, seed=seed, method=method, output="raw")
             j = body.joints(res.motion.poses, res.motion.trans)
             vals.append(clip_stats(j, i, h))
             motions.append(j)

@@ -190,7 +190,7 @@ def generate(pipe, methods: list[str], seed: int) -> list[dict]:
         speech = pipe.prepare_speech(audio, 16000, words=words)
         for m in methods:
             t0 = time.perf_counter()
-            res = pipe.generate(speech, steps=SPECS[m].default_steps, cfg=2.0, seed=seed, method=m)
+            res = pipe.generate(speech, steps=SPECS[m].default_steps, cfg=2.0, seed=seed, method=m, output="raw")
             raw = res.motion.slice(0, speech.num_frames)
             before, _ = finish(raw, False, DEFAULT_SMOOTHING, False)
             after, note = grounded(before)

@@ -219,7 +219,7 @@ def quality(pipe, cfg, takes: list[str], offline_steps: int) -> list[tuple]:
         y = load_audio(BEAT2 / "wave16k" / f"{name}.wav")
         beats = audio_beats(y)
         live = run_file(pipe, y, cfg, 200.0)
-        off = pipe.generate(y, 16000, steps=offline_steps, cfg=cfg.cfg, seed=cfg.seed).motion
+        off = pipe.generate(y, 16000, steps=offline_steps, cfg=cfg.cfg, seed=cfg.seed, output="raw").motion
         seams = [c.start for c in live.chunks[1:]]
         for label, mot, borders in (("streamed", live.motion(), seams), ("offline", off, None)):
             j = body.joints(mot.poses, mot.trans)

@@ -142,7 +142,7 @@ def main() -> int:
     for name, speech in inputs.items():
         rows, gen_feats, locs[name] = [], {e.name: [] for e in extract}, []
         for s in range(args.seeds):
-            m = pipe.generate(speech, steps=8, cfg=2.0, seed=s).motion
+            m = pipe.generate(speech, steps=8, cfg=2.0, seed=s, output="raw").motion
             world, local = joint_positions(m, body)
             rows.append(statistics_of_joints(world, local, ctx))
             locs[name].append(local)

@@ -200,7 +200,7 @@ def schedule_table(args) -> None:
 
     def one(m: str, threads: int, t0: float) -> float:
         set_threads(threads)
-        pipe.generate(sp, steps=steps[m], method=m)
+        pipe.generate(sp, steps=steps[m], method=m, output="raw")
         return time.perf_counter() - t0
 
     def sequential(threads: int) -> list[float]:

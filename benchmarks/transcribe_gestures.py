@@ -61,7 +61,8 @@ def main() -> int:
           "| mean wrist speed (m/s) |\n|---|---|---|---|")
     rows = {}
     for name, speech in inputs.items():
-        stats = [gesture_stats(body, pipe.generate(speech, steps=8, cfg=2.0, seed=s).motion) for s in range(args.seeds)]
+        stats = [gesture_stats(body, pipe.generate(speech, steps=8, cfg=2.0, seed=s, output="raw").motion)
+                 for s in range(args.seeds)]
         rows[name] = np.mean(stats, 0)
     rows["speaker (BEAT2 motion)"] = gesture_stats(body,
                                                    MotionSequence.load(args.data / "smplxflame_30" / f"{TAKE}.npz"))

@@ -83,7 +83,8 @@ def main() -> None:
         words.text_mode, words.transcript = auto.text_mode[:90], auto.transcript.text if heard else None
         rows = {}
         for name, speech in (("audio", audio_only), ("words", words)):
-            stats = [motion_statistics(pipe.generate(speech, seed=s, method="gesturelsm").motion, body, ctx)
+            stats = [motion_statistics(pipe.generate(speech, seed=s, method="gesturelsm", output="raw").motion, body,
+                                       ctx)
                      for s in range(args.seeds)]
             rows[name] = {k: float(np.nanmean([st[k] for st in stats])) for k in KEYS}
         said = (words.transcript or (auto.warnings[0] if auto.warnings else ""))[:60].replace("|", "/")

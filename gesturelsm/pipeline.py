@@ -3,7 +3,8 @@ benchmarks and the tests all call this.
 
     pipe = GesturePipeline.from_pretrained()            # shipped checkpoints in assets/
     res = pipe.generate(audio, sr, text="hello there", steps=8, cfg=2.0, seed=0, method="gesturelsm")
-    res.motion.save("out.npz")                          # BEAT2-compatible npz, 30 fps
+    res.motion.save("out.npz")                          # BEAT2 npz, 30 fps: what `gesturelsm generate` writes
+    res = pipe.generate(audio, sr, settings=Settings(seed=3, post=PostProcess(grounding=False)))   # or one object
     ed = pipe.edit(res.motion, audio, {"upper": [(3.0, 6.0)]}, seed=1)   # regenerate the upper body over 3-6 s
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
@@ -30,14 +31,14 @@ from .errors import AudioError, InputError
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
-from .pipelined import (HIDDEN, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
-                        overlap_timings, with_speech, with_words)
+from .pipelined import (HIDDEN, OUTPUTS, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
+                        finished, overlap_timings, with_speech, with_words)
 from .generator.model import GestureGenerator
 from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
 from .motion.merge import apply_edit, splice
 from .motion.postprocess import check_smoothing, fit_length
 from .motion.sequence import FPS, MotionSequence
-from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, check_method_settings
+from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, Settings, check_method_settings
 from .tokenizer.model import RVQVAE
 
 GROUND_TRUTH_MISSING = ("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; it is left "
@@ -72,15 +73,6 @@ class GenerationResult:
     def real_time_factor(self) -> float:
         """Seconds of speech per second of generation (the paper's convention)."""
         return self.motion.duration / max(self.generation_seconds, 1e-9)
-
-
-@dataclass
-class Generated:
-    """The motions of one plan, each exactly as long as the speech and post-processed."""
-    motions: dict[str, MotionSequence]         # method (or GROUND_TRUTH) -> motion, in the plan's order
-    results: dict[str, GenerationResult]       # generator methods: timings and settings
-    ground_truth: str | None                   # the BEAT2 take recognised, if asked for and found
-    warnings: list[str]
 
 
 @dataclass
@@ -273,12 +265,11 @@ class GesturePipeline:
                     made = Made(m, motion, take=take, warnings=[] if take else [GROUND_TRUTH_MISSING])
                 else:
                     res = self.generate(speech, steps=plan.steps_for(m), cfg=plan.settings.cfg,
-                                        seed=plan.settings.seed, method=m, progress=prog)
+                                        seed=plan.settings.seed, method=m, progress=prog, output="raw")
                     speech = self.settled(speech)
                     made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
                 if made.motion is not None:
-                    made.motion, note = plan.settings.post.apply(made.motion.slice(0, T), body)
-                    made.motion = with_speech(made.motion, speech)
+                    made.motion, note = finished(made.motion, speech, plan.settings.post, body)
                     made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
             except Exception as exc:  # the caller reports it with the methods that were made
                 if not keep_going:
@@ -286,39 +277,38 @@ class GesturePipeline:
                 made = Made(m, None, error=exc)
             yield made
 
-    def generate_all(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None,
-                     body=None) -> Generated:
-        """One request: every generator of the plan on the same speech, the ground-truth take if asked for (and
-        recognised), each fitted to the speech's length, then post-processed (`finish`, on `body`); the generators in
-        the plan's order, then the ground truth."""
-        made = {x.method: x for x in self.generate_each(speech, plan, progress, body)}
-        warnings = list(speech.warnings)
-        for x in made.values():
-            warnings += [w for w in x.warnings if w not in warnings]
-        shown = plan.generators + [GROUND_TRUTH] * (GROUND_TRUTH in made)            # the page's order
-        motions = {m: made[m].motion for m in shown if made[m].motion is not None}
-        results = {m: made[m].result for m in plan.generators}
-        return Generated(motions, results, made[GROUND_TRUTH].take if GROUND_TRUTH in made else None, warnings)
-
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
                  text: str | None = None, steps: int | None = None, cfg: float = DEFAULTS.cfg,
                  seed: int = DEFAULTS.seed, method: str = DEFAULTS.methods[0], progress: Progress | None = None,
-                 transcribe: bool = DEFAULTS.transcribe) -> GenerationResult:
-        """One method's motion for the speech (audio, or speech prepared once by `prepare_speech`); `steps` None:
-        the method's spec default."""
+                 transcribe: bool = DEFAULTS.transcribe, *, settings: Settings | None = None,
+                 output: str = "finished", body=None) -> GenerationResult:
+        """One method's motion for the speech (audio, or speech prepared once by `prepare_speech`). `settings`, when
+        given, decides every setting (its first method, that method's steps, CFG, seed, post-processing,
+        transcription, language); else the keywords do (`steps` None: the method's spec default) with the default
+        post-processing. `output` (OUTPUTS): "finished", the motion fitted to the speech, post-processed on `body`
+        (stand in place, smoothing, feet on the ground; default the mannequin) and keeping its words, exactly what
+        `gesturelsm generate` writes and the page shows; "raw", the motion as the method sampled and decoded it."""
+        if output not in OUTPUTS:
+            raise ValueError(f"output must be one of {', '.join(OUTPUTS)}, not {output!r}")
+        post, language = DEFAULTS.post, DEFAULTS.language
+        if settings is not None:
+            method, cfg, seed, transcribe = settings.methods[0], settings.cfg, settings.seed, settings.transcribe
+            steps, post, language = settings.steps_for(method), settings.post, settings.language
         steps = self.spec(method).default_steps if steps is None else steps
         self.check_settings(method, steps, cfg)
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
-                                                                                       transcribe, stream=True)
+                                                                                       transcribe, language,
+                                                                                       stream=True)
         prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
         out, speech, timings = self._streamed(speech, method,
                                               lambda sp: self.backends[method].generate(sp, steps, cfg, seed, prog))
         if progress:
             progress(1.0, f"{method}: done")
-        return GenerationResult(out.motion, method, int(steps), float(cfg), int(seed),
+        motion, note = (out.motion, None) if output == "raw" else finished(out.motion, speech, post, body)
+        return GenerationResult(motion, method, int(steps), float(cfg), int(seed),
                                 {**speech.timings, **out.timings, **timings},
-                                speech.text_mode, list(speech.warnings) + out.warnings)
+                                speech.text_mode, list(speech.warnings) + out.warnings + ([note] if note else []))
 
     def _streamed(self, speech: SpeechInput, method: str, make) -> tuple:
         """(make(speech), the finished speech, overlap timings): with pipelined speech `make` runs while the words are
@@ -396,5 +386,5 @@ class GesturePipeline:
         return self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language, stream=True), warnings
 
 
-__all__ = ["with_speech", "GesturePipeline", "GenerationResult", "Generated", "Plan", "SpeechInput", "InputError",
-           "AudioError", "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]
+__all__ = ["OUTPUTS", "finished", "with_speech", "GesturePipeline", "GenerationResult", "Plan", "SpeechInput",
+           "InputError", "AudioError", "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

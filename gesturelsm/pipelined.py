@@ -54,6 +54,17 @@ def overlap_timings(pending: "PendingWords", started: float, timings: dict[str, 
             HIDDEN: hidden}
 
 
+OUTPUTS = ("finished", "raw")       # what `GesturePipeline.generate` returns: post-processed, or as sampled
+
+
+def finished(motion: MotionSequence, speech: "SpeechInput", post: PostProcess,
+             body=None) -> tuple[MotionSequence, str | None]:
+    """`motion` as every entry point shows it: fitted to the speech's length, post-processed (`post` on `body`)
+    and keeping the words it was made from; and why grounding had to leave it as it was, when it had to."""
+    motion, note = post.apply(motion.slice(0, speech.num_frames), body)
+    return with_speech(motion, speech), note
+
+
 def with_speech(motion: MotionSequence, speech: "SpeechInput") -> MotionSequence:
     """`motion` keeping the transcript and word timings it was made from (saved in its npz: `transcript`, `words`,
     `word_times`; `gesturelsm edit` reuses them); none for audio-only speech."""
@@ -228,6 +239,6 @@ class PendingWords:
         return self._final
 
 
-__all__ = ["HIDDEN", "WAITING", "finish", "overlap_timings", "with_speech", "PendingWords", "Restart",
-           "automatic_speech",
-           "ready_points_of", "windowed_ready_points", "with_words", "STREAMED_LANGUAGES"]
+__all__ = ["HIDDEN", "OUTPUTS", "WAITING", "finish", "finished", "overlap_timings", "with_speech", "PendingWords",
+           "Restart", "automatic_speech", "ready_points_of", "windowed_ready_points", "with_words",
+           "STREAMED_LANGUAGES"]

@@ -22,7 +22,7 @@ SECONDS = 8.0
 def take(tiny_pipeline):
     """Speech prepared once, and the motion a generation made of it (the motion a user edits)."""
     speech = tiny_pipeline.prepare_speech(speech_like(SECONDS), 16000, transcribe=False)
-    return speech, tiny_pipeline.generate(speech, steps=2, seed=0).motion
+    return speech, tiny_pipeline.generate(speech, steps=2, seed=0, output="raw").motion
 
 
 def _joints(motion, region):
@@ -81,7 +81,7 @@ def test_only_the_windows_an_edit_touches_are_sampled(tiny_pipeline):
     from gesturelsm.flows import window_layout
 
     speech = tiny_pipeline.prepare_speech(speech_like(30.0), 16000, transcribe=False)
-    motion = tiny_pipeline.generate(speech, steps=2, seed=0).motion
+    motion = tiny_pipeline.generate(speech, steps=2, seed=0, output="raw").motion
     gen = tiny_pipeline.generators["gesturelsm"]
     t, s = gen.config.window_latents, gen.config.seed_latents
     starts = window_layout(225, t, s)
@@ -90,7 +90,7 @@ def test_only_the_windows_an_edit_touches_are_sampled(tiny_pipeline):
     calls = []
     hook = den.register_forward_hook(lambda *_: calls.append(1))
     try:
-        tiny_pipeline.generate(speech, steps=2, seed=0)
+        tiny_pipeline.generate(speech, steps=2, seed=0, output="raw")
         generating, calls[:] = len(calls), []
         tiny_pipeline.edit(motion, speech, {"upper": [(14.0, 15.0)]}, steps=2, seed=1)
     finally:

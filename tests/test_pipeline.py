@@ -14,16 +14,16 @@ from _support import speech_like
 
 def test_fixed_seed_gives_identical_output_and_other_seeds_differ(tiny_pipeline):
     y = speech_like(6.0)
-    a = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3, transcribe=False)
-    b = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3, transcribe=False)
-    c = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=4, transcribe=False)
+    a = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3, transcribe=False, output="raw")
+    b = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=3, transcribe=False, output="raw")
+    c = tiny_pipeline.generate(y, 16000, steps=4, cfg=2.0, seed=4, transcribe=False, output="raw")
     np.testing.assert_array_equal(a.motion.poses, b.motion.poses)
     assert not np.allclose(a.motion.poses, c.motion.poses)
 
 
 @pytest.mark.parametrize("seconds", [0.5, 1.0, 4.27, 30.0])
 def test_output_has_the_speech_length(tiny_pipeline, seconds):
-    res = tiny_pipeline.generate(speech_like(seconds), 16000, steps=2, transcribe=False)
+    res = tiny_pipeline.generate(speech_like(seconds), 16000, steps=2, transcribe=False, output="raw")
     assert res.motion.num_frames == int(seconds * 30)
     assert np.isfinite(res.motion.poses).all() and np.isfinite(res.motion.trans).all()
     assert set(res.timings) >= {"features", "sampling", "decoding"}
@@ -42,10 +42,10 @@ def test_every_method_and_any_sample_rate(tiny_pipeline):
 
     y44 = scipy.signal.resample_poly(y16, 441, 160).astype(np.float32)
     for method, steps in [("gesturelsm", 1), ("rectified_flow", 2), ("ddim", 5)]:
-        r = tiny_pipeline.generate(y44, 44100, steps=steps, method=method, transcribe=False)
+        r = tiny_pipeline.generate(y44, 44100, steps=steps, method=method, transcribe=False, output="raw")
         assert r.motion.num_frames == 90 and r.method == method
     stereo = np.stack([y16, y16], 1)
-    assert tiny_pipeline.generate(stereo, 16000, steps=1, transcribe=False).motion.num_frames == 90
+    assert tiny_pipeline.generate(stereo, 16000, steps=1, transcribe=False, output="raw").motion.num_frames == 90
 
 
 def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
@@ -64,8 +64,8 @@ def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
 
     a, b = latents(1.0), latents(3.0)
     assert (a - b).abs().max() > 1e-2 * a.abs().max()
-    assert not np.allclose(tiny_pipeline.generate(sp, steps=2, cfg=1.0).motion.poses,
-                           tiny_pipeline.generate(sp, steps=2, cfg=3.0).motion.poses)
+    assert not np.allclose(tiny_pipeline.generate(sp, steps=2, cfg=1.0, output="raw").motion.poses,
+                           tiny_pipeline.generate(sp, steps=2, cfg=3.0, output="raw").motion.poses)
     saved = gen.null_cond.detach().clone()
     try:
         with torch.no_grad():
@@ -85,19 +85,19 @@ def test_cfg_one_equals_conditional_and_changes_with_scale(tiny_pipeline):
 ])
 def test_absurd_settings_are_refused_with_a_message(tiny_pipeline, kwargs, msg):
     with pytest.raises(InputError, match=msg):
-        tiny_pipeline.generate(speech_like(1.0), 16000, **kwargs)
+        tiny_pipeline.generate(speech_like(1.0), 16000, **kwargs, output="raw")
 
 
 def test_bad_audio_is_refused_with_a_message(tiny_pipeline):
     with pytest.raises(InputError, match="silent"):
-        tiny_pipeline.generate(np.zeros(32000, np.float32), 16000)
+        tiny_pipeline.generate(np.zeros(32000, np.float32), 16000, output="raw")
     with pytest.raises(InputError, match="at least"):
-        tiny_pipeline.generate(speech_like(0.2), 16000)
+        tiny_pipeline.generate(speech_like(0.2), 16000, output="raw")
     with pytest.raises(InputError, match="invalid"):
-        tiny_pipeline.generate(np.full(32000, np.nan, np.float32), 16000)
+        tiny_pipeline.generate(np.full(32000, np.nan, np.float32), 16000, output="raw")
     long = GesturePipelineWithLimit(tiny_pipeline, 5.0)
     with pytest.raises(InputError, match="limit"):
-        long.generate(speech_like(6.0), 16000)
+        long.generate(speech_like(6.0), 16000, output="raw")
 
 
 @pytest.mark.parametrize("has_text", [False, True])
@@ -144,7 +144,7 @@ def GesturePipelineWithLimit(pipe, seconds):
 
 def test_long_audio_stitches_windows_without_jumps(tiny_pipeline):
     """No velocity spike at window borders compared with inside windows."""
-    res = tiny_pipeline.generate(speech_like(40.0), 16000, steps=2, seed=1, transcribe=False)
+    res = tiny_pipeline.generate(speech_like(40.0), 16000, steps=2, seed=1, transcribe=False, output="raw")
     gen = tiny_pipeline.generators["gesturelsm"]
     t, s = gen.config.window_latents, gen.config.seed_latents
     feats = res.motion.to_features()
@@ -204,6 +204,6 @@ def test_transcript_falls_back_to_audio_only_with_a_warning_when_text_encoder_is
         end: float
 
     monkeypatch.setattr(TextEmbedder, "_shared", TextEmbedder(model_dir=str(tmp_path / "missing")))
-    res = tiny_pipeline.generate(speech_like(2.0), 16000, words=[W("hello", 0.2, 0.8)], steps=1)
+    res = tiny_pipeline.generate(speech_like(2.0), 16000, words=[W("hello", 0.2, 0.8)], steps=1, output="raw")
     assert res.text_mode.startswith("audio-only") and any("unavailable" in w for w in res.warnings)
     assert res.motion.num_frames == 60

@@ -122,3 +122,45 @@ def test_generate_with_rig_follows_grounding(tiny_assets, tmp_path):
         roots[mode] = accessor_array(gltf, blob, anim["samplers"][ch["sampler"]]["output"])
         np.testing.assert_allclose(roots[mode], want.root_translation, atol=1e-5)
     assert np.abs(roots["on"] - roots["off"]).max() > 1e-3
+
+
+def _arrays(path) -> dict:
+    with np.load(path, allow_pickle=False) as f:
+        return {k: f[k] for k in f.files}
+
+
+@pytest.mark.parametrize("flags, settings", [
+    ((), None),                                                          # the README's example: keywords only
+    (("--method", "ddim", "--seed", "3", "--cfg", "1.5", "--grounding", "off", "--stand-in-place", "--smoothing",
+      "medium"), "settings")])
+def test_the_python_call_gives_the_commands_motion_bit_for_bit(tiny_assets, tiny_pipeline, tmp_path, flags,
+                                                               settings):
+    """`pipe.generate(...)` (as the README shows it, or with one settings object) and `gesturelsm generate` with the
+    same settings: the same arrays in the written npz, key for key (the finished motion: fitted, smoothed, grounded,
+    with its words); `output="raw"` is the motion before that."""
+    from gesturelsm.audio import load_audio
+    from gesturelsm.settings import PostProcess, Settings
+
+    wav = tmp_path / "s.wav"
+    sf.write(wav, speech_like(2.0, seed=6), 16000)
+    assert main(["generate", str(wav), "--checkpoints", str(tiny_assets), "--text", "hello there", "--steps", "2",
+                 *flags, "--out", str(tmp_path / "cli.npz")]) == 0
+    if settings is None:
+        res = tiny_pipeline.generate(load_audio(wav), 16000, text="hello there", steps=2)
+    else:
+        chosen = Settings(methods=("ddim",), steps={"ddim": 2}, cfg=1.5, seed=3,
+                          post=PostProcess(stand_in_place=True, smoothing="medium", grounding=False))
+        res = tiny_pipeline.generate(load_audio(wav), 16000, text="hello there", settings=chosen)
+    res.motion.save(tmp_path / "py.npz")
+    cli, py = _arrays(tmp_path / "cli.npz"), _arrays(tmp_path / "py.npz")
+    assert sorted(cli) == sorted(py) and "word_times" in cli
+    for k in cli:
+        assert np.array_equal(cli[k], py[k]), k
+    raw = tiny_pipeline.generate(load_audio(wav), 16000, text="hello there", steps=2, output="raw").motion
+    if settings is None:                                                 # grounding and smoothing changed it
+        assert not np.array_equal(raw.poses, res.motion.poses)
+
+
+def test_generate_refuses_an_unknown_output(tiny_pipeline):
+    with pytest.raises(ValueError, match="finished, raw"):
+        tiny_pipeline.generate(speech_like(1.0), 16000, output="smoothed")

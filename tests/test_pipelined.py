@@ -84,8 +84,8 @@ def test_pipelined_generation_gives_the_one_shot_motion_bit_for_bit(tiny_pipelin
     assert len(one.ready_points) >= 3
     streamed = tiny_pipeline.prepare_speech(y, SAMPLE_RATE, stream=True)
     assert streamed.stream is not None
-    a = tiny_pipeline.generate(one, steps=2, seed=3)
-    b = tiny_pipeline.generate(streamed, steps=2, seed=3)
+    a = tiny_pipeline.generate(one, steps=2, seed=3, output="raw")
+    b = tiny_pipeline.generate(streamed, steps=2, seed=3, output="raw")
     assert calls == [False, True]                                      # one-shot, then window by window
     _same(a.motion, b.motion)
     assert b.text_mode == a.text_mode and HIDDEN in b.timings and WAITING in b.timings
@@ -93,7 +93,7 @@ def test_pipelined_generation_gives_the_one_shot_motion_bit_for_bit(tiny_pipelin
     done = tiny_pipeline.settled(streamed)
     assert done.stream is None and [w.text for w in done.words] == [w.text for w in one.words]
     assert np.array_equal(done.word_features.numpy(), one.word_features.numpy())
-    c = tiny_pipeline.generate(y, SAMPLE_RATE, steps=2, seed=3)        # raw audio: pipelined by default
+    c = tiny_pipeline.generate(y, SAMPLE_RATE, steps=2, seed=3, output="raw")        # raw audio: pipelined by default
     _same(a.motion, c.motion)
     ranges = {"upper": [(20.0, 30.0)]}                                 # an edit of samples streams its words too
     e1 = tiny_pipeline.edit(a.motion, one, ranges, steps=2, seed=4)
@@ -108,7 +108,7 @@ def test_a_rejected_transcript_regenerates_as_the_one_shot_path(tiny_pipeline, r
     y = speech_like(seconds, seed=1)
     one = tiny_pipeline.prepare_speech(y, SAMPLE_RATE)
     assert one.words is None and one.ready_points == ()
-    b = tiny_pipeline.generate(tiny_pipeline.prepare_speech(y, SAMPLE_RATE, stream=True), steps=2, seed=0)
-    a = tiny_pipeline.generate(one, steps=2, seed=0)
+    b = tiny_pipeline.generate(tiny_pipeline.prepare_speech(y, SAMPLE_RATE, stream=True), steps=2, seed=0, output="raw")
+    a = tiny_pipeline.generate(one, steps=2, seed=0, output="raw")
     _same(a.motion, b.motion)
     assert b.text_mode.startswith("audio-only") and "not English" in b.warnings

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -90,7 +90,7 @@ def run_generate(args: argparse.Namespace) -> int:
     from ..audio import load_audio
     from ..backends import checkpoint_sources
     from ..export.rig import export_rig
-    from ..pipeline import GesturePipeline, with_speech
+    from ..pipeline import GesturePipeline
     from ..retarget import check_usable, load_character
 
     t0 = time.perf_counter()
@@ -110,18 +110,17 @@ def run_generate(args: argparse.Namespace) -> int:
     say(0.05, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
     speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, progress=say,
                                  transcribe=a.settings.transcribe, language=a.settings.language, stream=True)
-    res = pipe.generate(speech, steps=a.settings.steps_for(args.method), cfg=a.settings.cfg, seed=a.settings.seed,
-                        method=args.method, progress=say)          # starts while the words are still recognised
+    res = pipe.generate(speech, settings=replace(a.settings, methods=(args.method,)),   # finished, keeping its words
+                        progress=say)                             # starts while the words are still recognised
     speech = pipe.settled(speech)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', flush=True)
-    motion, note = a.settings.post.apply(res.motion)
-    motion = with_speech(motion, speech)                          # kept in the npz: `edit` reuses the words
+    motion = res.motion
     path = motion.save(a.out)
     end_to_end = time.perf_counter() - t1
     if rig is not None:
         print(f"wrote {export_rig(motion, rig, path, grounding=a.settings.post.grounding)}")
-    for w in res.warnings + ([note] if note else []):
+    for w in res.warnings:
         print(f"warning: {w}")
     report(res, a.settings, path, end_to_end, t1 - t0, time.perf_counter() - t0)
     return 0

@@ -97,7 +97,7 @@ class AmplitudeData:
             first = bank[k % len(bank)] if bank else None
             with sampling_options(pipe.generators[method], seed_latents=first, **options):
                 for sp in speech:
-                    motions.append(pipe.generate(sp, steps=steps, cfg=cfg, seed=k, method=method).motion)
+                    motions.append(pipe.generate(sp, steps=steps, cfg=cfg, seed=k, method=method, output="raw").motion)
         mode = "transcript" if text else "audio-only"
         row = self.row(label or f"{method} {steps} steps CFG {cfg:g} {mode}",
                        [self.joints(postprocess(m, False, self.smoothing)) for m in motions])

@@ -144,7 +144,8 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
         for key in plan:
             p, m, s = key
             for which in ("clip", "10s") + (("long",) if long_seconds and p in long_presets and rnd else ()):
-                _, wall = timed(lambda: pipes[p].generate(inputs[which], steps=s, cfg=cfg, method=m), device)
+                _, wall = timed(lambda: pipes[p].generate(inputs[which], steps=s, cfg=cfg, method=m, output="raw"),
+                                device)
                 if rnd:                                         # + the input's (once-per-speech) feature time
                     times[key][which].append(inputs[which].timings.get("features", 0.0) + wall)
         log(f"round {rnd}/{repeats} done")
@@ -162,7 +163,7 @@ def run_bench(checkpoints=None, presets=("shipped", "paper"), methods: list[str]
             if torch.device(device).type == "cuda":
                 torch.cuda.reset_peak_memory_stats()
             with PeakRSS() as mem:
-                pipe.generate(inputs["long"], steps=s, cfg=cfg, method=m)
+                pipe.generate(inputs["long"], steps=s, cfg=cfg, method=m, output="raw")
                 synchronize(device)
             row["long_seconds"] = statistics.median(times[key]["long"])
             row["rtf_60s"] = lengths["long"] / row["long_seconds"]
@@ -205,7 +206,7 @@ def time_end_to_end(pipe, audio: str | Path, out: str | Path, text: str | None =
     if seconds:
         y = y[: int(seconds * SAMPLE_RATE)]
     stages["decode audio"] = time.perf_counter() - t0
-    res = pipe.generate(y, SAMPLE_RATE, text=text, steps=steps, cfg=cfg, method=method)
+    res = pipe.generate(y, SAMPLE_RATE, text=text, steps=steps, cfg=cfg, method=method, output="raw")
     stages.update({k: v for k, v in res.timings.items()})
     t1 = time.perf_counter()
     render_video([res.motion], y, out)

@@ -215,7 +215,7 @@ def eval_clip(built: EvalBuilt, clip: EvalClip) -> list[list[tuple[MotionStats, 
     for item in spec.plan:
         per_seed = []
         for seed in range(spec.seeds):
-            res = pipe.generate(speech, steps=item.steps, cfg=item.cfg, seed=seed, method=item.method)
+            res = pipe.generate(speech, steps=item.steps, cfg=item.cfg, seed=seed, method=item.method, output="raw")
             m, gt = res.motion, None
             if clip.motion is not None:
                 n = min(m.num_frames, clip.motion.num_frames)

@@ -149,7 +149,7 @@ def warm_up(pipe, speech, grid: SweepGrid, progress: Progress | None = None) -> 
         for c in {c == 1.0: c for c in grid.cfgs}.values():       # one scale of each mode
             if progress:
                 progress(0.0, f"warming up {m}")
-            pipe.generate(speech, steps=1, cfg=c, seed=0, method=m)
+            pipe.generate(speech, steps=1, cfg=c, seed=0, method=m, output="raw")
     return time.perf_counter() - t0
 
 
@@ -187,7 +187,7 @@ def build_sweep(spec: SweepSpec) -> SweepBuilt:
 def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
     """One unit of a sweep: (method, steps, CFG, seed) generated, timed and measured."""
     method, steps, cfg, seed = job
-    res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method)
+    res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method, output="raw")
     post = PostProcess(smoothing="off", grounding=built.grounding)
     motion, _ = post.apply(res.motion.slice(0, built.speech.num_frames), built.body)
     world, local = joint_positions(motion, built.body)

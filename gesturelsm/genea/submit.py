@@ -13,7 +13,7 @@ from ..audio import load_audio
 from ..cluster import Connection, Files, Job, ProgressLine, Unit, run_units, write_atomic
 from ..constants import SAMPLE_RATE
 from ..export import npz_bytes
-from ..pipeline import GesturePipeline, Plan
+from ..pipeline import GesturePipeline
 from ..settings import Settings
 from .submission import Manifest, check_name, check_speech, refuse_all, sample_name, sample_seeds, sha256
 
@@ -50,8 +50,8 @@ def make_samples(pipe: GesturePipeline, unit: SpeechUnit) -> dict[str, bytes]:
         raise type(exc)(f"{unit.stem}: {exc}") from None
     out = {}
     for k, seed in enumerate(unit.seeds, 1):
-        made = pipe.generate_all(speech, Plan(replace(unit.settings, seed=seed), filename=unit.stem))
-        out[sample_name(unit.stem, k)] = npz_bytes(next(iter(made.motions.values())))
+        made = pipe.generate(speech, settings=replace(unit.settings, seed=seed))          # finished motion
+        out[sample_name(unit.stem, k)] = npz_bytes(made.motion)
     return out
 
 

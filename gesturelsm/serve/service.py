@@ -108,7 +108,7 @@ class GestureService:
             y = (0.3 * np.sin(np.arange(n) / SAMPLE_RATE * 2 * np.pi * 180)).astype(np.float32)
             speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
             for m in self.pipeline.methods:
-                self.pipeline.generate(speech, steps=1, method=m)
+                self.pipeline.generate(speech, steps=1, method=m, output="raw")
         automatic_words(y[:SAMPLE_RATE], remember=False)     # says "unavailable" itself when not installed
         return time.perf_counter() - t0
 

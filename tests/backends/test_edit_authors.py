@@ -23,7 +23,7 @@ def test_the_registry_says_which_methods_can_edit_and_the_others_refuse(ckpt_dir
                                                              "gesturelsm_authors", "diffusion_authors"}
     pipe = GesturePipeline.from_pretrained(checkpoints=[ckpt_dir], warm_up=False)
     speech = pipe.prepare_speech(speech_like(6.0), 16000, transcribe=False)
-    motion = pipe.generate(speech, steps=2, method="gesturelsm_authors").motion
+    motion = pipe.generate(speech, steps=2, method="gesturelsm_authors", output="raw").motion
     with pytest.raises(EditError, match="meanflow_authors cannot edit a motion: its sampler cannot hold known latents; "
                                         "methods that can: gesturelsm_authors"):
         pipe.edit(motion, speech, {"upper": [(1.0, 2.0)]}, method="meanflow_authors")

@@ -42,8 +42,8 @@ def test_backend_from_an_explicit_checkpoint_file_equals_the_folders():
     full = GesturePipeline.from_pretrained(ASSETS, warm_up=False)
     assert full.methods == ["gesturelsm", "rectified_flow", "ddim"]
     y = speech_like(2.0)
-    a = one.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False).motion
-    b = full.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False).motion
+    a = one.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False, output="raw").motion
+    b = full.generate(y, 16000, steps=2, cfg=1.5, seed=3, method="ddim", transcribe=False, output="raw").motion
     assert np.array_equal(a.poses, b.poses) and np.array_equal(a.expressions, b.expressions)
 
 
@@ -55,7 +55,8 @@ def test_authors_methods_are_backends_without_patching(ckpt_dir):
     both = GesturePipeline.from_pretrained(checkpoints=[ASSETS, ckpt_dir / "reference_meanflow.safetensors"],
                                            warm_up=False)
     assert both.methods == ["gesturelsm", "rectified_flow", "ddim", "meanflow_authors"]
-    res = both.generate(speech_like(1.0), 16000, steps=1, cfg=1.0, method="meanflow_authors", transcribe=False)
+    res = both.generate(speech_like(1.0), 16000, steps=1, cfg=1.0, method="meanflow_authors", transcribe=False,
+                        output="raw")
     assert res.motion.num_frames == 30 and np.allclose(res.motion.expressions, 0)
 
 
@@ -78,7 +79,7 @@ def test_bounds_come_from_the_specs():
 def test_unknown_method_is_named_with_the_choices():
     pipe = GesturePipeline.from_pretrained(ASSETS, methods=["gesturelsm"], warm_up=False)
     with pytest.raises(InputError, match="unknown method 'meanflow_authors'; available: gesturelsm$"):
-        pipe.generate(speech_like(1.0), method="meanflow_authors")
+        pipe.generate(speech_like(1.0), method="meanflow_authors", output="raw")
     with pytest.raises(InputError, match="unknown method 'nope'; the methods are: gesturelsm, rectified_flow"):
         method_spec("nope")
 

@@ -68,7 +68,7 @@ def test_a_sweep_cell_is_the_motion_that_setting_and_seed_generate_alone(cli_run
 
     audio = load_audio(wav)
     speech = pipe.prepare_speech(audio, 16000, transcribe=False)
-    res = pipe.generate(speech, steps=2, cfg=2.0, seed=1, method="ddim")
+    res = pipe.generate(speech, steps=2, cfg=2.0, seed=1, method="ddim", output="raw")
     motion, _ = finish(res.motion.slice(0, speech.num_frames), grounding=True)      # the sweep grounds the feet
     want = motion_statistics(motion, None, SpeechContext.of(speech.audio, speaker_reference().mean_speed))
     got = next(r for r in json.loads((cli_run / "sweep.json").read_text())["runs"]
@@ -174,7 +174,8 @@ def test_sweep_grounding_off_measures_the_samplers_own_motion(pipe, wav, tmp_pat
     speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
     grid = SweepGrid(("ddim",), (2,), (2.0,), 1)
     ref = speaker_reference()
-    raw = pipe.generate(speech, steps=2, cfg=2.0, seed=0, method="ddim").motion.slice(0, speech.num_frames)
+    raw = pipe.generate(speech, steps=2, cfg=2.0, seed=0, method="ddim", output="raw").motion
+    raw = raw.slice(0, speech.num_frames)
     context = SpeechContext.of(speech.audio, ref.mean_speed)
     for grounding in (False, True):
         result = run_sweep(pipe, speech, grid, grounding=grounding, keep_motions=False)

@@ -10,7 +10,7 @@ from gesturelsm.evaluation.amplitude import sampling_options
 def _poses(pipe, cfg: float, **opts) -> np.ndarray:
     y = np.random.default_rng(0).normal(scale=0.1, size=16000 * 2).astype(np.float32)
     with sampling_options(pipe.generators["gesturelsm"], **opts):
-        return pipe.generate(y, 16000, steps=4, cfg=cfg, seed=1, transcribe=False).motion.poses
+        return pipe.generate(y, 16000, steps=4, cfg=cfg, seed=1, transcribe=False, output="raw").motion.poses
 
 
 def test_guidance_interval_limits(tiny_pipeline):

@@ -42,7 +42,7 @@ def upper_speed_and_acc(j: np.ndarray) -> tuple[float, float]:
 def test_shipped_flow_models_move_like_the_speaker_without_jitter(heldout, method):
     pipe, body, speech, gt = heldout
     gt_speed, gt_acc = upper_speed_and_acc(gt)                     # 0.20 m/s, 1.31 m/s^2
-    res = pipe.generate(speech, steps=8, cfg=2.0, seed=0, method=method)
+    res = pipe.generate(speech, steps=8, cfg=2.0, seed=0, method=method, output="raw")
     speed, acc = upper_speed_and_acc(body.joints(res.motion.poses, res.motion.trans))
     assert 0.5 * gt_speed < speed < 2.5 * gt_speed, (speed, gt_speed)     # neither static nor frantic
     assert acc < 3.0 * gt_acc, (acc, gt_acc)                               # smooth (old release: ~8x)
@@ -125,6 +125,6 @@ def test_shipped_gesturelsm_moves_with_the_loudness_of_new_speech(beat2_root):
         take = ds.load(name)
         speech = pipe.prepare_speech(take.audio, 16000, words=take.words)
         for seed in range(6):
-            res = pipe.generate(speech, steps=8, cfg=2.0, seed=seed, method="gesturelsm")
+            res = pipe.generate(speech, steps=8, cfg=2.0, seed=seed, method="gesturelsm", output="raw")
             gains.append(energy_following(body.joints(res.motion.poses, res.motion.trans), take.audio).gain)
     assert_follows_loudness(gains)

@@ -25,14 +25,14 @@ def test_authors_methods_offered_beside_ours(pipe):
     assert {"gesturelsm_authors", "meanflow_authors"} <= set(pipe.methods)
     assert "gesturelsm" in pipe.methods           # the shipped models stay available
     with pytest.raises(InputError, match=r"Steps for MeanFlow \(authors' weights\) must be from 1 to 128"):
-        pipe.generate(speech_like(1.0), steps=0, method="meanflow_authors")
+        pipe.generate(speech_like(1.0), steps=0, method="meanflow_authors", output="raw")
 
 
 def test_long_speech_any_length_neutral_face(pipe):
     """64 s (their code stops at 63 s): every frame generated, jaw identity and expressions zero, said so. Audio
     only (no automatic transcription: the point is the length, and Whisper spends ~40 s on 64 s of tones)."""
     y = speech_like(64.0)
-    res = pipe.generate(y, 16000, steps=1, cfg=1.0, seed=0, method="meanflow_authors", transcribe=False)
+    res = pipe.generate(y, 16000, steps=1, cfg=1.0, seed=0, method="meanflow_authors", transcribe=False, output="raw")
     assert res.motion.num_frames == 64 * 30
     assert np.allclose(res.motion.poses[:, 66:69], 0, atol=1e-5) and np.allclose(res.motion.expressions, 0)
     assert FACE_NOTE in res.warnings and any("any length" in w for w in res.warnings)
@@ -43,9 +43,9 @@ def test_long_speech_any_length_neutral_face(pipe):
 def test_same_seed_same_motion_and_seed_matters(pipe):
     y = speech_like(6.0)
     kw = {"steps": 2, "cfg": 2.0, "method": "gesturelsm_authors", "transcribe": False}
-    a = pipe.generate(y, 16000, seed=3, **kw).motion.poses
-    b = pipe.generate(y, 16000, seed=3, **kw).motion.poses
-    c = pipe.generate(y, 16000, seed=4, **kw).motion.poses
+    a = pipe.generate(y, 16000, seed=3, **kw, output="raw").motion.poses
+    b = pipe.generate(y, 16000, seed=3, **kw, output="raw").motion.poses
+    c = pipe.generate(y, 16000, seed=4, **kw, output="raw").motion.poses
     assert np.array_equal(a, b) and not np.allclose(a, c)
 
 
