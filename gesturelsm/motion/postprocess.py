@@ -1,5 +1,5 @@
 """Post-processing of a finished motion, the same for every method and ground truth (the web app and the
-user-study batch both apply it through `pipeline.generate_all`).
+user-study batch both apply it through `pipeline.generate_each`, a single motion through `pipeline.generate`).
 
 - stand in place: the root's horizontal translation (x, z) is set to 0 on every frame; height (y) is kept.
 - smoothing: a Savitzky-Golay filter (polynomial order 2) along time on the 6D rotation features of all

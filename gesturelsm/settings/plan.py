@@ -1,4 +1,4 @@
-"""What one request makes from one prepared speech (`GesturePipeline.generate_each` / `generate_all`): its settings
+"""What one request makes from one prepared speech (`GesturePipeline.generate_each`): its settings
 and where the ground truth of a known take is looked up."""
 from __future__ import annotations
 

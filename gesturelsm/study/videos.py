@@ -124,10 +124,10 @@ def make_video(built: Built, unit: VideoUnit) -> VideoFiles:
     with reproducible():
         speech = _speech(built, unit)
         plan = replace(unit.plan, beat2=str(unit.take.local()) if unit.take is not None else None)
-        gen = built.pipeline.generate_all(speech, plan, body=built.body)   # generated while the words are recognised
-        speech = built.pipeline.settled(speech)
+        made = {x.method: x.motion for x in built.pipeline.generate_each(speech, plan, body=built.body)}
+        speech = built.pipeline.settled(speech)                      # generated while the words were recognised
         built.speech.update((k, built.pipeline.settled(v)) for k, v in list(built.speech.items()))
-    motion = gen.motions.get(unit.method)
+    motion = made.get(unit.method)
     if motion is None:
         return VideoFiles(None, None, note=f"{unit.audio_name}: not a take of the BEAT2 folder; no ground-truth video")
     if not unit.render:

@@ -189,9 +189,10 @@ def test_batch_grounding_flag_reaches_every_videos_plan(monkeypatch, tmp_path, f
         def check_plan(self, plan):
             return None
 
-        def generate_all(self, speech, plan, progress=None, body=None):
+        def generate_each(self, speech, plan, progress=None, body=None):
             plans.append(plan)
             raise Stop
+            yield
 
     monkeypatch.setattr(GesturePipeline, "from_pretrained", classmethod(lambda cls, **k: Pipe()))
     monkeypatch.setattr(batch_module, "weights_digest", lambda backend: "w")
