@@ -9,13 +9,13 @@ lines, lines.py, import a backend's code when they load it): the command line's 
 """
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Iterator, Mapping, Sequence
 
 from ..constants import ASSETS, Progress
 from ..errors import CheckpointError, InputError
 from ..flows.facts import DDIM_FACTS, RECTIFIED_FLOW_FACTS, SHORTCUT_FACTS
+from ..lazy import lazy_names
 from ..reference.config import REGIONS as AUTHORS_REGIONS
 from .lines import RVQ_FILE, Authors, Ours
 from .spec import GROUND_TRUTH, GROUND_TRUTH_LABEL, MAX_CFG, STEPS_SETTINGS, Bounds, MethodSpec
@@ -144,12 +144,7 @@ def flow_backends(tokenizers: dict, generators: dict) -> dict[str, Backend]:
     return {k: FlowBackend(method_spec(k), g, tokenizers) for k, g in generators.items()}
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _HOME)
 
 
 __all__ = ["BACKENDS", "GROUND_TRUTH", "GROUND_TRUTH_LABEL", "MAX_CFG", "SPECS", "STEPS_SETTINGS", "Backend",

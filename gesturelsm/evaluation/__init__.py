@@ -5,8 +5,9 @@ The names below are imported from their modules on first use, so a torch-free mo
 limits and defaults, sweep_limits.py) loads without torch."""
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_names
 
 _HOME = {"EvalClip": "clips", "heldout_clips": "clips", "EvalPlanItem": "evaluate", "evaluate": "evaluate",
          "plan_grid": "evaluate"}
@@ -16,12 +17,7 @@ if TYPE_CHECKING:
     from .evaluate import EvalPlanItem, evaluate, plan_grid
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _HOME)
 
 
 __all__ = ["EvalClip", "heldout_clips", "EvalPlanItem", "evaluate", "plan_grid"]

@@ -4,9 +4,9 @@ commands/live.py). Its settings (config.py) load without torch; the other names 
 modules on first use."""
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from ..lazy import lazy_names
 from .config import LiveConfig
 
 _HOME = {"MotionChunk": "stream", "StreamingGenerator": "stream"}
@@ -15,12 +15,7 @@ if TYPE_CHECKING:
     from .stream import MotionChunk, StreamingGenerator
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _HOME)
 
 
 __all__ = ["LiveConfig", "MotionChunk", "StreamingGenerator"]

@@ -4,8 +4,9 @@ The names below are imported from their modules on first use, so a torch-free mo
 skeleton, the regions' table) loads without torch: a command's `--help` that lists the regions loads no torch."""
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_names
 
 _HOME = {
     "Normalizer": "normalize", "FEATURE_DIM": "regions", "GENERATED_REGIONS": "regions", "REGIONS": "regions",
@@ -27,12 +28,7 @@ if TYPE_CHECKING:
     from .translation import trans_to_velocity, velocity_to_trans
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_names(__name__, _HOME)
 
 
 __all__ = [
