@@ -183,3 +183,25 @@ def player_page(url: str, player: str, extra_args: Sequence[str] = ()) -> Iterat
             yield page
         finally:
             browser.close()
+
+
+def open_page(browser, url: str):
+    """A new tab on the served page at 1400x1300, the video's accordion open."""
+    page = browser.new_page(viewport={"width": 1400, "height": 1300})
+    page.goto(url)
+    page.locator("#generate").wait_for(timeout=60000)
+    if page.locator("#video-box").count() and not page.locator("#video").count():
+        page.locator("#video-box").get_by_text("Video with the speech").click()      # the video's accordion
+    return page
+
+
+def generate_alone(page, wav) -> None:
+    """Upload `wav` and click Generate for GestureLSM alone, audio only (no transcription)."""
+    for name in ("DDIM", "Rectified flow"):
+        box = page.locator("#methods label", has_text=name)
+        if box.count() and box.locator("input").is_checked():
+            box.click()
+    page.locator("#auto-transcribe input[type=checkbox]").uncheck()
+    page.locator("#speech input[type=file]").first.set_input_files(str(wav))
+    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=60000)
+    page.locator("#generate").click()

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 import soundfile as sf
 
-from _support import CHROMIUM, served, speech_like
+from _support import CHROMIUM, generate_alone, open_page, served, speech_like
 
 FILES = ("gesturelsm.npz", "gesturelsm.bvh", "gesturelsm.glb", "gesturelsm_keypoints.json", "gesturelsm_arkit.csv")
 
@@ -44,26 +44,6 @@ def queue_url(tiny_assets, tmp_path_factory):
         yield url, service
 
 
-def _open(browser, url: str):
-    page = browser.new_page(viewport={"width": 1400, "height": 1300})
-    page.goto(url)
-    page.locator("#generate").wait_for(timeout=60000)
-    if page.locator("#video-box").count() and not page.locator("#video").count():
-        page.locator("#video-box").get_by_text("Video with the speech").click()      # the video's accordion
-    return page
-
-
-def _generate(page, wav) -> None:
-    for name in ("DDIM", "Rectified flow"):                                  # GestureLSM alone
-        box = page.locator("#methods label", has_text=name)
-        if box.count() and box.locator("input").is_checked():
-            box.click()
-    page.locator("#auto-transcribe input[type=checkbox]").uncheck()
-    page.locator("#speech input[type=file]").first.set_input_files(str(wav))
-    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=60000)
-    page.locator("#generate").click()
-
-
 @pytest.mark.browser
 @pytest.mark.slow
 def test_a_closed_tab_video_does_not_block_the_next_visitor(queue_url, tmp_path):
@@ -78,8 +58,8 @@ def test_a_closed_tab_video_does_not_block_the_next_visitor(queue_url, tmp_path)
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         try:
-            one = _open(browser, url)
-            _generate(one, long_wav)
+            one = open_page(browser, url)
+            generate_alone(one, long_wav)
             # its video renders (the summary shows the real progress, not a fixed percentage)
             one.wait_for_function("() => /Rendering the video \\(mp4\\): frame \\d+\\/1800/.test("
                                   "document.querySelector('#summary').innerText)", timeout=600000)
@@ -87,9 +67,9 @@ def test_a_closed_tab_video_does_not_block_the_next_visitor(queue_url, tmp_path)
             assert service.renders.running == 1
             one.close()                                                      # the tab closes mid-render
 
-            two = _open(browser, url)
+            two = open_page(browser, url)
             two.evaluate(WATCH_JS, list(FILES))
-            _generate(two, short_wav)
+            generate_alone(two, short_wav)
             two.wait_for_function("() => window.__order.includes('video')", timeout=600000)   # its mp4 arrives
             order = two.evaluate("() => window.__order")
             assert order == ["files", "video"]                              # every file before the video

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 import soundfile as sf
 
-from _support import CHROMIUM, speech_like
+from _support import CHROMIUM, generate_alone, open_page, speech_like
 
 WAIT_S = 600                     # bounds a page or a server that never gets there (not a timing assertion)
 
@@ -77,26 +77,6 @@ def gated(tiny_assets, tmp_path_factory):
         demo.close()
 
 
-def _open(browser, url: str):
-    page = browser.new_page(viewport={"width": 1400, "height": 1300})
-    page.goto(url)
-    page.locator("#generate").wait_for(timeout=60000)
-    if page.locator("#video-box").count() and not page.locator("#video").count():
-        page.locator("#video-box").get_by_text("Video with the speech").click()      # the video's accordion
-    return page
-
-
-def _generate(page, wav) -> None:
-    for name in ("DDIM", "Rectified flow"):                                  # GestureLSM alone
-        box = page.locator("#methods label", has_text=name)
-        if box.count() and box.locator("input").is_checked():
-            box.click()
-    page.locator("#auto-transcribe input[type=checkbox]").uncheck()
-    page.locator("#speech input[type=file]").first.set_input_files(str(wav))
-    page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=60000)
-    page.locator("#generate").click()
-
-
 def _page_work(demo):
     """The page's stop flags (closing.PageWork): the object whose `session_ended` is the page's unload."""
     fns = demo.blocks.fns
@@ -126,10 +106,10 @@ def test_a_tab_closed_mid_generate_stops_its_generation_and_another_tab_finishes
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
             try:
-                one, two = _open(browser, url), _open(browser, url)
-                _generate(one, long_wav)
+                one, two = open_page(browser, url), open_page(browser, url)
+                generate_alone(one, long_wav)
                 assert service.reached.wait(WAIT_S), "page one's generation never reached its first window"
-                _generate(two, short_wav)                                    # page two's, at the same time
+                generate_alone(two, short_wav)                                    # page two's, at the same time
                 one.close()                                                  # the tab closes mid-Generate
                 assert unloads.fired.wait(WAIT_S), "the closed tab's unload never stopped its work"
                 service.release.set()
