@@ -25,3 +25,15 @@ def test_a_name_is_imported_at_its_first_read_and_kept(tmp_path, monkeypatch):
     finally:
         for name in ("lazypkg", "lazypkg.heavy"):
             sys.modules.pop(name, None)
+
+
+@pytest.mark.parametrize("package", ["gesturelsm.backends", "gesturelsm.evaluation", "gesturelsm.live",
+                                     "gesturelsm.motion"])
+def test_no_lazy_name_is_also_a_submodule(package):
+    """Importing a submodule sets it as the package's attribute of that name, after which the lazy name would be
+    the module, not what the package exports (`from gesturelsm.evaluation import evaluate` once gave a module)."""
+    import importlib
+    import pkgutil
+
+    pkg = importlib.import_module(package)
+    assert not set(pkg._HOME) & {m.name for m in pkgutil.iter_modules(pkg.__path__)}

@@ -9,15 +9,14 @@ from typing import TYPE_CHECKING
 
 from ..lazy import lazy_names
 
-_HOME = {"EvalClip": "clips", "heldout_clips": "clips", "EvalPlanItem": "evaluate", "evaluate": "evaluate",
-         "plan_grid": "evaluate"}
+_HOME = {"EvalClip": "clips", "heldout_clips": "clips", "EvalPlanItem": "evaluate", "plan_grid": "evaluate"}
 
 if TYPE_CHECKING:
     from .clips import EvalClip, heldout_clips
-    from .evaluate import EvalPlanItem, evaluate, plan_grid
+    from .evaluate import EvalPlanItem, plan_grid
 
 
 __getattr__ = lazy_names(__name__, _HOME)
 
 
-__all__ = ["EvalClip", "heldout_clips", "EvalPlanItem", "evaluate", "plan_grid"]
+__all__ = ["EvalClip", "heldout_clips", "EvalPlanItem", "plan_grid"]
