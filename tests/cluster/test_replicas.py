@@ -100,7 +100,8 @@ def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tin
         npz = next(Path(f) for f in files if Path(f).name == "gesturelsm.npz")
         with np.load(npz) as d:
             motions.append(d["poses"].copy())
-    assert len({str(Path(a[0]).parent) for a in answers}) == 4    # four requests, four folders
+    # (each request's own folder is not visible here: Gradio serves files from a cache named by their content, and the
+    # same seed's video can be the same bytes; tests/cluster's crowd test counts the front end's request folders)
     here = GestureService(replicated.pipeline, replicated.settings, replicated.body)
     for seed, got in zip(seeds, motions):                          # the same motion as this process makes
         want = here.run(Request(str(wav), methods=["gesturelsm"], steps=1, cfg=2.0, seed=seed, smoothing="off",

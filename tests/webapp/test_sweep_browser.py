@@ -27,6 +27,10 @@ def test_a_small_sweep_runs_from_the_page_and_one_motion_opens_in_the_player(ser
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=60000)
         page.locator("#generate").click()
         page.wait_for_selector("#motion-stats[data-state=ready]", timeout=240000)
+        # every method's row, then the speaker's: the table is refilled as each method's motion comes
+        page.wait_for_function("() => { const rs = [...document.querySelectorAll('#motion-stats tr[data-method]')];"
+                               " return rs.length > 0 && rs[rs.length - 1].dataset.method === 'speaker'; }",
+                               timeout=240000)
         methods = page.eval_on_selector_all("#motion-stats tr[data-method]", "rs => rs.map(r => r.dataset.method)")
         assert methods[-1] == "speaker" and "gesturelsm" in methods
         tips = page.eval_on_selector_all("#motion-stats th[data-key]", "hs => hs.map(h => h.title)")
