@@ -6,7 +6,8 @@
 --windowed: word recall of the English model run on the whole take at once (Whisper's own 30-s windows) against
 recognition window by window as `transcribe` and the pipelined generation run it (asr/windows.py: a short first
 window, the rest ~24 s, cut in pauses), each window timed by the aligner on its own; recognition + alignment seconds
-of each, and the words' onset error against MFA.
+of each, and the words' onset error against MFA. --full-context: every piece encoded with Whisper's 30 s of context
+(without the English model's short context for short pieces), to compare.
 
 Per take: word recovery (recognised words paired in order with the MFA words by spoken form / MFA words),
 word-onset error against MFA (mean, p90, share within 100 ms) for each timing option ("whisper": Whisper's
@@ -37,6 +38,7 @@ sys.path.insert(0, str(REPO))
 from gesturelsm.align import Word, align_words, read_words  # noqa: E402
 from gesturelsm.align.metrics import onset_errors_ms, onset_stats  # noqa: E402
 from gesturelsm.align.normalize import speak  # noqa: E402
+from gesturelsm.asr.model import SHORT_CONTEXT  # noqa: E402
 from gesturelsm.asr.transcribe import BEAM_SIZE, MIN_AVG_LOGPROB, english_pieces, recognize  # noqa: E402
 from gesturelsm.asr.windows import recognition_cuts  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
@@ -155,8 +157,12 @@ def main() -> int:
     ap.add_argument("--beam-size", type=int, default=BEAM_SIZE,
                     help=f"Whisper's beam (default {BEAM_SIZE}, as shipped)")
     ap.add_argument("--windowed", action="store_true", help="only: whole-take against window-by-window recognition")
+    ap.add_argument("--full-context", action="store_true", help="encode every piece with Whisper's full 30 s of "
+                    "context (the English model's short context for short pieces off: gesturelsm/asr/model.py)")
     ap.add_argument("--memory-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.full_context:
+        SHORT_CONTEXT[0] = False
     if not (args.data / "textgrid").is_dir():
         print(f"no BEAT2 data at {args.data} (expected textgrid/ and wave16k/)", file=sys.stderr)
         return 2

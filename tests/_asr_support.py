@@ -3,9 +3,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import difflib
+
 import numpy as np
 
 from gesturelsm.align import tts
+from gesturelsm.align.normalize import speak as spoken
 
 SR = 16_000
 BEAT2 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "beat2"
@@ -46,3 +49,9 @@ def asr_available() -> bool:
     from gesturelsm.asr import available
 
     return available() and tts.available()
+
+
+def matched(pred: list[str], ref: list[str]) -> int:
+    """How many of the reference words the recognised ones recover, in order (by spoken form)."""
+    sm = difflib.SequenceMatcher(a=[spoken(w) for w in pred], b=[spoken(w) for w in ref], autojunk=False)
+    return sum(b.size for b in sm.get_matching_blocks())

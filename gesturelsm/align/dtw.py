@@ -49,70 +49,36 @@ def dtw(A: np.ndarray, B: np.ndarray, band: Band | None = None, skip_cost: float
     """Best path and its cost per unit weight (mean cosine distance along the path, skips included).
     ValueError when no path fits (only possible without `skip_cost`: lengths more than 3x apart).
 
-    Rows are processed one at a time, each vectorised over its band; accumulated and local costs of the
-    last few rows are kept in full-width buffers (so every step is a slice), step choices in band
-    coordinates (int8, N x band width) for the backtrack."""
+    The local costs of each query row over its band are one matrix-vector product each; the recursion over the
+    cells runs compiled (`_dtw_kernel.accumulate`, numba), cell by cell in the order and with the operations of a
+    row-vectorised numpy recursion, so its results are those of that recursion to the bit (tests/align hold it to
+    one). Step choices are kept in band coordinates (int8, N x band width) for the backtrack."""
     n, m = len(A), len(B)
     band = band or Band.full(n, m)
     lo, hi = band.lo, band.hi
-    pad = max(dj for _, dj in STEPS)  # column j lives at j + pad: predecessors never index below zero
-    R = max(di for di, _ in STEPS) + 1  # rows kept
-    D = np.full((R, m + pad), np.inf)
-    C = np.full((R, m + pad), np.inf)
-    arg = np.full((n, band.width), _START, np.int8)
-    last_col = np.full(n, np.inf)  # D[i, m - 1], for ends that skip the query's tail
-    last_row = np.full(m, np.inf)  # D[n - 1, j]
-    skip = skip_cost
+    cost = np.full((n, band.width), np.inf)
     for i in range(n):
         a, b = int(lo[i]), int(hi[i])
-        cur = i % R
-        if i >= R:  # forget row i - R
-            pa, pb = int(lo[i - R]), int(hi[i - R])
-            D[cur, pa + pad:pb + pad] = np.inf
-            C[cur, pa + pad:pb + pad] = np.inf
-        c = np.maximum(1.0 - B[a:b] @ A[i], 0.0)  # (W,) cosine distances of query row i in its band
-        C[cur, a + pad:b + pad] = c
-        j = np.arange(a, b)
-        if i == 0:  # start at (0, j) after skipping j reference frames
-            best = 2.0 * c + (np.where(j == 0, 0.0, skip * j) if skip is not None else np.where(j == 0, 0.0, np.inf))
-        elif skip is not None and a == 0:  # start at (i, 0) after skipping i query frames
-            best = np.full(b - a, np.inf)
-            best[0] = 2.0 * c[0] + skip * i
-        else:
-            best = np.full(b - a, np.inf)
-        choice = np.full(b - a, _START, np.int8)
-        for s_idx, (di, dj) in enumerate(STEPS):
-            if i - di < 0:
-                continue
-            prev = D[(i - di) % R, a - dj + pad:b - dj + pad]
-            if di == dj:
-                add = 2.0 * c
-            elif di < dj:
-                add = sum(C[cur, a - k + pad:b - k + pad] for k in range(dj)) * ((di + dj) / dj)
-            else:
-                add = sum(C[(i - k) % R, a + pad:b + pad] for k in range(di)) * ((di + dj) / di)
-            cand = prev + add
-            better = cand < best
-            best = np.where(better, cand, best)
-            choice[better] = s_idx
-        if gap_cost is not None:
-            if i > 0:  # vertical gap step: query frame i matches nothing
-                cand = D[(i - 1) % R, a + pad:b + pad] + gap_cost
-                better = cand < best
-                best = np.where(better, cand, best)
-                choice[better] = _VGAP
-            # horizontal gap steps: reference frames matched to nothing, D[j] = min_k<=j D'[k] + g (j - k)
-            run = np.minimum.accumulate(best - gap_cost * j) + gap_cost * j
-            better = run < best - 1e-12
-            best = np.where(better, run, best)
-            choice[better] = _HGAP
-        D[cur, a + pad:b + pad] = best
-        arg[i, : b - a] = choice
-        if b == m:
-            last_col[i] = best[-1]
-        if i == n - 1:
-            last_row[a:b] = best
+        cost[i, : b - a] = np.maximum(1.0 - B[a:b] @ A[i], 0.0)   # (W,) cosine distances of query row i
+    arg, last_row, last_col = _compiled()(cost, lo, hi, m, np.inf if skip_cost is None else float(skip_cost),
+                                          skip_cost is not None, 0.0 if gap_cost is None else float(gap_cost),
+                                          gap_cost is not None, np.result_type(A, B) == np.float32)
     return _backtrack(arg, band, last_row, last_col, n, m, skip_cost)
+
+
+def _compiled():
+    """The recursion compiled by numba (`_dtw_kernel.py`; imported on first use: numba takes ~0.4 s to import, and the
+    compiled code is cached on disk, so only the first process ever compiles it, ~2 s)."""
+    from ._dtw_kernel import accumulate
+
+    return accumulate
+
+
+def warm() -> None:
+    """Compile the recursion (or load it from the disk cache) ahead of its first use, so that a server's first visitor
+    does not wait for it."""
+    A = np.eye(4)[:3]
+    dtw(A, A, None, 0.6, 0.9)
 
 
 def _backtrack(arg: np.ndarray, band: Band, last_row: np.ndarray, last_col: np.ndarray, n: int, m: int,

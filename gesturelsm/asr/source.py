@@ -125,6 +125,15 @@ def _timed(audio_16k: np.ndarray, language: str = AUTO, *on_piece: Callable[[Pie
     return replace(got, seconds=time.perf_counter() - t0)
 
 
+def warm_up(audio_16k: np.ndarray) -> None:
+    """Recognise `audio_16k` once, keeping nothing (the model loaded, its kernels chosen; "unavailable" said when it is
+    not installed), and ready the aligner that times the words (align/dtw.py: its compiled recursion loaded)."""
+    from ..align.dtw import warm
+
+    automatic_words(audio_16k, remember=False)
+    warm()
+
+
 def remember_words(audio_16k: np.ndarray, words: AutomaticWords, language: str = AUTO) -> None:
     """Keep `words`, recognised from these samples in another process (the web demo's replicas), as if recognised
     here: `automatic_words` of the same samples and language returns them."""

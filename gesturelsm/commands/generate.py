@@ -101,7 +101,8 @@ def run_generate(args: argparse.Namespace) -> int:
     words = read_words(a.textgrid) if a.textgrid else None
     say(0.0, f"loading the models ({args.method})")
     recognised = words is None and not args.text and a.settings.transcribe
-    preload = preloading(text=recognised or words is not None or bool(args.text), recogniser=recognised)
+    preload = preloading(text=recognised or words is not None or bool(args.text), recogniser=recognised,
+                         aligner=recognised or bool(args.text))
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
                                            max_seconds=a.max_seconds)
     preload.join()
@@ -126,8 +127,9 @@ def run_generate(args: argparse.Namespace) -> int:
     return 0
 
 
-def preloading(text: bool, recogniser: bool) -> threading.Thread:
-    """A started thread that loads the text encoder (`text`) and the speech recogniser (`recogniser`) while the
+def preloading(text: bool, recogniser: bool, aligner: bool = False) -> threading.Thread:
+    """A started thread that loads the text encoder (`text`), the speech recogniser (`recogniser`) and the aligner's
+    compiled recursion (`aligner`: words typed or recognised are timed by it) while the
     generator loads (each mostly on one core); join it before the speech is prepared. What fails to load here is
     reported where it is used."""
     from ..asr import model
@@ -141,6 +143,10 @@ def preloading(text: bool, recogniser: bool) -> threading.Thread:
                 model.load_model()
             except Exception:  # reported by the recognition that needs it
                 pass
+        if aligner:
+            from ..align.dtw import warm
+
+            warm()
 
     thread = threading.Thread(target=load, name="gesturelsm-preload", daemon=True)
     thread.start()

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 
 from ..align import Word
-from ..asr.source import automatic_words
+from ..asr.source import warm_up as warm_words
 from ..audio import SAMPLE_RATE, AudioTooLongError, load_audio
 from ..body import load_body_model
 from ..body.model import resolve_model_path
@@ -109,7 +109,7 @@ class GestureService:
             speech = self.pipeline.prepare_speech(y, SAMPLE_RATE, words=_warmup_words())
             for m in self.pipeline.methods:
                 self.pipeline.generate(speech, steps=1, method=m, output="raw")
-        automatic_words(y[:SAMPLE_RATE], remember=False)     # says "unavailable" itself when not installed
+        warm_words(y[:SAMPLE_RATE])                          # says "unavailable" itself when not installed
         return time.perf_counter() - t0
 
     def prefetch(self, audio_path: str | None, text: str = "", textgrid_path: str | None = None,

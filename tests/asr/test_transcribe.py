@@ -1,23 +1,17 @@
 """gesturelsm.asr.transcribe: recognised words in order with sensible times; honest rejection otherwise."""
 from __future__ import annotations
 
-import difflib
 
 import numpy as np
 import pytest
 
 from gesturelsm.align import read_words
-from gesturelsm.align.normalize import speak as spoken
 from gesturelsm.asr import transcribe
 from gesturelsm.asr.transcribe import AUDIO_ONLY_NOTE
 from gesturelsm.audio import load_audio
 
 from _asr_support import ENGLISH, SR
-
-
-def _matched(pred: list[str], ref: list[str]) -> int:
-    sm = difflib.SequenceMatcher(a=[spoken(w) for w in pred], b=[spoken(w) for w in ref], autojunk=False)
-    return sum(b.size for b in sm.get_matching_blocks())
+from _asr_support import matched as _matched
 
 
 def test_synthetic_english_comes_back_in_order_with_increasing_times(recognizer, english):
