@@ -25,7 +25,10 @@ straight to the multilingual model.
 """
 from __future__ import annotations
 
+import contextlib
 import math
+import queue
+import threading
 from dataclasses import dataclass, field, replace
 from typing import Callable, Iterator
 
@@ -165,17 +168,52 @@ class Piece:
 def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SIZE) -> Iterator[Piece]:
     """The English model on `y` window by window (windows.recognition_cuts), each window's words timed on its own
     audio (`timing` as `transcribe` takes it). A window whose every Whisper segment loops has no words (its
-    details["repeated_phrase"]); `english_transcript` pools the pieces."""
+    details["repeated_phrase"]); `english_transcript` pools the pieces.
+
+    The first window is recognised and timed before anything else (its words are the ones the first motion waits
+    for); after it, window j + 1 is recognised on a thread of its own while window j is timed, so the aligner's work
+    hides under the recogniser's. The pieces are the same either way, in order."""
     cuts = recognition_cuts(y)
-    for j, (a, b) in enumerate(zip(cuts, cuts[1:])):
-        chunk = y[a:b]
-        words, logp, ntok, details = _recognized(chunk, beam_size, None, ENGLISH)
-        heard = " ".join(w.text for w in words)
-        timed, method, warnings = _timed(chunk, words, heard, timing) if words else ([], "none", [])
-        t0, length = a / SAMPLE_RATE, (b - a) / SAMPLE_RATE
-        timed = [Word(w.text, t0 + min(w.start, length), t0 + min(max(w.end, w.start), length)) for w in timed]
-        final = math.inf if j == len(cuts) - 2 else b / SAMPLE_RATE
-        yield Piece(timed, final, heard, logp, ntok, method, warnings, details)
+    spans = list(zip(cuts, cuts[1:]))
+    last = len(spans) - 1
+    yield _piece(y, *spans[0], *_recognized(y[spans[0][0]:spans[0][1]], beam_size, None, ENGLISH), timing, last == 0)
+    if last == 0:
+        return
+    heard: queue.Queue = queue.Queue(maxsize=1)
+    stop = threading.Event()
+
+    def recognise() -> None:
+        try:
+            for a, b in spans[1:]:
+                if stop.is_set():
+                    return
+                heard.put(((a, b), _recognized(y[a:b], beam_size, None, ENGLISH)))
+        except BaseException as exc:       # raised where the pieces are read
+            heard.put((None, exc))
+
+    thread = threading.Thread(target=recognise, name="gesturelsm-recognise", daemon=True)
+    thread.start()
+    try:
+        for j in range(1, last + 1):
+            span, got = heard.get()
+            if span is None:
+                raise got
+            yield _piece(y, *span, *got, timing, j == last)
+    finally:
+        stop.set()
+        with contextlib.suppress(queue.Empty):
+            heard.get_nowait()              # a window recognised for nobody: the thread ends
+
+
+def _piece(y: np.ndarray, a: int, b: int, words: list[Word], logp: float, ntok: int, details: dict, timing: str,
+           last: bool) -> Piece:
+    """Window y[a:b]'s recognised words timed on its audio, in seconds from the start of `y`."""
+    chunk = y[a:b]
+    heard = " ".join(w.text for w in words)
+    timed, method, warnings = _timed(chunk, words, heard, timing) if words else ([], "none", [])
+    t0, length = a / SAMPLE_RATE, (b - a) / SAMPLE_RATE
+    timed = [Word(w.text, t0 + min(w.start, length), t0 + min(max(w.end, w.start), length)) for w in timed]
+    return Piece(timed, math.inf if last else b / SAMPLE_RATE, heard, logp, ntok, method, warnings, details)
 
 
 def english_transcript(pieces: list[Piece]) -> Transcript:
