@@ -1,7 +1,8 @@
 """`GesturePipeline.stream` (gesturelsm/streaming.py): each method's windows as the sampler makes them final, its
 whole raw motion, then the method made; the whole raw motion is `generate(output="raw")` and the method made is
-`generate(...)` bit for bit, the windows' new frames add up to the raw motion (to float rounding), and `generate_each` is the stream's
-methods without windows. Tiny checkpoints (windows of 24 frames) and the shipped ones, on short speech."""
+`generate(...)` bit for bit, the windows' new frames add up to the raw motion (to float rounding), and
+`generate_each` is the stream's methods without windows. Tiny checkpoints (windows of 32 frames) and the shipped
+ones, on short speech."""
 from __future__ import annotations
 
 import threading
