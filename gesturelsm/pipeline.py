@@ -216,14 +216,14 @@ class GesturePipeline:
                windows: bool = True) -> Iterator[Window | Made]:
         """Motion as it is made, for every method of `settings` (or of `plan`: the settings and where ground truth is
         looked up; neither: the defaults), in `run_order` (fewest steps first). For each method: a `Window` after each
-        window the sampler makes final, its raw motion so far (from frame 0, decoded incrementally: the last frames
-        of each may differ a little from the whole decoding), then one `Window(whole=True)`, its whole raw motion
-        (bit for bit `generate(..., output="raw")`), then its `Made`: bit for bit what `generate` returns for that
-        method with these settings (`output`, `body` as there). The speech (samples at `sr` with `words` / `text`,
-        as `generate` takes them, or prepared) is prepared once for all methods. The methods run on a thread of the
-        stream's own; closing the iterator early stops them at the next window. `keep_going`: a method that fails
-        yields a `Made` with its error and the next is made (else the error is raised here). `windows=False`: only
-        the `Made`s, made on the caller's thread as it reads (`generate_each`)."""
+        window the sampler makes final, its raw motion so far (from frame 0; decoded with context each side, the
+        whole decoding's frames to float rounding: gesturelsm.streaming), then one `Window(whole=True)`, its whole raw
+        motion (bit for bit `generate(..., output="raw")`), then its `Made`: bit for bit what `generate` returns for
+        that method with these settings (`output`, `body` as there). The speech (samples at `sr` with `words` /
+        `text`, as `generate` takes them, or prepared) is prepared once for all methods. The methods run on a thread
+        of the stream's own (`progress` is called from it); closing the iterator early stops them at the next window.
+        `keep_going`: a method that fails yields a `Made` with its error and the next is made (else the error is
+        raised here). `windows=False`: only the `Made`s, made on the caller's thread as it reads (`generate_each`)."""
         plan = plan_of(settings, plan)
         check_output(output)
 

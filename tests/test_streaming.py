@@ -152,3 +152,33 @@ def shipped_pipeline():
     if not (ASSETS / "generator" / "gesturelsm.safetensors").exists():
         pytest.skip("the shipped checkpoints are not here")
     return GesturePipeline.from_pretrained(methods=["gesturelsm"], warm_up=False)
+
+
+@pytest.mark.slow
+def test_the_documented_stream_example_runs(tmp_path, monkeypatch, capsys):
+    """docs/CLI.md's `pipe.stream` example, as written, on the shipped checkpoints: it saves each method's motion,
+    the motion `generate` gives for it."""
+    import re
+    from pathlib import Path
+
+    import soundfile as sf
+
+    from gesturelsm.audio import load_audio
+    from gesturelsm.pipeline import ASSETS, GesturePipeline
+
+    if not (ASSETS / "generator" / "ddim.safetensors").exists():
+        pytest.skip("the shipped checkpoints are not here")
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "CLI.md").read_text()
+    code = re.search(r"`pipe\.stream` is the same generation.*?```python\n(.*?)```", doc, re.S).group(1)
+    sf.write(tmp_path / "speech.wav", speech_like(6.0, seed=2), 16000)
+    monkeypatch.chdir(tmp_path)
+    pipe = GesturePipeline.from_pretrained(methods=["gesturelsm", "ddim"], warm_up=False)
+    exec(compile(code, "docs/CLI.md", "exec"), {"pipe": pipe, "load_audio": load_audio, "Settings": Settings})
+    printed = capsys.readouterr().out
+    assert "gesturelsm raw so far: 180 frames (whole)" in printed and "ddim raw so far: 180 frames (whole)" in printed
+    from gesturelsm.motion import MotionSequence
+
+    for m in ("gesturelsm", "ddim"):
+        one = Settings(methods=(m,), seed=3)
+        _same(MotionSequence.load(tmp_path / f"{m}.npz"),
+              pipe.generate(load_audio(tmp_path / "speech.wav"), 16000, settings=one).motion)
