@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Iterator, Mapping
 
+import numpy as np
 import torch
 
 from .backends import GROUND_TRUTH, SpeechInput, label
@@ -27,8 +28,9 @@ from .data.lookup import find_beat2_take, take_motion
 from .errors import Cancelled, InputError
 from .generator.sampling import window_previews
 from .motion.postprocess import fit_length
-from .motion.regions import join_regions
+from .motion.regions import TRANS_OFFSET, join_regions
 from .motion.sequence import MotionSequence
+from .motion.translation import velocity_to_trans
 from .pipelined import HIDDEN, OUTPUTS, WAITING, finished
 from .settings import DEFAULTS, Plan, Settings
 
@@ -96,9 +98,17 @@ class Window:
         return self.motion.num_frames
 
 
-def raw_motion(parts: Mapping[str, torch.Tensor]) -> MotionSequence:
-    """Decoded regions ({region: (frames, C) features}, as `generator.sampling.decode_latents` gives) as motion."""
-    return MotionSequence.from_features(join_regions({k: v.cpu() for k, v in parts.items()}))
+def raw_motion(parts: Mapping[str, torch.Tensor], before: MotionSequence | None = None) -> MotionSequence:
+    """Decoded regions ({region: (frames, C) features from frame 0}, as `generator.sampling.decode_latents` gives)
+    as motion. `before`: the motion of fewer of the same frames (an earlier window of the same decoding): its frames
+    are kept and only the ones after it converted (the root's path, a sum of steps, from all of them)."""
+    x = join_regions({k: v.cpu() for k, v in parts.items()})
+    if before is None or before.num_frames >= x.shape[0]:
+        return MotionSequence.from_features(x)
+    new = MotionSequence.from_features(x[before.num_frames:])
+    return replace(new, poses=np.concatenate([before.poses, new.poses]),
+                   trans=velocity_to_trans(x[:, TRANS_OFFSET:TRANS_OFFSET + 3]).numpy(),
+                   expressions=np.concatenate([before.expressions, new.expressions]))
 
 
 def plan_of(settings: Settings | None, plan: Plan | None) -> Plan:
@@ -174,6 +184,7 @@ class _Events(Watch):
         self.closed = self.done = False
         self.error: BaseException | None = None
         self.method = ""
+        self.last: MotionSequence | None = None    # the method's motion so far, as the last window gave it
 
     def put(self, item: Window | Made) -> None:
         with self.cond:
@@ -208,7 +219,7 @@ class _Events(Watch):
 
     # the generating thread's side: Watch, window_previews' listener, progress
     def begin(self, method: str) -> None:
-        self.method = method
+        self.method, self.last = method, None
 
     def raw(self, method: str, motion: MotionSequence) -> None:
         self.put(Window(method, motion, whole=True))
@@ -217,7 +228,9 @@ class _Events(Watch):
         return not self.closed
 
     def show(self, parts: dict[str, torch.Tensor]) -> None:
-        self.put(Window(self.method, raw_motion(parts)))
+        last = self.last if self.last is not None and self.last.num_frames < len(next(iter(parts.values()))) else None
+        self.last = raw_motion(parts, last)             # fewer frames than the last: the method made again
+        self.put(Window(self.method, self.last))
 
     def progress(self, fraction: float, message: str) -> None:
         if self.closed:
