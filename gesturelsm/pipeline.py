@@ -6,6 +6,8 @@ benchmarks and the tests all call this.
     res.motion.save("out.npz")                          # BEAT2 npz, 30 fps: what `gesturelsm generate` writes
     res = pipe.generate(audio, sr, settings=Settings(seed=3, post=PostProcess(grounding=False)))   # or one object
     ed = pipe.edit(res.motion, audio, {"upper": [(3.0, 6.0)]}, seed=1)   # regenerate the upper body over 3-6 s
+    for ev in pipe.stream(audio, sr, settings=Settings(methods=("gesturelsm", "ddim"))):   # as it is made:
+        print(ev.method, ev.frames if isinstance(ev, Window) else "made")       # windows (raw), then each Made
 
 Every method is a backend (`gesturelsm.backends`): the pipeline prepares the speech once, checks the settings
 against the method's spec with the one validator (`gesturelsm.settings`) and calls the backend's `generate`.
@@ -13,7 +15,7 @@ against the method's spec with the one validator (`gesturelsm.settings`) and cal
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Iterator, Mapping, Sequence
 
@@ -24,11 +26,10 @@ from .align import align_words
 from .asr.languages import AUTO, NOT_FOR_GESTURES, gesture_words
 from .asr.source import AutomaticWords, automatic_words, remember_words, typed_alignment
 from .audio import SAMPLE_RATE, resample, to_mono
-from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends, label,
+from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, SpeechInput, flow_backends,
                        load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
-from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .pipelined import (HIDDEN, OUTPUTS, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
@@ -36,56 +37,12 @@ from .pipelined import (HIDDEN, OUTPUTS, STREAMED_LANGUAGES, WAITING, PendingWor
 from .generator.model import GestureGenerator
 from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe, length_mismatch
 from .motion.merge import apply_edit, splice
-from .motion.postprocess import check_smoothing, fit_length
+from .motion.postprocess import check_smoothing
 from .motion.sequence import FPS, MotionSequence
 from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, Settings, check_method_settings
+from .streaming import GenerationResult, Made, Watch, Window, check_output, generation_seconds, made_each, plan_of, \
+    windowed
 from .tokenizer.model import RVQVAE
-
-GROUND_TRUTH_MISSING = ("Ground truth was asked for, but the speech is not a take of the BEAT2 folder; it is left "
-                        "out.")
-NOT_GENERATION = ("alignment", "transcription", "rendering",     # stages outside generation time (the paper's AITS)
-                  WAITING, HIDDEN)
-
-
-def generation_seconds(timings: Mapping[str, float]) -> float:
-    """Generation time from per-stage seconds: features, sampling and decoding, without transcript alignment or
-    recognition (the paper's AITS convention) and without rendering."""
-    return sum(v for k, v in timings.items() if k not in NOT_GENERATION)
-
-
-@dataclass
-class GenerationResult:
-    motion: MotionSequence
-    method: str
-    steps: int
-    cfg: float
-    seed: int
-    timings: dict[str, float]           # seconds: features, alignment, sampling, decoding
-    text_mode: str
-    warnings: list[str]
-
-    @property
-    def generation_seconds(self) -> float:
-        """Inference time without transcript alignment or recognition (the paper's AITS convention)."""
-        return generation_seconds(self.timings)
-
-    @property
-    def real_time_factor(self) -> float:
-        """Seconds of speech per second of generation (the paper's convention)."""
-        return self.motion.duration / max(self.generation_seconds, 1e-9)
-
-
-@dataclass
-class Made:
-    """One method of a plan, made (`GesturePipeline.generate_each`): its motion, post-processed and as long as the
-    speech (None: it failed, or the ground-truth take was not recognised), or the error it failed with."""
-    method: str
-    motion: MotionSequence | None
-    result: GenerationResult | None = None     # a generator's timings and settings
-    take: str | None = None                    # the BEAT2 take recognised (GROUND_TRUTH)
-    warnings: list[str] = field(default_factory=list)
-    error: Exception | None = None
-
 
 class GesturePipeline:
     def __init__(self, backends: dict[str, Backend], device: str | torch.device = "cpu",
@@ -249,33 +206,32 @@ class GesturePipeline:
 
     def generate_each(self, speech: SpeechInput, plan: Plan, progress: Progress | None = None, body=None,
                       keep_going: bool = False) -> Iterator[Made]:
-        """The plan's methods one by one in `run_order`, each as soon as it is made: fitted to the speech's length
-        and post-processed (`finish`: stand in place, smoothing, feet on the ground on `body`, default the mannequin
-        or $GESTURELSM_SMPLX_MODEL). With `keep_going` a method that fails yields its error and the next one is
-        made; otherwise the error is raised."""
-        self.check_plan(plan)
-        T, order = speech.num_frames, self.run_order(plan)
-        for i, m in enumerate(order):
-            lo, hi = i / len(order), (i + 1) / len(order)
-            prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
-            try:
-                if m == GROUND_TRUTH:
-                    take = find_beat2_take(plan.beat2, speech.audio, plan.filename)
-                    motion = None if take is None else fit_length(take_motion(plan.beat2, take), T)
-                    made = Made(m, motion, take=take, warnings=[] if take else [GROUND_TRUTH_MISSING])
-                else:
-                    res = self.generate(speech, steps=plan.steps_for(m), cfg=plan.settings.cfg,
-                                        seed=plan.settings.seed, method=m, progress=prog, output="raw")
-                    speech = self.settled(speech)
-                    made = Made(m, res.motion, res, warnings=res.warnings)  # e.g. the authors' models: face neutral
-                if made.motion is not None:
-                    made.motion, note = finished(made.motion, speech, plan.settings.post, body)
-                    made.warnings = made.warnings + ([f"{label(m)}: {note}"] if note else [])
-            except Exception as exc:  # the caller reports it with the methods that were made
-                if not keep_going:
-                    raise
-                made = Made(m, None, error=exc)
-            yield made
+        """The plan's methods one by one, each as soon as it is made and finished: `stream(speech, plan=plan,
+        windows=False)`, on the caller's thread (a `window_previews` listener of the caller hears its windows)."""
+        return self.stream(speech, plan=plan, progress=progress, body=body, keep_going=keep_going, windows=False)
+
+    def stream(self, speech: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
+               text: str | None = None, *, settings: Settings | None = None, plan: Plan | None = None,
+               output: str = "finished", body=None, progress: Progress | None = None, keep_going: bool = False,
+               windows: bool = True) -> Iterator[Window | Made]:
+        """Motion as it is made, for every method of `settings` (or of `plan`: the settings and where ground truth is
+        looked up; neither: the defaults), in `run_order` (fewest steps first). For each method: a `Window` after each
+        window the sampler makes final, its raw motion so far (from frame 0; decoded with context each side, the
+        whole decoding's frames to float rounding: gesturelsm.streaming), then one `Window(whole=True)`, its whole raw
+        motion (bit for bit `generate(..., output="raw")`), then its `Made`: bit for bit what `generate` returns for
+        that method with these settings (`output`, `body` as there). The speech (samples at `sr` with `words` /
+        `text`, as `generate` takes them, or prepared) is prepared once for all methods. The methods run on a thread
+        of the stream's own (`progress` is called from it); closing the iterator early stops them at the next window.
+        `keep_going`: a method that fails yields a `Made` with its error and the next is made (else the error is
+        raised here). `windows=False`: only the `Made`s, made on the caller's thread as it reads (`generate_each`)."""
+        plan = plan_of(settings, plan)
+        check_output(output)
+
+        def made(watch: Watch | None = None, prog: Progress | None = progress) -> Iterator[Made]:
+            prepared = speech if isinstance(speech, SpeechInput) else self.prepare_speech(
+                speech, sr, words, text, prog, plan.settings.transcribe, plan.settings.language, stream=True)
+            yield from made_each(self, prepared, plan, output, body, prog, keep_going, watch)
+        return windowed(made, progress) if windows else made()
 
     @torch.no_grad()
     def generate(self, audio: np.ndarray | SpeechInput, sr: int = SAMPLE_RATE, words: list | None = None,
@@ -289,8 +245,7 @@ class GesturePipeline:
         post-processing. `output` (OUTPUTS): "finished", the motion fitted to the speech, post-processed on `body`
         (stand in place, smoothing, feet on the ground; default the mannequin) and keeping its words, exactly what
         `gesturelsm generate` writes and the page shows; "raw", the motion as the method sampled and decoded it."""
-        if output not in OUTPUTS:
-            raise ValueError(f"output must be one of {', '.join(OUTPUTS)}, not {output!r}")
+        check_output(output)
         post, language = DEFAULTS.post, DEFAULTS.language
         if settings is not None:
             method, cfg, seed, transcribe = settings.methods[0], settings.cfg, settings.seed, settings.transcribe
@@ -386,5 +341,5 @@ class GesturePipeline:
         return self.prepare_speech(y, SAMPLE_RATE, words, text, progress, transcribe, language, stream=True), warnings
 
 
-__all__ = ["OUTPUTS", "finished", "with_speech", "GesturePipeline", "GenerationResult", "Plan", "SpeechInput",
-           "InputError", "AudioError", "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]
+__all__ = ["OUTPUTS", "finished", "with_speech", "GesturePipeline", "GenerationResult", "Made", "Window", "Plan",
+           "SpeechInput", "InputError", "AudioError", "ASSETS", "GROUND_TRUTH", "finish", "generation_seconds"]

@@ -31,6 +31,7 @@ FLOORS: list[set[str]] = [
                                                                # each described once (its spec)
     {"settings"},                                              # one generation's settings, defaults, validator
     {"pipelined"},                                             # speech preparation pipelined with generation
+    {"streaming"},                                             # motion as it is made: per method, per window
     {"pipeline"},                                              # speech -> motion, one request flow
     {"study", "evaluation", "live", "genea"},                  # what uses the pipeline (live: streaming; GENEA
                                                                # submissions)

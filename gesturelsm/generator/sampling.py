@@ -146,6 +146,10 @@ class PreviewListener(Protocol):
     def show(self, parts: dict[str, torch.Tensor]) -> None:
         """The raw decoded motion so far: {region: (frames, C) features}, from frame 0, growing call by call."""
 
+# A listener may also have `context_after` (latents, default 0): frames are shown once that many final latents follow
+# them, so that they are decoded with the context after them too (16, decode_latents' margin: as the whole motion is
+# decoded, to float rounding), at the cost of showing them that much later.
+
 
 _listening = threading.local()
 
@@ -165,29 +169,34 @@ def window_decoder(tokenizers: dict, num_frames: int) -> "WindowDecoder | None":
     """The `on_window` of a generation on this thread: a `WindowDecoder` for the listener of `window_previews`, None
     outside one."""
     listener = getattr(_listening, "listener", None)
-    return None if listener is None else WindowDecoder(tokenizers, num_frames, listener)
+    return None if listener is None else WindowDecoder(tokenizers, num_frames, listener,
+                                                       after=getattr(listener, "context_after", 0))
 
 
 class WindowDecoder:
     """Decodes the final latents of a generation as they grow, only the new ones each time (with `margin` latents of
-    context before them), and shows the listener the raw motion so far. The last frames of a call are decoded without
-    the context after them, so they may differ a little from the whole motion's decoding: a preview only."""
+    context before them), and shows the listener the raw motion so far. With `after` 0 the last frames of a call are
+    decoded without the context after them, so they may differ a little from the whole motion's decoding (a preview);
+    with `after` > 0 only the frames that many final latents precede are shown, decoded with them as context."""
 
-    def __init__(self, tokenizers: dict, num_frames: int, listener: PreviewListener, margin: int = 16):
+    def __init__(self, tokenizers: dict, num_frames: int, listener: PreviewListener, margin: int = 16,
+                 after: int = 0):
         self.tokenizers, self.num_frames, self.listener, self.margin = tokenizers, num_frames, listener, margin
+        self.after = after
         self.pieces: dict[str, list[torch.Tensor]] = {r: [] for r in tokenizers}
         self.done = 0
 
     @torch.no_grad()
     def __call__(self, latents: torch.Tensor) -> None:
         n = latents.shape[1]
-        if n <= self.done or 4 * n >= self.num_frames or not self.listener.wanted():
+        upto = n - self.after                         # latents shown after this call
+        if upto <= self.done or 4 * n >= self.num_frames or not self.listener.wanted():
             return                                    # the whole motion: it is finished moments later
         lo = max(0, self.done - self.margin)
         device = next(next(iter(self.tokenizers.values())).parameters()).device
         parts = decode_latents(self.tokenizers, latents[:, lo:n].to(device), 4 * (n - lo))
         for region, y in parts.items():
-            self.pieces[region].append(y[4 * (self.done - lo):].cpu())
-        self.done = n
-        frames = min(self.num_frames, 4 * n)
+            self.pieces[region].append(y[4 * (self.done - lo):4 * (upto - lo)].cpu())
+        self.done = upto
+        frames = min(self.num_frames, 4 * upto)
         self.listener.show({r: torch.cat(p)[:frames] for r, p in self.pieces.items()})
