@@ -11,7 +11,7 @@ is an executable. Here:
 - `PlainDataUnpickler`: the one allow-list for pickles, `ALLOWED_GLOBALS`: numpy's array/dtype/scalar
   reconstruction, plain containers (dicts, lists, strings and numbers need no global) and bytes as protocols 0-2
   store them (`_codecs.encode`), plus the stand-in classes a caller names (the authors' vocabulary,
-  `reference/safe_load.py`, becomes an inert record), also when built through `copyreg._reconstructor` (how
+  `reference/released_files.py`, becomes an inert record), also when built through `copyreg._reconstructor` (how
   protocols 0-1 store an instance). Python 2 names (`__builtin__`, `copy_reg`) are compared under their Python 3
   names. A pickle naming any other global is refused (`UnsafePickleError`) before that global is looked up, so its
   code never runs.

@@ -14,7 +14,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
-    {"constants", "errors", "lazy"},                           # conventions, the error family, names on first use
+    {"constants", "errors", "lazy", "memo"},                   # conventions, the error family, names on first use,
+                                                               # a memo of recent results
     {"safe_load"},                                             # safe loading
     {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech input (what a file is, reading
      "cluster"},                                               # it), files, the methods, fast CPU kernels; units

@@ -20,7 +20,7 @@ from ..reference.config import LATENT_SCALE, REGIONS
 from ..reference.model import ReferenceGenerator
 from ..reference.runner import FACE_NOTE, LONG_AUDIO_NOTE, ReferenceBundle, generate_reference
 from .base import BackendOutput, Progress, SpeechInput
-from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
+from .inpainting import EditOutput, decoded_span, held_latents, middle_latent, static_clip
 from .spec import MethodSpec
 
 
@@ -41,7 +41,7 @@ class AuthorsBackend:
     @torch.no_grad()
     def edit(self, speech: SpeechInput, motion: MotionSequence, spec: EditSpec, steps: int, cfg: float, seed: int,
              progress: Progress | None = None) -> EditOutput:
-        """`spec` regenerated with the input's latents (their RVQ encoders) held (backends/editing.py)."""
+        """`spec` regenerated with the input's latents (their RVQ encoders) held (backends/inpainting.py)."""
         if not self.spec.inpainting:
             raise InputError(f"{self.spec.key}'s sampler cannot hold known latents, so it cannot edit a motion")
         t0 = time.perf_counter()

@@ -67,7 +67,7 @@ class Backend(Protocol):
     def edit(self, speech: SpeechInput, motion: MotionSequence, spec, steps: int, cfg: float, seed: int,
              progress: Progress | None = None):
         """Where `spec.inpainting`: `motion` (as long as the speech) with `spec` (motion.editing.EditSpec) regenerated
-        in latent space, as a backends.editing.EditOutput (the decoded span around the regenerated latents)."""
+        in latent space, as a backends.inpainting.EditOutput (the decoded span around the regenerated latents)."""
 
 
 class BackendKind(Protocol):

@@ -20,7 +20,7 @@ from ..motion.regions import GENERATED_REGIONS, REGIONS, join_regions
 from ..motion.sequence import MotionSequence
 from ..tokenizer.model import RVQVAE
 from .base import BackendOutput, Progress, SpeechInput
-from .editing import EditOutput, decoded_span, held_latents, middle_latent, static_clip
+from .inpainting import EditOutput, decoded_span, held_latents, middle_latent, static_clip
 from .spec import MethodSpec
 
 
@@ -60,7 +60,7 @@ class FlowBackend:
     @torch.no_grad()
     def edit(self, speech: SpeechInput, motion: MotionSequence, spec: EditSpec, steps: int, cfg: float, seed: int,
              progress: Progress | None = None) -> EditOutput:
-        """`spec` regenerated with the input's latents held (backends/editing.py)."""
+        """`spec` regenerated with the input's latents held (backends/inpainting.py)."""
         t0 = time.perf_counter()
         device = next(self.model.parameters()).device
         known = encode_regions(self.tokenizers, motion.to_features().to(device)).cpu()       # (R, L, D) un-scaled

@@ -31,7 +31,7 @@ from .ik import two_bone
 from .rig import LegRig, Posed, forward
 from .rotations import slerp, yaw_only
 from .solve import SOFT_CAP, SOFT_MIN, Grounded, GroundingSettings, measure_feet, soft_min
-from .steps import StepPlanner
+from .footsteps import StepPlanner
 
 
 def _ease(x: float) -> float:

@@ -26,7 +26,7 @@ from .drift import DriftParams, remove_drift, smooth
 from .ik import REACH, two_bone
 from .rig import LegRig, Posed, forward
 from .rotations import about, normalize, slerp
-from .steps import StepParams, plan_steps
+from .footsteps import StepParams, plan_steps
 from .targets import FootPlan, TargetParams, correction, plan_foot
 
 

@@ -20,7 +20,7 @@ from .config import REGION_DIMS, REGIONS, RELEASED_SAMPLERS, GeneratorConfig, RV
 from .denoiser import rope_inv_freq
 from .model import ReferenceGenerator
 from .rvq import ReferenceRVQ
-from .safe_load import ReferenceFileError
+from .released_files import ReferenceFileError
 
 # reference key (without 'module.') -> ours; None = not used at inference (dropped)
 _RENAMES: tuple[tuple[str, str | None], ...] = (

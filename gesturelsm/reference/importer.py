@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .config import REGIONS
 from .convert import check_region_dims, generator_from_state, rvq_from_state, save_generator, save_rvqs
-from .safe_load import ReferenceFileError, load_npy, load_state, load_vocab
+from .released_files import ReferenceFileError, load_npy, load_state, load_vocab
 
 GENERATOR_FILES = {"shortcut": "shortcut_reflow.bin", "diffusion": "new_540_diffusion.bin", "meanflow": "meanflow.pth"}
 STAT_FILES = {"mean": "beatx_2_330_mean.npy", "std": "beatx_2_330_std.npy",

@@ -9,7 +9,7 @@ its click path neither decodes nor transcribes again. Automatic English words ar
 thread (gesturelsm/pipelined.py): the speech is remembered as soon as its audio features are ready, and a click
 while the upload's words are still being recognised joins that recognition (generation starts on the first windows
 whose words are final) instead of waiting for all of it. A request that arrives while its upload is still being
-prepared waits for that work instead of doing it twice (`asr.source.Recent`); one whose transcript settings changed
+prepared waits for that work instead of doing it twice (`memo.Recent`); one whose transcript settings changed
 since reuses the decoded audio and prepares the speech for the new settings.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ from typing import Callable, Hashable
 
 import numpy as np
 
-from ..asr.source import Recent
+from ..memo import Recent
 from ..pipeline import SpeechInput
 
 KEEP = 16                         # uploads remembered (each a few MB of samples per minute of speech)

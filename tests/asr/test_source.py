@@ -19,7 +19,7 @@ def test_recent_computes_each_key_once_even_when_asked_concurrently():
     import threading
     import time
 
-    from gesturelsm.asr.source import Recent
+    from gesturelsm.memo import Recent
 
     memo, calls, answers = Recent(2), [], []
 

@@ -10,7 +10,7 @@ import torch
 from gesturelsm.reference.config import REGION_DIMS, RVQConfig
 from gesturelsm.reference.convert import generator_from_state, save_generator, save_rvqs
 from gesturelsm.reference.rvq import ReferenceRVQ
-from gesturelsm.reference.safe_load import load_state
+from gesturelsm.reference.released_files import load_state
 
 FIX = Path(__file__).parent / "fixtures"
 

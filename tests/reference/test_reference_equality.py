@@ -14,7 +14,7 @@ import torch
 from gesturelsm.kernels import accelerate
 from gesturelsm.reference.convert import (generator_from_state, load_generator, load_rvqs, rvq_from_state,
                                           save_generator, save_rvqs)
-from gesturelsm.reference.safe_load import load_state, load_vocab
+from gesturelsm.reference.released_files import load_state, load_vocab
 from gesturelsm.reference.speech import features_from_file
 
 FIX = Path(__file__).parent / "fixtures"

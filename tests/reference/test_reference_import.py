@@ -16,7 +16,7 @@ from gesturelsm.reference.convert import generator_from_state, load_generator, l
 from gesturelsm.reference.denoiser import rope_inv_freq
 from gesturelsm.reference.model import ReferenceGenerator
 from gesturelsm.reference.rvq import ReferenceRVQ
-from gesturelsm.reference.safe_load import ReferenceFileError, load_state, load_vocab
+from gesturelsm.reference.released_files import ReferenceFileError, load_state, load_vocab
 
 FIX = Path(__file__).parent / "fixtures"
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gesturelsm.reference.safe_load import ReferenceFileError, load_vocab
+from gesturelsm.reference.released_files import ReferenceFileError, load_vocab
 
 FIX = Path(__file__).parent / "fixtures"
 
