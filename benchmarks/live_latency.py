@@ -89,7 +89,7 @@ def messages(character: str | None, grounding: bool = True):
     out = {"mannequin": lambda mc: encode(motion_record(mc.motion, body, mc.start))}
     if character:
         from gesturelsm.retarget import load_character
-        from gesturelsm.webapp.live_character import CharacterStream
+        from gesturelsm.live.characters import CharacterStream
 
         stream = CharacterStream(load_character(character), body, grounding=grounding)
 

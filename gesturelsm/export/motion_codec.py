@@ -23,7 +23,7 @@ A record, little-endian throughout:
     meta: meta_bytes of UTF-8 JSON, an object (the live feed's status and latency; empty in files)
 
 Version 2 is version 1 with a character section: the same motion on the visitor's character (the live feed with a
-character chosen, gesturelsm/webapp/live_character.py). A record without one is written as version 1, byte for byte.
+character chosen, gesturelsm/live/characters.py). A record without one is written as version 1, byte for byte.
 
     header (28 bytes) as above, version 2
     section header (4 bytes)

@@ -6,37 +6,31 @@ to apply with three-vrm (gesturelsm/webapp/player/src/character.js `applyFrame`)
     character = read_upload(path)                      # Character, or gr.Error with one line
     payload = character_payload(character, motions)    # JSON-able: bones, nodes, fps, per-method rotations
 
-The payload per method holds base64 float32 arrays: `quats` (frames, bones, 4), local rotations (x, y, z, w)
-of the bone nodes in `nodes` (glTF node indices, hips first; `bones` are their names), and `root` (frames, 3),
-the hips' local translation; `align` (x, y, z, w) turns the character's world into the player's (SMPL-X axes)
-and `scale` is its units per metre. A VRM that defines viseme (`aa ih ou ee oh`) or `blink` expressions also moves
-its face: `morphs` lists the morph-target channels its presets bind, [[glTF mesh index, morph target index], ...],
-and each method adds `morph` (frames, len(morphs)), those channels' weights = `retarget.face.morph_weights` of the
-method's `alive_face_weights` (what the exported VRM animates); the player sets them as the influences of every three.js
-Mesh of that glTF mesh. A character without these presets gets neither key. The player sets
-`#motion-player[data-character]` to `name`. A file that cannot be used raises gr.Error (`choose`, the upload's
-event: a warning) and the mannequin stays.
+The payload is built without page code in gesturelsm/export/character_payload.py (the live stream's characters use
+it too, gesturelsm/live/characters.py). The payload per method holds base64 float32 arrays: `quats` (frames, bones,
+4), local rotations (x, y, z, w) of the bone nodes in `nodes` (glTF node indices, hips first; `bones` are their
+names), and `root` (frames, 3), the hips' local translation; `align` (x, y, z, w) turns the character's world into
+the player's (SMPL-X axes) and `scale` is its units per metre. A VRM that defines viseme (`aa ih ou ee oh`) or
+`blink` expressions also moves its face: `morphs` lists the morph-target channels its presets bind, [[glTF mesh
+index, morph target index], ...], and each method adds `morph` (frames, len(morphs)), those channels' weights =
+`retarget.face.morph_weights` of the method's `alive_face_weights` (what the exported VRM animates); the player sets
+them as the influences of every three.js Mesh of that glTF mesh. A character without these presets gets neither key.
+The player sets `#motion-player[data-character]` to `name`. A file that cannot be used raises gr.Error (`choose`,
+the upload's event: a warning) and the mannequin stays.
 
     files = rig_downloads(character, motions, folder)  # each method's motion in the character's own file
 """
 from __future__ import annotations
 
-import base64
-import hashlib
 import logging
-import shutil
 from pathlib import Path
 
 import gradio as gr
-import numpy as np
 
-from gesturelsm.body.model import resolve_body
 from gesturelsm.errors import GestureError
-from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
-from gesturelsm.export.alive import alive_face_weights
-from gesturelsm.export.rig import export_rig
-from gesturelsm.retarget import Character, check_usable, load_character, retarget_motion
-from gesturelsm.retarget.face import channel_weights, morph_channels, morph_weights
+from gesturelsm.export.character_payload import (bone_order, character_payload, decode, face_channels, face_morph,
+                                                 page_character, rig_downloads)
+from gesturelsm.retarget import Character, check_usable, load_character
 from gesturelsm.retarget.grounding import leg_problem
 
 log = logging.getLogger(__name__)
@@ -95,72 +89,5 @@ def choose(path: str | Path | None) -> tuple[Character | None, dict]:
                                       f"bones); clear it for the mannequin")
 
 
-def _b64(a: np.ndarray) -> str:
-    return base64.b64encode(np.ascontiguousarray(a, np.float32).tobytes()).decode()
-
-
-def bone_order(skel) -> list[int]:
-    """The joints the player sets, in the payload's order: the hips, then the other humanoid bones."""
-    return [skel.bones["pelvis"]] + sorted(i for i in skel.bones.values() if i != skel.bones["pelvis"])
-
-
-def face_channels(character: Character) -> list[tuple[int, int]]:
-    """The morph-target channels (glTF mesh, target) the character's viseme / blink presets bind; [] for none."""
-    return morph_channels(character.document.gltf) if character.document is not None else []
-
-
-def face_morph(character: Character, channels: list[tuple[int, int]], seq, body, blinker=None) -> np.ndarray:
-    """(frames, len(channels)) float32: the weights of `channels` for `seq`'s jaw and expressions (the export's);
-    `blinker`: a stream's (its blinks carried over chunks), else the whole motion's own."""
-    gltf = character.document.gltf
-    per_mesh = morph_weights(gltf, alive_face_weights(body, seq, blinker))
-    return channel_weights(per_mesh, channels, seq.num_frames)
-
-
-def character_payload(character: Character, motions: dict, body=None, grounding: bool = True) -> dict:
-    """Each method's motion on the character: {name, bones, nodes, fps, frames, methods: {method: {quats, root}}},
-    plus `morphs` and each method's `morph` for a character with face presets (module docstring); its feet
-    planted on its own legs unless `grounding` is off."""
-    skel = character.skeleton
-    order = bone_order(skel)
-    out = {"name": character.name, "bones": [skel.names[i] for i in order], "nodes": [skel.nodes[i] for i in order],
-           "methods": {}}
-    channels = face_channels(character)
-    if channels:
-        out["morphs"] = [list(c) for c in channels]
-        face_body = resolve_body(body)
-    for method, seq in motions.items():
-        r = retarget_motion(seq, character, body, grounding=grounding)
-        q = continuous_quaternions(matrix_to_quaternion_xyzw(r.local_rotation[:, order]))
-        out["methods"][method] = {"quats": _b64(q), "root": _b64(r.root_translation)}
-        if channels:
-            out["methods"][method]["morph"] = _b64(face_morph(character, channels, seq, face_body))
-        out["fps"], out["frames"] = r.fps, min(out.get("frames", r.num_frames), r.num_frames)
-        out["align"] = matrix_to_quaternion_xyzw(r.align).tolist()
-        out["scale"] = float(r.scale)
-    out["head"] = order.index(skel.bones["head"]) if "head" in skel.bones else 0
-    return out
-
-
-def page_character(character: Character, motions: dict, folder: Path, url, body=None, grounding: bool = True) -> dict:
-    """`character_payload` plus the file the player loads: copied into the request's folder (`url(path)` is its
-    address) and `key`, a hash of its bytes, so the browser parses one character once whatever the request."""
-    data = character.path.read_bytes()
-    path = Path(folder) / f"character{character.path.suffix.lower()}"
-    shutil.copyfile(character.path, path)
-    return {**character_payload(character, motions, body, grounding), "url": url(path),
-            "key": hashlib.sha1(data).hexdigest()}
-
-
-def rig_downloads(character: Character | None, motions: dict, folder: Path, body=None,
-                  grounding: bool = True) -> list[Path]:
-    """Each method's motion in the character's own file (`gesturelsm export --rig`): METHOD_NAME.vrm / .glb."""
-    if character is None:
-        return []
-    return [export_rig(seq, character, Path(folder) / f"{method}.npz", body, grounding)
-            for method, seq in motions.items()]
-
-
-def decode(b64: str, shape: tuple[int, ...]) -> np.ndarray:
-    """A payload array back to numpy (for tests and tools)."""
-    return np.frombuffer(base64.b64decode(b64), np.float32).reshape(shape)
+__all__ = ["LABEL", "MAX_CHARACTER_BYTES", "PAGE_SUFFIXES", "bone_order", "character_payload", "character_upload",
+           "choose", "decode", "face_channels", "face_morph", "page_character", "read_upload", "rig_downloads"]

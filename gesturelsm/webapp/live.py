@@ -21,7 +21,7 @@ meta object {"frames": frames so far, "audio_seconds": audio received so far, "m
 "real_time_factor", "status"}. With a body (the page's) the frames are the in-browser player's arrays (kind
 quaternion: 55 local rotations x, y, z, w, the root in metres, E expression weights;
 gesturelsm/export/player_payload.py `motion_arrays`); without one, the generated SMPL-X motion (kind axis-angle: 55 x 3
-poses and trans). With the visitor's character (live_character.py: the socket's hello names the page session's token)
+poses and trans). With the visitor's character (live/characters.py: the socket's hello names the page session's token)
 each record also carries the frames on the character (the format's version 2 character section); without one the
 records are version 1. Over the socket a record is a binary message; Gradio's microphone puts it base64-encoded in the
 hidden textbox `live-motion` (`decode(base64.b64decode(text))`).
@@ -70,7 +70,7 @@ def to_float(sr: int, data: np.ndarray) -> np.ndarray:
 def payload(session: LiveSession, status: str, body=None, character=None) -> tuple[bytes, str, str]:
     """(the motion record for the player, text of #live-latency, text of #live-stats) from what the session produced
     since the last call; with `body` (a resolved body model) the record holds the in-browser player's arrays, with
-    `character` (live_character.py `CharacterStream`) also the same frames on the visitor's character."""
+    `character` (live/characters.py `CharacterStream`) also the same frames on the visitor's character."""
     chunks = session.poll()
     st = session.stats()
     start = chunks[0].start if chunks else session.delivered
@@ -147,7 +147,7 @@ def _delete(session: LiveSession | None) -> None:
 
 
 def character_js() -> str:
-    """The Character upload's last chained event: hands the page session's live spec (live_character.py
+    """The Character upload's last chained event: hands the page session's live spec (live/characters.py
     `LiveCharacters.choose`: token, name, url, key; null for the mannequin) to the live player, which uses it from the
     next Record on (gesturelsm/webapp/player/src/index.js `chooseLiveCharacter`)."""
     from .player.component import BUNDLE, file_url
@@ -189,7 +189,7 @@ def add_live_tab(manager: LiveManager, body=None, cache: str | Path | None = Non
     model), `cache` (where its rest GLB goes), `socket_routes` (`live_socket.routes`) and the player bundle built,
     the microphone streams over the app's WebSocket (its one route) and the motion plays in the in-browser player
     `live-player`; otherwise through Gradio's streaming microphone, shown as numbers (no routes). `characters`
-    (live_character.py `LiveCharacters`, the page sessions' characters) goes to the socket's route."""
+    (live/characters.py `LiveCharacters`, the page sessions' characters) goes to the socket's route."""
     if body is not None:
         from gesturelsm.body.model import resolve_body
 

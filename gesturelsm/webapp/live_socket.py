@@ -8,14 +8,14 @@ chunk the moment the session's worker has it (no polling):
 
     client -> server   text   {"sample_rate": 16000}            first message (the AudioContext's rate); with
                               {"sample_rate": 16000, "character": TOKEN}  the page session's character token
-                                                                 (live_character.py), the stream is on that character
+                                                                 (live/characters.py), the stream is on that character
                               {..., "grounding": false}          feet on the ground off for this stream (default
                                                                  on: grounded causally, chunk by chunk)
     client -> server   binary int16 little-endian mono PCM       any length (the page sends 50 ms)
     client -> server   text   {"end": true}                     stop: the rest of the speech is generated, then closed
     server -> client   binary a motion record, no frames        only when the hello named a character, first: meta
                                                                  {"status": "streaming", "character": the player's spec
-                                                                 (live_character.py `CharacterStream.spec`, url, key)},
+                                                                 (live/characters.py `CharacterStream.spec`, url, key)},
                                                                  or {"status": "streaming", "character_error": why}
                                                                  for a token the server does not hold (the mannequin)
     server -> client   binary a motion record                   per motion chunk (live.py `payload`; layout in
@@ -47,7 +47,7 @@ from gesturelsm.export.motion_codec import MotionRecord, encode
 from gesturelsm.live.session import LiveManager
 
 from .live import PATH, payload, to_float
-from .live_character import EXPIRED, CharacterStream
+from ..live.characters import EXPIRED, CharacterStream
 
 log = logging.getLogger(__name__)
 RATES = (8000, MAX_SAMPLE_RATE)  # sample rates accepted from a page (an AudioContext's range is 3000-768000)
@@ -95,7 +95,7 @@ def pcm(data: bytes, sr: int) -> np.ndarray:
 
 
 async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None) -> None:
-    """One visitor's stream, from the socket's opening to its close; `characters` (live_character.py
+    """One visitor's stream, from the socket's opening to its close; `characters` (live/characters.py
     `LiveCharacters`) resolves the hello's character token."""
     await ws.accept()
     loop = asyncio.get_running_loop()
@@ -174,7 +174,7 @@ async def serve(ws: WebSocket, manager: LiveManager, body=None, characters=None)
 def stream_character(characters, token: str, body=None,
                      grounding: bool = True) -> tuple[CharacterStream | None, dict]:
     """The stream's character for the hello's `token` and the meta of the message that tells the page: its spec,
-    or why the stream uses the mannequin; `grounding`: its feet planted on its own legs (live_character.py)."""
+    or why the stream uses the mannequin; `grounding`: its feet planted on its own legs (live/characters.py)."""
     entry = characters.get(token) if characters is not None else None
     url = entry.serve() if entry is not None else None
     if url is None:
@@ -230,7 +230,7 @@ def control(text: str | None) -> dict:
 
 def routes(manager: LiveManager, body=None, characters=None) -> list[WebSocketRoute]:
     """The socket route for a FastAPI app (`Blocks.launch(app_kwargs={"routes": ...})`); `characters`: the page
-    sessions' characters (live_character.py `LiveCharacters`), None: the mannequin only."""
+    sessions' characters (live/characters.py `LiveCharacters`), None: the mannequin only."""
     async def endpoint(ws: WebSocket) -> None:
         await serve(ws, manager, body, characters)
 

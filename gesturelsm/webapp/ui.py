@@ -36,7 +36,7 @@ from .demo import Demo
 from .downloads import Downloads
 from . import words as page_words
 from .language import language_choice
-from .live_character import LiveCharacters
+from ..live.characters import LiveCharacters
 from .page_params import control, make_request, page_handler
 from .player import component as motion_player
 from .raw_inputs import numeric_choices, pass_through
@@ -327,7 +327,8 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
                 inputs, button, upload, note = _input_column(service)
             with gr.Column(scale=2):
                 payload, video, summary, table, files, view, show3d, stats, edit, status = _output_column(service)
-        manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
+        manager, routes, characters = None, [], LiveCharacters(service.workdir, motion_player.file_url,
+                                                                body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
             service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)

@@ -270,7 +270,7 @@ def test_the_characters_face_moves_in_the_browser(tmp_path):
 
     from _skinned import face_vrm
     from _support import synthetic_motion
-    from gesturelsm.webapp.live_character import CharacterStream
+    from gesturelsm.live.characters import CharacterStream
 
     path = face_vrm(tmp_path / "face.vrm", vrm="0")
     character = read_upload(str(path))

@@ -25,9 +25,10 @@ from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import load_character, retarget_motion
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order, character_payload
+from gesturelsm.export.character_payload import bone_order, character_payload
 from gesturelsm.webapp.live import payload
-from gesturelsm.webapp.live_character import EXPIRED, CharacterStream, LiveCharacters
+from gesturelsm.live.characters import EXPIRED, CharacterStream, LiveCharacters
+from gesturelsm.webapp.player.component import file_url
 
 CHUNKS = (20, 20, 7, 33, 20, 20)          # the live feed's 20-frame chunks, and uneven ones
 
@@ -166,7 +167,7 @@ def test_streamed_face_weights_equal_the_whole_motions(body, motion, tmp_path):
 
 
 def test_tokens_resolve_to_the_chosen_character_and_expire(character, tmp_path):
-    chars = LiveCharacters(tmp_path, max_entries=2)
+    chars = LiveCharacters(tmp_path, file_url, max_entries=2)
     token, spec = chars.choose(character, None)
     assert isinstance(token, str) and len(token) >= 32 and spec["token"] == token and spec["name"] == "me.glb"
     rest = CharacterStream(character).spec()                             # the live player shows it at rest with these
@@ -183,7 +184,7 @@ def test_tokens_resolve_to_the_chosen_character_and_expire(character, tmp_path):
     assert chars.choose(None, again) == (None, None) and chars.get(again) is None and len(chars) == 0
     tokens = [chars.register(character) for _ in range(3)]               # at most max_entries, the oldest go
     assert chars.get(tokens[0]) is None and all(chars.get(t) for t in tokens[1:])
-    short = LiveCharacters(tmp_path, ttl_s=0.05)
+    short = LiveCharacters(tmp_path, file_url, ttl_s=0.05)
     t = short.register(character)
     time.sleep(0.1)
     assert short.get(t) is None
@@ -197,7 +198,7 @@ def test_over_the_socket_the_stream_is_on_the_tokens_character(shipped_pipe, cha
     from gesturelsm.live.session import LiveManager
     from gesturelsm.webapp import live_socket
 
-    chars = LiveCharacters(tmp_path)
+    chars = LiveCharacters(tmp_path, file_url)
     token = chars.register(character)
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
     client = TestClient(Starlette(routes=live_socket.routes(mgr, body, chars)))
@@ -256,7 +257,7 @@ def test_a_character_the_retargeting_refuses_is_a_message_and_the_mannequin(char
 
     from gesturelsm.webapp.live_socket import stream_character
 
-    chars = LiveCharacters(tmp_path)
+    chars = LiveCharacters(tmp_path, file_url)
     huge = replace(character, skeleton=replace(character.skeleton, translation=character.skeleton.translation * 1e6))
     stream, meta = stream_character(chars, chars.register(huge), body)
     assert stream is None and "absurd scale" in meta["character_error"] and meta["status"] == "streaming"

@@ -98,7 +98,7 @@ def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, m
     receives exactly the weights the server computed for each chunk, and the character's mesh shows the weights of the
     frame on screen, which change over time. The tiny test checkpoints keep the jaw shut, so the server's face sees
     the generated motion with its jaw opening and shutting (5 frames each)."""
-    import gesturelsm.webapp.live_character as live_character
+    import gesturelsm.live.characters as live_character
     from _skinned import face_vrm
     from _support import player_page
     from gesturelsm.motion.skeleton import JOINT_INDEX

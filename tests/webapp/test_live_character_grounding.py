@@ -16,8 +16,8 @@ from gesturelsm.retarget.grounding import CharacterStreamGrounder
 from gesturelsm.retarget.solve import prepare
 
 pytest.importorskip("gradio")
-from gesturelsm.webapp.character import bone_order
-from gesturelsm.webapp.live_character import CharacterStream
+from gesturelsm.export.character_payload import bone_order
+from gesturelsm.live.characters import CharacterStream
 
 CHUNKS = (20, 20, 7, 33, 20, 1, 19)
 

@@ -14,7 +14,7 @@ export { decodeMotion } from './motion_decoder.js';
 export { LiveFeed, MotionPlayer };
 
 let liveFeed = null;            // the page's live feed, whichever of the two players mounts first
-let liveCharacter = null;       // the page session's character for the live feed (gesturelsm/webapp/live_character.py)
+let liveCharacter = null;       // the page session's character for the live feed (gesturelsm/live/characters.py)
 
 // One player per element, created on first use; the page calls gesturelsmPlayer.load(payload).
 export function mount(element) {

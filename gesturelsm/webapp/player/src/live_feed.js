@@ -49,7 +49,7 @@ export class LiveFeed {
   set measure(on) { this.player.measure = on; }
 
   // The character the next stream uses (null: the mannequin); parsed now so that Record does not wait for it, and
-  // shown at rest before the first stream (the spec has its bones, axes and scale: live_character.py
+  // shown at rest before the first stream (the spec has its bones, axes and scale: live/characters.py
   // `LiveCharacters.choose`).
   useCharacter(spec) {
     this.chosen = spec && spec.token ? spec : null;

@@ -1,7 +1,9 @@
 """The visitor's character in the Live tab, server side: the live socket streams the motion on the character the page
-session chose with the Character upload (character.py), retargeted chunk by chunk.
+session chose with the Character upload (webapp/character.py), retargeted chunk by chunk. No page code here: the page
+gives the address its files are loaded at (`url`).
 
-    characters = LiveCharacters(workdir, body=body)        # one per server (ui.py); the live socket gets it too
+    characters = LiveCharacters(workdir, url, body=body)   # one per server (ui.py); the live socket gets it too;
+                                                           # url(path): the address the page loads a file at
     token, spec = characters.choose(character, old_token)  # the upload's event: the page session keeps the token,
                                                            # the page's live player gets `spec` (token, name, url, key)
     entry = characters.get(token)                          # the live socket's hello names the token: LiveEntry / None
@@ -37,19 +39,18 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
-from gesturelsm.body.model import resolve_body
-from gesturelsm.export.alive import Blinker
-from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
-from gesturelsm.motion.sequence import MotionSequence
-from gesturelsm.retarget import Character, Ground, SourceBody, retarget
-from gesturelsm.retarget.grounding import CharacterStreamGrounder
-from gesturelsm.retarget.solve import prepare
-
-from .character import bone_order, face_channels, face_morph
-from .player.component import file_url
+from ..body.model import resolve_body
+from ..export.alive import Blinker
+from ..export.character_payload import bone_order, face_channels, face_morph
+from ..export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
+from ..motion.sequence import MotionSequence
+from ..retarget import Character, Ground, SourceBody, retarget
+from ..retarget.grounding import CharacterStreamGrounder
+from ..retarget.solve import prepare
 
 TTL_S = 6 * 3600          # an entry unused this long is dropped (its page session has long gone quiet)
 MAX_ENTRIES = 64          # characters held at once (each holds its parsed file); the oldest go first
@@ -61,6 +62,7 @@ class LiveEntry:
     character: Character
     key: str                       # a hash of the file's bytes: the browser parses one file once
     folder: Path                   # the request folder holding the copy the page loads
+    url: Callable[[Path], str]     # the address the page loads a file of the server's at
     used: float = field(default_factory=time.monotonic)
 
     @property
@@ -76,15 +78,18 @@ class LiveEntry:
             os.utime(self.folder)                       # fresh for the sweeper
         except OSError:
             return None
-        return file_url(self.served)
+        return self.url(self.served)
 
 
 class LiveCharacters:
     """Page session tokens -> the character each chose (thread-safe; see the module docstring)."""
 
-    def __init__(self, workdir: str | Path, ttl_s: float = TTL_S, max_entries: int = MAX_ENTRIES, body=None):
-        """`body`: the server's body model (None: the built-in one), which the at-rest spec is measured on."""
-        self.workdir, self.ttl_s, self.max_entries, self.body = Path(workdir), ttl_s, max_entries, body
+    def __init__(self, workdir: str | Path, url: Callable[[Path], str], ttl_s: float = TTL_S,
+                 max_entries: int = MAX_ENTRIES, body=None):
+        """`url(path)`: the address the page loads a file of the server's at (the page's own, e.g. Gradio's file
+        route); `body`: the server's body model (None: the built-in one), which the at-rest spec is measured on."""
+        self.workdir, self.url, self.ttl_s, self.max_entries = Path(workdir), url, ttl_s, max_entries
+        self.body = body
         self._entries: OrderedDict[str, LiveEntry] = OrderedDict()
         self._lock = threading.Lock()
 
@@ -94,7 +99,7 @@ class LiveCharacters:
 
     def _add(self, character: Character) -> tuple[str, LiveEntry]:
         entry = LiveEntry(character, hashlib.sha1(character.path.read_bytes()).hexdigest(),
-                          self.workdir / f"req-{secrets.token_hex(16)}")
+                          self.workdir / f"req-{secrets.token_hex(16)}", self.url)
         entry.serve()
         token = secrets.token_urlsafe(24)
         with self._lock:
