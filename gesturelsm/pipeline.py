@@ -28,6 +28,7 @@ from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, S
                        load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
+from .progress import GENERATION, span
 from .data.lookup import find_beat2_take, take_motion
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
@@ -256,8 +257,7 @@ class GesturePipeline:
         self.check_plan(plan)
         T, order = speech.num_frames, self.run_order(plan)
         for i, m in enumerate(order):
-            lo, hi = i / len(order), (i + 1) / len(order)
-            prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
+            prog = span(progress, i / len(order), (i + 1) / len(order))     # each method its share in turn
             try:
                 if m == GROUND_TRUTH:
                     take = find_beat2_take(plan.beat2, speech.audio, plan.filename)
@@ -300,7 +300,7 @@ class GesturePipeline:
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe, language,
                                                                                        stream=True)
-        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        prog = GENERATION.span(progress, "method", prefix=f"{method}: ")
         out, speech, timings = self._streamed(speech, method,
                                               lambda sp: self.backends[method].generate(sp, steps, cfg, seed, prog))
         if progress:
@@ -356,7 +356,7 @@ class GesturePipeline:
         keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
         ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
         speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress, language)
-        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        prog = GENERATION.span(progress, "method", prefix=f"{method}: ")
         out, speech, streamed = self._streamed(speech, method,
                                                lambda sp: self.backends[method].edit(sp, motion, ask, steps, cfg, seed,
                                                                                      prog))
