@@ -95,7 +95,7 @@ class Run:
         """A progress callback: stops the run when it was cancelled, or, while no click has taken it, when something
         else needs the cores (a live stream started)."""
         if not self.taken and not self.cancelled.is_set() and self.busy():
-            self.cancelled.set()
+            self.cancelled.cancel("something else needs the cores")
         self.cancelled.check()
 
     def items(self) -> Iterator[Made]:

@@ -131,8 +131,9 @@ class RenderQueue:
     def _cancel(self, tickets: list[Ticket], reason: str) -> None:
         with self._cond:
             for t in tickets:
-                if t.cancelled.cancel(reason):
+                if not t.cancelled.is_set():
                     t.reason = reason
+                    t.cancelled.cancel(reason)
                 if t in self._waiting:              # its entry goes now; a running one frees its slot when killed
                     self._waiting.remove(t)
             self._cond.notify_all()
