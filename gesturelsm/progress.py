@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import sys
+import threading
 import time
 from typing import TextIO
 
@@ -76,13 +77,14 @@ class Line:
     line at each `steps`-th of the series and its last, each after the first saying the seconds since it where the
     count follows its noun (`[ 27 %] gesturelsm: window 225/2250 (12.3 s since window 1)`): a 30-minute motion's
     2,250 windows are 11 lines. `write(text)` puts a line of its own (a unit's result) without breaking the
-    redrawn one."""
+    redrawn one. Reports may come from several threads (the words recognised beside the windows sampled)."""
 
     def __init__(self, stream: TextIO | None = None, steps: int = 10):
         self._stream = stream
         self.steps = steps
         self._series: tuple[str, int] | None = None     # (the text before the count, n) of the series under way
         self._last, self._step, self._t0, self._open = 0, -1, 0.0, False
+        self._lock = threading.Lock()
 
     @property
     def stream(self) -> TextIO:
@@ -93,6 +95,10 @@ class Line:
         return bool(getattr(self.stream, "isatty", lambda: False)())
 
     def __call__(self, fraction: float, message: str) -> None:
+        with self._lock:
+            self._report(fraction, message)
+
+    def _report(self, fraction: float, message: str) -> None:
         line = f"[{100 * fraction:3.0f} %] {message}"
         m = _COUNT.match(message)
         if m is None:
@@ -115,10 +121,11 @@ class Line:
 
     def write(self, text: str) -> None:
         """A line of its own; a series' redrawn line is drawn again at its next step."""
-        if self._open:
-            self.stream.write("\r\033[K")
-            self._open = False
-        self._put(text + "\n")
+        with self._lock:
+            if self._open:
+                self.stream.write("\r\033[K")
+                self._open = False
+            self._put(text + "\n")
 
     def _close(self) -> None:
         if self._open:
