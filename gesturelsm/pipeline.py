@@ -30,6 +30,7 @@ from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, S
                        load_backends)
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
+from .progress import GENERATION
 from .features.audio import audio_channels
 from .features.text import TEXT_DIM, TextEmbedder
 from .pipelined import (HIDDEN, OUTPUTS, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
@@ -255,7 +256,7 @@ class GesturePipeline:
         speech = audio if isinstance(audio, SpeechInput) else self.prepare_speech(audio, sr, words, text, progress,
                                                                                        transcribe, language,
                                                                                        stream=True)
-        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        prog = GENERATION.span(progress, "method", prefix=f"{method}: ")
         out, speech, timings = self._streamed(speech, method,
                                               lambda sp: self.backends[method].generate(sp, steps, cfg, seed, prog))
         if progress:
@@ -311,7 +312,7 @@ class GesturePipeline:
         keys = [k if isinstance(k, Keyframe) else keyframe(*k, current=motion) for k in keyframes]
         ask = edit_spec(regenerate, motion.num_frames, keys, spec.regions, method)
         speech, warnings = self._edit_speech(motion, speech, sr, words, text, transcribe, progress, language)
-        prog = (lambda f, m: progress(0.2 + 0.7 * f, f"{method}: {m}")) if progress else None
+        prog = GENERATION.span(progress, "method", prefix=f"{method}: ")
         out, speech, streamed = self._streamed(speech, method,
                                                lambda sp: self.backends[method].edit(sp, motion, ask, steps, cfg, seed,
                                                                                      prog))

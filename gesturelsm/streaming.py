@@ -31,6 +31,7 @@ from .motion.postprocess import fit_length
 from .motion.regions import TRANS_OFFSET, join_regions
 from .motion.sequence import MotionSequence
 from .motion.translation import velocity_to_trans
+from .progress import span
 from .pipelined import HIDDEN, OUTPUTS, WAITING, finished
 from .settings import DEFAULTS, Plan, Settings
 
@@ -145,8 +146,7 @@ def made_each(pipe: Any, speech: SpeechInput, plan: Plan, output: str = "finishe
     pipe.check_plan(plan)
     T, order = speech.num_frames, pipe.run_order(plan)
     for i, m in enumerate(order):
-        lo, hi = i / len(order), (i + 1) / len(order)
-        prog = (lambda f, msg, lo=lo, hi=hi: progress(lo + (hi - lo) * f, msg)) if progress else None
+        prog = span(progress, i / len(order), (i + 1) / len(order))     # each method its share in turn
         if watch is not None:
             watch.begin(m)
         try:

@@ -16,7 +16,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors", "lazy", "memo"},                   # conventions, the error family, names on first use,
                                                                # a memo of recent results
-    {"safe_load"},                                             # safe loading
+    {"safe_load", "progress"},                                 # safe loading; progress reports (spans, stages,
+                                                               # the command line's renderer)
     {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech input (what a file is, reading
      "cluster"},                                               # it), files, the methods, fast CPU kernels; units
                                                                # of work here or as Ray tasks (no Ray until asked)

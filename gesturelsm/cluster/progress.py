@@ -1,16 +1,16 @@
 """Progress over units with an estimate of the time left, for the command line.
 
 `Tally` counts finished and failed units and estimates the time left from the cost done so far (throughput, so
-the estimate holds for one process and for a cluster alike). `ProgressLine` draws it on stderr: one line redrawn
-in place on a terminal (`[######----]  60 %  6/10 videos, 1 failed, about 1m20s left: v_3f2a...`), a new line at
-most every `every` seconds otherwise (logs, CI).
+the estimate holds for one process and for a cluster alike). `ProgressLine` (progress.Line, the command line's one
+renderer) draws it on stderr: one line redrawn in place on a terminal (`[ 60 %] 6/10 videos, 1 failed, about 1m20s
+left: v_3f2a...`), in a log the first, one line at each tenth of the units and the last.
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
-from typing import TextIO
+
+from ..progress import Line
 
 
 def duration(seconds: float) -> str:
@@ -60,38 +60,8 @@ class Tally:
         return ", ".join(parts) + (f": {last}" if last else "")
 
 
-class ProgressLine:
-    """A `Progress` callable (fraction, message) that draws a bar on stderr."""
-
-    def __init__(self, stream: TextIO | None = None, width: int = 24, every: float = 5.0):
-        self.stream = stream or sys.stderr
-        self.width, self.every = width, every
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self._last = -1e9
-        self._open = False
-
-    def __call__(self, fraction: float, message: str) -> None:
-        now = time.perf_counter()
-        final = fraction >= 1.0
-        if not self.tty and not final and now - self._last < self.every:
-            return
-        self._last = now
-        full = int(round(self.width * min(max(fraction, 0.0), 1.0)))
-        line = f"[{'#' * full}{'-' * (self.width - full)}] {100 * fraction:3.0f} %  {message}"
-        if self.tty:
-            self.stream.write("\r\033[K" + line[:200] + ("\n" if final else ""))
-            self._open = not final
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
-
-    def write(self, text: str) -> None:
-        """A log line that does not break the bar (the bar is drawn again on the next update)."""
-        if self._open:
-            self.stream.write("\r\033[K")
-            self._open = False
-        self.stream.write(text + "\n")
-        self.stream.flush()
+# the command line's one progress renderer (gesturelsm/progress.py): a run's `Tally.message` is a counted series
+ProgressLine = Line
 
 
 __all__ = ["ProgressLine", "Tally", "duration"]

@@ -14,7 +14,8 @@ through the same functions, so that a unit's result does not depend on where it 
 - On a cluster, a unit whose worker or node dies is run again (Ray's task retries, `retries` times); a unit that
   raises is not (the same inputs raise again) and is listed in the report with its one-line reason, while the
   others go on. At most `in_flight` units are queued at once, so inputs of thousands of units never sit in memory
-  together. `cancelled()` (asked between units) stops the run: queued units are cancelled, nothing more is written.
+  together. `cancelled` (an errors.CancelToken, or a predicate; asked between units) stops the run: queued units
+  are cancelled, nothing more is written (errors.Cancelled).
 - Progress goes to `progress(fraction, message)` with the time left, estimated from each unit's `cost`.
 """
 from __future__ import annotations
@@ -26,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Sequence
 
 from ..constants import Progress
-from ..errors import ClusterError, GestureError
+from ..errors import Cancellable, CancelToken, Cancelled, ClusterError, GestureError
 from .connect import Connection
 from .progress import Tally
 
@@ -73,19 +74,21 @@ class RunReport:
             raise ClusterError(f"{len(self.failed)} of {total} {noun} failed on every try:\n{lines}")
 
 
-class Stopped(GestureError):
-    """The run was cancelled on request; units not finished were not written."""
+# the run was cancelled on request; units not finished were not written
+Stopped = Cancelled
+STOPPED = "Stopped on request; the units not finished were not written."
 
 
 def run_units(job: Job, units: Sequence[Unit], on_result: Callable[[Unit, Any], None], *,
               connection: Connection | None = None, built: Any = None, progress: Progress | None = None,
-              cancelled: Callable[[], bool] | None = None, retries: int = RETRIES, cpus: float = 1.0,
+              cancelled: Cancellable | None = None, retries: int = RETRIES, cpus: float = 1.0,
               in_flight: int | None = None, noun: str = "units", keep_going: bool = True) -> RunReport:
     """Every unit through `job` (module docstring); returns which were done and which failed. `keep_going=False`
     (this process only): the first failure raises its own exception, as a plain loop would."""
     if len({u.key for u in units}) != len(units):
         raise ValueError("two units share a key")
     tally = Tally(len(units), sum(u.cost for u in units) or 1.0, noun)
+    cancelled = CancelToken.of(cancelled)
     report = RunReport()
     if progress and units:
         progress(0.0, tally.message())
@@ -123,8 +126,7 @@ def _run_here(job: Job, units: Sequence[Unit], on_result, built, tally, report, 
               keep_going: bool) -> None:
     built = job.build(job.spec) if built is None else built
     for unit in units:
-        if cancelled is not None and cancelled():
-            raise Stopped("Stopped on request; the units not finished were not written.")
+        cancelled.check(Cancelled, STOPPED)
         try:
             result, error = job.work(built, unit.inputs), None
         except Exception as exc:
@@ -166,8 +168,7 @@ def _run_on_ray(job: Job, units: Sequence[Unit], on_result, tally, report, progr
                     break
             if not pending:
                 return
-            if cancelled is not None and cancelled():
-                raise Stopped("Stopped on request; the units not finished were not written.")
+            cancelled.check(Cancelled, STOPPED)
             ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)
             for ref in ready:
                 unit = pending.pop(ref)

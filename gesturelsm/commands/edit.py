@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import math
 import re
-import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -22,9 +21,10 @@ from typing import TYPE_CHECKING
 
 from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
 from ..errors import UserError
+from ..progress import Line
 from ..settings import DEFAULT_METHOD, Settings
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, output_file, positive, refuse, say)
+                                  cli_settings, input_file, output_file, positive, refuse)
 
 if TYPE_CHECKING:
     from ..motion.sequence import MotionSequence
@@ -35,7 +35,7 @@ _SECONDS = re.compile(r"\s*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?\s*"
 # REGIONS@START-END; the regions and the numbers are checked by edit_spec, so a negative start or an unknown region
 # gets its own message (outside the speech, unknown region) rather than this syntax's
 _RANGE = re.compile(r"^\s*([^@]+)@\s*(-?[0-9.]+)\s*-\s*(-?[0-9.]+)\s*$")
-_WINDOW = re.compile(r"^(.*)window ([0-9]+)/([0-9]+)$")       # the sampler's step: "gesturelsm: window 3/2250"
+say = Line()                    # the progress on stderr (progress.Line: a long motion's windows in a few lines)
 NAME = "edit"
 HELP = "regenerate body regions of a motion over time ranges, keep the rest"
 
@@ -243,50 +243,8 @@ def _edited(a: Checked, args: argparse.Namespace, motion: MotionSequence, audio,
     st = a.settings
     res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
                     cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
-                    post=st.post, progress=WindowSteps(), language=st.language)
+                    post=st.post, progress=say, language=st.language)
     return res
-
-
-class WindowSteps:
-    """The edit's progress on stderr as `say` prints it, but a long motion's windows in a few lines (a 30-minute
-    motion has 2,250): on a terminal one line redrawn in place; otherwise (a log) the first window, one line at each
-    tenth of the windows and the last, each saying how many windows are done of how many and the seconds since the
-    first. Every other step is printed as it comes."""
-
-    def __init__(self, stream=None, steps: int = 10):
-        self.stream = stream or sys.stderr
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.steps = steps
-        self._pass: tuple[str, int] | None = None       # (what samples, its window count) of the windows under way
-        self._last, self._step, self._t0, self._open = 0, -1, 0.0, False
-
-    def __call__(self, fraction: float, message: str) -> None:
-        m = _WINDOW.match(message)
-        if m is None:
-            self._close()
-            self.stream.write(f"[{100 * fraction:3.0f} %] {message}\n")
-            self.stream.flush()
-            return
-        head, i, n = m.group(1), int(m.group(2)), int(m.group(3))
-        if self._pass != (head, n) or i <= self._last:      # a new pass of windows
-            self._pass, self._step, self._t0 = (head, n), -1, time.perf_counter()
-        self._last, step = i, i * self.steps // n
-        line = f"[{100 * fraction:3.0f} %] {head}window {i}/{n}"
-        if self.tty:
-            self.stream.write("\r\033[K" + line + ("\n" if i == n else ""))
-            self._open = i < n
-        elif self._step < 0 or step > self._step or i == n:
-            since = f" ({time.perf_counter() - self._t0:.1f} s since window 1)" if i > 1 else ""
-            self.stream.write(line + since + "\n")
-            self._step = step
-        else:
-            return
-        self.stream.flush()
-
-    def _close(self) -> None:
-        if self._open:
-            self.stream.write("\n")
-            self._open = False
 
 
 def _exports(a: Checked, motion: MotionSequence, path: Path, rig) -> None:

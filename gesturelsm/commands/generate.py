@@ -1,10 +1,10 @@
 """`gesturelsm generate` (speech -> motion npz): the command line of the pipeline (pipeline.py).
 
 Every argument is checked before any work (the settings' validator, `gesturelsm.settings`); while it works it says
-what it does on stderr (reading, transcribing, each window), shows the words it recognised, and reports the time
-both ways: generation only (the paper's AITS convention) and end to end. Without a transcript the words are recognised
-window by window while generation already works (gesturelsm.pipelined); the summary says how much of the
-transcription was hidden under generation.
+what it does on stderr (reading, transcribing, the windows: progress.Line), shows the words it recognised, and
+reports the time both ways: generation only (the paper's AITS convention) and end to end. Without a transcript the
+words are recognised window by window while generation already works (gesturelsm.pipelined); the summary says how
+much of the transcription was hidden under generation.
 """
 from __future__ import annotations
 
@@ -16,13 +16,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
+from ..progress import Line
 from ..settings import DEFAULT_METHOD, Settings
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, output_file, positive, refuse, say)
+                                  cli_settings, input_file, output_file, positive, refuse)
 
 if TYPE_CHECKING:
     from ..pipeline import GenerationResult
 
+say = Line()                    # the progress on stderr (progress.Line: a long speech's windows in a few lines)
 NAME = "generate"
 HELP = "generate SMPL-X gestures for a speech file"
 

@@ -15,6 +15,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import UserError
+from ..progress import Line
 
 NAME = "render"
 HELP = "render motion(s) with the speech to an mp4 (offscreen, CPU)"
@@ -46,7 +47,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="with --rig: the character's feet planted on its own legs (off: its legs as retargeted)")
     p.add_argument("--frame", type=int, help="write only this frame as a PNG")
     p.add_argument("--crf", type=int, default=20, help="x264 quality, lower = better (default 20)")
-    p.add_argument("--quiet", action="store_true", help="no progress (a bar on a terminal, whole lines otherwise)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress (one line redrawn on a terminal, a line per tenth of the frames otherwise)")
     p.add_argument("--progress-json", action="store_true",
                    help='progress as JSON lines on stdout ({"fraction": 0.5, "message": "..."}) for programs')
     p.set_defaults(func=run)
@@ -83,6 +85,11 @@ def _style(args: argparse.Namespace):
     if args.supersample:
         style = replace(style, supersample=args.supersample)
     return style
+
+
+def _json_lines(fraction: float, message: str) -> None:
+    """--progress-json: one JSON object a step on stdout (render/background.py reads them)."""
+    print(json.dumps({"fraction": round(fraction, 4), "message": message}), flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -125,32 +132,12 @@ def run(args: argparse.Namespace) -> int:
                 out.parent.mkdir(parents=True, exist_ok=True)
                 iio.imwrite(out, frame)
             else:
-                bar, tenths = None, [-1]
-                # a bar redrawn in place on a terminal; in a file or a pipe, one whole line per tenth of the frames
-                if not args.quiet and not args.progress_json and sys.stderr.isatty():
-                    from tqdm import tqdm
-
-                    bar = tqdm(total=1000, dynamic_ncols=True, mininterval=0.5,
-                               bar_format="render {percentage:3.0f}%|{bar}| {desc} [{elapsed}<{remaining}]")
-
-                def progress(fraction: float, message: str) -> None:
-                    if args.progress_json:
-                        print(json.dumps({"fraction": round(fraction, 4), "message": message}), flush=True)
-                    if bar is not None:
-                        bar.n = int(fraction * 1000)
-                        bar.set_description_str(message, refresh=False)
-                        bar.refresh()
-                    elif not args.quiet and not args.progress_json and int(fraction * 10) > tenths[0]:
-                        tenths[0] = int(fraction * 10)
-                        print(f"render {tenths[0] * 10:3d}% {message}", file=sys.stderr, flush=True)
-
-                try:
-                    render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,
-                                 gen_seconds=gen, progress=progress, crf=args.crf, character=character,
-                                 grounding=args.grounding == "on")
-                finally:
-                    if bar is not None:
-                        bar.close()
+                # the frames on stderr (progress.Line: one line redrawn on a terminal, a line per tenth in a log);
+                # --progress-json: JSON lines on stdout for programs; --quiet: nothing
+                progress = _json_lines if args.progress_json else None if args.quiet else Line()
+                render_video(args.motions, args.audio, out, labels=labels, body=args.model, style=style,
+                             gen_seconds=gen, progress=progress, crf=args.crf, character=character,
+                             grounding=args.grounding == "on")
         except RenderError as exc:
             raise UserError(str(exc)) from None
         for w in caught:

@@ -11,14 +11,16 @@ import contextlib
 import sys
 from dataclasses import replace
 
-from ..cluster import ProgressLine, add_cluster_argument, check_reachable, connect
+from ..cluster import add_cluster_argument, check_reachable, connect
 from ..constants import SAMPLE_RATE
 from ..errors import InputError
+from ..progress import Line
 from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, grounding_on,
-                                  input_file, output_folder, positive, refuse, say, threads)
+                                  input_file, output_folder, positive, refuse, threads)
 from ..settings.check import check_language
 from ..settings.values import from_text
 
+say = Line()                    # the progress on stderr: the speech's steps, then the motions (a counted series)
 NAME = "sweep"
 HELP = "steps x CFG x seeds on one speech: time and motion statistics, table and plot"
 
@@ -97,7 +99,7 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
         print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
     with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
         result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
-                           progress=ProgressLine(sys.stderr), connection=conn,
+                           progress=say, connection=conn,
                            checkpoints=checkpoint_sources(args.checkpoints))
     files = write_sweep(result, out, args.metric)
     print(markdown_text(result))

@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from ..body import load_body_model
-from ..cluster import Connection, Files, Job, Stopped, Unit, run_units
+from ..cluster import Connection, Files, Job, Unit, run_units
 from ..constants import Progress
-from ..errors import GestureError, InputError
+from ..errors import Cancellable, Cancelled, GestureError, InputError
 from ..pipeline import GesturePipeline, SpeechInput
 from ..settings import CLI, Limits, Names, PostProcess, grid_problems
 from ..settings.values import method_list
@@ -34,8 +33,8 @@ from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_po
                            speaker_reference, statistics_of_joints)
 
 
-class SweepCancelled(GestureError):
-    """The sweep was stopped on request; nothing was written."""
+# the sweep was stopped on request; nothing was written
+SweepCancelled = Cancelled
 
 
 @dataclass(frozen=True)
@@ -196,14 +195,15 @@ def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
 
 
 def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerReference | None = None,
-              progress: Progress | None = None, cancelled: Callable[[], bool] | None = None,
+              progress: Progress | None = None, cancelled: Cancellable | None = None,
               keep_motions: bool = True, grounding: bool = True, connection: Connection | None = None,
               checkpoints: list | None = None) -> SweepResult:
     """Generate every cell once per seed from one prepared speech (pipeline.SpeechInput) and measure each motion, its
     feet grounded (settings.PostProcess, without smoothing: the sampler's own motion otherwise) unless `grounding` is
     off, after `warm_up`. Each (cell, seed) is a unit of work: in this process with `pipe`, or with `connection`
     (gesturelsm.cluster) a task whose worker loads `checkpoints` (what `checkpoint_sources` gave) and warms up once.
-    `cancelled()` is asked before every generation; True raises SweepCancelled. `progress(fraction, message)`
+    `cancelled` (an errors.CancelToken, or a predicate) is asked before every generation; once cancelled,
+    errors.Cancelled (SweepCancelled) is raised. `progress(fraction, message)`
     carries the estimate of the time left. On a cluster, cells that fail are listed (ClusterError) after the others
     ran; here the first error stops."""
     reference = reference if reference is not None else speaker_reference()
@@ -221,8 +221,8 @@ def run_sweep(pipe, speech, grid: SweepGrid, body=None, reference: SpeakerRefere
                            connection=connection, progress=progress, cancelled=cancelled, noun="motions",
                            built=None if ship else SweepBuilt(pipe, speech, context, body, keep_motions, grounding),
                            keep_going=ship)
-    except Stopped:
-        raise SweepCancelled("The sweep was cancelled; nothing was written.") from None
+    except Cancelled:
+        raise Cancelled("The sweep was cancelled; nothing was written.") from None
     report.raise_failures("sweep cells")
     return SweepResult(grid, [runs[u.key] for u in units], speech.duration, speech.text_mode, reference,
                        time.perf_counter() - t0, warmup_s, grounding)

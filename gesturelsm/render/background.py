@@ -31,12 +31,12 @@ import tempfile
 import threading
 import warnings
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from ..constants import Progress
-from ..errors import Cancelled, RenderError
+from ..errors import Cancellable, CancelToken, Cancelled, RenderError
 from ..motion.sequence import MotionSequence
 from .frames import RenderWarning
 
@@ -47,8 +47,8 @@ CANCEL_POLL_S = 0.1          # how often a running render asks whether it was ca
 _lock = threading.Lock()
 
 
-class RenderCancelled(Cancelled):
-    """render_apart's `cancelled()` said yes: the render process was stopped and its partial file removed."""
+# render_apart's `cancelled` said yes: the render process was stopped and its partial file removed
+RenderCancelled = Cancelled
 
 
 def lower_this_process(nice: int) -> dict:
@@ -84,11 +84,12 @@ def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, ou
                  labels: Sequence[str] | None = None, size: tuple[int, int] = (512, 512),
                  body_path: str | Path | None = None, gen_seconds: Sequence[float | None] | None = None,
                  progress: Progress | None = None, nice: int = 19, sr: int = 16000,
-                 cancelled: Callable[[], bool] | None = None, rig: str | Path | None = None,
+                 cancelled: Cancellable | None = None, rig: str | Path | None = None,
                  grounding: bool = True) -> Path:
     """What `render_video(motions, audio, out, ...)` renders (default style), rendered by a child process in its
-    own session at niceness `nice` (see the module docstring). Waits for it; returns `out`. `cancelled()` is asked
-    at every progress report (~1 % of the frames): True stops the process and raises RenderCancelled. rig: a
+    own session at niceness `nice` (see the module docstring). Waits for it; returns `out`. `cancelled` (an
+    errors.CancelToken, or a predicate) is asked every 0.1 s and at every progress report (~1 % of the frames):
+    once cancelled the process is stopped and errors.Cancelled (RenderCancelled) raised. rig: a
     character file (.vrm / .glb / .gltf) whose own mesh is drawn instead of the body (`gesturelsm render --rig`),
     its feet planted on its own legs unless `grounding` is off."""
     import soundfile as sf
@@ -110,14 +111,14 @@ def render_apart(motions: Sequence[MotionSequence], audio: np.ndarray | None, ou
             cmd += ["--model", str(body_path)]
         if rig is not None:
             cmd += ["--rig", str(rig)] + ([] if grounding else ["--grounding", "off"])
-        _run(cmd, out, job / "stderr.txt", progress, cancelled)
+        _run(cmd, out, job / "stderr.txt", progress, None if cancelled is None else CancelToken.of(cancelled))
     finally:
         shutil.rmtree(job, ignore_errors=True)
     return out
 
 
 def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
-         cancelled: Callable[[], bool] | None) -> None:
+         cancelled: CancelToken | None) -> None:
     with open(err_path, "w+") as err:
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL, text=True,
                                 start_new_session=True)
@@ -133,13 +134,13 @@ def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
                     if progress is not None:
                         progress(0.0, "starting: framing the camera on the motions")
                 elif "fraction" in msg:
-                    if cancelled is not None and cancelled():
-                        raise RenderCancelled("the render was cancelled")
+                    if cancelled is not None:
+                        cancelled.check(Cancelled, "the render was cancelled")
                     if progress is not None:
                         progress(float(msg["fraction"]), str(msg.get("message", "")))
             code = proc.wait()
             if killed.is_set():
-                raise RenderCancelled("the render was cancelled")
+                raise Cancelled("the render was cancelled")
         except BaseException:
             proc.kill()                      # the renderer writes a .part file, renamed when complete: remove it
             proc.wait()
@@ -164,15 +165,15 @@ def _run(cmd: list[str], out: Path, err_path: Path, progress: Progress | None,
                                   f"{lines[-1] if lines else 'no message'}")
 
 
-def _watch(proc: subprocess.Popen, cancelled: Callable[[], bool], killed: threading.Event,
+def _watch(proc: subprocess.Popen, cancelled: CancelToken, killed: threading.Event,
            every_s: float = CANCEL_POLL_S) -> threading.Thread:
-    """A thread that asks `cancelled()` every `every_s` seconds while `proc` runs and kills it at once when it says
+    """A thread that asks `cancelled` every `every_s` seconds while `proc` runs and kills it at once when it says
     yes (setting `killed`): a cancelled render stops within a fraction of a second, also before its first frame
     (framing the camera on a long motion takes seconds, with no progress line to check at)."""
     def watch() -> None:
         while not killed.wait(every_s) and proc.poll() is None:
             try:
-                stop = cancelled()
+                stop = cancelled.cancelled
             except Exception:
                 log.exception("checking whether a render was cancelled failed")
                 continue

@@ -23,6 +23,7 @@ import threading
 import time
 from typing import Callable, Hashable, Iterator
 
+from ..errors import CancelToken, Interrupted
 from ..generator.sampling import window_previews
 from ..pipeline import Made, Plan
 from ..settings import motion_values
@@ -31,9 +32,9 @@ from .preview import Preview
 log = logging.getLogger("gesturelsm.app")
 
 
-class Cancelled(BaseException):
-    """Raised inside a run's progress callback to stop it at its next window (a BaseException so that a method's own
-    error handling, `generate_each(keep_going=True)`, does not record it as that method's failure)."""
+# raised inside a run's progress callback to stop it at its next window: the family's BaseException kind, so that a
+# method's own error handling (`generate_each(keep_going=True)`) does not record it as that method's failure
+Cancelled = Interrupted
 
 
 def motion_key(upload: Hashable, speech: Hashable, plan: Plan) -> Hashable:
@@ -53,7 +54,7 @@ class Run:
         self.started_at: float | None = None   # when the run began making (after the run before it stopped)
         self.done = False
         self.failed = False                    # cancelled, or stopped by an error of the server's (not finished)
-        self.cancelled = threading.Event()
+        self.cancelled = CancelToken()
         self.taken = False
         self._cond = threading.Condition()
         self.thread: threading.Thread | None = None
@@ -94,9 +95,8 @@ class Run:
         """A progress callback: stops the run when it was cancelled, or, while no click has taken it, when something
         else needs the cores (a live stream started)."""
         if not self.taken and not self.cancelled.is_set() and self.busy():
-            self.cancelled.set()
-        if self.cancelled.is_set():
-            raise Cancelled()
+            self.cancelled.cancel("something else needs the cores")
+        self.cancelled.check()
 
     def items(self) -> Iterator[Made]:
         """Each method as the run makes it (the made ones at once), until the run ends."""

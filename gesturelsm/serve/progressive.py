@@ -31,6 +31,7 @@ from ..errors import GestureError, InputError
 from ..generator.sampling import window_previews
 from ..motion.sequence import MotionSequence
 from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
+from ..progress import REQUEST
 from .ahead import Cancelled, Run
 from .request import RenderJob, Request, Result, timing_rows
 
@@ -137,7 +138,7 @@ def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray 
     prog = rising(progress) if progress else (lambda f, m: None)
     torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
     service.cleanup()
-    plan, speech, notes = service.speech(req, audio, prog, stream=True)   # its words may still be recognised
+    plan, speech, notes = service.speech(req, audio, REQUEST.span(prog, "speech"), stream=True)  # words may come later
     grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
     if audio is None:
         run = service.ahead.take(service.motion_key(req, plan))
@@ -207,12 +208,12 @@ def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iter
         for x in run.items():
             if x.method in todo:
                 todo.remove(x.method)
-            prog(0.12 + 0.5 * (1 - len(todo) / len(plan.methods)), f"{label(x.method)} made")
+            REQUEST.span(prog, "methods")(1 - len(todo) / len(plan.methods), f"{label(x.method)} made")
             yield x
         if not todo:
             return
         plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
-    yield from service.pipeline.generate_each(speech, plan, progress=lambda f, m: prog(0.12 + 0.5 * f, m),
+    yield from service.pipeline.generate_each(speech, plan, progress=REQUEST.span(prog, "methods"),
                                               body=service.body, keep_going=True)
 
 
@@ -226,7 +227,7 @@ def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Pro
             if kind == "made":
                 if x.method in todo:
                     todo.remove(x.method)
-                prog(0.12 + 0.5 * (1 - len(todo) / len(plan.methods)), f"{label(x.method)} made")
+                REQUEST.span(prog, "methods")(1 - len(todo) / len(plan.methods), f"{label(x.method)} made")
             if kind != "progress":
                 yield kind, x
         if not todo:
@@ -236,7 +237,7 @@ def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Pro
     try:
         for kind, x in read(own):
             if kind == "progress":
-                prog(0.12 + 0.5 * x[0], x[1])
+                REQUEST.span(prog, "methods")(*x)
             else:
                 yield kind, x
         if own.error is not None:

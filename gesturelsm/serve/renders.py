@@ -6,7 +6,7 @@ Each render enters the line with a `Ticket` and its owner (the page session that
     ticket = queue.enter(owner)                 # the owner's older tickets are cancelled: superseded
     ticket.wait(report=lambda position: ...)    # blocks until a slot is free; position 1 = next in line
     try:
-        render(..., cancelled=ticket.cancelled.is_set)      # the render process is killed as soon as it is set
+        render(..., cancelled=ticket.cancelled)     # a CancelToken: the render process is killed once it is set
     finally:
         ticket.done()                           # the slot goes to the next in line
 
@@ -23,6 +23,7 @@ import threading
 import time
 from typing import Callable, Hashable
 
+from ..errors import CancelToken
 from ..render.background import RenderCancelled
 
 SUPERSEDED = "a newer request of the same page replaced it"
@@ -34,7 +35,7 @@ class Ticket:
 
     def __init__(self, queue: "RenderQueue", owner: Hashable | None, number: int):
         self.queue, self.owner, self.number = queue, owner, number
-        self.cancelled = threading.Event()
+        self.cancelled = CancelToken()
         self.reason = ""
         self.entered = time.monotonic()
         self.started: float | None = None          # when its turn came (monotonic)
@@ -132,7 +133,7 @@ class RenderQueue:
             for t in tickets:
                 if not t.cancelled.is_set():
                     t.reason = reason
-                    t.cancelled.set()
+                    t.cancelled.cancel(reason)
                 if t in self._waiting:              # its entry goes now; a running one frees its slot when killed
                     self._waiting.remove(t)
             self._cond.notify_all()

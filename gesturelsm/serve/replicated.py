@@ -42,6 +42,7 @@ from ..constants import Progress
 from ..data.lookup import find_beat2_take
 from ..errors import ClusterError, GestureError
 from ..pipeline import GROUND_TRUTH
+from ..progress import REQUEST
 from ..render.background import RenderCancelled
 from . import replicas
 from .config import ServiceSettings
@@ -106,7 +107,7 @@ class ReplicatedService(GestureService):
         textgrid = _upload(req.textgrid_path) if req.textgrid_path else None
         auto = transcript_source(req.text, bool(req.textgrid_path), plan.settings.transcribe) == AUTOMATIC
         words = self._remembered(upload, req.language) if auto else None
-        prog(0.05, "generating on a replica")
+        prog(REQUEST.at("speech"), "generating on a replica")
         reply = self._call("run", req, upload, textgrid, words, self._take(req))
         out = _receive(reply, self.folder(), started)    # the visitor's own folder, as without replicas
         prog(1.0, "done")

@@ -36,12 +36,13 @@ from ..audio import SAMPLE_RATE, AudioTooLongError, load_audio
 from ..body import load_body_model
 from ..body.model import resolve_model_path
 from ..constants import Progress
-from ..errors import AudioError, GestureError, InputError, RenderError
+from ..errors import AudioError, CancelToken, GestureError, InputError, RenderError
 from ..evaluation.sweep import SweepLimits
 from ..export import export_arkit, export_bvh, export_glb, export_keypoints, export_npz
 from ..motion.sequence import MotionSequence
 from ..backends import GROUND_TRUTH, SPECS, checkpoint_sources
 from ..pipeline import GesturePipeline, Plan, SpeechInput
+from ..progress import REQUEST
 from ..settings import DEFAULTS, Limits
 from ..render.background import render_apart
 from .checks import check_request, textgrid_words
@@ -233,7 +234,7 @@ class GestureService:
         """Checks (`check`), then the speech prepared once for every method (the transcript typed, from the TextGrid,
         recognised or none, as the request says), and notes for the page; for an upload, what its prefetch prepared
         (`serve/prepared.py`), else prepared here and remembered. Automatic words are recognised on a thread: with
-        `stream` the speech may come back before them (generation joins them), else once they are known."""
+        `stream` the speech may come back before them (generation joins them), else once known (`prog`: its 0..1)."""
         path = None
         if audio is None:
             req, plan, audio = self.load(req, extra)
@@ -250,10 +251,10 @@ class GestureService:
         def prepare() -> tuple[SpeechInput, list[str]]:
             fresh.append(True)
             words, notes = self._words(req, seconds)
-            prog(0.02, "reading speech")
+            prog(0.0, "reading speech")
             live = [True]                                # the words' thread says nothing once this returns
             speech = self.pipeline.prepare_speech(audio, SAMPLE_RATE, words=words, text=req.text or None,
-                                                  progress=lambda f, m: live[0] and prog(0.02 + 0.1 * f, m),
+                                                  progress=lambda f, m: live[0] and prog(f, m),
                                                   transcribe=plan.settings.transcribe,
                                                   language=plan.settings.language, stream=True)
             live[0] = False
@@ -280,7 +281,7 @@ class GestureService:
         if req.render:
             result = self.render(result, prog)
         if req.exports:
-            prog(0.93, "exports")
+            prog(REQUEST.at("exports"), "exports")
             result = self.export(result)
         prog(1.0, "done")
         return result
@@ -324,11 +325,10 @@ class GestureService:
             return result
         prog = progress or (lambda f, m: None)
         with self.renders.enter(owner) as ticket:
-            ticket.wait(lambda position: prog(0.62, waiting_line(position)), cancelled)
+            ticket.wait(lambda position: prog(REQUEST.at("video"), waiting_line(position)), cancelled)
             t_r = time.perf_counter()
-            out = self._video(result, video_progress(lambda f, m: prog(0.62 + 0.3 * f, m)),
-                              lambda: ticket.cancelled.is_set() or (cancelled is not None and cancelled()),
-                              character)
+            out = self._video(result, video_progress(REQUEST.span(prog, "video")),
+                              CancelToken(ticket.cancelled, cancelled), character)
             render_s = time.perf_counter() - t_r
         return with_render_time(out, render_s, time.perf_counter() - result.job.started)
 

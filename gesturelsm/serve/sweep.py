@@ -16,6 +16,7 @@ from ..constants import SAMPLE_RATE, Progress
 from ..errors import InputError
 from ..evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult, check_grid, run_sweep, sweep_grid
 from ..evaluation.sweep_report import PLOT_METRICS, write_sweep
+from ..progress import SWEEP_REQUEST
 from ..settings import DEFAULTS, PAGE
 from ..settings.values import one_of
 from .request import Request
@@ -62,8 +63,8 @@ def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress:
                    render=False, exports=False)
     base, _, audio = service.load(base, extra=problems)
     check_grid(service.pipeline, grid, len(audio) / SAMPLE_RATE, limits)
-    plan, speech, notes = service.speech(base, audio, lambda f, m: prog(0.1 * f, m))
-    result = run_sweep(service.pipeline, speech, grid, progress=lambda f, m: prog(0.1 + 0.85 * f, m),
+    plan, speech, notes = service.speech(base, audio, SWEEP_REQUEST.span(prog, "speech"))
+    result = run_sweep(service.pipeline, speech, grid, progress=SWEEP_REQUEST.span(prog, "sweep"),
                        cancelled=cancelled)
     folder = service.folder()
     files = write_sweep(result, folder / "sweep", metric)

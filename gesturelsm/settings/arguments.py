@@ -18,7 +18,6 @@ import argparse
 import math
 import numbers
 import os
-import sys
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -188,11 +187,6 @@ def output_folder(path: Any, field: str, problems: list[str]) -> Path | None:
     return None
 
 
-def say(fraction: float, message: str) -> None:
-    """A command's progress on stderr, one line per step (its results go to stdout)."""
-    print(f"[{100 * fraction:3.0f} %] {message}", file=sys.stderr, flush=True)
-
-
 def refuse(problems: list[str]) -> None:
     """Raise every problem at once (one per line), if any."""
     if problems:
@@ -202,4 +196,4 @@ def refuse(problems: list[str]) -> None:
 __all__ = ["add_flag", "add_language_flag", "cli_asked", "add_max_seconds_flag", "add_post_flags", "add_settings_flags",
            "cli_settings",
            "default_steps_text", "input_file",
-           "input_folder", "output_file", "output_folder", "positive", "refuse", "say", "threads"]
+           "input_folder", "output_file", "output_folder", "positive", "refuse", "threads"]

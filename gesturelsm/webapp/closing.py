@@ -8,9 +8,10 @@ handler's progress callback (`PageWork.checked`) then raises `PageClosed` at the
 generation or an edit, the next motion of a sweep), and the handler returns without output. Other pages' work is
 not touched: the flags are per page session.
 
-`PageClosed` is a BaseException, as asyncio's CancelledError is: a cancellation, not an error, so that no
-`except Exception` on the way (a method that fails does not stop the others, pipeline.generate_each) takes it for
-a failed method and goes on with the next one.
+`PageClosed` is the cancellation family's BaseException kind (errors.Interrupted), as asyncio's CancelledError is:
+a cancellation, not an error, so that no `except Exception` on the way (a method that fails does not stop the
+others, pipeline.generate_each) takes it for a failed method and goes on with the next one. The flags are
+errors.CancelToken.
 """
 from __future__ import annotations
 
@@ -21,11 +22,13 @@ from typing import Callable, Iterable, Iterator
 
 import gradio as gr
 
+from ..errors import CancelToken, Interrupted
+
 log = logging.getLogger("gesturelsm.app")
 
 
-class PageClosed(BaseException):
-    """The page that asked for this work closed; the work stops here."""
+# the page that asked for this work closed; the work stops here
+PageClosed = Interrupted
 
 
 class PageWork:
@@ -33,7 +36,7 @@ class PageWork:
 
     def __init__(self, renders=None):
         self.renders = renders                  # the service's render queue (serve/renders.py), or None
-        self._running: dict[str, set[threading.Event]] = {}
+        self._running: dict[str, set[CancelToken]] = {}
         self._lock = threading.Lock()
 
     def session_ended(self, request: gr.Request = None) -> None:
@@ -54,9 +57,9 @@ class PageWork:
             log.info("a page closed during its request: the work stopped")
 
     @contextlib.contextmanager
-    def running(self, request) -> Iterator[threading.Event]:
+    def running(self, request) -> Iterator[CancelToken]:
         """A flag set when `request`'s page closes while the block runs (never set without a page session)."""
-        flag = threading.Event()
+        flag = CancelToken()
         key = getattr(request, "session_hash", None)
         if key:
             with self._lock:
@@ -88,11 +91,10 @@ class PageWork:
             return len(self._running)
 
     @staticmethod
-    def checked(progress, flag: threading.Event) -> Callable[[float, str], None]:
+    def checked(progress, flag: CancelToken) -> Callable[[float, str], None]:
         """`progress(f, desc=m)` (Gradio's) as the package's (f, m) callback, raising PageClosed once `flag` is set."""
         def report(f: float, m: str) -> None:
-            if flag.is_set():
-                raise PageClosed
+            flag.check(PageClosed, "the page closed")
             progress(f, desc=m)
         return report
 

@@ -117,17 +117,17 @@ def test_progress_line_redraws_on_a_terminal_and_logs_lines_elsewhere():
             return True
 
     tty = Tty()
-    line = ProgressLine(tty, width=10)
+    line = ProgressLine(tty)                                           # progress.Line, the one renderer
     line(0.5, "5/10 videos")
     line.write("  v_1 rendered")
     line(1.0, "10/10 videos")
-    assert tty.getvalue() == ("\r\033[K[#####-----]  50 %  5/10 videos\r\033[K  v_1 rendered\n"
-                              "\r\033[K[##########] 100 %  10/10 videos\n")
+    assert tty.getvalue() == ("\r\033[K[ 50 %] 5/10 videos\r\033[K  v_1 rendered\n"
+                              "\r\033[K[100 %] 10/10 videos\n")
     log = io.StringIO()
-    quiet = ProgressLine(log, width=4, every=3600)
-    for f in (0.0, 0.25, 0.5, 1.0):                                    # one line, then only the last
-        quiet(f, f"{f}")
-    assert log.getvalue() == "[----]   0 %  0.0\n[####] 100 %  1.0\n"
+    quiet = ProgressLine(log)
+    for k in range(0, 41):                                             # the first, each tenth, the last
+        quiet(k / 40, f"{k}/40 videos")
+    assert log.getvalue().splitlines() == [f"[{100 * k / 40:3.0f} %] {k}/40 videos" for k in range(0, 41, 4)]
 
 
 def test_runner_here_builds_once_lists_failures_and_keeps_going():

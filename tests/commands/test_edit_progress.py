@@ -1,5 +1,6 @@
 """`gesturelsm edit`'s progress: a long motion's windows (2,250 for 30 minutes) are a few lines in a log and one
-redrawn line on a terminal, while every other step is printed as it comes (commands/edit.py, WindowSteps)."""
+redrawn line on a terminal, while every other step is printed as it comes (progress.Line, the command line's one
+renderer)."""
 from __future__ import annotations
 
 import io
@@ -8,7 +9,7 @@ import re
 import soundfile as sf
 
 from gesturelsm.cli import main
-from gesturelsm.commands.edit import WindowSteps
+from gesturelsm.progress import Line as WindowSteps
 
 from _support import speech_like, synthetic_motion
 

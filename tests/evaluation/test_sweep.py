@@ -127,6 +127,22 @@ def test_a_cancelled_sweep_stops_before_the_next_motion_and_writes_nothing(pipe,
     assert len(asked) == 2 and list(tmp_path.iterdir()) == []
 
 
+def test_a_cancelled_token_stops_the_sweep_with_one_line(pipe, wav):
+    from gesturelsm.audio import load_audio
+    from gesturelsm.errors import Cancelled, CancelToken
+
+    speech = pipe.prepare_speech(load_audio(wav), 16000, transcribe=False)
+    token, said = CancelToken(), []
+
+    def progress(f, m):
+        said.append(m)
+        if m.startswith("1/2 motions"):                     # the first motion is made: the tab's Cancel
+            token.cancel()
+    with pytest.raises(Cancelled, match="^The sweep was cancelled; nothing was written.$"):
+        run_sweep(pipe, speech, SweepGrid(("gesturelsm",), (1, 2), (2.0,), 1), progress=progress, cancelled=token)
+    assert not any(m.startswith("2/2") for m in said)
+
+
 def test_write_sweep_replaces_an_earlier_sweep_in_place(pipe, wav, tmp_path):
     from gesturelsm.audio import load_audio
 

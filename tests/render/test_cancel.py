@@ -53,3 +53,13 @@ def test_a_render_cancelled_before_its_first_frame_stops(tmp_path, make_pose):
     assert not (tmp_path / "w.mp4").exists()
     with bg._lock:
         assert not bg._running
+
+
+def test_a_cancelled_token_stops_a_render_with_its_reason_kept(tmp_path, make_pose):
+    from gesturelsm.errors import Cancelled, CancelToken
+
+    token = CancelToken()
+    token.cancel("a newer request of the same page replaced it")
+    with pytest.raises(Cancelled, match="the render was cancelled"):
+        render_apart([make_pose(600, -1.2)], None, tmp_path / "w.mp4", size=(32, 32), nice=5, cancelled=token)
+    assert not (tmp_path / "w.mp4").exists() and token.reason.startswith("a newer request")

@@ -124,9 +124,10 @@ def test_cli_render_progress_is_whole_lines_when_not_a_terminal(tmp_path, make_p
     assert main(["render", str(npz), "--audio", str(wav), "--out", str(tmp_path / "o.mp4"), "--size", "64x64"]) == 0
     err = capsys.readouterr().err
     assert "\r" not in err
-    lines = [ln for ln in err.splitlines() if ln.startswith("render")]
-    percents = [int(ln.split()[1].rstrip("%")) for ln in lines]
+    lines = [ln for ln in err.splitlines() if ln.startswith("[")]          # progress.Line: "[ 40 %] frame 12/30 ..."
+    percents = [int(ln[1:4]) for ln in lines]
     assert 2 <= len(lines) <= 11 and percents == sorted(set(percents)) and percents[-1] == 100
+    assert all(" frame " in ln for ln in lines)
     assert main(["render", str(npz), "--audio", str(wav), "--out", str(tmp_path / "q.mp4"), "--size", "64x64",
                  "--quiet"]) == 0
-    assert "render" not in capsys.readouterr().err
+    assert "frame" not in capsys.readouterr().err
