@@ -24,7 +24,7 @@ from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
 from ..errors import UserError
 from ..settings import DEFAULT_METHOD, Settings
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, output_file, positive, refuse, say)
+                                  add_transcribe_flag, cli_settings, input_file, output_file, positive, refuse, say)
 
 if TYPE_CHECKING:
     from ..motion.sequence import MotionSequence
@@ -57,7 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = g.add_mutually_exclusive_group()
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
-    src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
+    add_transcribe_flag(src)
     add_language_flag(g)
     g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="a method whose sampler can hold known latents: "

@@ -14,7 +14,8 @@ from dataclasses import replace
 from ..cluster import ProgressLine, add_cluster_argument, check_reachable, connect
 from ..constants import SAMPLE_RATE
 from ..errors import InputError
-from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, grounding_on,
+from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, add_methods_flag,
+                                  add_transcribe_flag, grounding_on,
                                   input_file, output_folder, positive, refuse, say, threads)
 from ..settings.check import check_language
 from ..settings.values import from_text
@@ -33,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    "and write sweep.csv, sweep.md, sweep.json and sweep.png (a statistic against "
                                    f"generation time). Size bound: {limits.describe()}.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ...)")
-    p.add_argument("--methods", nargs="+", default=None, help="default: every method the checkpoints provide")
+    add_methods_flag(p, help="default: every method the checkpoints provide")
     p.add_argument("--steps", nargs="+", default=list(DEFAULT_STEPS),
                    help=f"sampling step counts (default: {' '.join(map(str, DEFAULT_STEPS))})")
     p.add_argument("--cfg", nargs="+", default=list(DEFAULT_CFGS),
@@ -42,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--text", default=None, help="transcript (word timings aligned automatically)")
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
-    src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
+    add_transcribe_flag(src, help="audio-only when neither --text nor --textgrid")
     add_language_flag(p)
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     add_grounding_flag(p)

@@ -68,7 +68,8 @@ class Settings:
     """One generation's settings: which methods, their steps, guidance, seed, post-processing, transcription and the
     speech's language."""
     methods: tuple[str, ...] = setting((DEFAULT_METHOD,), label="Methods", flag="--methods", param="methods", page=3,
-                                       cli=None)      # method keys and/or GROUND_TRUTH, in the order shown
+                                       cli="methods", argparse={"nargs": "+"},
+                                       help="default: every generator found")   # method keys and/or GROUND_TRUTH
     steps: Mapping[str, int] = setting(factory=dict, label="Steps", flag="--steps", param="steps", page=4, cli=None,
                                        also=(DDIM_STEPS,))     # per method; missing: its spec's default_steps
     cfg: float = setting(DEFAULT_CFG, label="CFG scale", flag="--cfg", param="cfg", page=5,
@@ -78,8 +79,10 @@ class Settings:
                         help="generation seed: the same seed gives the same motion (default: {default})")
     post: PostProcess = PostProcess()
     transcribe: bool = setting(True, label="Automatic transcription", flag="--no-transcribe", param="auto_text",
-                               page=11, check=switch, cli=None, from_cli=lambda v: not v)
-    # recognise the speech when neither a transcript nor word timings are given (each command words --no-transcribe)
+                               page=11, check=switch, cli="transcribe", from_cli=lambda v: not v,
+                               argparse={"action": "store_true", "default": False},
+                               help="audio-only: do not transcribe the speech")
+    # recognise the speech when neither a transcript nor word timings are given
     language: str = setting(AUTO, label="Language", flag="--language", param="language", page=13, check=check_language,
                             cli="language", argparse={"metavar": "CODE"},
                             help="the speech's language: auto (English first, else the language the multilingual "

@@ -38,7 +38,8 @@ class Setting:
     """One setting as every entry point shows it. `check(value, field, problems)` returns the normalised value or
     None after adding one sentence to `problems` (`values.py`); None: the validator checks it with the methods
     chosen (methods, steps, CFG). `cli`: which shared flag builder adds its flag ("settings": with --cfg and --seed,
-    "post": with --smoothing, "language"), None where each command adds its own (--methods, --no-transcribe).
+    "post": with --smoothing, "language", "methods", "transcribe"), None where none does (the steps: their flags
+    depend on the methods, `arguments.add_settings_flags`).
     `page`: its place among the page handlers' and the API's parameters (a contract: new settings come last)."""
     name: str                                   # the field's name (Asked, Request, Settings or PostProcess)
     label: str                                  # the page's name, in the page's messages: "CFG scale"
