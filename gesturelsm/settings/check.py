@@ -15,6 +15,7 @@ import dataclasses
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from ..errors import InputError
+from .controls import cfg_bound
 from .defaults import Limits, Settings
 from .fields import MISSING
 from .schema import CLI, PAGE, Asked, Names, named, settings_class, settings_of
@@ -76,13 +77,6 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
             whole_number(value, getattr(names, setting), 1, hi, found)
     problems += list(dict.fromkeys(found))
     return None if found else steps
-
-
-def cfg_bound(methods: Sequence[str]) -> float:
-    """The largest CFG scale every chosen method accepts."""
-    from ..backends import SPECS
-
-    return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
 
 
 def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
