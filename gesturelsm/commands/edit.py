@@ -240,11 +240,8 @@ def _edited(a: Checked, args: argparse.Namespace, motion: MotionSequence, audio,
 
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
                                            max_seconds=a.max_seconds)
-    st = a.settings
-    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
-                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
-                    post=st.post, progress=WindowSteps(), language=st.language)
-    return res
+    return pipe.edit(motion, audio, a.regenerate, keys, sr=SAMPLE_RATE, words=words, text=args.text,
+                     progress=WindowSteps(), settings=a.settings)
 
 
 class WindowSteps:

@@ -34,6 +34,18 @@ from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_po
                            speaker_reference, statistics_of_joints)
 
 
+# What a sweep measures, said in its table (the page's Sweep tab, sweep.md, `gesturelsm sweep`): each motion as the
+# method sampled it (`output="raw"`), not the finished motion `generate` and the page show; grounded (unless
+# --grounding off), unsmoothed and not stood in place (`sweep_cell`'s post-processing)
+MEASURES = "raw motion, not the finished motion: {grounded}, unsmoothed"
+
+
+def measures(grounding: bool) -> str:
+    """"raw motion, not the finished motion: grounded, unsmoothed" (or "not grounded"): what a sweep's statistics
+    were measured on (MEASURES)."""
+    return MEASURES.format(grounded="grounded" if grounding else "not grounded")
+
+
 class SweepCancelled(GestureError):
     """The sweep was stopped on request; nothing was written."""
 
@@ -188,7 +200,7 @@ def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
     """One unit of a sweep: (method, steps, CFG, seed) generated, timed and measured."""
     method, steps, cfg, seed = job
     res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method, output="raw")
-    post = PostProcess(smoothing="off", grounding=built.grounding)
+    post = PostProcess(stand_in_place=False, smoothing="off", grounding=built.grounding)     # as MEASURES says
     motion, _ = post.apply(res.motion.slice(0, built.speech.num_frames), built.body)
     world, local = joint_positions(motion, built.body)
     return SweepRun(method, steps, cfg, seed, res.generation_seconds, statistics_of_joints(world, local, built.context),

@@ -116,6 +116,12 @@ class Settings:
 
         return int(self.steps.get(method, method_spec(method).default_steps))
 
+    def one_call(self) -> tuple[str, int, float, int, bool, PostProcess, str]:
+        """(method, its steps, CFG, seed, transcribe, post-processing, language) of the first method: what one
+        method's call takes (`GesturePipeline.edit`)."""
+        method = self.methods[0]
+        return method, self.steps_for(method), self.cfg, self.seed, self.transcribe, self.post, self.language
+
     @property
     def generators(self) -> list[str]:
         """The chosen methods that generate (ground truth is looked up, not generated)."""

@@ -19,7 +19,7 @@ import gradio as gr
 from gesturelsm.backends import label, ours_default
 from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
-from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
+from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult, measures
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
@@ -45,7 +45,8 @@ class PageSweep:
 
 
 def table_html(result: SweepResult) -> str:
-    """`#sweep-table`: time and statistics per cell (mean ± spread over seeds), the speaker's row last."""
+    """`#sweep-table`: time and statistics per cell (mean ± spread over seeds), the speaker's row last; its caption
+    says what was measured (`evaluation.sweep.measures`: raw motion, grounded or not, unsmoothed)."""
     cols = [("time", "time", "s", "Generation time: sampling + decoding, features shared. Better: lower.")] + \
            [(s.key, s.label, s.unit, s.tooltip) for s in (*STATISTICS, SEED_SPREAD)]
     head = "<tr><th>method</th><th>steps</th><th>CFG</th>" + "".join(
@@ -70,6 +71,7 @@ def table_html(result: SweepResult) -> str:
                     "".join(cell(s.key, st[s.key]) for s in STATISTICS) + "<td></td></tr>")
     return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><div {SCROLL}><table>'
             f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table></div><p><small>'
+            f'<span class="sweep-measures">Measured on {html.escape(measures(result.grounding))}.</span> '
             f"{len(result.runs)} motions of {result.speech_seconds:.1f} s in {result.seconds:.1f} s; mean ± standard "
             f"deviation over {result.grid.seeds} seed(s). Transcript: {html.escape(result.text_mode)}. Hover a heading "
             "for what it measures.</small></p></div>")
