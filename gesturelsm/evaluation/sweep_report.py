@@ -15,8 +15,8 @@ import numpy as np
 from ..errors import InputError
 from .motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from ..backends import color, label
-from .sweep import SweepResult, measures
-from .sweep_limits import PLOT_METRICS
+from .sweep import SweepResult
+from .sweep_limits import PLOT_METRICS, measures
 
 FILES = ("sweep.csv", "sweep.md", "sweep.json", "sweep.png")
 if PLOT_METRICS != tuple(s.key for s in (*STATISTICS, SEED_SPREAD)):

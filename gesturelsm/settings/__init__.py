@@ -14,5 +14,5 @@ from .plan import Plan
 
 __all__ = ["Asked", "CLI", "DEFAULTS", "DEFAULT_CFG", "DEFAULT_METHOD", "Limits", "MAX_SECONDS", "MIN_SECONDS",
            "MISSING", "Names", "PAGE", "Plan", "PostProcess", "SEED_MAX", "Setting", "Settings",
-           "check_method_settings", "checked", "checked_object", "grid_problems", "motion_values", "page_params", "setting",
-           "settings_of", "settings_problems"]
+           "check_method_settings", "checked", "checked_object", "grid_problems", "motion_values", "page_params",
+           "setting", "settings_of", "settings_problems"]

@@ -197,5 +197,5 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
 
 
 __all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "asked_of", "cfg_bound", "check_language",
-           "check_method_settings", "check_steps", "checked", "checked_object", "checked_seed", "grid_problems", "seed_problems",
-           "settings_problems", "steps_per_method"]
+           "check_method_settings", "check_steps", "checked", "checked_object", "checked_seed", "grid_problems",
+           "seed_problems", "settings_problems", "steps_per_method"]

@@ -25,7 +25,7 @@ class Offer:
     limits: Any
 
 
-Of = Callable[[Offer], Any]                     # a part of a control that follows the server's methods
+Of = Callable[[Any], Any]                       # a part of a control that follows the server's methods (an Offer)
 Given = Union[Any, Of]                          # a value, or a function of the offer
 
 

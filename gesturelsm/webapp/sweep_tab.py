@@ -19,7 +19,8 @@ import gradio as gr
 from gesturelsm.backends import label, ours_default
 from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
-from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult, measures
+from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
+from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
@@ -110,7 +111,7 @@ class SweepHandlers:
         try:
             with self.pages.running(request) as closed:
                 out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text,
-                                                      auto_text, language), self.limits,
+                                                      transcribe=auto_text, language=language), self.limits,
                                          progress=lambda f, m: progress(f, desc=m),
                                          cancelled=lambda: stop.is_set() or closed.is_set())
         except GestureError as exc:

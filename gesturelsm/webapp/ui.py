@@ -205,8 +205,8 @@ class _Handlers:
 
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr.Markdown]:
     """Speech, transcript and settings (each setting's control as its field says: `webapp/controls.py`, for this
-    server's methods); returns the request's inputs in the handlers' order (`page_params`), the button, the Character upload,
-    the note."""
+    server's methods); returns the request's inputs in the handlers' order (`page_params`), the button, the Character
+    upload, the note."""
     make = controls_of(service)                    # each setting's control as its field says (webapp/controls.py)
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                      elem_id="speech")

@@ -14,8 +14,8 @@ from _support import speech_like
 from gesturelsm.cli import main
 from gesturelsm.errors import InputError
 from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, motion_statistics, speaker_reference
-from gesturelsm.evaluation.sweep import (SweepCancelled, SweepGrid, SweepLimits, check_grid, measures, run_sweep,
-                                         sweep_grid)
+from gesturelsm.evaluation.sweep import SweepCancelled, SweepGrid, SweepLimits, check_grid, run_sweep, sweep_grid
+from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import write_sweep
 from gesturelsm.pipeline import GesturePipeline, finish
 

@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 
 from gesturelsm.evaluation.motion_stats import STATISTICS
-from gesturelsm.evaluation.sweep import MEASURES, SweepGrid, SweepResult, SweepRun, measures
+from gesturelsm.evaluation.sweep import SweepGrid, SweepResult, SweepRun
+from gesturelsm.evaluation.sweep_limits import MEASURES, measures
 from gesturelsm.evaluation.sweep_report import markdown_text, sweep_json
 
 

@@ -1,8 +1,8 @@
 """Each setting is said once, on its field of the settings object (`gesturelsm.settings.fields`): a field added there
-appears in the command line, the validator, the request, the page's controls and handlers, the Gradio API and the
-key of motion made ahead, with no other edit, and a field's control (kind, element id, info, bounds) is the page's.
-The added field runs in a process of its own, the settings object replaced by one with the field before anything
-else is imported (as if the field were written in defaults.py)."""
+appears in the command line, the validator, the request, the sweep's request, the page's controls and handlers, the
+Gradio API and the key of motion made ahead, with no other edit, and a field's control (kind, element id, info,
+bounds) is the page's. The added field runs in a process of its own, the settings object replaced by one with the
+field before anything else is imported (as if the field were written in defaults.py)."""
 from __future__ import annotations
 
 import os
@@ -70,6 +70,16 @@ assert cli == ["--energy must be between 0 and 3 (got -1)."], cli
 req = Request("a.wav", energy=0.5)
 assert check_request(req, ["gesturelsm"], Limits(), [256, 384])[1].energy == 0.5
 assert "Energy" in check_request(Request("a.wav", energy=7), ["gesturelsm"], Limits(), [256, 384])[2][0]
+
+# the sweep's request: a field of its own, checked by the one validator with Generate's words
+from gesturelsm.evaluation.sweep import SweepLimits
+from gesturelsm.serve.sweep import SweepRequest, checked_sweep
+
+assert [f.name for f in dataclasses.fields(SweepRequest)][-1] == "energy"
+problems = []
+checked_sweep(SweepRequest("a.wav", ["gesturelsm"], "1", "2", 1, "bc", energy=7), ["gesturelsm"], SweepLimits(),
+              Limits(), problems)
+assert problems == ["Energy must be between 0 and 3 (got 7)."], problems
 
 # the made-ahead key: motion made with another energy is not taken
 one, two = (Plan(checked(Asked(energy=e), ["gesturelsm"])) for e in (1.0, 2.0))

@@ -48,7 +48,8 @@ def test_the_page_keeps_its_controls():
     assert c["auto_text"].label == "Transcribe automatically when no transcript is given"
     assert c["grounding"].label == "Feet on the ground (planted feet, no drift, on the floor)"
     assert c["in_place"].label == "Stand in place (no horizontal root movement)" and c["in_place"].elem_id is None
-    assert c["language"].label == "Speech language" and c["language"].choices[0] == ("Automatic (English first)", "auto")
+    assert c["language"].label == "Speech language"
+    assert c["language"].choices[0] == ("Automatic (English first)", "auto")
     assert isinstance(c["cfg"], gr.Slider) and (c["cfg"].minimum, c["cfg"].step, c["cfg"].label) == (0.0, 0.1,
                                                                                                      "CFG scale")
     assert c["cfg"].maximum == min(SPECS[m].max_cfg for m in ("gesturelsm", "rectified_flow", "ddim"))
