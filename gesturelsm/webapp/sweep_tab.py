@@ -24,8 +24,10 @@ from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings.schema import named
 
 from .closing import PageWork
+from .controls import page_control
 from .language import language_choice
 from .layout import SCROLL, TYPED_NOTE
 from .player import component as motion_player
@@ -180,9 +182,9 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | 
                 text = gr.Textbox(label="Transcript (optional: recognised automatically without it, as for Generate)",
                                   lines=2, elem_id="sweep-text")
                 note = gr.Markdown(visible=False, elem_id="sweep-text-note")   # typed words kept for new speech
-                auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
-                                        label="Transcribe automatically when no transcript is given")
-                language = language_choice("sweep-language")     # as Generate's #language
+                # Generate's #auto-transcribe and #language, made from their fields (webapp/controls.py)
+                auto_text = page_control(named("transcribe"), elem_id="sweep-auto-transcribe")
+                language = language_choice("sweep-language")
                 chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=shown, label="Methods",
                                           elem_id="sweep-methods")
                 steps = gr.Textbox(" ".join(map(str, DEFAULT_STEPS)), label="Steps (space-separated)",
