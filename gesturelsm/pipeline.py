@@ -40,7 +40,8 @@ from .motion.editing import EditError, Keyframe, edit_spec, fit_speech, keyframe
 from .motion.merge import apply_edit, splice
 from .motion.postprocess import check_smoothing
 from .motion.sequence import FPS, MotionSequence
-from .settings import DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, Settings, check_method_settings
+from .settings import (DEFAULTS, MAX_SECONDS, MIN_SECONDS, Limits, Plan, PostProcess, Settings, check_method_settings,
+                       checked_object)
 from .streaming import GenerationResult, Made, Watch, Window, check_output, generation_seconds, made_each, plan_of, \
     windowed
 from .tokenizer.model import RVQVAE
@@ -289,7 +290,8 @@ class GesturePipeline:
              keyframes: Sequence = (), method: str = DEFAULTS.methods[0], steps: int | None = None,
              cfg: float = DEFAULTS.cfg, seed: int = DEFAULTS.seed, sr: int = SAMPLE_RATE, words: list | None = None,
              text: str | None = None, transcribe: bool = DEFAULTS.transcribe, post: PostProcess = DEFAULTS.post,
-             body=None, progress: Progress | None = None, language: str = DEFAULTS.language) -> GenerationResult:
+             body=None, progress: Progress | None = None, language: str = DEFAULTS.language, *,
+             settings: Settings | None = None) -> GenerationResult:
         """`motion` with the regions of `regenerate` ({region: [(start_s, end_s), ...]}) generated anew from the
         speech it goes with, conditioned on everything kept, and `keyframes` ([(time_s, pose source)], sources as
         motion.editing.keyframe takes them) pinned. The result is as long as `motion` and is the input's values bit
@@ -297,7 +299,11 @@ class GesturePipeline:
         motion at each end, without a jump (motion/merge.py). The regenerated motion is post-processed by `post` as
         a generation is (stand in place, smoothing, feet on the ground on `body`; grounding only when the lower body
         is regenerated, the only region it changes) before it is merged: the input is a finished motion and is not
-        processed again. Only methods whose spec says `inpainting` can edit."""
+        processed again. Only methods whose spec says `inpainting` can edit. `settings`, when given, decides every
+        setting (as for `generate`), checked by the settings' validator; else the keywords do."""
+        if settings is not None:
+            method, steps, cfg, seed, transcribe, post, language = \
+                checked_object(settings, self.methods, self.limits).one_call()
         spec = self.spec(method)
         if not spec.inpainting:
             able = [m for m in self.methods if self.spec(m).inpainting]

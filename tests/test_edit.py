@@ -143,3 +143,39 @@ def test_a_regenerated_lower_body_is_grounded_as_a_generation_is(tiny_pipeline, 
         assert np.array_equal(out.trans[:60], motion.trans[:60]) and np.array_equal(out.trans[180:], motion.trans[180:])
         assert np.array_equal(_joints(out, "upper"), _joints(motion, "upper"))
     assert not np.array_equal(_joints(on, "lower")[60:180], _joints(off, "lower")[60:180])
+
+
+def test_an_edit_takes_the_settings_object_as_generate_does(tiny_pipeline, take, tmp_path):
+    """`settings=Settings(...)` gives the same motion file, byte for byte, as the same settings as keywords."""
+    from gesturelsm.settings import Settings
+
+    speech, motion = take
+    ask, post = {"upper": [(3.0, 5.0)], "lower": [(1.0, 2.5)]}, PostProcess(stand_in_place=True, smoothing="strong")
+    by_keywords = tiny_pipeline.edit(motion, speech, ask, method="gesturelsm", steps=2, cfg=1.5, seed=5, post=post)
+    by_settings = tiny_pipeline.edit(motion, speech, ask, settings=Settings(methods=("gesturelsm",),
+                                                                            steps={"gesturelsm": 2}, cfg=1.5, seed=5,
+                                                                            post=post))
+    paths = [r.motion.save(tmp_path / f"{name}.npz") for name, r in (("kw", by_keywords), ("st", by_settings))]
+    assert paths[0].read_bytes() == paths[1].read_bytes()
+    assert (by_settings.steps, by_settings.cfg, by_settings.seed) == (2, 1.5, 5)
+
+
+@pytest.mark.parametrize("settings, message", [
+    (dict(seed=1.5), "Seed must be a whole number from 0 to 4294967295 (got 1.5; it is not rounded for you)."),
+    (dict(seed=2 ** 40), "Seed must be from 0 to 4294967295 (got 1099511627776)."),
+    (dict(methods=("nope",)), "Unknown method 'nope'"),
+    (dict(post=PostProcess(smoothing="lots")), "Smoothing must be one of"),
+])
+def test_an_edits_settings_object_goes_through_the_one_validator(tiny_pipeline, take, settings, message):
+    """The settings object of an edit is refused as the page's and the command line's values are, each problem with
+    the validator's line (the same words as `settings.checked` gives)."""
+    from gesturelsm.settings import Asked, Settings, checked
+    from gesturelsm.settings.check import asked_of
+
+    speech, motion = take
+    with pytest.raises(InputError) as err:
+        tiny_pipeline.edit(motion, speech, {"upper": [(1.0, 2.0)]}, settings=Settings(**settings))
+    assert message in str(err.value)
+    with pytest.raises(InputError) as same:
+        checked(asked_of(Settings(**settings)), tiny_pipeline.methods)
+    assert str(same.value) == str(err.value) and isinstance(asked_of(Settings()), Asked)

@@ -15,8 +15,8 @@ import contextlib
 
 from ..cluster import add_cluster_argument, check_reachable, connect
 from ..errors import GestureError, UserError
-from ..settings.arguments import (add_language_flag, add_post_flags, add_settings_flags, cli_settings, input_file,
-                                  input_folder, output_folder, refuse)
+from ..settings.arguments import (add_language_flag, add_methods_flag, add_post_flags, add_settings_flags,
+                                  cli_settings, input_file, input_folder, output_folder, refuse)
 from ..settings.values import from_text, real_number, whole_number
 from ..study.design import MODES
 
@@ -31,8 +31,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(NAME, help=HELP, description=__doc__,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--audio-dir", required=True, help="folder of speech files (wav, flac, mp3, ...)")
-    p.add_argument("--methods", nargs="+", default=ours_default(),
-                   help=f"{', '.join(SPECS)}, {GROUND_TRUTH} (needs --beat2) (default: {' '.join(ours_default())})")
+    add_methods_flag(p, default=ours_default(),
+                     help=f"{', '.join(SPECS)}, {GROUND_TRUTH} (needs --beat2) (default: {' '.join(ours_default())})")
     p.add_argument("--out", required=True, help="output folder (videos/, key/, study.json)")
     p.add_argument("--raters", type=from_text, default=10,
                    help="number of rater links (a rerun with more adds links; default: 10)")

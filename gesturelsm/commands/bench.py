@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 
 from ..settings import DEFAULT_CFG
-from ..settings.arguments import input_file, input_folder, output_folder, refuse, threads
+from ..settings.arguments import add_methods_flag, input_file, input_folder, output_folder, refuse, threads
 from ..settings.values import from_text, method_list, real_number, whole_number
 from .eval import checked_grid, write_report
 
@@ -27,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
     b.add_argument("--presets", nargs="+", default=["shipped", "paper"], choices=["shipped", "paper"],
                    help="model sizes to time: the shipped checkpoints and the paper's size")
-    b.add_argument("--methods", nargs="+", default=None, help="default: every generator found")
+    add_methods_flag(b)
     b.add_argument("--steps", nargs="+", default=[1, 2, 4, 8, 20], help="sampling step counts (default: 1 2 4 8 20)")
     b.add_argument("--cfg", type=from_text, default=DEFAULT_CFG, help=f"CFG scale (default: {DEFAULT_CFG:g})")
     b.add_argument("--repeats", type=from_text, default=3, help="timed runs per setting (default: 3)")

@@ -24,7 +24,7 @@ from ..errors import UserError
 from ..progress import Line
 from ..settings import DEFAULT_METHOD, Settings
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, output_file, positive, refuse)
+                                  add_transcribe_flag, cli_settings, input_file, output_file, positive, refuse)
 
 if TYPE_CHECKING:
     from ..motion.sequence import MotionSequence
@@ -57,7 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = g.add_mutually_exclusive_group()
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
-    src.add_argument("--no-transcribe", action="store_true", help="audio-only: do not transcribe the speech")
+    add_transcribe_flag(src)
     add_language_flag(g)
     g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),
                    help="a method whose sampler can hold known latents: "
@@ -240,11 +240,8 @@ def _edited(a: Checked, args: argparse.Namespace, motion: MotionSequence, audio,
 
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
                                            max_seconds=a.max_seconds)
-    st = a.settings
-    res = pipe.edit(motion, audio, a.regenerate, keys, method=args.method, steps=st.steps_for(args.method),
-                    cfg=st.cfg, seed=st.seed, sr=SAMPLE_RATE, words=words, text=args.text, transcribe=st.transcribe,
-                    post=st.post, progress=say, language=st.language)
-    return res
+    return pipe.edit(motion, audio, a.regenerate, keys, sr=SAMPLE_RATE, words=words, text=args.text,
+                     progress=say, settings=a.settings)
 
 
 def _exports(a: Checked, motion: MotionSequence, path: Path, rig) -> None:

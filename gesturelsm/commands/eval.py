@@ -16,7 +16,7 @@ from pathlib import Path
 from ..cluster import add_cluster_argument, check_reachable, connect
 from ..errors import CheckpointError
 from ..settings import CLI, DEFAULT_CFG, Limits, grid_problems
-from ..settings.arguments import input_file, input_folder, output_folder, refuse, threads
+from ..settings.arguments import add_methods_flag, input_file, input_folder, output_folder, refuse, threads
 from ..settings.values import from_text, method_list, real_number, whole_number
 
 NAME = "eval"
@@ -29,7 +29,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    "CFG -> markdown table (paper format) and JSON.")
     p.add_argument("--data", required=True, help="BEAT2-layout folder (smplxflame_30/, wave16k/, textgrid/)")
     p.add_argument("--checkpoints", default=None, help="folder with tokenizer/ and generator/ (default: assets/)")
-    p.add_argument("--methods", nargs="+", default=None, help="default: every generator found")
+    add_methods_flag(p)
     p.add_argument("--steps", nargs="+", default=[1, 2, 4, 8], help="sampling step counts (default: 1 2 4 8)")
     p.add_argument("--cfg", nargs="+", default=[DEFAULT_CFG], help=f"CFG scales (default: {DEFAULT_CFG:g})")
     p.add_argument("--seeds", type=from_text, default=2, help="seeds per clip and setting (default: 2)")

@@ -17,7 +17,8 @@ from ..cluster import add_cluster_argument, check_reachable, connect
 from ..genea.submission import SAMPLES
 from ..settings import DEFAULT_METHOD
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, input_folder, output_file, output_folder, positive, refuse)
+                                  add_transcribe_flag, cli_settings, input_file, input_folder, output_file,
+                                  output_folder, positive, refuse)
 from ..settings.values import from_text, whole_number
 
 MAX_SAMPLES = 100
@@ -43,8 +44,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--samples", type=from_text, default=SAMPLES,
                    help=f"samples per speech file; the leaderboard asks a non-deterministic system for {SAMPLES}")
     s.add_argument("--textgrids", help="folder of <stem>.TextGrid word timings (default: transcribe each speech)")
-    s.add_argument("--no-transcribe", action="store_true",
-                   help="audio-only: do not transcribe the speech when no --textgrids are given")
+    add_transcribe_flag(s, help="audio-only: do not transcribe the speech when no --textgrids are given")
     add_language_flag(s)
     add_settings_flags(s, steps="one")
     s.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS), help="the method to submit")

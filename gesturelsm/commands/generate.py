@@ -19,7 +19,7 @@ from ..constants import MAX_MOTION_SECONDS, SAMPLE_RATE
 from ..progress import Line
 from ..settings import DEFAULT_METHOD, Settings
 from ..settings.arguments import (add_language_flag, add_max_seconds_flag, add_post_flags, add_settings_flags,
-                                  cli_settings, input_file, output_file, positive, refuse)
+                                  add_transcribe_flag, cli_settings, input_file, output_file, positive, refuse)
 
 if TYPE_CHECKING:
     from ..pipeline import GenerationResult
@@ -48,8 +48,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = g.add_mutually_exclusive_group()
     src.add_argument("--text", help="transcript; word timings are aligned automatically")
     src.add_argument("--textgrid", help="Praat TextGrid with a words tier")
-    src.add_argument("--no-transcribe", action="store_true",
-                     help="audio-only: do not transcribe the speech when neither --text nor --textgrid is given")
+    add_transcribe_flag(src, help="audio-only: do not transcribe the speech when neither --text nor --textgrid is "
+                                  "given")
     add_language_flag(g)
     add_settings_flags(g, steps="one")
     g.add_argument("--method", default=DEFAULT_METHOD, choices=list(SPECS),

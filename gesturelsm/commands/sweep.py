@@ -13,11 +13,10 @@ from dataclasses import replace
 
 from ..cluster import add_cluster_argument, check_reachable, connect
 from ..constants import SAMPLE_RATE
-from ..errors import InputError
 from ..progress import Line
-from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, grounding_on,
-                                  input_file, output_folder, positive, refuse, threads)
-from ..settings.check import check_language
+from ..settings.arguments import (add_grounding_flag, add_language_flag, add_max_seconds_flag, add_methods_flag,
+                                  add_transcribe_flag, input_file, output_folder, positive, refuse, threads)
+from ..settings.check import CLI
 from ..settings.values import from_text
 
 say = Line()                    # the progress on stderr: the speech's steps, then the motions (a counted series)
@@ -35,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                                    "and write sweep.csv, sweep.md, sweep.json and sweep.png (a statistic against "
                                    f"generation time). Size bound: {limits.describe()}.")
     p.add_argument("audio", help="speech file (wav, flac, mp3, ...)")
-    p.add_argument("--methods", nargs="+", default=None, help="default: every method the checkpoints provide")
+    add_methods_flag(p, help="default: every method the checkpoints provide")
     p.add_argument("--steps", nargs="+", default=list(DEFAULT_STEPS),
                    help=f"sampling step counts (default: {' '.join(map(str, DEFAULT_STEPS))})")
     p.add_argument("--cfg", nargs="+", default=list(DEFAULT_CFGS),
@@ -44,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     src = p.add_mutually_exclusive_group()
     src.add_argument("--text", default=None, help="transcript (word timings aligned automatically)")
     src.add_argument("--textgrid", default=None, help="Praat TextGrid with a words tier")
-    src.add_argument("--no-transcribe", action="store_true", help="audio-only when neither --text nor --textgrid")
+    add_transcribe_flag(src, help="audio-only when neither --text nor --textgrid")
     add_language_flag(p)
     p.add_argument("--metric", default="wrist_speed", choices=PLOT_METRICS, help="the plot's statistic")
     add_grounding_flag(p)
@@ -64,25 +63,25 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     from ..align.textgrid import read_words
     from ..audio import load_audio
     from ..backends import SPECS, checkpoint_sources
-    from ..evaluation.sweep import SweepLimits, check_grid, run_sweep, sweep_grid
+    from ..evaluation.sweep import SweepLimits, check_grid, run_sweep, sweep_problems
+    from ..evaluation.sweep_limits import sweep_settings
     from ..evaluation.sweep_report import markdown_text, write_sweep
     from ..pipeline import GesturePipeline
 
     limits = SweepLimits()
 
     p: list[str] = []
-    grid = None
-    try:              # the named methods' bounds, or every method's when none are named (each may be loaded)
-        grid = sweep_grid(args.methods or list(SPECS), args.steps, args.cfg, args.seeds, list(SPECS))
-    except InputError as exc:
-        p += str(exc).splitlines()
+    # the settings part by the settings' validator (the flags --methods, --grounding, --no-transcribe, --language have;
+    # the named methods' bounds, or every method's when none are named: each may be loaded), then the grid's lists
+    values = {s.name: s.from_cli(getattr(args, s.dest)) for s in sweep_settings() if hasattr(args, s.dest)}
+    settings, grid = sweep_problems({**values, "methods": args.methods or list(SPECS)}, args.steps, args.cfg,
+                                    args.seeds, list(SPECS), names=CLI, problems=p)
     n_threads = threads(args.threads, p)
     max_work = positive(args.max_work, "--max-work", p)
     max_seconds = positive(args.max_seconds, "--max-seconds", p)
     audio_path = input_file(args.audio, "AUDIO", p)
     textgrid = input_file(args.textgrid, "--textgrid", p) if args.textgrid else None
     out = output_folder(args.out, "--out", p)
-    language = check_language(args.language, "--language", p)
     refuse(p)
     check_reachable(args.cluster)                # before the speech is read and the models load
     if n_threads:
@@ -93,12 +92,12 @@ def run_sweep_cli(args: argparse.Namespace) -> int:
     grid = replace(grid, methods=tuple(dict.fromkeys(args.methods or pipe.methods)))
     check_grid(pipe, grid, len(audio) / SAMPLE_RATE, SweepLimits(limits.max_cells, limits.max_seeds, max_work))
     words = read_words(textgrid) if textgrid else None
-    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=not args.no_transcribe,
-                                 progress=say, language=language)
+    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, transcribe=settings.transcribe,
+                                 progress=say, language=settings.language)
     if speech.transcript:
         print(f'recognised: "{speech.transcript}"', file=sys.stderr, flush=True)
     with connect(args.cluster) if args.cluster else contextlib.nullcontext() as conn:
-        result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=grounding_on(args),
+        result = run_sweep(pipe, speech, grid, keep_motions=False, grounding=settings.post.grounding,
                            progress=say, connection=conn,
                            checkpoints=checkpoint_sources(args.checkpoints))
     files = write_sweep(result, out, args.metric)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -26,9 +27,9 @@ from ..cluster import Connection, Files, Job, Unit, run_units
 from ..constants import Progress
 from ..errors import Cancellable, Cancelled, GestureError, InputError
 from ..pipeline import GesturePipeline, SpeechInput
-from ..settings import CLI, Limits, Names, PostProcess, grid_problems
+from ..settings import CLI, Asked, Limits, Names, PostProcess, Settings, grid_problems, settings_problems
 from ..settings.values import method_list
-from .sweep_limits import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits
+from .sweep_limits import DEFAULT_CFGS, DEFAULT_STEPS, MEASURED_POST, SweepLimits, sweep_settings
 from .motion_stats import (STATISTICS, SpeakerReference, SpeechContext, joint_positions, seed_spread,
                            speaker_reference, statistics_of_joints)
 
@@ -53,13 +54,30 @@ def sweep_grid(methods, steps, cfgs, seeds, available: list[str], limits: SweepL
                settings_limits: Limits = Limits(), names: Names = CLI) -> SweepGrid:
     """A grid from values as sent ("1 2, 4", lists, numbers as text or not): each checked by the settings' validator
     against every chosen method's spec and `settings_limits` (a server's step caps); every problem at once, one line
-    each (InputError)."""
+    each (InputError). `sweep_problems` with the other settings at their defaults."""
     problems: list[str] = []
-    chosen = method_list(methods, available, problems, names.methods)
-    values = grid_problems(chosen or [], steps, cfgs, seeds, limits.max_seeds, settings_limits, names, problems)
-    if problems:
+    _, grid = sweep_problems({"methods": methods}, steps, cfgs, seeds, available, limits, settings_limits, names,
+                             problems)
+    if problems or grid is None:
         raise InputError("\n".join(problems))
-    return SweepGrid(tuple(chosen), *values)
+    return grid
+
+
+def sweep_problems(values: Mapping[str, Any], steps, cfgs, seeds, available: list[str],
+                   limits: SweepLimits = SweepLimits(), settings_limits: Limits = Limits(), names: Names = CLI,
+                   problems: list | None = None) -> tuple[Settings | None, SweepGrid | None]:
+    """(the settings, the grid) of a sweep as sent, every problem added to `problems`, one line each: its settings
+    part (`sweep_settings`: the methods, feet on the ground, transcription, language, any setting added; `values` by
+    the settings' names, those missing at their defaults) by the settings' validator with the words `generate` and
+    the page give, then the grid's lists against the chosen methods (`sweep_grid`'s checks). None where a problem
+    was found."""
+    problems = [] if problems is None else problems
+    settings, found = settings_problems(Asked(**{s.name: values[s.name] for s in sweep_settings() if s.name in values}),
+                                        available, settings_limits, names)
+    problems += found
+    chosen = list(settings.methods) if settings is not None else method_list(values.get("methods"), available, [])
+    grid = grid_problems(chosen or [], steps, cfgs, seeds, limits.max_seeds, settings_limits, names, problems)
+    return settings, (SweepGrid(tuple(chosen or ()), *grid) if grid is not None and chosen else None)
 
 
 def check_grid(pipe, grid: SweepGrid, seconds: float, limits: SweepLimits = SweepLimits()) -> None:
@@ -187,7 +205,7 @@ def sweep_cell(built: SweepBuilt, job: tuple[str, int, float, int]) -> SweepRun:
     """One unit of a sweep: (method, steps, CFG, seed) generated, timed and measured."""
     method, steps, cfg, seed = job
     res = built.pipeline.generate(built.speech, steps=steps, cfg=cfg, seed=seed, method=method, output="raw")
-    post = PostProcess(smoothing="off", grounding=built.grounding)
+    post = PostProcess(**MEASURED_POST, grounding=built.grounding)          # raw motion, as MEASURES says
     motion, _ = post.apply(res.motion.slice(0, built.speech.num_frames), built.body)
     world, local = joint_positions(motion, built.body)
     return SweepRun(method, steps, cfg, seed, res.generation_seconds, statistics_of_joints(world, local, built.context),

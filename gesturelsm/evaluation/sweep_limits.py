@@ -1,10 +1,11 @@
-"""What a sweep may hold and what it runs with when nothing is given, without torch: `gesturelsm sweep --help`, the
-page's Sweep tab and evaluation/sweep.py read them from here."""
+"""What a sweep may hold, what it runs with when nothing is given, which settings it varies, fixes or takes and what
+it measures, without torch: `gesturelsm sweep`, the page's Sweep tab, serve/sweep.py and evaluation/sweep.py read
+them from here."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..settings import DEFAULT_CFG
+from ..settings import DEFAULT_CFG, Setting, settings_of
 
 
 @dataclass(frozen=True)
@@ -27,4 +28,27 @@ PLOT_METRICS = ("bc", "beat_gain", "loudness_gain", "raised_share", "height_p95"
                 "diversity", "foot_skate", "contact_share", "drift_per_min", "root_range", "bob", "penetration",
                 "leg_jerk", "seed_spread")
 
-__all__ = ["DEFAULT_CFGS", "DEFAULT_STEPS", "PLOT_METRICS", "SweepLimits"]
+SWEPT = ("steps", "ddim_steps", "cfg", "seed")          # the settings a sweep's grid varies
+# the post-processing a sweep's measurement fixes (`sweep_cell`): the raw motion, unsmoothed, not stood in place
+MEASURED_POST = {"stand_in_place": False, "smoothing": "off"}
+# what a sweep measures, said in its table (the page's Sweep tab, sweep.md, `gesturelsm sweep`, sweep.json): each
+# motion as the method sampled it (`output="raw"`), not the finished motion `generate` and the page show; grounded
+# unless its grounding setting is off, unsmoothed (MEASURED_POST)
+MEASURES = "raw motion, not the finished motion: {grounded}, unsmoothed"
+
+
+def measures(grounding: bool) -> str:
+    """"raw motion, not the finished motion: grounded, unsmoothed" (or "not grounded"): what a sweep's statistics
+    were measured on (MEASURES)."""
+    return MEASURES.format(grounded="grounded" if grounding else "not grounded")
+
+
+def sweep_settings(cls: type | None = None) -> tuple[Setting, ...]:
+    """The settings a sweep takes one value of (its request's settings part, checked by the settings' validator):
+    every setting of the settings object `cls` but those its grid varies (SWEPT) and those its measurement fixes
+    (MEASURED_POST): the methods, feet on the ground, transcription, language and any setting added."""
+    return tuple(s for s in settings_of(cls) if s.name not in SWEPT and s.name not in MEASURED_POST)
+
+
+__all__ = ["DEFAULT_CFGS", "DEFAULT_STEPS", "MEASURED_POST", "MEASURES", "PLOT_METRICS", "SWEPT", "SweepLimits",
+           "measures", "sweep_settings"]

@@ -16,7 +16,7 @@ from ..errors import InputError
 from .motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from ..backends import color, label
 from .sweep import SweepResult
-from .sweep_limits import PLOT_METRICS
+from .sweep_limits import PLOT_METRICS, measures
 
 FILES = ("sweep.csv", "sweep.md", "sweep.json", "sweep.png")
 if PLOT_METRICS != tuple(s.key for s in (*STATISTICS, SEED_SPREAD)):
@@ -50,9 +50,10 @@ def markdown_text(result: SweepResult) -> str:
     g = result.grid
     head = ["method", "steps", "CFG", "time (s)", *(f"{s.label} ({s.unit})" for s in STATISTICS),
             f"{SEED_SPREAD.label} ({SEED_SPREAD.unit})"]
-    lines = [f"Sweep on {result.speech_seconds:.1f} s of speech ({result.text_mode}); {g.seeds} seed(s) per setting, "
+    lines = [f"Measured on {measures(result.grounding)}.", "",
+             f"Sweep on {result.speech_seconds:.1f} s of speech ({result.text_mode}); {g.seeds} seed(s) per setting, "
              f"mean ± standard deviation over seeds; generation time is sampling + decoding (features shared); "
-             f"feet on the ground {'on' if result.grounding else 'off'}; whole sweep {result.seconds:.1f} s.", "",
+             f"whole sweep {result.seconds:.1f} s.", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in result.rows():
         lines.append("| " + " | ".join([label(r["method"]), str(r["steps"]), f"{r['cfg']:g}", _cell(r, "time"),
@@ -119,7 +120,7 @@ def sweep_json(result: SweepResult) -> dict:
     return {"grid": {"methods": list(g.methods), "steps": list(g.steps), "cfg": list(g.cfgs), "seeds": g.seeds},
             "grounding": result.grounding,
             "speech_seconds": result.speech_seconds, "text_mode": result.text_mode, "seconds": result.seconds,
-            "rows": result.rows(),
+            "measures": measures(result.grounding), "rows": result.rows(),
             "runs": [{"method": r.method, "steps": r.steps, "cfg": r.cfg, "seed": r.seed, "time": r.seconds,
                       **r.statistics} for r in result.runs],
             "speaker": None if result.reference is None else {"source": result.reference.source,

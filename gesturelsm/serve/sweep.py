@@ -6,34 +6,57 @@ deleted like the others; then the sweep, its files and the speech for the player
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, make_dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 import soundfile as sf
 
 from ..constants import SAMPLE_RATE, Progress
-from ..errors import InputError
-from ..evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult, check_grid, run_sweep, sweep_grid
+from ..evaluation.sweep import (DEFAULT_CFGS, DEFAULT_STEPS, SweepGrid, SweepLimits, SweepResult, check_grid, run_sweep,
+                                sweep_problems)
+from ..evaluation.sweep_limits import sweep_settings
 from ..evaluation.sweep_report import PLOT_METRICS, write_sweep
 from ..progress import SWEEP_REQUEST
-from ..settings import DEFAULTS, PAGE
+from ..settings import PAGE, Limits
+from ..settings.check import asked_of
 from ..settings.values import one_of
 from .request import Request
 
+SWEEP_DOC = """A sweep as sent: the speech, the methods, the grid's lists as text ("1 2 4 8") or lists, the seed count,
+the plotted statistic and the transcript, then every setting a sweep takes one value of by its name
+(`evaluation.sweep_limits.sweep_settings`: feet on the ground, transcription, language, any setting added), with its
+default; each checked by the settings' validator, as for Generate."""
 
-@dataclass
-class SweepRequest:
-    """A sweep as sent: lists as text ("1 2 4 8") or lists, numbers as sent."""
-    audio_path: Any
-    methods: Any
-    steps: Any = DEFAULT_STEPS
-    cfgs: Any = DEFAULT_CFGS
-    seeds: Any = 1
-    metric: Any = "wrist_speed"              # the statistic plotted (evaluation.sweep_report.PLOT_METRICS)
-    text: Any = ""
-    transcribe: Any = DEFAULTS.transcribe    # automatic transcript when no text is typed (as Generate)
-    language: Any = DEFAULTS.language        # the speech's language (auto: English, else the one identified)
+
+def sweep_request_class(cls: type | None = None) -> type:
+    """The sweep request's dataclass: its own fields, then one per setting of `sweep_settings(cls)` (the methods are
+    its second field, sent always)."""
+    own = [("audio_path", Any), ("methods", Any), ("steps", Any, field(default=DEFAULT_STEPS)),
+           ("cfgs", Any, field(default=DEFAULT_CFGS)), ("seeds", Any, field(default=1)),
+           ("metric", Any, field(default="wrist_speed")),       # the statistic plotted (sweep_report.PLOT_METRICS)
+           ("text", Any, field(default=""))]
+    settings = [(s.name, Any, field(default=s.default)) for s in sweep_settings(cls) if s.name != "methods"]
+    made = make_dataclass("SweepRequest", [*own, *settings], namespace={"__doc__": SWEEP_DOC})
+    made.__module__ = __name__
+    return made
+
+
+SweepRequest = sweep_request_class()
+
+
+def checked_sweep(req: Any, available: list[str], limits: SweepLimits, settings_limits: Limits,
+                  problems: list[str]) -> tuple[dict[str, Any], SweepGrid | None, str | None]:
+    """(the settings part by name, checked, for the sweep's request; the grid; the statistic), every problem added to
+    `problems` (one line each): the settings part by the settings' validator with Generate's words and the grid's
+    lists (`evaluation.sweep.sweep_problems`). A settings part with a problem is left to its defaults (its problems
+    are said once)."""
+    values = {s.name: getattr(req, s.name) for s in sweep_settings()}
+    settings, grid = sweep_problems(values, req.steps, req.cfgs, req.seeds, available, limits, settings_limits, PAGE,
+                                    problems)
+    metric = one_of(req.metric, "Statistic", PLOT_METRICS, problems)
+    part = {} if settings is None else {s.name: getattr(asked_of(settings), s.name) for s in sweep_settings()}
+    return part, grid, metric
 
 
 @dataclass(frozen=True)
@@ -51,21 +74,14 @@ def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress:
     prog = progress or (lambda f, m: None)
     service.cleanup()
     problems: list[str] = []
-    grid = None
-    try:
-        grid = sweep_grid(req.methods, req.steps, req.cfgs, req.seeds, service.pipeline.methods, limits,
-                          service.limits, PAGE)
-    except InputError as exc:
-        problems += str(exc).splitlines()
-    metric = one_of(req.metric, "Statistic", PLOT_METRICS, problems)
-    methods = grid.methods if grid else service.pipeline.methods[:1]
-    base = Request(req.audio_path, text=req.text, methods=methods, transcribe=req.transcribe, language=req.language,
+    part, grid, metric = checked_sweep(req, list(service.pipeline.methods), limits, service.limits, problems)
+    base = Request(req.audio_path, text=req.text, **{"methods": service.pipeline.methods[:1], **part},
                    render=False, exports=False)
     base, _, audio = service.load(base, extra=problems)
     check_grid(service.pipeline, grid, len(audio) / SAMPLE_RATE, limits)
     plan, speech, notes = service.speech(base, audio, SWEEP_REQUEST.span(prog, "speech"))
     result = run_sweep(service.pipeline, speech, grid, progress=SWEEP_REQUEST.span(prog, "sweep"),
-                       cancelled=cancelled)
+                       cancelled=cancelled, grounding=plan.settings.post.grounding)
     folder = service.folder()
     files = write_sweep(result, folder / "sweep", metric)
     wav = folder / "speech.wav"
@@ -73,4 +89,4 @@ def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress:
     return SweepOutcome(result, folder, files, wav, (*speech.warnings, *notes))
 
 
-__all__ = ["SweepOutcome", "SweepRequest", "run_sweep_request"]
+__all__ = ["SweepOutcome", "SweepRequest", "checked_sweep", "run_sweep_request", "sweep_request_class"]

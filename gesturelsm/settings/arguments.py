@@ -36,10 +36,12 @@ def default_steps_text(setting: str | None = None) -> str:
     return ", ".join(f"{s.label} {s.default_steps}" for s in SPECS.values() if setting in (None, s.steps_setting))
 
 
-def add_flag(p: Any, s: Setting) -> None:
-    """The flag of one setting, with its default, its argparse options and its help (`fields.Setting`)."""
-    options = {"default": s.default, **s.argparse}
-    p.add_argument(s.flag, help=s.help.format(default=s.default), **options)
+def add_flag(p: Any, s: Setting, **own: Any) -> None:
+    """The flag of one setting, with its default, its argparse options and its help (`fields.Setting`); `own`: what
+    one command says otherwise (its own help or default)."""
+    options = {"default": s.default, **s.argparse, **own}
+    options.setdefault("help", s.help.format(default=s.default))
+    p.add_argument(s.flag, **options)
 
 
 def add_settings_flags(p: argparse.ArgumentParser, steps: str = "one", cls: type | None = None) -> None:
@@ -79,6 +81,17 @@ def grounding_on(args: argparse.Namespace) -> bool:
 def add_language_flag(p: argparse.ArgumentParser) -> None:
     """--language: the speech's language for recognition and for aligning a typed transcript."""
     add_flag(p, named("language"))
+
+
+def add_methods_flag(p: Any, default: Any = None, help: str | None = None) -> None:
+    """--methods (several): the methods a command runs; `default` and `help` where the command's differ."""
+    add_flag(p, named("methods"), default=default, **({"help": help} if help is not None else {}))
+
+
+def add_transcribe_flag(p: Any, help: str | None = None) -> None:
+    """--no-transcribe: audio-only when no transcript is given (read back by `cli_asked` as `transcribe`); `p` is
+    usually the group of the transcript's sources (--text, --textgrid); `help` where the command says it otherwise."""
+    add_flag(p, named("transcribe"), **({"help": help} if help is not None else {}))
 
 
 def add_max_seconds_flag(p: argparse.ArgumentParser) -> None:
@@ -193,7 +206,8 @@ def refuse(problems: list[str]) -> None:
         raise InputError("\n".join(dict.fromkeys(problems)))
 
 
-__all__ = ["add_flag", "add_language_flag", "cli_asked", "add_max_seconds_flag", "add_post_flags", "add_settings_flags",
+__all__ = ["add_flag", "add_language_flag", "add_max_seconds_flag", "add_methods_flag", "add_post_flags",
+           "add_settings_flags", "add_transcribe_flag", "cli_asked",
            "cli_settings",
            "default_steps_text", "input_file",
            "input_folder", "output_file", "output_folder", "positive", "refuse", "threads"]

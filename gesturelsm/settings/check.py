@@ -15,8 +15,9 @@ import dataclasses
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from ..errors import InputError
+from .controls import cfg_bound
 from .defaults import Limits, Settings
-from .fields import MISSING
+from .fields import MISSING, walk
 from .schema import CLI, PAGE, Asked, Names, named, settings_class, settings_of
 from .values import check_language, method_list, number_list, real_number, whole_number
 
@@ -76,13 +77,6 @@ def check_steps(asked: Asked, methods: Sequence[str], limits: Limits, names: Nam
             whole_number(value, getattr(names, setting), 1, hi, found)
     problems += list(dict.fromkeys(found))
     return None if found else steps
-
-
-def cfg_bound(methods: Sequence[str]) -> float:
-    """The largest CFG scale every chosen method accepts."""
-    from ..backends import SPECS
-
-    return min((SPECS[m].max_cfg for m in methods if m in SPECS), default=max(s.max_cfg for s in SPECS.values()))
 
 
 def seed_problems(value: Any, names: Names, problems: list[str]) -> int | None:
@@ -151,6 +145,28 @@ def checked(asked: Asked, available: Sequence[str], limits: Limits = Limits(), n
     return settings
 
 
+def asked_of(settings: Any) -> Asked:
+    """The values of a settings object made in code, by the settings' names, as an entry point would send them."""
+    values = {}
+    for path, s in walk(type(settings)):
+        if not s.merged:
+            value = settings
+            for part in path:
+                value = getattr(value, part)
+            values[s.name] = value
+    return Asked(**values)
+
+
+def checked_object(settings: Settings, available: Sequence[str], limits: Limits = Limits(),
+                   names: Names = PAGE) -> Settings:
+    """A settings object made in code (`settings=Settings(...)` of the Python API) checked by the one validator, as
+    the page's and the command line's values are: the settings normalised, or an InputError with every problem."""
+    valid, problems = settings_problems(asked_of(settings), available, limits, names, cls=type(settings))
+    if problems or valid is None:
+        raise InputError("\n".join(problems))
+    return valid
+
+
 def check_method_settings(spec: MethodSpec, steps: Any, cfg: Any, limits: Limits = Limits()) -> None:
     """One method's steps and CFG scale against its spec (the pipeline's own check, for callers of its Python API):
     InputError naming the method."""
@@ -180,6 +196,6 @@ def grid_problems(methods: Sequence[str], steps: Any, cfgs: Any, seeds: Any, max
     return step_list, cfg_list, count
 
 
-__all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "cfg_bound", "check_language", "check_method_settings",
-           "check_steps", "checked", "checked_seed", "grid_problems", "seed_problems",
-           "settings_problems", "steps_per_method"]
+__all__ = ["Asked", "CLI", "MISSING", "Names", "PAGE", "asked_of", "cfg_bound", "check_language",
+           "check_method_settings", "check_steps", "checked", "checked_object", "checked_seed", "grid_problems",
+           "seed_problems", "settings_problems", "steps_per_method"]

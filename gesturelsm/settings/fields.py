@@ -1,20 +1,24 @@
 """What each generation setting is, said once, on the field of the settings object that holds it
 (`defaults.Settings`, `defaults.PostProcess`): its name on the page and in messages, its command-line flag, its page
-handler's and the Gradio API's parameter name, its default, its check and whether it changes the motion.
+handler's and the Gradio API's parameter name, its default, its check, whether it changes the motion and its
+control on the page (`controls.Control`: kind, element id, info, bounds).
 
     cfg: float = setting(DEFAULT_CFG, label="CFG scale", flag="--cfg", param="cfg", page=5, cli="settings",
                          help="classifier-free guidance scale (default: {default:g})")
 
 From these the rest is made (`schema.py`): the validator's field names (`Names`: `PAGE`, `CLI`) and what it
 accepts (`Asked`), the command line's flags (`arguments.add_flag`), the page's and the API's parameters
-(`page_params`), the request's fields (`serve/request.py`) and the key of motion made ahead (`motion_values`, here).
-A field added to the settings object with its `setting(...)` appears in each of them.
+(`page_params`), the page's controls (`webapp/controls.py`), the request's fields (`serve/request.py`) and the key
+of motion made ahead (`motion_values`, here). A field added to the settings object with its `setting(...)` appears in
+each of them.
 """
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping
+
+from .controls import Control, default_control
 
 
 class _Missing:
@@ -38,7 +42,8 @@ class Setting:
     """One setting as every entry point shows it. `check(value, field, problems)` returns the normalised value or
     None after adding one sentence to `problems` (`values.py`); None: the validator checks it with the methods
     chosen (methods, steps, CFG). `cli`: which shared flag builder adds its flag ("settings": with --cfg and --seed,
-    "post": with --smoothing, "language"), None where each command adds its own (--methods, --no-transcribe).
+    "post": with --smoothing, "language", "methods", "transcribe"), None where none does (the steps: their flags
+    depend on the methods, `arguments.add_settings_flags`).
     `page`: its place among the page handlers' and the API's parameters (a contract: new settings come last)."""
     name: str                                   # the field's name (Asked, Request, Settings or PostProcess)
     label: str                                  # the page's name, in the page's messages: "CFG scale"
@@ -53,6 +58,12 @@ class Setting:
     argparse: Mapping[str, Any] = dataclasses.field(default_factory=dict)   # choices, action, metavar
     from_cli: Callable[[Any], Any] = _same      # the flag's value -> the value as sent ("on" -> True)
     merged: bool = False                        # checked into another field (ddim_steps into steps)
+    control: Control | None = None              # the page's control (`controls.py`); None: `default_control`
+
+    @property
+    def page_control(self) -> Control:
+        """The page's control of this setting: its own, else the one its default and choices suggest."""
+        return self.control or default_control(self.name, self.default, self.argparse.get("choices"))
 
     @property
     def dest(self) -> str:

@@ -2,17 +2,15 @@
 or one of the recogniser's languages."""
 from __future__ import annotations
 
-import gradio as gr
+from typing import Any
 
-from gesturelsm.asr.languages import LANGUAGES
-from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings.schema import named
 
-from .raw_inputs import pass_through
+from .controls import page_control
 
 
-def language_choice(elem_id: str = "language") -> gr.Dropdown:
+def language_choice(elem_id: str = "language") -> Any:
     """A dropdown whose value goes to the request as sent (the settings' validator checks it): the Generate tab's
-    `#language` and the Sweep tab's `#sweep-language`, the same choices and default."""
-    return pass_through(gr.Dropdown([("Automatic (English first)", "auto"), *((f"{n} ({c})", c) for c, n in
-                                                                             LANGUAGES.items())],
-                                    value=DEFAULTS.language, label="Speech language", elem_id=elem_id))
+    `#language` and the Sweep tab's `#sweep-language`, the same choices and default (the language setting's control,
+    `webapp/controls.py`)."""
+    return page_control(named("language"), elem_id=elem_id)

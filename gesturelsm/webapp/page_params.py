@@ -9,7 +9,7 @@ Gradio reads a handler's positional parameters for the API's names, its defaults
 `gr.Request` and `gr.Progress` only to positional parameters it recognises by annotation and default; the handler made
 here has exactly that signature and hands the body `sent`: {parameter: value as sent}. A setting added to the settings
 object is a parameter of every handler (optional, with its default) and of the API, and a control of the page
-(`control`), with no other edit.
+(`webapp/controls.py`), with no other edit.
 """
 from __future__ import annotations
 
@@ -19,9 +19,7 @@ from typing import Any, Callable, Mapping
 import gradio as gr
 
 from gesturelsm.serve.request import Request
-from gesturelsm.settings import Setting, page_params, settings_of
-
-from .raw_inputs import pass_through
+from gesturelsm.settings import page_params, settings_of
 
 OWN = {"audio": "audio_path", "text": "text", "textgrid": "textgrid_path", "size": "size"}   # the request's own
 
@@ -73,19 +71,4 @@ def make_request(sent: Mapping[str, Any], **more: Any) -> Request:
     return Request(**{OWN.get(p) or by_param[p]: v for p, v in sent.items()}, **more)
 
 
-def control(s: Setting) -> Any:
-    """A control of the page for a setting that has no control of its own: a checkbox for a switch, choices for a
-    setting with choices, a number box for a number, else a text box; its value goes to the checks as sent."""
-    choices = s.argparse.get("choices")
-    if isinstance(s.default, bool):
-        made = gr.Checkbox(value=s.default, label=s.label, elem_id=s.name.replace("_", "-"))
-    elif choices:
-        made = gr.Radio(list(choices), value=s.default, label=s.label, elem_id=s.name.replace("_", "-"))
-    elif isinstance(s.default, (int, float)):
-        made = gr.Number(value=s.default, label=s.label, elem_id=s.name.replace("_", "-"))
-    else:
-        made = gr.Textbox(value=s.default, label=s.label, elem_id=s.name.replace("_", "-"))
-    return pass_through(made)
-
-
-__all__ = ["OWN", "control", "make_request", "page_handler"]
+__all__ = ["OWN", "make_request", "page_handler"]

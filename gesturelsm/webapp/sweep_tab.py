@@ -20,11 +20,14 @@ from gesturelsm.backends import label, ours_default
 from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
+from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
+from gesturelsm.settings.schema import named
 
 from .closing import PageWork
+from .controls import page_control
 from .language import language_choice
 from .layout import SCROLL, TYPED_NOTE
 from .player import component as motion_player
@@ -45,7 +48,8 @@ class PageSweep:
 
 
 def table_html(result: SweepResult) -> str:
-    """`#sweep-table`: time and statistics per cell (mean ± spread over seeds), the speaker's row last."""
+    """`#sweep-table`: time and statistics per cell (mean ± spread over seeds), the speaker's row last; its caption
+    says what was measured (`evaluation.sweep.measures`: raw motion, grounded or not, unsmoothed)."""
     cols = [("time", "time", "s", "Generation time: sampling + decoding, features shared. Better: lower.")] + \
            [(s.key, s.label, s.unit, s.tooltip) for s in (*STATISTICS, SEED_SPREAD)]
     head = "<tr><th>method</th><th>steps</th><th>CFG</th>" + "".join(
@@ -70,6 +74,7 @@ def table_html(result: SweepResult) -> str:
                     "".join(cell(s.key, st[s.key]) for s in STATISTICS) + "<td></td></tr>")
     return (f'<div id="sweep-table" data-state="ready" data-cells="{len(result.rows())}"><div {SCROLL}><table>'
             f'<thead>{head}</thead><tbody>{"".join(body)}</tbody></table></div><p><small>'
+            f'<span class="sweep-measures">Measured on {html.escape(measures(result.grounding))}.</span> '
             f"{len(result.runs)} motions of {result.speech_seconds:.1f} s in {result.seconds:.1f} s; mean ± standard "
             f"deviation over {result.grid.seeds} seed(s). Transcript: {html.escape(result.text_mode)}. Hover a heading "
             "for what it measures.</small></p></div>")
@@ -108,7 +113,7 @@ class SweepHandlers:
         try:
             with self.pages.running(request) as closed:
                 out = self.service.sweep(SweepRequest(audio_path, methods, steps, cfgs, seeds, metric, text,
-                                                      auto_text, language), self.limits,
+                                                      transcribe=auto_text, language=language), self.limits,
                                          progress=lambda f, m: progress(f, desc=m),
                                          cancelled=lambda: stop.is_set() or closed.is_set())
         except GestureError as exc:
@@ -177,9 +182,9 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | 
                 text = gr.Textbox(label="Transcript (optional: recognised automatically without it, as for Generate)",
                                   lines=2, elem_id="sweep-text")
                 note = gr.Markdown(visible=False, elem_id="sweep-text-note")   # typed words kept for new speech
-                auto_text = gr.Checkbox(value=DEFAULTS.transcribe, elem_id="sweep-auto-transcribe",
-                                        label="Transcribe automatically when no transcript is given")
-                language = language_choice("sweep-language")     # as Generate's #language
+                # Generate's #auto-transcribe and #language, made from their fields (webapp/controls.py)
+                auto_text = page_control(named("transcribe"), elem_id="sweep-auto-transcribe")
+                language = language_choice("sweep-language")
                 chosen = gr.CheckboxGroup([(label(m), m) for m in methods], value=shown, label="Methods",
                                           elem_id="sweep-methods")
                 steps = gr.Textbox(" ".join(map(str, DEFAULT_STEPS)), label="Steps (space-separated)",

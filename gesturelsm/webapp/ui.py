@@ -16,30 +16,27 @@ from pathlib import Path
 
 import gradio as gr
 
-from gesturelsm.backends import SPECS, STEPS_SETTINGS, label, ours_default
 from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
-from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
-from gesturelsm.settings import DEFAULTS, page_params, settings_of
-from gesturelsm.settings.check import cfg_bound
+from gesturelsm.settings import page_params, settings_of
 
 from . import edit_section, live, live_socket, stats_view, sweep_tab, videos
 from .layout import TIMING_WIDTHS as WIDTHS
 from .aside import aside
 from .character import character_upload, choose, rig_downloads
 from .closing import PageWork
+from .controls import controls_of
 from .demo import Demo
 from .downloads import Downloads
 from . import words as page_words
-from .language import language_choice
 from ..live.characters import LiveCharacters
-from .page_params import control, make_request, page_handler
+from .page_params import make_request, page_handler
 from .player import component as motion_player
-from .raw_inputs import numeric_choices, pass_through
+from .raw_inputs import numeric_choices
 
 log = logging.getLogger("gesturelsm.app")
 LIVE_STREAMS = 2                # live microphone streams at once (each takes ~1/4 of a core); more get "busy"
@@ -206,67 +203,34 @@ class _Handlers:
         return (str(out.video), out.table, out.summary, *self.download_files(out))
 
 
-def _step_slider(service: GestureService, setting: str) -> gr.Slider:
-    """The slider of one step setting: up to the most steps this server accepts for the methods it drives, starting at
-    the first one's default (each method's spec; the server's caps, ServiceSettings.limits)."""
-    specs = [SPECS[m] for m in service.pipeline.methods if m in SPECS and SPECS[m].steps_setting == setting] or \
-        [s for s in SPECS.values() if s.steps_setting == setting]
-    hi = max(service.limits.max_steps(s) for s in specs)
-    return pass_through(gr.Slider(1, hi, value=specs[0].default_steps, step=1, label=STEPS_SETTINGS[setting],
-                                  info="for " + ", ".join(s.label for s in specs)))
-
-
-def _methods_info(methods: list[str]) -> str | None:
-    """What the choices' specs say a visitor should know: the authors' released weights run in our windowing, and
-    the methods that generate no face."""
-    specs = [SPECS[m] for m in methods if m in SPECS]
-    notes = ["Authors' weights: their released models; long speech uses our windowing with a neutral first seed."] \
-        if any(s.imported for s in specs) else []
-    faceless = [s.label for s in specs if "face" not in s.regions]
-    if faceless:
-        notes.append(f"{', '.join(faceless)} generate no face, so the face stays neutral.")
-    return " ".join(notes) or None
-
-
 def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr.Markdown]:
-    """Speech, transcript and settings (defaults and bounds from `gesturelsm.settings.DEFAULTS` and the method
-    specs); returns the request's inputs in the handlers' order (`page_params`), the button, the Character upload,
-    the note."""
-    choices = [(label(m), m) for m in service.methods]
-    shown = [m for m in ours_default() if m in service.methods][:3]
+    """Speech, transcript and settings (each setting's control as its field says: `webapp/controls.py`, for this
+    server's methods); returns the request's inputs in the handlers' order (`page_params`), the button, the Character
+    upload, the note."""
+    make = controls_of(service)                    # each setting's control as its field says (webapp/controls.py)
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
                      elem_id="speech")
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
     note = gr.Markdown(visible=False, elem_id="transcript-note")     # typed words kept for new speech (words.py)
-    auto_text = pass_through(gr.Checkbox(value=DEFAULTS.transcribe, elem_id="auto-transcribe",
-                                         label="Transcribe automatically when no transcript is given"))
-    language = language_choice()
+    auto_text, language = make("auto_text"), make("language")
     textgrid = gr.File(label="Word timings as a TextGrid (optional, instead of automatic timing)",
                        file_types=[".TextGrid", ".textgrid"], type="filepath")
-    methods = pass_through(gr.CheckboxGroup(choices, value=shown, label="Methods shown side by side",
-                                            elem_id="methods", info=_methods_info(service.methods)))
+    methods = make("methods")
     character = character_upload()
     with gr.Row():
-        steps = _step_slider(service, "steps")
-        cfg = pass_through(gr.Slider(0.0, cfg_bound(service.pipeline.methods), value=DEFAULTS.cfg, step=0.1,
-                                     label="CFG scale"))
+        steps, cfg = make("steps"), make("cfg")
     with gr.Row():
-        ddim_steps = _step_slider(service, "ddim_steps")
-        seed = pass_through(gr.Number(value=DEFAULTS.seed, precision=0, label="Seed"))
+        ddim_steps, seed = make("ddim_steps"), make("seed")
     with gr.Accordion("Options", open=False):
-        grounding = pass_through(gr.Checkbox(value=DEFAULTS.post.grounding, elem_id="grounding",
-                                             label="Feet on the ground (planted feet, no drift, on the floor)"))
-        in_place = pass_through(gr.Checkbox(value=DEFAULTS.post.stand_in_place,
-                                            label="Stand in place (no horizontal root movement)"))
-        smoothing = pass_through(gr.Radio(list(SMOOTHING_WINDOWS), value=DEFAULTS.post.smoothing, label="Smoothing"))
+        grounding, in_place, smoothing = make("grounding"), make("in_place"), make("smoothing")
         size = numeric_choices(gr.Dropdown([(f"{s} x {s} per body", s) for s in VIDEO_SIZES], value=DEFAULT_SIZE,
                                            label="Video size"), VIDEO_SIZES)
         controls = dict(audio=audio, text=text, textgrid=textgrid, methods=methods, steps=steps, cfg=cfg, seed=seed,
                         ddim_steps=ddim_steps, in_place=in_place, smoothing=smoothing, size=size, auto_text=auto_text,
                         grounding=grounding, language=language)
-        controls |= {s.param: control(s) for s in settings_of() if s.param not in controls}   # a setting's own
+        controls |= {s.param: make(s.param) for s in settings_of() if s.param not in controls}   # a setting's own
     button = gr.Button("Generate gestures", variant="primary", elem_id="generate")
     ex = _examples()
     if ex:

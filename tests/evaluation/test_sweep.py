@@ -15,6 +15,7 @@ from gesturelsm.cli import main
 from gesturelsm.errors import InputError
 from gesturelsm.evaluation.motion_stats import STATISTICS, SpeechContext, motion_statistics, speaker_reference
 from gesturelsm.evaluation.sweep import SweepCancelled, SweepGrid, SweepLimits, check_grid, run_sweep, sweep_grid
+from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import write_sweep
 from gesturelsm.pipeline import GesturePipeline, finish
 
@@ -183,7 +184,7 @@ def test_sweep_times_leave_out_each_methods_warm_up(pipe, wav):
     assert {(m, c == 1.0) for m, _, c, _ in untimed} == {(m, c == 1.0) for m, _, c, _ in timed}
 
 
-def test_sweep_grounding_off_measures_the_samplers_own_motion(pipe, wav, tmp_path, eval_assets):
+def test_sweep_grounding_off_measures_the_samplers_own_motion(pipe, wav, tmp_path, eval_assets, capsys):
     from gesturelsm.audio import load_audio
 
     out = tmp_path / "off"
@@ -200,10 +201,14 @@ def test_sweep_grounding_off_measures_the_samplers_own_motion(pipe, wav, tmp_pat
         assert got["foot_skate"] == pytest.approx(want["foot_skate"]) and got["bob"] == pytest.approx(want["bob"])
         assert result.grounding is grounding
         write_sweep(result, out / str(grounding))
-        assert f"feet on the ground {'on' if grounding else 'off'}" in (out / str(grounding) / "sweep.md").read_text()
+        md = (out / str(grounding) / "sweep.md").read_text()      # the table says what it measured (MEASURES)
+        said = f"raw motion, not the finished motion: {'grounded' if grounding else 'not grounded'}, unsmoothed"
+        assert md.startswith(f"Measured on {said}.\n") and measures(grounding) == said
         assert json.loads((out / str(grounding) / "sweep.json").read_text())["grounding"] is grounding
     assert main(["sweep", str(wav), "--checkpoints", str(eval_assets), "--methods", "ddim", "--steps", "2",
                  "--cfg", "2", "--seeds", "1", "--no-transcribe", "--grounding", "off", "--out", str(out / "cli")]) == 0
     rep = json.loads((out / "cli" / "sweep.json").read_text())
+    assert "Measured on raw motion, not the finished motion: not grounded, unsmoothed." in capsys.readouterr().out
+    assert rep["measures"] == measures(False)
     assert rep["grounding"] is False and rep["runs"][0]["bob"] == pytest.approx(
         motion_statistics(raw, None, context)["bob"])

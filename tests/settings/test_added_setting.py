@@ -1,7 +1,8 @@
 """Each setting is said once, on its field of the settings object (`gesturelsm.settings.fields`): a field added there
-appears in the command line, the validator, the request, the page's controls and handlers, the Gradio API and the
-key of motion made ahead, with no other edit. The added field runs in a process of its own, the settings object
-replaced by one with the field before anything else is imported (as if the field were written in defaults.py)."""
+appears in the command line, the validator, the request, the sweep's request, the page's controls and handlers, the
+Gradio API and the key of motion made ahead, with no other edit, and a field's control (kind, element id, info,
+bounds) is the page's. The added field runs in a process of its own, the settings object replaced by one with the
+field before anything else is imported (as if the field were written in defaults.py)."""
 from __future__ import annotations
 
 import os
@@ -18,16 +19,24 @@ import argparse, dataclasses, inspect
 from types import SimpleNamespace
 
 from gesturelsm.settings import schema
-from gesturelsm.settings.defaults import Settings
+from gesturelsm.settings.controls import Control
+from gesturelsm.settings.defaults import DEFAULT_CFG, Settings
 from gesturelsm.settings.fields import setting
 from gesturelsm.settings.values import from_text, real_number
 
 
 @dataclasses.dataclass(frozen=True)
 class WithEnergy(Settings):
+    # an existing field whose control says other bounds, step and info: the page's CFG slider follows it
+    cfg: float = setting(DEFAULT_CFG, label="CFG scale", flag="--cfg", param="cfg", page=5,
+                         argparse={"type": from_text}, help="classifier-free guidance scale (default: {default:g})",
+                         control=Control("slider", "cfg-box", info="guidance, retold", step=0.5,
+                                         bounds=lambda offer: (0.5, 9.0)))
     energy: float = setting(1.0, label="Energy", flag="--energy", param="energy",
                             check=lambda v, f, p: real_number(v, f, 0.0, 3.0, p), argparse={"type": from_text},
-                            help="how much the body moves (default: {default:g})")
+                            help="how much the body moves (default: {default:g})",
+                            control=Control("slider", "energy", info="how much the body moves", step=0.25,
+                                            bounds=lambda offer: (0.0, 3.0)))
 
 
 schema.Settings = WithEnergy                 # the shipped settings object, with the field added
@@ -62,6 +71,16 @@ req = Request("a.wav", energy=0.5)
 assert check_request(req, ["gesturelsm"], Limits(), [256, 384])[1].energy == 0.5
 assert "Energy" in check_request(Request("a.wav", energy=7), ["gesturelsm"], Limits(), [256, 384])[2][0]
 
+# the sweep's request: a field of its own, checked by the one validator with Generate's words
+from gesturelsm.evaluation.sweep import SweepLimits
+from gesturelsm.serve.sweep import SweepRequest, checked_sweep
+
+assert [f.name for f in dataclasses.fields(SweepRequest)][-1] == "energy"
+problems = []
+checked_sweep(SweepRequest("a.wav", ["gesturelsm"], "1", "2", 1, "bc", energy=7), ["gesturelsm"], SweepLimits(),
+              Limits(), problems)
+assert problems == ["Energy must be between 0 and 3 (got 7)."], problems
+
 # the made-ahead key: motion made with another energy is not taken
 one, two = (Plan(checked(Asked(energy=e), ["gesturelsm"])) for e in (1.0, 2.0))
 assert motion_key("upload", "speech", one) != motion_key("upload", "speech", two)
@@ -82,7 +101,11 @@ h = _Handlers.__new__(_Handlers)
 with gr.Blocks() as demo:
     inputs, button, _, _ = _input_column(fake)
     button.click(h.generate, inputs, gr.JSON(), api_name="generate")
-assert inputs[-1].label == "Energy" and inputs[-1].value == 1.0
+assert inputs[-1].label == "Energy" and inputs[-1].value == 1.0 and isinstance(inputs[-1], gr.Slider)
+assert (inputs[-1].elem_id, inputs[-1].info, inputs[-1].maximum, inputs[-1].step) == \
+    ("energy", "how much the body moves", 3.0, 0.25)
+cfg = inputs[page_params().index("cfg")]
+assert (cfg.elem_id, cfg.info, cfg.minimum, cfg.maximum, cfg.step) == ("cfg-box", "guidance, retold", 0.5, 9.0, 0.5)
 api = demo.get_api_info()["named_endpoints"]["/generate"]["parameters"]
 assert [p["parameter_name"] for p in api] == list(page_params())
 assert api[-1]["parameter_has_default"] and api[-1]["parameter_default"] == 1.0

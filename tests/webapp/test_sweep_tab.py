@@ -68,6 +68,7 @@ def test_page_sweep_shows_the_numbers_gesturelsm_sweep_writes(page_sweep, tiny_a
     assert plot.endswith("sweep.png") and sorted(p.rsplit("/", 1)[1] for p in files) == \
         ["sweep.csv", "sweep.json", "sweep.md", "sweep.png"]
     assert len(pick["choices"]) == 8 and pick["value"] == "0"
+    assert "Measured on raw motion, not the finished motion: grounded, unsmoothed." in table    # what it measured
 
 
 def test_a_sweep_run_opens_in_the_player_as_its_own_motion(page_sweep):
