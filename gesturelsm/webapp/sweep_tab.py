@@ -169,7 +169,8 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | 
         gr.Markdown("Tune steps and CFG by the numbers: every combination of the methods, step counts and CFG scales "
                     "is generated once per seed from this speech (its features computed once), timed and measured. "
                     f"Size of a sweep on this server: {limits.describe()}. The command line does the same with "
-                    "`gesturelsm sweep` (docs/SWEEP.md).")
+                    "`gesturelsm sweep` (docs/SWEEP.md)." + (f" {service.generation.sweep_note}"
+                                                              if service.generation.sweep_note else ""))
         with gr.Row():
             with gr.Column(scale=1):
                 audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech",

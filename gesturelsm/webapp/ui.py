@@ -330,7 +330,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
         manager, routes, characters = None, [], LiveCharacters(service.workdir, body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
-            service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)
+            service.set_busy(lambda: manager.active > 0)          # live streams keep their cores (serve/ahead.py)
             routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
                                        socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service, pages=h.pages)
