@@ -126,6 +126,7 @@ class ReplicaGeneration:
         reply = self.call("edit", sent, method, start, end, regions, seed,
                           time.perf_counter() - result.job.started)
         folder = root_folder(result) / reply.result.job.folder.name
+        folder.mkdir(parents=True, exist_ok=True)
         out = _receive(reply, folder)
         prog(1.0, "done")
         return replace(out, previous=result)
