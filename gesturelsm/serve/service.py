@@ -13,8 +13,9 @@ post-processing are the library's one request flow (`pipeline.generate_each`, `s
 the result after each method (`serve/progressive.py`). The service is composed: the upload's checks and its speech
 (`serve/intake.py`), the request folders (`serve/names.py`), the runs made ahead (`serve/ahead.py`), the render queue
 (`serve/renders.py`), and the port its requests, edits, sweeps, videos and downloads are made through
-(`serve/port.py` `Generation`: in this process, `serve/local.py`, or on Ray Serve replicas, `serve/replicated.py`). A request run with `render=False` returns its `Result` at once; `render(result)` and
-`export(result)` then return new results with the video and the downloads (`serve/request.py`). Every problem a
+(`serve/port.py` `Generation`: in this process, `serve/local.py`, or on Ray Serve replicas, `serve/replicated.py`).
+A request run with `render=False` returns its `Result` at once; `render(result)` and `export(result)` then return new
+results with the video and the downloads (`serve/request.py`). Every problem a
 visitor can fix raises an `errors.GestureError` with a message meant for the page.
 """
 from __future__ import annotations

@@ -47,6 +47,7 @@ from gesturelsm.motion.sequence import MotionSequence
 from gesturelsm.retarget import Character, Ground, SourceBody, retarget
 from gesturelsm.retarget.grounding import CharacterStreamGrounder
 from gesturelsm.retarget.solve import prepare
+from gesturelsm.serve.names import request_name
 
 from .character import bone_order, face_channels, face_morph
 from .player.component import file_url
@@ -94,7 +95,7 @@ class LiveCharacters:
 
     def _add(self, character: Character) -> tuple[str, LiveEntry]:
         entry = LiveEntry(character, hashlib.sha1(character.path.read_bytes()).hexdigest(),
-                          self.workdir / f"req-{secrets.token_hex(16)}")
+                          self.workdir / request_name())
         entry.serve()
         token = secrets.token_urlsafe(24)
         with self._lock:

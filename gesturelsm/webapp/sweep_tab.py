@@ -21,6 +21,7 @@ from gesturelsm.errors import GestureError
 from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, format_value
 from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
+from gesturelsm.serve.names import BODIES
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
 
@@ -149,7 +150,7 @@ class SweepHandlers:
             self._refuse("This sweep kept no motions to play.")
         return player_payload([r.motion], [f"{label(r.method)} {r.steps} steps CFG {r.cfg:g} seed {r.seed}"],
                               [r.method], self.service.body, state.folder / f"run-{int(run)}",
-                              self.service.workdir / "player-bodies", url=motion_player.file_url, audio=state.wav)
+                              self.service.workdir / BODIES, url=motion_player.file_url, audio=state.wav)
 
 
 def typed_note(text: str | None):

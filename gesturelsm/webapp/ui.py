@@ -22,6 +22,7 @@ from gesturelsm.errors import GestureError
 from gesturelsm.motion.postprocess import SMOOTHING_WINDOWS
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
+from gesturelsm.serve.names import BODIES
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import DEFAULTS, page_params, settings_of
@@ -331,7 +332,7 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
             service.set_busy(lambda: manager.active > 0)          # live streams keep their cores (serve/ahead.py)
-            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
+            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / BODIES,
                                        socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service, pages=h.pages)
         with gr.Accordion("How it works, and the model's limits", open=False):
