@@ -16,8 +16,9 @@ PACKAGE = Path(__file__).resolve().parents[1] / "gesturelsm"
 FLOORS: list[set[str]] = [
     {"constants", "errors", "lazy", "memo"},                   # conventions, the error family, names on first use,
                                                                # a memo of recent results
-    {"safe_load", "progress"},                                 # safe loading; progress reports (spans, stages,
-                                                               # the command line's renderer)
+    {"safe_load", "progress", "request_files"},                # safe loading; progress reports (spans, stages,
+                                                               # the command line's renderer); the server's folder
+                                                               # and file names
     {"motion", "audio", "checkpoint", "flows", "kernels",      # motion data, speech input (what a file is, reading
      "cluster"},                                               # it), files, the methods, fast CPU kernels; units
                                                                # of work here or as Ray tasks (no Ray until asked)

@@ -48,6 +48,7 @@ from ..export.alive import Blinker
 from ..export.character_payload import bone_order, face_channels, face_morph
 from ..export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from ..motion.sequence import MotionSequence
+from ..request_files import request_name
 from ..retarget import Character, Ground, SourceBody, retarget
 from ..retarget.grounding import CharacterStreamGrounder
 from ..retarget.solve import prepare
@@ -99,7 +100,7 @@ class LiveCharacters:
 
     def _add(self, character: Character) -> tuple[str, LiveEntry]:
         entry = LiveEntry(character, hashlib.sha1(character.path.read_bytes()).hexdigest(),
-                          self.workdir / f"req-{secrets.token_hex(16)}", self.url)
+                          self.workdir / request_name(), self.url)
         entry.serve()
         token = secrets.token_urlsafe(24)
         with self._lock:

@@ -6,7 +6,6 @@ its video and downloads are made by `GestureService.render` and `.export` as a g
 """
 from __future__ import annotations
 
-import secrets
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -19,6 +18,7 @@ from ..constants import Progress
 from ..errors import InputError
 from ..motion.regions import GENERATED_REGIONS
 from ..settings.check import checked_seed
+from ..request_files import edit_name
 from .request import EditTiming, Result
 
 EDITED = ", edited"          # appended once to an edited motion's label (player and video)
@@ -77,7 +77,7 @@ def edit_result(pipeline, result: Result | None, method: str, start, end, region
     res = pipeline.edit(result.motions[method], result.speech, {r: [(start, end)] for r in chosen},
                         method=method, steps=plan.steps_for(method), cfg=plan.settings.cfg, seed=seed,
                         post=plan.settings.post, body=body, progress=progress)
-    folder = root_folder(result) / f"edit-{len(result.edits) + 1}-{secrets.token_hex(4)}"
+    folder = root_folder(result) / edit_name(len(result.edits) + 1)
     folder.mkdir(parents=True)
     motions = {**result.motions, method: res.motion}
     i = list(result.motions).index(method)

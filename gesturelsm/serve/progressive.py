@@ -1,6 +1,7 @@
 """One request's result as it grows, for the page that shows each method the moment its motion exists.
 
-`stream_request(service, req)` yields `Result`s: the first once the speech is prepared (no motion yet, every method
+`stream_request(shop, req)` (`shop`: the `Workshop` of the server's pipeline, checks, runs made ahead and request
+folders) yields `Result`s: the first once the speech is prepared (no motion yet, every method
 `pending`; automatic words may still be being recognised: the first method's generation starts on the windows whose
 words are final, gesturelsm/pipelined.py, and the results say the finished speech's text mode once they are known),
 then one per method made, fastest first (`GesturePipeline.run_order`), each holding every motion made so
@@ -33,7 +34,9 @@ from ..motion.sequence import MotionSequence
 from ..pipeline import GROUND_TRUTH, Made, Plan, SpeechInput
 from ..progress import REQUEST
 from .ahead import Cancelled, Run
+from .intake import SPEECH_AHEAD
 from .request import RenderJob, Request, Result, timing_rows
+from .workshop import Workshop
 
 log = logging.getLogger("gesturelsm.app")
 
@@ -41,8 +44,6 @@ log = logging.getLogger("gesturelsm.app")
 MADE_AHEAD = ("Made ahead: generation started after the upload with these settings, before Generate was clicked "
               "(the same settings and seed make the same motion; the table's times are the generation's own, spent "
               "before the click: its rows say \"made ahead\").")
-SPEECH_AHEAD = ("The speech was prepared when it was uploaded, before Generate was clicked (audio features, word "
-                "timings, the automatic transcript): the table shows the time each took then.")
 WORDS_AHEAD = ("The words were recognised before Generate was clicked (at the upload, or for an earlier request of the "
                "same speech): the table shows the time their transcription took then.")
 
@@ -123,38 +124,39 @@ class Growing:
                       previews=dict([preview]) if preview is not None and preview[0] in pending else {})
 
 
-def stream_request(service, req: Request, progress: Progress | None = None,
+def stream_request(shop: Workshop, req: Request, progress: Progress | None = None,
                    audio: np.ndarray | None = None, previews: bool = False) -> Iterator[Result]:
     """The request's result after the speech is prepared and after each method, with `previews` also as the first
-    method's windows come (module docstring); `service` is the `GestureService` whose checks, prepared speech, motion
-    made ahead, pipeline and request folders it uses."""
-    with service.ahead.generating():                     # no motion is made ahead while a request generates
-        yield from _stream(service, req, progress, audio, previews)
+    method's windows come (module docstring), made with `shop`'s checks, prepared speech, motion made ahead,
+    pipeline and request folders."""
+    with shop.ahead.generating():                        # no motion is made ahead while a request generates
+        yield from _stream(shop, req, progress, audio, previews)
 
 
-def _stream(service, req: Request, progress: Progress | None, audio: np.ndarray | None,
+def _stream(shop: Workshop, req: Request, progress: Progress | None, audio: np.ndarray | None,
             previews: bool = False) -> Iterator[Result]:
     started = time.perf_counter()
     prog = rising(progress) if progress else (lambda f, m: None)
-    torch.set_num_threads(service.settings.threads)         # in the thread that serves it (Gradio's worker)
-    service.cleanup()
-    plan, speech, notes = service.speech(req, audio, REQUEST.span(prog, "speech"), stream=True)  # words may come later
-    grow = Growing(plan, speech, notes, service.folder(), int(req.size), started)
+    torch.set_num_threads(shop.threads)                     # in the thread that serves it (Gradio's worker)
+    shop.folders.cleanup()
+    # its words may still be recognised: generation joins them as they come
+    plan, speech, notes = shop.intake.speech(req, audio, REQUEST.span(prog, "speech"), stream=True)
+    grow = Growing(plan, speech, notes, shop.folders.new(), int(req.size), started)
     if audio is None:
-        run = service.ahead.take(service.motion_key(req, plan))
+        run = shop.ahead.take(shop.intake.motion_key(req, plan))
     else:                                                # samples, not an upload: nothing was made ahead for them
-        service.ahead.cancel()
+        shop.ahead.cancel()
         run = None
     ready = len(run.made) if run is not None else 0      # made before the click: shown at once, in one result
     if GROUND_TRUTH not in plan.methods and not ready:   # else the take's lookup comes first and settles its slot
         yield grow.result()
-    events = _events(service, plan, speech, run, prog) if previews else \
-        (("made", x) for x in _made(service, plan, speech, run, prog))
+    events = _events(shop, plan, speech, run, prog) if previews else \
+        (("made", x) for x in _made(shop, plan, speech, run, prog))
     i, shown = -1, 0
     for kind, x in events:
         if kind == "preview":
             if not grow.moving() and i + 1 >= ready and not 0 < shown <= x.num_frames < 2 * shown:
-                making = next((m for m in service.pipeline.run_order(plan) if m != GROUND_TRUTH and
+                making = next((m for m in shop.pipeline.run_order(plan) if m != GROUND_TRUTH and
                                m not in grow.made), None)
                 if making is not None:                   # each shown preview at least doubles the one before
                     shown = x.num_frames
@@ -200,7 +202,7 @@ def known(speech: SpeechInput) -> SpeechInput:
     return pending.settle()
 
 
-def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iterator[Made]:
+def _made(shop: Workshop, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iterator[Made]:
     """The plan's methods as they are made: by the run made ahead for them (`serve/ahead.py`) when there is one, and
     here what it did not make (a run that stopped on an error of the server's)."""
     todo = list(plan.methods)
@@ -213,11 +215,11 @@ def _made(service, plan: Plan, speech: SpeechInput, run, prog: Progress) -> Iter
         if not todo:
             return
         plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
-    yield from service.pipeline.generate_each(speech, plan, progress=REQUEST.span(prog, "methods"),
-                                              body=service.body, keep_going=True)
+    yield from shop.pipeline.generate_each(speech, plan, progress=REQUEST.span(prog, "methods"),
+                                           body=shop.body, keep_going=True)
 
 
-def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Progress) -> Iterator[tuple]:
+def _events(shop: Workshop, plan: Plan, speech: SpeechInput, run: Run | None, prog: Progress) -> Iterator[tuple]:
     """`_made` with previews: ("made", Made) for each method and ("preview", MotionSequence) for each window of the
     first method as it comes, read from the run made ahead when there is one, else from a run on a thread of its own
     (`own_run`: its progress is said here, in the request's thread); that run is stopped if the reader stops."""
@@ -233,7 +235,7 @@ def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Pro
         if not todo:
             return
         plan = replace(plan, settings=replace(plan.settings, methods=tuple(todo)))
-    own = own_run(service, plan, speech)
+    own = own_run(shop, plan, speech)
     try:
         for kind, x in read(own):
             if kind == "progress":
@@ -247,20 +249,20 @@ def _events(service, plan: Plan, speech: SpeechInput, run: Run | None, prog: Pro
         own.thread.join()
 
 
-def own_run(service, plan: Plan, speech: SpeechInput) -> Run:
+def own_run(shop: Workshop, plan: Plan, speech: SpeechInput) -> Run:
     """`plan`'s methods made on a thread of its own at the server's math threads, the first one's windows shown as
     they come (`Run.preview`); what stops it (other than cancelling) is kept in `Run.error`."""
     run = Run(None, what=", ".join(plan.methods))
     run.taken = True
-    threads = service.settings.threads
+    threads = shop.threads
 
     def work() -> None:
         failed = False
         try:
             torch.set_num_threads(threads)
             with window_previews(run.preview):
-                for x in service.pipeline.generate_each(speech, plan, progress=run.say, body=service.body,
-                                                        keep_going=True):
+                for x in shop.pipeline.generate_each(speech, plan, progress=run.say, body=shop.body,
+                                                     keep_going=True):
                     run.add(x)
         except Cancelled:
             failed = True

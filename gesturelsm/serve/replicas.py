@@ -14,7 +14,6 @@ Nothing here imports Ray at module level: only `deploy` does, when replicas are 
 """
 from __future__ import annotations
 
-import copy
 import fcntl
 import logging
 import os
@@ -33,6 +32,7 @@ from ..errors import ClusterError
 from ..retarget import load_character
 from ..settings import DEFAULTS
 from .config import ServiceSettings
+from ..request_files import UPLOADS
 from .request import Request, Result
 from .service import GestureService
 
@@ -111,7 +111,8 @@ def _collect(folder: Path) -> dict[str, bytes]:
 
 
 class GestureReplica:
-    """One replica (a Serve deployment's class): run / render / export / transcribe, each with its inputs by value."""
+    """One replica (a Serve deployment's class): run / edit / render / export / transcribe, each with its inputs by
+    value."""
 
     def __init__(self, spec: ReplicaSpec):
         self.scratch = Scratch()
@@ -154,8 +155,7 @@ class GestureReplica:
                     pass
             service = self.service
             if take is not None:                    # this request's ground truth: a service that sees its take
-                service = copy.copy(self.service)
-                service.settings = replace(self.service.settings, beat2=str(take.local()))
+                service = self.service.with_settings(replace(self.service.settings, beat2=str(take.local())))
             result = service.run(req)
             try:
                 return _reply(result, time.perf_counter() - t0)
@@ -170,6 +170,16 @@ class GestureReplica:
         try:
             return _reply(self.service.render(result, character=self._character(rig)),
                           time.perf_counter() - result.job.started)
+        finally:
+            shutil.rmtree(result.job.folder, ignore_errors=True)
+
+    def edit(self, result: Result, method: str, start, end, regions, seed, elapsed: float) -> Reply:
+        """`GestureService.edit` of `result` (sent without the results before it): the reply's folder is the edit's,
+        its name the one the front end gives the edit's folder inside the request's."""
+        result = self._here(result, elapsed)
+        try:
+            out = self.service.edit(result, method, start, end, regions, seed)
+            return _reply(replace(out, previous=None), time.perf_counter() - out.job.started)
         finally:
             shutil.rmtree(result.job.folder, ignore_errors=True)
 
@@ -208,7 +218,7 @@ class GestureReplica:
 
 
 def _save(folder: Path, upload: Upload) -> Path:
-    path = folder / "uploads" / Path(upload.name).name
+    path = folder / UPLOADS / Path(upload.name).name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(upload.data)
     return path

@@ -1,5 +1,6 @@
 """A sweep (methods x steps x CFG x seeds on one upload, `gesturelsm.evaluation.sweep`) as one web request: the
-page's Sweep tab and its API call `GestureService.sweep`, which takes the path of a request: the upload's checks,
+page's Sweep tab and its API call `GestureService.sweep`, which takes the path of a request (`run_sweep_request` with
+the server's `Workshop`): the upload's checks,
 the settings' validator with the server's limits (its step caps included), the speech read and prepared once with
 the transcript the request asks for (typed, recognised automatically or none), and a request folder that is
 deleted like the others; then the sweep, its files and the speech for the player.
@@ -21,7 +22,9 @@ from ..progress import SWEEP_REQUEST
 from ..settings import PAGE, Limits
 from ..settings.check import asked_of
 from ..settings.values import one_of
+from ..request_files import SPEECH, SWEEP
 from .request import Request
+from .workshop import Workshop
 
 SWEEP_DOC = """A sweep as sent: the speech, the methods, the grid's lists as text ("1 2 4 8") or lists, the seed count,
 the plotted statistic and the transcript, then every setting a sweep takes one value of by its name
@@ -68,23 +71,24 @@ class SweepOutcome:
     notes: tuple[str, ...]                   # what the visitor should know (transcript warnings)
 
 
-def run_sweep_request(service, req: SweepRequest, limits: SweepLimits, progress: Progress | None,
+def run_sweep_request(shop: Workshop, req: SweepRequest, limits: SweepLimits, progress: Progress | None,
                       cancelled: Callable[[], bool] | None) -> SweepOutcome:
     """See the module docstring. Every problem of the request at once (InputError), before any work."""
     prog = progress or (lambda f, m: None)
-    service.cleanup()
+    pipeline, intake = shop.pipeline, shop.intake
+    shop.folders.cleanup()
     problems: list[str] = []
-    part, grid, metric = checked_sweep(req, list(service.pipeline.methods), limits, service.limits, problems)
-    base = Request(req.audio_path, text=req.text, **{"methods": service.pipeline.methods[:1], **part},
+    part, grid, metric = checked_sweep(req, list(pipeline.methods), limits, intake.limits, problems)
+    base = Request(req.audio_path, text=req.text, **{"methods": pipeline.methods[:1], **part},
                    render=False, exports=False)
-    base, _, audio = service.load(base, extra=problems)
-    check_grid(service.pipeline, grid, len(audio) / SAMPLE_RATE, limits)
-    plan, speech, notes = service.speech(base, audio, SWEEP_REQUEST.span(prog, "speech"))
-    result = run_sweep(service.pipeline, speech, grid, progress=SWEEP_REQUEST.span(prog, "sweep"),
+    base, _, audio = intake.load(base, extra=problems)
+    check_grid(pipeline, grid, len(audio) / SAMPLE_RATE, limits)
+    plan, speech, notes = intake.speech(base, audio, SWEEP_REQUEST.span(prog, "speech"))
+    result = run_sweep(pipeline, speech, grid, progress=SWEEP_REQUEST.span(prog, "sweep"),
                        cancelled=cancelled, grounding=plan.settings.post.grounding)
-    folder = service.folder()
-    files = write_sweep(result, folder / "sweep", metric)
-    wav = folder / "speech.wav"
+    folder = shop.folders.new()
+    files = write_sweep(result, folder / SWEEP, metric)
+    wav = folder / SPEECH
     sf.write(wav, speech.audio, SAMPLE_RATE, subtype="PCM_16")
     return SweepOutcome(result, folder, files, wav, (*speech.warnings, *notes))
 

@@ -22,6 +22,7 @@ from gesturelsm.evaluation.motion_stats import BY_KEY, SEED_SPREAD, STATISTICS, 
 from gesturelsm.evaluation.sweep import DEFAULT_CFGS, DEFAULT_STEPS, SweepLimits, SweepResult
 from gesturelsm.evaluation.sweep_limits import measures
 from gesturelsm.evaluation.sweep_report import PLOT_METRICS, sweep_plot
+from gesturelsm.request_files import BODIES
 from gesturelsm.serve.sweep import SweepRequest
 from gesturelsm.settings import DEFAULTS
 from gesturelsm.settings.schema import named
@@ -154,7 +155,7 @@ class SweepHandlers:
             self._refuse("This sweep kept no motions to play.")
         return player_payload([r.motion], [f"{label(r.method)} {r.steps} steps CFG {r.cfg:g} seed {r.seed}"],
                               [r.method], self.service.body, state.folder / f"run-{int(run)}",
-                              self.service.workdir / "player-bodies", url=motion_player.file_url, audio=state.wav)
+                              self.service.workdir / BODIES, url=motion_player.file_url, audio=state.wav)
 
 
 def typed_note(text: str | None):
@@ -174,7 +175,8 @@ def add_sweep_tab(service, limits: SweepLimits = PAGE_LIMITS, pages: PageWork | 
         gr.Markdown("Tune steps and CFG by the numbers: every combination of the methods, step counts and CFG scales "
                     "is generated once per seed from this speech (its features computed once), timed and measured. "
                     f"Size of a sweep on this server: {limits.describe()}. The command line does the same with "
-                    "`gesturelsm sweep` (docs/SWEEP.md).")
+                    "`gesturelsm sweep` (docs/SWEEP.md)." + (f" {service.generation.sweep_note}"
+                                                              if service.generation.sweep_note else ""))
         with gr.Row():
             with gr.Column(scale=1):
                 audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech",

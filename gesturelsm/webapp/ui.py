@@ -20,6 +20,7 @@ from gesturelsm.constants import ASSETS
 from gesturelsm.errors import GestureError
 from gesturelsm.serve.config import QUEUE_SIZE
 from gesturelsm.serve.lifetime import gradio_delete_cache
+from gesturelsm.request_files import BODIES
 from gesturelsm.serve.request import DEFAULT_SIZE, TIMING_COLUMNS, VIDEO_SIZES, Request, Result
 from gesturelsm.serve.service import GestureService
 from gesturelsm.settings import page_params, settings_of
@@ -295,8 +296,8 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
                                                                 body=service.body)
         if "gesturelsm" in service.pipeline.methods:            # the Live tab streams the GestureLSM generator
             manager = live.LiveManager(service.pipeline, LIVE_STREAMS, threads=settings.threads, relay=engines)
-            service.ahead.busy = lambda: manager.active > 0       # live streams keep their cores (serve/ahead.py)
-            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / "player-bodies",
+            service.set_busy(lambda: manager.active > 0)          # live streams keep their cores (serve/ahead.py)
+            routes = live.add_live_tab(manager, body=service.body, cache=service.workdir / BODIES,
                                        socket_routes=live_socket.routes, characters=characters)
         sweep_tab.add_sweep_tab(service, pages=h.pages)
         with gr.Accordion("How it works, and the model's limits", open=False):

@@ -137,7 +137,7 @@ def test_a_prefetched_transcript_goes_with_the_request(replicated, tmp_path):
     assert replicated.prefetch(str(wav)) is True
     assert replicated.prefetch(None) is False
     out = replicated.run(Request(str(wav), methods=["gesturelsm"], render=False, exports=False))
-    remembered = replicated._remembered(Upload(wav.name, wav.read_bytes()))
+    remembered = replicated.generation._remembered(Upload(wav.name, wav.read_bytes()))
     assert remembered is not None and out.text_mode == remembered.text_mode
     assert remembered.seconds > 0                                      # the recognition's own time, on the replica
     assert out.timings["gesturelsm"]["transcription"] == remembered.seconds     # found ready, not recognised again

@@ -83,7 +83,7 @@ def test_an_edit_shows_its_own_timings_beside_the_generation(generated, monkeypa
     import time
     from pathlib import Path
 
-    import gesturelsm.serve.service as service_module
+    import gesturelsm.serve.local as service_module
 
     def render_apart(motions, audio, video, **kw):          # a stand-in that takes a moment, as a render does
         time.sleep(0.01)

@@ -82,19 +82,21 @@ def test_ground_truth_of_unknown_speech_has_no_place(service, speech_wav):
 
 
 def test_a_service_that_makes_results_elsewhere_gives_one(service, speech_wav):
-    """A service whose `run` makes the result elsewhere (the replicas' front end) and has no `stream` of its own: the
-    page gets that one result, made once."""
+    """A service whose results are made elsewhere (the replicas' generation, serve/replicated.py, which answers once
+    every method is made): the page gets that one result, made once."""
+    from gesturelsm.serve.replicated import ReplicaGeneration
     from gesturelsm.serve.service import GestureService
 
-    class Elsewhere(GestureService):
-        made = 0
+    made = []
 
+    class Elsewhere(ReplicaGeneration):
         def run(self, req, progress=None, audio=None):
-            Elsewhere.made += 1
-            return super().run(req, progress, audio)
-    other = Elsewhere(service.pipeline, service.settings, service.body)
+            made.append(req)
+            return self.local.run(req, progress, audio)
+    other = GestureService(service.pipeline, service.settings, service.body,
+                           generation=lambda local: Elsewhere(local, handle=None, count=None))
     results = list(other.stream(_request(speech_wav)))
-    assert len(results) == 1 and Elsewhere.made == 1 and list(results[0].motions) == ALL
+    assert len(results) == 1 and len(made) == 1 and list(results[0].motions) == ALL
     assert results[0].pending == () and results[0].video is None
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-import gesturelsm.serve.service as service_module
+import gesturelsm.serve.local as service_module
 from gesturelsm.render.background import RenderCancelled
 from gesturelsm.serve.renders import CLOSED, SUPERSEDED, RenderQueue, video_progress, waiting_line
 from gesturelsm.serve.request import Request

@@ -88,7 +88,7 @@ def test_stopping_replicas_on_a_cluster_this_process_started_leaves_serve_to_the
     from ray import serve
 
     from gesturelsm.serve import replicas
-    from gesturelsm.serve.replicated import ReplicatedService
+    from gesturelsm.serve.replicated import ReplicaGeneration
 
     calls = []
     monkeypatch.setattr(serve, "delete", lambda name: calls.append(("delete", name)))
@@ -97,9 +97,9 @@ def test_stopping_replicas_on_a_cluster_this_process_started_leaves_serve_to_the
     for owned, want in ((True, [("delete", "app-1")]), (False, [("delete", "app-1"), ("shutdown",)])):
         calls.clear()
         closed = []
-        service = ReplicatedService.__new__(ReplicatedService)
-        service.name, service.connection = "app-1", SimpleNamespace(owned=owned, close=lambda: closed.append(1))
-        service.close()
+        generation = ReplicaGeneration.__new__(ReplicaGeneration)
+        generation.name, generation.connection = "app-1", SimpleNamespace(owned=owned, close=lambda: closed.append(1))
+        generation.close()
         assert calls == want and closed == [1]
     calls.clear()
     replicas.stop("app-2")                              # by default (a joined cluster): Serve goes when it is empty

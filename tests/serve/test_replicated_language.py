@@ -28,7 +28,7 @@ def front(service, tmp_path):
         if method == "transcribe":
             return SimpleNamespace(text_mode=f"words in {args[1]}")
         raise Sent(method)
-    svc._call = call
+    svc.generation.call = call
     wav = tmp_path / "speech.wav"
     sf.write(wav, speech_like(2.0, seed=3), 16000)
     return svc, calls, wav

@@ -67,7 +67,7 @@ def test_render_and_export_return_new_results_and_leave_the_input_as_it_was(serv
     video with the rendering column and ready time, then the downloads); the one handed in keeps what it had."""
     import dataclasses
 
-    import gesturelsm.serve.service as service_module
+    import gesturelsm.serve.local as service_module
 
     drawn, rigs = [], []
 
@@ -305,7 +305,7 @@ def test_the_upload_is_prepared_before_the_click_and_reused(service, tmp_path, m
     from collections import Counter
 
     import gesturelsm.pipeline as pipeline_module
-    import gesturelsm.serve.service as service_module
+    import gesturelsm.serve.intake as intake_module
     from gesturelsm.asr import available
     from gesturelsm.asr.source import RECENT
 
@@ -320,7 +320,7 @@ def test_the_upload_is_prepared_before_the_click_and_reused(service, tmp_path, m
             calls[name] += 1
             return f(*a, **k)
         return g
-    monkeypatch.setattr(service_module, "load_audio", counted("decode", service_module.load_audio))
+    monkeypatch.setattr(intake_module, "load_audio", counted("decode", intake_module.load_audio))
     monkeypatch.setattr(pipeline_module, "automatic_words", counted("transcribe", pipeline_module.automatic_words))
     monkeypatch.setattr(service.pipeline, "prepare_speech", counted("prepare", service.pipeline.prepare_speech))
     RECENT.clear()
@@ -363,7 +363,7 @@ def test_the_video_renders_in_a_lowered_process_of_its_own(service, speech_wav, 
 @pytest.mark.parametrize("given", ["loaded", "path"])
 def test_the_render_process_gets_the_services_body(service, speech_wav, monkeypatch, given):
     """A body given as a file path (not only a loaded model) reaches the render process, not the default body."""
-    import gesturelsm.serve.service as service_module
+    import gesturelsm.serve.local as service_module
     from gesturelsm.body.model import resolve_body
 
     body = resolve_body(service.body)

@@ -18,6 +18,7 @@ from gesturelsm.export.player_payload import body_glb, player_payload, write_mot
 from gesturelsm.motion.sequence import NUM_BETAS
 from gesturelsm.serve.editing import edited_method
 from gesturelsm.serve.request import Result
+from gesturelsm.request_files import BODIES, SPEECH, player_before, player_file, player_partial
 from gesturelsm.serve.service import GestureService
 
 from ..character import page_character
@@ -51,7 +52,7 @@ def body_url(service: GestureService) -> str:
     """The rest body of the default shape (zero betas, what the generators output), written once."""
     import numpy as np
 
-    return file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / "player-bodies"))
+    return file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / BODIES))
 
 
 def player_component(service: GestureService) -> gr.HTML:
@@ -79,15 +80,15 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     if not slots:
         return None
     folder = out.job.folder
-    wav = folder / "speech.wav"
+    wav = folder / SPEECH
     if not wav.exists():
         sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
     order = [m for m, _ in slots]
     made = [m for m in order if m in out.motions]
     labels = {**dict(slots), **dict(zip(out.motions, out.job.labels))}     # an edited motion's label says so
     p = player_payload([out.motions[m] for m in made], [labels[m] for m in made], made, service.body, folder,
-                       service.workdir / "player-bodies", url=file_url, audio=wav,
-                       names=[f"player-{order.index(k)}-{k}.bin" for k in made])
+                       service.workdir / BODIES, url=file_url, audio=wav,
+                       names=[player_file(order.index(k), k) for k in made])
     ready = {b["method"]: b for b in p["bodies"]}
     rest = body_url(service)
     growing = {} if character is not None else previews(service, out, folder, order)
@@ -100,7 +101,7 @@ def payload(service: GestureService, out: Result, character=None) -> dict | None
     motions, edited = {m: out.motions[m] for m in made}, edited_method(out)
     if edited is not None:
         i, before = order.index(edited), out.previous.motions[edited].slice(0, p["frames"])
-        path, _ = write_motion(before, service.body, folder / f"player-{i}-{edited}-before.bin")
+        path, _ = write_motion(before, service.body, folder / player_before(i, edited))
         p["compare"] = {"index": i, "method": edited, "motion": file_url(path)}
         motions[f"{edited}:before"] = before
     if character is not None:           # from the first payload on: the slots are built on the character
@@ -116,8 +117,8 @@ def previews(service: GestureService, out: Result, folder: Path, order: list[str
         if m in out.motions or m not in order:
             continue
         i = order.index(m)
-        path = folder / f"player-{i}-{m}-upto-{seq.num_frames}.bin"
+        path = folder / player_partial(i, m, seq.num_frames)
         p = player_payload([seq], [dict(out.slots).get(m, m)], [m], service.body, folder,
-                           service.workdir / "player-bodies", url=file_url, names=[path.name])
+                           service.workdir / BODIES, url=file_url, names=[path.name])
         bodies[m] = {**p["bodies"][0], "partial": True, "frames": seq.num_frames}
     return bodies
