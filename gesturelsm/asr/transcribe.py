@@ -40,7 +40,7 @@ from ..constants import SAMPLE_RATE
 from . import multilingual
 from .languages import AUTO, CHOICES, ENGLISH, NO_SPACES, espeak_voice, name
 from .model import MODEL_NAME, RecognizerUnavailable, load_model
-from .windows import recognition_cuts
+from .recognition_windows import recognition_cuts
 
 MIN_AVG_LOGPROB = -0.6   # mean token log-probability below this: not (clear) English speech
 # The multilingual model (Whisper base) on speech it identified: eSpeak Japanese, Spanish and German score -0.63 to
@@ -152,9 +152,9 @@ def _recognized(audio: np.ndarray, beam_size: int, model, language: str) -> tupl
 
 @dataclass(frozen=True)
 class Piece:
-    """The English model's words of one recognition window (asr/windows.py), timed by our aligner on that window's
-    audio; times in seconds from the start of the whole speech. Every word starting before `final_until` is known once
-    this piece and the ones before it are (the window's end; infinity for the last window)."""
+    """The English model's words of one recognition window (asr/recognition_windows.py), timed by our aligner on that
+    window's audio; times in seconds from the start of the whole speech. Every word starting before `final_until` is
+    known once this piece and the ones before it are (the window's end; infinity for the last window)."""
     words: list[Word]
     final_until: float
     heard: str

@@ -24,7 +24,7 @@ from ..align.textgrid import read_words
 from ..audio import SAMPLE_RATE, AudioError, load_audio
 from ..errors import DatasetError
 from ..motion.sequence import FPS, MotionSequence
-from .windows import window_starts
+from .training_windows import window_starts
 
 CACHE_VERSION = 1
 

@@ -20,7 +20,7 @@ class LiveConfig:
     decode_lag: int = 0            # final latents required right of the emitted span (0: provisional ones)
     blend_frames: int = 8          # frames after a chunk's end decoded now and faded into the next chunk's start
     held: int = 4                  # final latents before the new ones held fixed while sampling (0: all in the window)
-    grounding: bool = True         # feet on the ground, causally, chunk by chunk (grounding/stream.py)
+    grounding: bool = True         # feet on the ground, causally, chunk by chunk (grounding/motion_stream.py)
 
     def check(self, t: int, s: int) -> None:
         if not 1 <= self.commit <= t - s:

@@ -38,18 +38,16 @@ away, the far ones by little). Frames of the finalised latents are decoded with 
 left and the window's own not-yet-final latents on the right (so no waiting); `decode_lag` > 0 instead waits for that
 many final latents on the right. The next decode sees final values there and differs a little near the seam, so the
 first `blend_frames` frames of each chunk fade (in feature space, cosine weights) from the previous decode of those
-frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames
-past the chunk; beyond them its last offset fades out (a fade over only those frames leaves seams rougher than the
-inside: `benchmarks/live_latency.py --skip-paced` prints the seam jerk). With lookahead 0 the window has no latent
-right of the span: the decoder is given the span's last latent repeated there (enough for `blend_frames`), so the
-chunk's last frames have a right context and the next chunk has a decode to fade from (without it the jerk at seams
-was 6x the inside on a held-out take). Root translation is integrated across chunks
-(motion/translation.py convention).
-Feet on the ground (`grounding`, on by default): each emitted chunk is grounded causally before it leaves, by one
-`MotionStreamGrounder` per stream (gesturelsm/grounding/stream.py: contacts, plants, drift filter and blends carried
-across chunks), so no frame waits for later speech and frames once emitted never change.
-Motion time is locked to audio time: frame f is audio sample f * 16000 / 30, and the stream ends with exactly the
-offline frame count floor(N * 30 / 16000).
+frames into the new one: no jump at seams and no extra latency. The previous decode has only 4 * lookahead frames past
+the chunk; beyond them its last offset fades out (a fade over only those frames leaves seams rougher than the inside:
+`benchmarks/live_latency.py --skip-paced` prints the seam jerk). With lookahead 0 the window has no latent right of the
+span: the decoder is given the span's last latent repeated there (enough for `blend_frames`), so the chunk's last frames
+have a right context and the next chunk has a decode to fade from (without it the jerk at seams was 6x the inside on a
+held-out take). Root translation is integrated across chunks (motion/translation.py convention). Feet on the ground
+(`grounding`, on by default): each emitted chunk is grounded causally before it leaves, by one `MotionStreamGrounder`
+per stream (gesturelsm/grounding/motion_stream.py: contacts, plants, drift filter and blends carried across chunks), so
+no frame waits for later speech and frames once emitted never change. Motion time is locked to audio time: frame f is
+audio sample f * 16000 / 30, and the stream ends with exactly the offline frame count floor(N * 30 / 16000).
 """
 from __future__ import annotations
 
@@ -70,7 +68,7 @@ from ..flows import make_method
 from ..flows.base import inpainting
 from ..generator.data import samples_for
 from ..generator.sampling import decode_latents
-from ..grounding.stream import MotionStreamGrounder
+from ..grounding.motion_stream import MotionStreamGrounder
 from ..motion.regions import TRANS_OFFSET, join_regions
 from ..motion.sequence import MotionSequence
 from .config import LiveConfig

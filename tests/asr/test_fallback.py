@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gesturelsm.asr.transcribe import AUDIO_ONLY_NOTE, FALLBACK_TEMPERATURES, LOOP_RATIO, recognize, transcribe
-from gesturelsm.asr.windows import recognition_cuts
+from gesturelsm.asr.recognition_windows import recognition_cuts
 
 from _asr_support import SR
 
@@ -75,7 +75,7 @@ def test_a_loop_in_some_windows_decodes_again_with_the_fallback(fake):
 def test_chords_are_rejected_by_the_real_recogniser_in_one_pass(recognizer, monkeypatch):
     """30 s of a steady chord: Whisper's greedy pass writes one phrase over and over (the CTranslate2 kernels of some
     CPUs give no segment at all); either way it is rejected without the five sampling passes of the fallback: one
-    greedy pass per recognition window (asr/windows.py)."""
+    greedy pass per recognition window (asr/recognition_windows.py)."""
     passes = []
     decode = tmod._decode
     monkeypatch.setattr(tmod, "_decode", lambda *a: passes.append(a[2]) or decode(*a))

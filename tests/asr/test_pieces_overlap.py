@@ -10,7 +10,7 @@ import pytest
 from gesturelsm.align import Word
 import importlib
 
-from gesturelsm.asr.windows import recognition_cuts
+from gesturelsm.asr.recognition_windows import recognition_cuts
 
 tr = importlib.import_module("gesturelsm.asr.transcribe")       # the module (the package exports its function)
 

@@ -1,7 +1,7 @@
-"""Grounding a stream causally, chunk by chunk (grounding/causal.py, grounding/stream.py): however the stream is cut,
-the frames are those of the same grounder fed the whole motion at once; a frame once returned depends on no later
-frame; a planted foot stays within 1 cm; the upper body is bit for bit the input's; contact transitions are no
-faster than the motion's own joints; bad chunks pass through and the stream goes on."""
+"""Grounding a stream causally, chunk by chunk (grounding/causal.py, grounding/motion_stream.py): however the stream is
+cut, the frames are those of the same grounder fed the whole motion at once; a frame once returned depends on no later
+frame; a planted foot stays within 1 cm; the upper body is bit for bit the input's; contact transitions are no faster
+than the motion's own joints; bad chunks pass through and the stream goes on."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -12,7 +12,7 @@ import pytest
 from _standing import (FPS, KEPT_COLUMNS, joints, segments, sliding_left_foot, standing, stepping, swaying)
 from gesturelsm.grounding import GroundingSettings, ground_motion
 from gesturelsm.grounding.rotations import exp, log
-from gesturelsm.grounding.stream import MotionStreamGrounder
+from gesturelsm.grounding.motion_stream import MotionStreamGrounder
 from gesturelsm.grounding.targets import TargetParams
 from gesturelsm.motion import MotionSequence
 

@@ -37,7 +37,7 @@ def test_live_cli_grounds_causally_by_default_and_off_keeps_the_decoders_legs(sh
     """The same stream with --grounding on (the default) and off: the upper body and face are bit for bit the same,
     only the legs and root differ, and the grounded stream is the ungrounded one grounded by the causal core in one
     go (the generator's chunks do not matter: equal to float32)."""
-    from gesturelsm.grounding.stream import MotionStreamGrounder
+    from gesturelsm.grounding.motion_stream import MotionStreamGrounder
 
     from _standing import KEPT_COLUMNS
 
