@@ -4,6 +4,7 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import time
 from typing import Iterator, Sequence
 
 import numpy as np
@@ -13,6 +14,15 @@ from gesturelsm.motion import MotionSequence
 
 def quiet(*args, **kwargs) -> None:
     """Stands in for a progress callback (gr.Progress outside a Gradio event, a pipeline's progress)."""
+
+
+def until(condition, what: str, limit: float = 60.0, every: float = 0.01) -> None:
+    """Returns once `condition()` holds. `limit` seconds only bound something that never gets there, on a machine
+    however loaded: then the test fails saying `what` did not happen."""
+    deadline = time.monotonic() + limit
+    while not condition():
+        assert time.monotonic() < deadline, f"not within {limit:g} s: {what}"
+        time.sleep(every)
 
 
 def assert_close_rel(got, want, rel: float = 1e-5) -> None:

@@ -91,9 +91,7 @@ def test_rows_as_they_come_stopwatch_and_json(monkeypatch, tmp_path):
     h.save_json(None, rows)                                               # no --json: nothing written
 
 
-SCRIPTS = [pytest.param(p.name, marks=pytest.mark.skip(reason="its table and timer are its own"))
-           if p.name == "player_latency.py" else p.name
-           for p in sorted(BENCHMARKS.glob("*.py")) if not p.name.startswith("_")]
+SCRIPTS = [p.name for p in sorted(BENCHMARKS.glob("*.py")) if not p.name.startswith("_")]
 
 
 @pytest.mark.parametrize("name", SCRIPTS)
