@@ -5,11 +5,18 @@ import contextlib
 import os
 import shutil
 import time
+from pathlib import Path
 from typing import Iterator, Sequence
 
 import numpy as np
 
 from gesturelsm.motion import MotionSequence
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("GESTURELSM_SHARED") or REPO.parent / "shared")   # the real data: ../shared beside the
+BEAT2 = SHARED / "data" / "beat2"                                                # repository, never copied into it
+REAL_TAKE = "2_scott_0_1_1"
+VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"                     # the shared real character
 
 
 def quiet(*args, **kwargs) -> None:

@@ -6,14 +6,12 @@ the stream. Tiny checkpoints (the app tests' service). Skips, saying why, withou
 character."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from _support import until
+from _support import VRM, until
 
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 
 PLAYER = "#live-player"
 LIVE = f"document.querySelector('{PLAYER}').__live"
