@@ -127,6 +127,15 @@ def served(service) -> Iterator[str]:
         demo.close()
 
 
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on (for a server a test starts)."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
 def gradio_client(url: str):
     """A Gradio client of a served test app. Its HTTP timeout (httpx's default is 5 s) is long enough for a server
     that shares two loaded cores with another test process: the load test's twelve clients timed out under load."""

@@ -17,7 +17,7 @@ import pytest
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
-from _support import speech_like, until
+from _support import free_port, speech_like, until
 
 pytest.importorskip("gradio")
 uvicorn = pytest.importorskip("uvicorn")
@@ -25,17 +25,11 @@ live_socket = pytest.importorskip("gesturelsm.webapp.live_socket")
 from starlette.applications import Starlette  # noqa: E402
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture()
 def served(shipped_pipe):
     """(manager, port): the socket route served by uvicorn in a thread, at most one live stream."""
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
-    port = _free_port()
+    port = free_port()
     server = uvicorn.Server(uvicorn.Config(Starlette(routes=live_socket.routes(mgr)), host="127.0.0.1", port=port,
                                            log_config=None, log_level="debug"))
     thread = threading.Thread(target=server.run, daemon=True)
