@@ -10,7 +10,7 @@ video and once while it renders. Shipped checkpoints, eSpeak NG speech (as app/m
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--think-s 3] [--repeat 3]
                                                   [--vs /path/to/other/checkout] [--quick] [--character avatar.vrm]
-                                                  [--without-ahead] [--new-seed]
+                                                  [--without-ahead] [--new-seed] [--json FILE]
 
 The page is the checkout's own `python -m app` in a process of its own (benchmarks/_served.py: its warm-up, its
 math threads), opened with the player's measurement hooks on (`?measure=1`, gesturelsm/webapp/player/src/measure.js).
@@ -22,7 +22,9 @@ waits for `#motion-player[data-character]`), interleaved the same way. --think-s
 the click (0: at once, so the click also waits for the work the upload started). The page makes the motion of the
 settings it shows while the visitor thinks (gesturelsm/serve/ahead.py): --without-ahead serves this checkout a second
 time with --no-ahead (interleaved the same way), and --new-seed types another seed right before each click, so the
-click asks for other motion than the one made ahead (the server starts on it when the seed changes).
+click asks for other motion than the one made ahead (the server starts on it when the seed changes). --json FILE also
+writes the table there. The page's server sets its own math threads (as `python -m app` does); this process runs no
+model code.
 """
 from __future__ import annotations
 
@@ -37,13 +39,12 @@ import contextlib
 import json
 import re
 import tempfile
-import time
 from statistics import median
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+from _harness import REPO, Rows, Stopwatch, json_flag, save_json
+
 sys.path.insert(0, str(REPO))                  # app/measure.py lives in the checkout, not the wheel
-sys.path.insert(0, str(REPO / "benchmarks"))   # _served.py
 
 ALL = ["gesturelsm", "rectified_flow", "ddim"]
 LABELS = {"gesturelsm": "GestureLSM", "rectified_flow": "Rectified flow", "ddim": "DDIM"}
@@ -53,17 +54,18 @@ PLAYER = "#motion-player"
 def fps(page, seconds: float = 2.0) -> float:
     """Motion frames drawn per second by the player over `seconds` (data-frames counts them)."""
     n0 = int(page.get_attribute(PLAYER, "data-frames"))
-    t0 = time.perf_counter()
-    page.wait_for_timeout(seconds * 1000)
-    return (int(page.get_attribute(PLAYER, "data-frames")) - n0) / (time.perf_counter() - t0)
+    with Stopwatch() as sw:
+        page.wait_for_timeout(seconds * 1000)
+    return (int(page.get_attribute(PLAYER, "data-frames")) - n0) / sw.seconds
 
 
 def fps_while(page, js: str, max_s: float = 10.0) -> float:
     """Motion frames drawn per second while `js` (an expression) is true in the page, over at most max_s seconds."""
-    n0, t0 = int(page.get_attribute(PLAYER, "data-frames")), time.perf_counter()
-    while time.perf_counter() - t0 < max_s and page.evaluate(f"() => Boolean({js})"):
-        page.wait_for_timeout(250)
-    return (int(page.get_attribute(PLAYER, "data-frames")) - n0) / (time.perf_counter() - t0)
+    n0 = int(page.get_attribute(PLAYER, "data-frames"))
+    with Stopwatch() as sw:
+        while sw.elapsed < max_s and page.evaluate(f"() => Boolean({js})"):
+            page.wait_for_timeout(250)
+    return (int(page.get_attribute(PLAYER, "data-frames")) - n0) / sw.seconds
 
 
 def scrub_offset(page, times=(0.5, 1.7, 3.2, 0.9)) -> float:
@@ -88,16 +90,16 @@ def click_and_wait(page, n: int, timeout_s: float = 600, on: str | None = None) 
     character file `on`, when given) and until all `n` move (data-bodies), and the player's own marks (ms)."""
     page.evaluate(f"() => {{ delete document.querySelector('{PLAYER}').dataset.marks; }}")
     click_ms = page.evaluate("() => performance.now()")
-    t0 = time.perf_counter()
-    page.locator("#generate").click()
-    # polled on every animation frame: wait_for_selector's polling backs off to 500 ms and added 0.3-0.5 s
-    sel = f"{PLAYER}[data-marks][data-state=playing]" + (f"[data-character={json.dumps(on)}]" if on else "")
-    page.wait_for_function(f"() => document.querySelector({json.dumps(sel)}) !== null",
-                           polling="raf", timeout=timeout_s * 1000)
-    first = time.perf_counter() - t0
-    page.wait_for_function(f"() => ({ALL_MOVING.format(n=n)})(document.querySelector('{PLAYER}'))", polling="raf",
-                           timeout=timeout_s * 1000)
-    every = time.perf_counter() - t0
+    with Stopwatch() as sw:
+        page.locator("#generate").click()
+        # polled on every animation frame: wait_for_selector's polling backs off to 500 ms and added 0.3-0.5 s
+        sel = f"{PLAYER}[data-marks][data-state=playing]" + (f"[data-character={json.dumps(on)}]" if on else "")
+        page.wait_for_function(f"() => document.querySelector({json.dumps(sel)}) !== null",
+                               polling="raf", timeout=timeout_s * 1000)
+        first = sw.elapsed
+        page.wait_for_function(f"() => ({ALL_MOVING.format(n=n)})(document.querySelector('{PLAYER}'))",
+                               polling="raf", timeout=timeout_s * 1000)
+    every = sw.seconds
     marks = json.loads(page.get_attribute(PLAYER, "data-marks"))
     marks["payload"] = (marks["start"] - click_ms) / 1000                 # click -> first payload in the page (s)
     marks["page_play"] = marks["payload"] + marks["play"] / 1000        # click -> playing on the page's own clock
@@ -141,18 +143,19 @@ def run_case(browser, url: str, wav: Path, methods: list[str], think_s: float = 
     page.wait_for_timeout(think_s * 1000)             # a visitor choosing settings (the upload is being prepared)
     if new_seed:                                      # ... who types another seed and clicks at once
         page.get_by_label("Seed").fill("5")
-    t0 = time.perf_counter()
-    first, every, marks = click_and_wait(page, len(methods), on=Path(character).name if character is not None else None)
-    r = {"play": first, "all": every, "marks": marks, "drawn2": frames_drawn(page, 2.0)}
-    if quick:                                         # the mp4 renders on (niced: on a busy machine it waits long)
-        page.close()
-        return r
-    rendering = ("!document.querySelector('#summary').innerText.includes('Video ready') && "
-                 f"document.querySelector('{PLAYER}').dataset.state === 'playing'")
-    r["fps_render"] = fps_while(page, rendering)     # until the mp4 is ready or the speech is over (<= 10 s)
-    page.wait_for_function("() => document.querySelector('#summary').innerText.includes('Video ready')",
-                           timeout=900000)                        # the page says so; the video opens on request
-    r["mp4"] = time.perf_counter() - t0
+    on = Path(character).name if character is not None else None
+    with Stopwatch() as clock:                        # click -> mp4
+        first, every, marks = click_and_wait(page, len(methods), on=on)
+        r = {"play": first, "all": every, "marks": marks, "drawn2": frames_drawn(page, 2.0)}
+        if quick:                                     # the mp4 renders on (niced: on a busy machine it waits long)
+            page.close()
+            return r
+        rendering = ("!document.querySelector('#summary').innerText.includes('Video ready') && "
+                     f"document.querySelector('{PLAYER}').dataset.state === 'playing'")
+        r["fps_render"] = fps_while(page, rendering)  # until the mp4 is ready or the speech is over (<= 10 s)
+        page.wait_for_function("() => document.querySelector('#summary').innerText.includes('Video ready')",
+                               timeout=900000)                    # the page says so; the video opens on request
+        r["mp4"] = clock.elapsed
     page.locator("#downloads a").first.wait_for(timeout=300000)          # the chain is over: the server idles
     page.evaluate("() => { const p = window.gesturelsmPlayer; p.seek(0); p.play(); }")
     page.wait_for_timeout(300)
@@ -180,9 +183,9 @@ def again(page, n: int, workdir: Path, first_method: str) -> dict:
     r["again_rendering"], _, _ = click_and_wait(page, n)
     folder = re.search(r"req-[0-9a-f]+", page.evaluate("() => window.gesturelsmPlayer.payload.bodies[0].motion"))[0]
     exported = workdir / folder / f"{first_method}_keypoints.json"    # the newest request's last download
-    t_end = time.perf_counter() + 900
-    while not exported.exists() and time.perf_counter() < t_end:
-        page.wait_for_timeout(250)
+    with Stopwatch() as sw:
+        while not exported.exists() and sw.elapsed < 900:
+            page.wait_for_timeout(250)
     page.wait_for_function(downloads_changed(old), timeout=60000)   # and the page shows them
     return r
 
@@ -201,19 +204,18 @@ FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "
         "again, new seed -> playing (s)", "again while the mp4 renders -> playing (s) (runs where it still rendered)"]
 
 
-def row(dur: float, n: int, page: str, body: str, runs: list[dict], quick: bool) -> str:
-    """One line of the table: medians over `runs`."""
+def cells(dur: float, n: int, page: str, body: str, runs: list[dict], quick: bool) -> list[str]:
+    """The cells of one line of the table: medians over `runs`."""
     med = lambda k: median([x[k] for x in runs])               # noqa: E731
     spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
     payload = median([x["marks"].get("payload", 0) for x in runs])
-    cells = [f"{dur:.1f} s", str(n), page, body, f"**{med('play'):.2f}**{spread}", f"{med('all'):.2f}",
-             f"{med('drawn2'):.0f}", f"{payload:.2f}"]
+    out = [f"{dur:.1f} s", str(n), page, body, f"**{med('play'):.2f}**{spread}", f"{med('all'):.2f}",
+           f"{med('drawn2'):.0f}", f"{payload:.2f}"]
     if not quick:
         busy = sum(x["rendering"] for x in runs)
-        cells += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]),
-                  f"{med('scrub'):.0f}", f"{med('again'):.2f}",
-                  f"{med('again_rendering'):.2f} ({busy}/{len(runs)})"]
-    return "| " + " | ".join(cells) + " |"
+        out += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]),
+                f"{med('scrub'):.0f}", f"{med('again'):.2f}", f"{med('again_rendering'):.2f} ({busy}/{len(runs)})"]
+    return out
 
 
 def unique_speech(wav: Path, k: int, out: Path) -> Path:
@@ -245,6 +247,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--chromium", default="/usr/lib/chromium/chromium")
     p.add_argument("--character", type=Path, metavar="PATH",
                    help="also run every case with this character chosen in the page (.vrm / .glb / .gltf)")
+    json_flag(p)
     args = p.parse_args(argv)
     if args.character is not None and not args.character.is_file():
         p.error(f"--character {args.character}: no such file")
@@ -257,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
     pages = [(REPO, "this checkout", ())] + ([(REPO, "this checkout, --no-ahead", ("--no-ahead",))]
                                             if args.without_ahead else []) \
         + ([(args.vs, f"{args.vs.name} (--vs)", ())] if args.vs else [])
-    cols = HEADER + ([] if args.quick else FULL)
+    table = Rows(HEADER + ([] if args.quick else FULL))
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; think {args.think_s:g} s"
           f"{'; another seed typed right before the click' if args.new_seed else ''}; medians of {args.repeat}\n")
     with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as stack:
@@ -266,7 +269,7 @@ def main(argv: list[str] | None = None) -> int:
         for i, (checkout, name, extra) in enumerate(pages):
             (tmp / f"app{i}").mkdir()
             apps.append(stack.enter_context(served_app(checkout, tmp / f"app{i}" / "work", name, extra=extra)))
-        print("| " + " | ".join(cols) + " |\n|" + "---|" * len(cols), flush=True)
+        print(table.header(), flush=True)
         browser = stack.enter_context(sync_playwright()).chromium.launch(executable_path=args.chromium,
                                                                          args=CHROMIUM_ARGS)
         k = 0
@@ -283,8 +286,10 @@ def main(argv: list[str] | None = None) -> int:
                             cases[(a.name, b)].append(run_case(browser, a.url, run_wav, ALL[:n], args.think_s,
                                                                a.workdir, b, args.quick, args.new_seed))
                 for (name, b), runs in cases.items():
-                    print(row(dur, n, name, "mannequin" if b is None else b.name, runs, args.quick), flush=True)
+                    table.add(*cells(dur, n, name, "mannequin" if b is None else b.name, runs, args.quick))
+                    print(table.last(), flush=True)
         browser.close()
+    save_json(args.json, table)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
     return 0
 

@@ -1,8 +1,6 @@
 """eSpeak NG speech of known sentences for the speech recognition tests (tests/asr, tests/generator)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import difflib
 
 import numpy as np
@@ -11,7 +9,6 @@ from gesturelsm.align import tts
 from gesturelsm.align.normalize import speak as spoken
 
 SR = 16_000
-BEAT2 = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "beat2"
 ENGLISH = "yesterday my sister walked to the market and bought fresh bread apples and a bottle of milk"
 GERMAN = ("guten morgen heute möchte ich ihnen erzählen wie wir im letzten sommer mit dem fahrrad durch die "
           "berge gefahren sind")

@@ -4,15 +4,32 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import time
+from pathlib import Path
 from typing import Iterator, Sequence
 
 import numpy as np
 
 from gesturelsm.motion import MotionSequence
 
+REPO = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("GESTURELSM_SHARED") or REPO.parent / "shared")   # the real data: ../shared beside the
+BEAT2 = SHARED / "data" / "beat2"                                                # repository, never copied into it
+REAL_TAKE = "2_scott_0_1_1"
+VRM = SHARED / "assets" / "characters" / "cryptovoxels.vrm"                     # the shared real character
+
 
 def quiet(*args, **kwargs) -> None:
     """Stands in for a progress callback (gr.Progress outside a Gradio event, a pipeline's progress)."""
+
+
+def until(condition, what: str, limit: float = 60.0, every: float = 0.01) -> None:
+    """Returns once `condition()` holds. `limit` seconds only bound something that never gets there, on a machine
+    however loaded: then the test fails saying `what` did not happen."""
+    deadline = time.monotonic() + limit
+    while not condition():
+        assert time.monotonic() < deadline, f"not within {limit:g} s: {what}"
+        time.sleep(every)
 
 
 def assert_close_rel(got, want, rel: float = 1e-5) -> None:
@@ -108,6 +125,15 @@ def served(service) -> Iterator[str]:
         yield url
     finally:
         demo.close()
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that nothing listens on (for a server a test starts)."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def gradio_client(url: str):

@@ -31,12 +31,7 @@ os.environ.setdefault("GESTURELSM_KERNELS_CACHE", "")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from _support import build_tiny_assets  # noqa: E402
-
-REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared"))
-BEAT2 = SHARED / "data" / "beat2"
-REAL_TAKE = "2_scott_0_1_1"
+from _support import BEAT2, REAL_TAKE, REPO, build_tiny_assets  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -91,9 +91,7 @@ def test_rows_as_they_come_stopwatch_and_json(monkeypatch, tmp_path):
     h.save_json(None, rows)                                               # no --json: nothing written
 
 
-SCRIPTS = [pytest.param(p.name, marks=pytest.mark.skip(reason="its table and timer are its own"))
-           if p.name == "player_latency.py" else p.name
-           for p in sorted(BENCHMARKS.glob("*.py")) if not p.name.startswith("_")]
+SCRIPTS = [p.name for p in sorted(BENCHMARKS.glob("*.py")) if not p.name.startswith("_")]
 
 
 @pytest.mark.parametrize("name", SCRIPTS)
@@ -101,3 +99,25 @@ def test_every_script_runs_through_the_harness(name):
     tree = ast.parse((BENCHMARKS / name).read_text())
     nodes = list(ast.walk(tree))
     assert any(isinstance(n, ast.ImportFrom) and n.module == "_harness" for n in nodes), f"{name} skips _harness"
+
+
+def test_player_latency_keeps_its_flags_and_its_table(monkeypatch, capsys):
+    """Other docs quote its command lines and columns: the flags stay, and a row has one cell per column."""
+    monkeypatch.setattr(sys, "path", [str(BENCHMARKS)] + sys.path)               # as `python benchmarks/NAME.py`
+    spec = importlib.util.spec_from_file_location("_player_latency_under_test", BENCHMARKS / "player_latency.py")
+    m = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(m)
+    with pytest.raises(SystemExit):
+        m.main(["--help"])
+    shown = capsys.readouterr().out
+    for flag in ("--seconds", "--methods", "--think-s", "--repeat", "--vs", "--quick", "--without-ahead", "--new-seed",
+                 "--character", "--chromium", "--json"):
+        assert flag in shown, flag
+    run = {"play": 1.0, "all": 1.5, "marks": {"payload": 0.2}, "drawn2": 30, "fps_render": 20.0, "mp4": 9.0,
+           "fps_idle": 30.0, "prof": None, "scrub": 0, "again": 1.1, "again_rendering": 1.2, "rendering": True}
+    quick = m.Rows(m.HEADER)
+    quick.add(*m.cells(10.0, 1, "this checkout", "mannequin", [run, run], True))
+    assert quick.last() == "| 10.0 s | 1 | this checkout | mannequin | **1.00** (1.00-1.00) | 1.50 | 30 | 0.20 |"
+    full = m.Rows(m.HEADER + m.FULL)
+    full.add(*m.cells(10.0, 1, "this checkout", "mannequin", [run], False))
+    assert full.last().endswith("| 20.0 | 9.0 | 30.0 | n/a | 0 | 1.10 | 1.20 (1/1) |")

@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 
 from gesturelsm.align import tts
+from _support import BEAT2
 
 SR = 16_000
-SHARED = Path(__file__).resolve().parents[2].parent / "shared"
-BEAT2 = SHARED / "data" / "beat2"
 SENTENCE = ("the quick brown fox jumps over the lazy dog while seven happy children sing loudly "
             "in the garden behind our little house")
 

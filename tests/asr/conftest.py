@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 
-from _asr_support import BEAT2, ENGLISH, GERMAN, speak
+from _asr_support import ENGLISH, GERMAN, speak
+from _support import BEAT2
 
 
 @pytest.fixture(scope="session")

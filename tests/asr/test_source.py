@@ -11,26 +11,31 @@ from gesturelsm.asr.source import AUDIO_ONLY, AUTOMATIC, TEXTGRID, TYPED, automa
 from gesturelsm.cli import build_parser, main
 
 from _asr_support import ENGLISH, SR
+from _support import until
 
 
 def test_recent_computes_each_key_once_even_when_asked_concurrently():
     """Four threads ask for one key while it is being computed: one computation, four equal answers; the oldest
     key is forgotten past `size`; if the computing caller fails, a waiting caller computes for itself."""
     import threading
-    import time
 
     from gesturelsm.memo import Recent
 
     memo, calls, answers = Recent(2), [], []
 
-    def slow(v):
+    def waiting(key) -> int:
+        """Callers waiting for the computation of `key` (its event's waiters)."""
+        return len(memo._running[key]._cond._waiters)
+
+    def slow(v, others: int = 0):
         def f():
             calls.append(v)
-            time.sleep(0.2)
+            if others:                                               # held until the other callers wait for it
+                until(lambda: waiting("a") >= others, f"{others} more callers waited for 'a'")
             return v * 10
         return f
 
-    threads = [threading.Thread(target=lambda: answers.append(memo.get("a", slow(1)))) for _ in range(4)]
+    threads = [threading.Thread(target=lambda: answers.append(memo.get("a", slow(1, others=3)))) for _ in range(4)]
     for t in threads:
         t.start()
     for t in threads:
@@ -51,8 +56,7 @@ def test_recent_computes_each_key_once_even_when_asked_concurrently():
     assert started.wait(30)                                          # "d" is being computed, and will fail
     waiter = threading.Thread(target=lambda: second.append(memo.get("d", slow(5))))
     waiter.start()
-    while not memo._running["d"]._cond._waiters:                     # the second caller waits for the first
-        time.sleep(0.001)
+    until(lambda: waiting("d") == 1, "the second caller waited for the first")
     release.set()
     first.join()
     waiter.join()

@@ -1,16 +1,14 @@
 """Fixtures for body tests: the shipped mannequin, a synthetic SMPL-X-like model, the shared data folder."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gesturelsm.motion.skeleton import NUM_JOINTS, PARENTS
+from _support import SHARED
 
-REPO = Path(__file__).resolve().parents[2]
-SHARED = Path(os.environ.get("GESTURELSM_SHARED", REPO.parent / "shared"))
 BVH = SHARED / "data" / "beat_v1" / "2_scott_0_1_1.bvh"
 TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
 SMPLX_V, SMPLX_F = 10475, 20908

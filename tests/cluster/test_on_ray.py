@@ -4,7 +4,6 @@ failures listed, and a node removed mid-run without losing or repeating a unit."
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 
 import pytest
@@ -14,6 +13,7 @@ from gesturelsm.cluster.connect import check_workers, package_fingerprint
 from gesturelsm.errors import ClusterError
 
 import _cluster_support as units
+from _support import until
 
 AUTO = parse_cluster("auto")
 
@@ -53,10 +53,8 @@ def test_a_node_removed_mid_run_still_yields_every_unit_exactly_once(ray_cluster
         calls.append(unit.key)
         pids.append(result[1])
         if len(calls) == 1:                       # once both nodes are inside a long unit, take one node away
-            deadline = time.monotonic() + 120     # (a loaded machine starts the second node's unit late)
-            while sum(line.split()[0] != "10" for line in _lines(starts)) < 2:
-                assert time.monotonic() < deadline, "the two nodes never both ran a long unit"
-                time.sleep(0.01)
+            until(lambda: sum(line.split()[0] != "10" for line in _lines(starts)) >= 2,
+                  "both nodes were running a long unit", limit=600)
             ray_cluster.remove_node(worker_node, allow_graceful=False)
 
     try:

@@ -17,7 +17,7 @@ import soundfile as sf
 from gesturelsm.cluster import parse_cluster, parse_replicas
 from gesturelsm.serve.replicas import SCRATCH, Upload
 
-from _support import gradio_client, served, speech_like
+from _support import gradio_client, served, speech_like, until
 
 AUTO = parse_cluster("auto")
 SCRATCH_ROOT = Path(tempfile.gettempdir()) / SCRATCH
@@ -88,10 +88,8 @@ def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tin
     with served(replicated) as url:
         jobs = [gradio_client(url).submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False,
                                           "off", 256, False, api_name="/generate") for seed in seeds]
-        deadline = time.monotonic() + 600                           # bounds a replica that never starts its call
-        while not all(any(scratch.glob(f"replica-{pid}-*/call-*")) for pid in pids):    # both working on a request
-            assert time.monotonic() < deadline, "the two replicas never both had a request"
-            time.sleep(0.01)
+        until(lambda: all(any(scratch.glob(f"replica-{pid}-*/call-*")) for pid in pids),
+              "both replicas were working on a request", limit=600)
         os.kill(pids[0], signal.SIGKILL)
         answers = [j.result(timeout=900) for j in jobs]
     motions = []
@@ -108,10 +106,8 @@ def test_four_visitors_through_two_replicas_one_killed_meanwhile(replicated, tin
                                 render=False, exports=False, transcribe=False)).motions["gesturelsm"]
         np.testing.assert_allclose(got, want.poses, atol=1e-5)
     assert not np.allclose(motions[0], motions[1])
-    deadline = time.monotonic() + 300                              # its replacement removes the dead one's folder
-    while time.monotonic() < deadline and any(scratch.glob(killed_folders[0])):
-        time.sleep(1)
-    assert not any(scratch.glob(killed_folders[0]))
+    until(lambda: not any(scratch.glob(killed_folders[0])), "the killed replica's replacement removed its folder",
+          limit=300, every=0.5)
     assert len(_replica_pids()) == 2 and pids[0] not in _replica_pids()
 
 
@@ -168,11 +164,10 @@ def test_a_client_killed_mid_request_leaves_the_others_and_the_replicas_as_they_
         client = subprocess.Popen([sys.executable, "-c", CLIENT, url, str(wav)], stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL)
         try:
-            deadline = time.monotonic() + 600                        # its request reaches a replica
-            while not {p.name for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")} - before:
+            def reached() -> bool:
                 assert client.poll() is None, "the client ended before its request reached a replica"
-                assert time.monotonic() < deadline, "the killed client's request never reached a replica"
-                time.sleep(0.01)
+                return bool({p.name for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")} - before)
+            until(reached, "the killed client's request reached a replica", limit=600)
         finally:
             client.kill()                                            # mid-request
             client.wait()
@@ -186,10 +181,8 @@ def test_a_client_killed_mid_request_leaves_the_others_and_the_replicas_as_they_
             motions.append(d["poses"].copy())
     assert len({str(Path(a[0]).parent) for a in answers}) == 3                        # three folders
     assert not np.allclose(motions[0], motions[1]) and not np.allclose(motions[1], motions[2])
-    deadline = time.monotonic() + 300                     # every call has ended on the replicas, the killed one's too
-    while any(SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*") for pid in pids) and time.monotonic() < deadline:
-        time.sleep(0.5)
-    assert not any(p for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*"))
+    until(lambda: not any(p for pid in pids for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")),
+          "every call ended on the replicas, the killed client's too", limit=300, every=0.5)
     assert _replica_pids() == pids                                   # no replica died or was replaced
 
 
@@ -225,10 +218,8 @@ def test_twelve_clients_on_two_replicas_one_killed_each_gets_its_own_motion(repl
         clients = [gradio_client(url) for _ in seeds]
         jobs = [c.submit(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, seed, 20, False, "off", 256, False,
                          api_name="/generate") for c, seed in zip(clients, seeds)]
-        deadline = time.monotonic() + 600
-        while not all(any(SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")) for pid in pids):
-            assert time.monotonic() < deadline, "the two replicas never both had a request"
-            time.sleep(0.01)
+        until(lambda: all(any(SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")) for pid in pids),
+              "both replicas were working on a request", limit=600)
         os.kill(pids[0], signal.SIGKILL)                            # mid-request, with ten more waiting
         outcomes = [_outcome(j) for j in jobs]
         after_kill = gradio_client(url).predict(handle_file(str(wav)), "", None, ["gesturelsm"], 1, 2.0, 999, 20,
@@ -252,8 +243,6 @@ def test_twelve_clients_on_two_replicas_one_killed_each_gets_its_own_motion(repl
     def calls() -> list[Path]:
         return [p for pid in pids_seen for p in SCRATCH_ROOT.glob(f"replica-{pid}-*/call-*")]
 
-    deadline = time.monotonic() + 300                               # the replacement removes the dead one's folder
-    while time.monotonic() < deadline and (any(SCRATCH_ROOT.glob(killed[0])) or calls()):
-        time.sleep(1)
-    assert not any(SCRATCH_ROOT.glob(killed[0])) and calls() == []
+    until(lambda: not any(SCRATCH_ROOT.glob(killed[0])) and calls() == [],
+          "the replacement removed the killed replica's folder and every call ended", limit=300, every=0.5)
     assert len(_replica_pids()) == 2 and pids[0] not in _replica_pids()

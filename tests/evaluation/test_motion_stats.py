@@ -8,14 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from _support import speech_like, synthetic_motion
+from _support import BEAT2, speech_like, synthetic_motion
 from gesturelsm.evaluation.evaluate import motion_stats as eval_motion_stats
 from gesturelsm.evaluation.motion_stats import (SPEAKER_FILE, STATISTICS, SpeechContext, joint_positions,
                                                 motion_statistics, seed_spread, speaker_reference,
                                                 statistics_of_joints, stats_body)
 from gesturelsm.metrics.speech_response import beat_timing, energy_following
 
-SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "beat2"
 
 
 def test_statistics_equal_the_eval_definitions_for_the_same_motion():
@@ -56,15 +55,15 @@ def _load_take(name: str):
     from gesturelsm.audio import resample, to_mono
     from gesturelsm.motion import MotionSequence
 
-    motion = MotionSequence.load(SHARED / "smplxflame_30" / f"{name}.npz")
-    y, sr = sf.read(SHARED / "wave16k" / f"{name}.wav", dtype="float32")
+    motion = MotionSequence.load(BEAT2 / "smplxflame_30" / f"{name}.npz")
+    y, sr = sf.read(BEAT2 / "wave16k" / f"{name}.wav", dtype="float32")
     return motion, resample(to_mono(y), sr, 16000)
 
 
 def test_the_stored_speaker_row_matches_the_training_take_measured_here():
-    if not (SHARED / "smplxflame_30").is_dir():
-        pytest.skip(f"{SHARED} is absent (the real BEAT2 take lives in ../shared)")
-    takes = sorted(p.stem for p in (SHARED / "smplxflame_30").glob("*.npz"))
+    if not (BEAT2 / "smplxflame_30").is_dir():
+        pytest.skip(f"{BEAT2} is absent (the real BEAT2 take lives in ../shared)")
+    takes = sorted(p.stem for p in (BEAT2 / "smplxflame_30").glob("*.npz"))
     stored = json.loads(SPEAKER_FILE.read_text())
     ref = speaker_reference()
     assert set(stored["statistics"]) == {s.key for s in STATISTICS}
@@ -90,9 +89,9 @@ def test_the_stored_speaker_row_matches_the_training_take_measured_here():
 
 
 def test_the_speaker_row_is_what_the_statistics_give_for_the_take_against_its_own_speech():
-    if not (SHARED / "smplxflame_30").is_dir():
-        pytest.skip(f"{SHARED} is absent (the real BEAT2 take lives in ../shared)")
-    takes = sorted(p.stem for p in (SHARED / "smplxflame_30").glob("*.npz"))
+    if not (BEAT2 / "smplxflame_30").is_dir():
+        pytest.skip(f"{BEAT2} is absent (the real BEAT2 take lives in ../shared)")
+    takes = sorted(p.stem for p in (BEAT2 / "smplxflame_30").glob("*.npz"))
     if len(takes) != 1:
         pytest.skip("several takes: the row is a weighted mean (checked above for the amplitude statistics)")
     motion, audio = _load_take(takes[0])

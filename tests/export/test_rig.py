@@ -6,7 +6,6 @@ loads as a VRM in three-vrm in Chromium, where the right wrist sits where the mo
 from __future__ import annotations
 
 import base64
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +15,8 @@ from _rigs import bvh_positions, character_js_page, gltf_validator_errors
 from gesturelsm.cli import main
 from gesturelsm.export.glb import accessor_array, read_glb
 from gesturelsm.retarget import load_character, retarget_motion
+from _support import VRM
 
-REPO = Path(__file__).resolve().parents[2]
-VRM = REPO.parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 
 
 @pytest.fixture(scope="module")

@@ -3,9 +3,7 @@ put, a sliding foot is pinned, the upper body is bit for bit the input's, contac
 the feet stand on the floor, drift goes; motions that cannot be grounded come back unchanged with a note."""
 from __future__ import annotations
 
-import os
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,9 +15,9 @@ from gesturelsm.grounding.rotations import exp, log
 from gesturelsm.grounding.targets import TargetParams
 from gesturelsm.motion import MotionSequence
 from gesturelsm.motion.skeleton import PARENTS
+from _support import BEAT2
 
-SHARED = Path(os.environ.get("GESTURELSM_SHARED", Path(__file__).resolve().parents[2].parent / "shared"))
-TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+TAKE = BEAT2 / "smplxflame_30" / "2_scott_0_1_1.npz"
 FPS = 30
 LEGS = (1, 2, 4, 5, 7, 8)
 

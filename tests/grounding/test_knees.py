@@ -5,9 +5,7 @@ landings and lifts (tests/grounding/test_grounding.py `test_contact_transitions_
 twice as much on the real take (docs/GROUNDING.md)."""
 from __future__ import annotations
 
-import os
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,9 +17,9 @@ from gesturelsm.metrics.feet import feet_stats
 from gesturelsm.motion import MotionSequence
 
 from .test_grounding import assert_pinned, joints, sliding_left_foot, standing
+from _support import BEAT2
 
-SHARED = Path(os.environ.get("GESTURELSM_SHARED", Path(__file__).resolve().parents[2].parent / "shared"))
-TAKE = SHARED / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+TAKE = BEAT2 / "smplxflame_30" / "2_scott_0_1_1.npz"
 LOWEST = GroundingSettings(straight=False)
 
 

@@ -3,7 +3,6 @@ as the plain streaming generator."""
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ import pytest
 from gesturelsm.live import LiveConfig, StreamingGenerator
 from gesturelsm.live.session import LiveBusy, LiveManager
 
-from _support import speech_like
+from _support import speech_like, until
 
 CFG = LiveConfig(steps=1)
 
@@ -27,19 +26,13 @@ def speech(beat2_root):
     return load_audio(beat2_root / "wave16k" / "2_scott_0_2_2.wav")[:16000 * 6]
 
 
-def wait_for(cond, timeout: float = 60.0) -> None:
-    end = time.perf_counter() + timeout
-    while not cond() and time.perf_counter() < end:
-        time.sleep(0.02)
-
-
 def test_stop_midway_leaves_no_worker(shipped_pipe, speech):
     mgr = LiveManager(shipped_pipe, max_sessions=2, config=CFG)
     s = mgr.open()
     for a in range(0, len(speech) // 2, 3200):
         s.feed(speech[a:a + 3200])
-    wait_for(lambda: s.gen.emitted > 0)
-    assert s.gen.emitted > 0 and s.poll()
+    until(lambda: s.gen.emitted > 0, "the session made motion")
+    assert s.poll()
     s.stop()
     assert not s._thread.is_alive() and live_threads() == [] and mgr.active == 0
     with pytest.raises(RuntimeError, match="ended"):
@@ -69,8 +62,7 @@ def test_limit_gives_a_clear_busy_message_and_frees_on_stop(shipped_pipe, speech
     for s in (a, b):                                   # both stream at once
         for k in range(0, 16000 * 2, 3200):
             s.feed(speech[k:k + 3200])
-    wait_for(lambda: a.gen.emitted > 0 and b.gen.emitted > 0)
-    assert a.gen.emitted > 0 and b.gen.emitted > 0
+    until(lambda: a.gen.emitted > 0 and b.gen.emitted > 0, "both sessions made motion")
     a.stop()
     c = mgr.open()                                     # a freed its place
     mgr.stop_all()
@@ -81,10 +73,10 @@ def test_idle_stream_stops_itself(shipped_pipe):
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=CFG, idle_timeout=0.3)
     s = mgr.open()
     s.feed(speech_like(0.4))
-    wait_for(lambda: not s.running, timeout=10.0)
-    assert not s.running and "no audio" in s.stats()["error"]
-    wait_for(lambda: mgr.active == 0, timeout=5.0)
-    assert mgr.active == 0 and live_threads() == []
+    until(lambda: not s.running, "the idle stream stopped itself")
+    assert "no audio" in s.stats()["error"]
+    until(lambda: mgr.active == 0, "the idle stream gave its place back")
+    assert live_threads() == []
 
 
 def test_outbox_is_bounded_when_nobody_reads(shipped_pipe):

@@ -2,14 +2,14 @@
 take against the figures the measures are quoted with."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gesturelsm.metrics.feet import FOOT_JOINTS, LEG_JOINTS, feet_stats, floor_height, foot_skate, path_diameter
+from _support import BEAT2
 
-TAKE = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "beat2" / "smplxflame_30" / "2_scott_0_1_1.npz"
+TAKE = BEAT2 / "smplxflame_30" / "2_scott_0_1_1.npz"
 
 
 def standing(T: int = 300) -> np.ndarray:

@@ -17,9 +17,9 @@ from _skinned import write_skinned_glb
 from gesturelsm.cli import main
 from gesturelsm.render import RenderStyle, RenderWarning, fit_camera, render_frames
 from gesturelsm.retarget import Character, load_character
+from _support import VRM
 
 STYLE = RenderStyle(size=(128, 128), floor="none", shadow=False)
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 
 
 @pytest.fixture(scope="module")

@@ -2,7 +2,6 @@
 real take: every humanoid bone's world direction follows SMPL-X's within 3 degrees on average."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +12,8 @@ from gesturelsm.body.fk import forward_kinematics_aa
 from gesturelsm.body.model import resolve_body
 from gesturelsm.motion.skeleton import PARENTS
 from gesturelsm.retarget import load_character, retarget_motion
+from _support import VRM
 
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 
 
 def test_cryptovoxels_follows_the_real_take(real_motion):

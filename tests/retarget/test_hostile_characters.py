@@ -12,14 +12,13 @@ import numpy as np
 import pytest
 
 from _hostile_characters import character_cases, write_characters
-from _support import synthetic_motion
+from _support import VRM, synthetic_motion
 from gesturelsm.cli import main
 from gesturelsm.render.figure import make_figure
 from gesturelsm.retarget import CharacterError, load_character
 from gesturelsm.retarget.mesh import character_mesh
 from gesturelsm.webapp.character import choose, read_upload
 
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 CASES = character_cases(VRM, slow=False)
 
 

@@ -13,6 +13,8 @@ import pytest
 
 from gesturelsm.serve.request import Request
 
+from _support import until
+
 ALL = ("gesturelsm", "rectified_flow", "ddim")
 STEPS = {"gesturelsm": 3, "rectified_flow": 1, "ddim": 2}
 
@@ -159,10 +161,7 @@ def test_no_run_starts_while_the_server_generates_or_is_busy(service, upload, ca
 def test_a_run_stops_when_something_else_needs_the_cores(service, upload, calls, monkeypatch):
     gate = _gated(service, monkeypatch, after=1)
     run = _ahead(service, _request(upload))
-    for _ in range(600):                                          # the first method made; the second held
-        if run.made:
-            break
-        threading.Event().wait(0.1)
+    until(lambda: run.made, "the first method was made ahead")   # the second held
     monkeypatch.setattr(run, "busy", lambda: True)                 # e.g. a live stream opened meanwhile
     gate.set()
     run.thread.join(60)

@@ -18,7 +18,7 @@ from gesturelsm.errors import GestureError
 from gesturelsm.serve.request import Request
 from gesturelsm.serve.service import GestureService
 
-from _support import gradio_client, speech_like
+from _support import gradio_client, speech_like, until
 
 
 @pytest.fixture
@@ -148,10 +148,8 @@ def test_outputs_are_swept_on_a_timer_and_at_shutdown(service, tmp_path):
     past = time.time() - 3600
     os.utime(old, (past, past))
     sweeper = Sweeper(svc.cleanup, 0.05, final=lambda: svc.cleanup(max_age_s=0)).start()
-    deadline = time.time() + 20
-    while old.exists() and time.time() < deadline:                     # no request arrives meanwhile
-        time.sleep(0.05)
-    assert not old.exists() and fresh.exists()
+    until(lambda: not old.exists(), "the timer swept the hour-old folder", every=0.05)   # no request meanwhile
+    assert fresh.exists()
     sweeper.stop()                                                     # shutdown: everything goes
     assert not fresh.exists()
 

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import socket
 import subprocess
 import sys
 import time
@@ -16,16 +15,10 @@ from pathlib import Path
 import pytest
 
 from _study_support import make_synthetic_study
-from _support import CHROMIUM
+from _support import CHROMIUM, free_port
 
 REPO = Path(__file__).resolve().parents[2]
 PREFERRED = ["alpha", "beta", "gamma"]          # what the attentive raters prefer, best first
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @contextlib.contextmanager
@@ -83,7 +76,7 @@ def test_pairwise_study_in_the_browser_with_a_restart(tmp_path):
     trials = {i: [dict(t.__dict__) for t in raters[i].trials] for i in raters}
     n = len(trials[1])
     assert {t["check"] for t in trials[1]} == {"", "mismatch", "repeat"}
-    port = _free_port()
+    port = free_port()
     cli = [sys.executable, "-m", "gesturelsm", "study", "serve", str(folder), "--port", str(port)]
     direct = [sys.executable, "-c", "import sys; from gesturelsm.study.server import serve; "
               f"serve(sys.argv[1], port={port})", str(folder)]

@@ -112,13 +112,21 @@ def test_a_read_only_database_is_refused_while_serving_and_at_startup(folder):
     assert _stored(folder) == [(1, 0)]
 
 
-def test_a_write_lock_held_elsewhere_gives_a_json_error_and_stalls_no_video(folder):
+def test_a_write_lock_held_elsewhere_gives_a_json_error_and_stalls_no_video(folder, monkeypatch):
     """Another program holds the database's write lock until both requests are answered (or 20 s pass): the
     answer must come back refused while the lock is still held, and the video must not wait for it."""
     from starlette.testclient import TestClient
 
+    from gesturelsm.study import server
     from gesturelsm.study.server import Study, build_app
 
+    writing = threading.Event()                      # the answer's write has begun (it waits for the lock)
+
+    def record(*args, **kw):
+        writing.set()
+        return original(*args, **kw)
+    original = server._record
+    monkeypatch.setattr(server, "_record", record)
     rater = _rater(folder)
     with TestClient(build_app(Study.open(folder)), raise_server_exceptions=False) as c:   # one event loop
         session = c.post(f"/api/{rater.token}/open").json()["session"]
@@ -143,7 +151,7 @@ def test_a_write_lock_held_elsewhere_gives_a_json_error_and_stalls_no_video(fold
         threading.Thread(target=release_after_both_or_20s, daemon=True).start()
         with ThreadPoolExecutor(2) as pool:
             fa = pool.submit(timed, "answer", lambda: _answer(c, rater.token, session, 0))
-            time.sleep(0.05)
+            assert writing.wait(60), "the answer never began its write"
             fv = pool.submit(timed, "video", lambda: c.get(f"/api/{rater.token}/video/0/left"))
             a, v = fa.result(), fv.result()
         released.wait(30)

@@ -12,11 +12,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from _rigs import character_js_page
-from _support import quiet
+from _support import VRM, quiet
 from gesturelsm.webapp.character import character_payload, decode, read_upload
 from gesturelsm.retarget import retarget_motion
 
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from _rigs import Y_UP_TO_Z_UP, build_rig, write_gltf
-from _support import speech_like, synthetic_motion
+from _support import speech_like, synthetic_motion, until
 from gesturelsm.export.glb import continuous_quaternions, matrix_to_quaternion_xyzw
 from gesturelsm.export.motion_codec import CHARACTER_VERSION, HEADER, VERSION, decode, encode
 from gesturelsm.export.player_payload import motion_record
@@ -96,10 +96,7 @@ def test_no_jump_at_chunk_borders(character, motion, body):
 
 
 def wait_idle(mgr) -> None:
-    deadline = time.monotonic() + 10
-    while mgr.active and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert mgr.active == 0
+    until(lambda: mgr.active == 0, "every live stream ended")
 
 
 class FakeSession:

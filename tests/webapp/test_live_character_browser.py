@@ -6,12 +6,12 @@ the stream. Tiny checkpoints (the app tests' service). Skips, saying why, withou
 character."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-VRM = Path(__file__).resolve().parents[2].parent / "shared" / "assets" / "characters" / "cryptovoxels.vrm"
+from _support import VRM, until
+
 
 PLAYER = "#live-player"
 LIVE = f"document.querySelector('{PLAYER}').__live"
@@ -64,11 +64,13 @@ def test_the_live_tab_streams_onto_the_chosen_character(app_url, speech_48k):
         page.wait_for_function(f"() => Number(document.querySelector('{PLAYER}').dataset.frames) > 5", timeout=60000)
         assert page.get_attribute(PLAYER, "data-state") == "playing"
         seen = []
-        for _ in range(12):                                                  # the hand over ~2.4 s of the stream
+
+        def moved() -> bool:                                                 # the hand, sampled as the stream plays
             seen.append(_hand(page, hand))
             page.wait_for_timeout(200)
-        seen = np.asarray(seen)
-        assert np.isfinite(seen).all() and np.ptp(seen, axis=0).max() > 0.005   # it moves (metres)
+            assert np.isfinite(seen[-1]).all(), seen[-1]
+            return len(seen) >= 12 and np.ptp(np.asarray(seen), axis=0).max() > 0.005     # it moves (metres)
+        until(moved, "the character's hand moved 5 mm", every=0)
         info = page.evaluate(f"""() => {{ const f = {LIVE}, b = f.player.bodies[0];
             return {{streamed: b.streamed === true, frames: b.frames, shown: f.player.frames(),
                     error: f.element.dataset.error || f.element.dataset.characterError || null}}; }}""")
@@ -128,9 +130,12 @@ def test_the_live_tab_moves_the_characters_face(app_url, speech_48k, tmp_path, m
         page.wait_for_selector(f"{PLAYER}[data-character='face.vrm']", timeout=30000)
         page.wait_for_function(f"() => {LIVE}.player.bodies[0].frames > 40", timeout=60000)
         seen = []
-        for _ in range(8):
+
+        def changed() -> bool:                                               # the face, sampled as the stream plays
             seen.append(page.evaluate(FACE_JS))
             page.wait_for_timeout(250)
+            return len(seen) >= 8 and len({tuple(np.round(s["influences"], 6)) for s in seen}) > 1
+        until(changed, "the face's morph weights changed", every=0)
         page.locator("#live-stop").click()
         page.wait_for_function(f"() => {LIVE}.ws === null", timeout=30000)
     assert seen[0]["morphs"] == [[0, k] for k in range(6)]                     # the stream's channels

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -16,7 +15,7 @@ from gesturelsm.export.motion_codec import AXIS_ANGLE, QUATERNION, MotionRecord,
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
-from _support import speech_like
+from _support import speech_like, until
 
 pytest.importorskip("gradio")
 live_socket = pytest.importorskip("gesturelsm.webapp.live_socket")
@@ -29,10 +28,7 @@ def workers() -> int:
 
 
 def wait_idle(mgr: LiveManager) -> None:
-    deadline = time.monotonic() + 10
-    while (mgr.active or workers()) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert mgr.active == 0 and workers() == 0
+    until(lambda: mgr.active == 0 and workers() == 0, "every live stream ended and its worker stopped")
 
 
 @pytest.fixture()
@@ -113,9 +109,7 @@ def test_past_the_limit_the_visitor_reads_busy(client_for):
     with client.websocket_connect(live_socket.PATH) as first:
         first.send_text(json.dumps({"sample_rate": 16000}))
         first.send_bytes(pcm_blocks(0.1, 16000)[0])
-        deadline = time.monotonic() + 5
-        while not mgr.active and time.monotonic() < deadline:
-            time.sleep(0.01)
+        until(lambda: mgr.active == 1, "the first stream opened")
         with client.websocket_connect(live_socket.PATH) as second:
             second.send_text(json.dumps({"sample_rate": 16000}))
             assert "in use" in receive(second).meta["status"]

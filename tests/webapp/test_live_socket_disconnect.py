@@ -10,7 +10,6 @@ import select
 import socket
 import struct
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -18,7 +17,7 @@ import pytest
 from gesturelsm.live import LiveConfig
 from gesturelsm.live.session import LiveManager
 
-from _support import speech_like
+from _support import free_port, speech_like, until
 
 pytest.importorskip("gradio")
 uvicorn = pytest.importorskip("uvicorn")
@@ -26,25 +25,16 @@ live_socket = pytest.importorskip("gesturelsm.webapp.live_socket")
 from starlette.applications import Starlette  # noqa: E402
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture()
 def served(shipped_pipe):
     """(manager, port): the socket route served by uvicorn in a thread, at most one live stream."""
     mgr = LiveManager(shipped_pipe, max_sessions=1, config=LiveConfig(steps=1))
-    port = _free_port()
+    port = free_port()
     server = uvicorn.Server(uvicorn.Config(Starlette(routes=live_socket.routes(mgr)), host="127.0.0.1", port=port,
                                            log_config=None, log_level="debug"))
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
-    deadline = time.monotonic() + 20
-    while not server.started and time.monotonic() < deadline:
-        time.sleep(0.02)
-    assert server.started
+    until(lambda: server.started, "the socket's server started")
     yield mgr, port
     server.should_exit = True
     thread.join(10)
@@ -93,14 +83,6 @@ class Handlers:
                 self.running, self.finished = self.running - 1, self.finished + 1
 
 
-def _wait(condition, what: str, limit: float = 60.0) -> None:
-    """Until `condition()` holds; `limit` seconds only bound a server that never gets there (then the test fails)."""
-    deadline = time.monotonic() + limit
-    while not condition():
-        assert time.monotonic() < deadline, f"the server never got there: {what}"
-        time.sleep(0.01)
-
-
 def _pcm(seconds: float) -> list[bytes]:
     y = (np.clip(speech_like(seconds, seed=7), -1, 1) * 32767).astype("<i2")
     return [y[a:a + 1600].tobytes() for a in range(0, len(y), 1600)]
@@ -116,7 +98,7 @@ def _no_hello(port, mgr, handlers):
 def _after_hello(port, mgr, handlers):
     c = RawClient(port)
     c.send(HELLO)
-    _wait(lambda: mgr.active == 1, "the stream opened")
+    until(lambda: mgr.active == 1, "the stream opened")
     c.drop()
 
 
@@ -147,12 +129,12 @@ def _refused(port, mgr, handlers):
 def _busy(port, mgr, handlers):
     first = RawClient(port)
     first.send(HELLO)
-    _wait(lambda: mgr.active == 1, "the first stream opened")
+    until(lambda: mgr.active == 1, "the first stream opened")
     done = handlers.finished
     second = RawClient(port)
     second.send(HELLO)                   # past the limit: the server sends "busy" to a client that is gone
     second.drop()
-    _wait(lambda: handlers.finished > done, "the second visitor was answered")
+    until(lambda: handlers.finished > done, "the second visitor was answered")
     first.drop()
 
 
@@ -169,7 +151,7 @@ def test_a_client_that_leaves_leaves_no_traceback(served, caplog, monkeypatch, s
     caplog.set_level(logging.DEBUG)
     for _ in range(3):
         stage(port, mgr, handlers)
-    _wait(lambda: mgr.active == 0 and handlers.running == 0 and handlers.finished >= 3,
+    until(lambda: mgr.active == 0 and handlers.running == 0 and handlers.finished >= 3,
           "every handler finished after the last drop")
     import gc
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from _support import player_page, served, shipped_service
+from _support import player_page, served, shipped_service, until
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "gesturelsm" / "webapp" / "examples"
 PLAYER = "#motion-player"
@@ -123,17 +123,13 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped, monkeyp
 def test_the_motion_made_ahead_plays_at_the_click_in_one_payload(shipped):
     """The settings on screen are made while the visitor reads them (serve/ahead.py): the click's first payload
     already has every body, and the summary says so."""
-    import time
-
     service, url = shipped
     with player_page(url, PLAYER) as page:
         page.locator("#methods label", has_text="DDIM").click()               # GestureLSM + rectified flow
         page.locator("#speech input[type=file]").first.set_input_files(str(EXAMPLES / "hello.wav"))
         page.locator("#speech [data-testid=download-link]").wait_for(state="attached", timeout=30000)
-        t0 = time.monotonic()
-        while not (service.ahead._run is not None and service.ahead._run.done and len(service.ahead._run.made) == 2):
-            assert time.monotonic() - t0 < 120, "nothing was made ahead"
-            time.sleep(0.2)
+        until(lambda: service.ahead._run is not None and service.ahead._run.done and len(service.ahead._run.made) == 2,
+              "both methods were made ahead", limit=120)
         page.evaluate(WATCH_PAYLOADS)
         page.locator("#generate").click()
         page.wait_for_selector(f"{PLAYER}[data-bodies='2']", timeout=120000)
@@ -233,5 +229,5 @@ def test_the_page_plays_the_methods_made_when_one_fails(shipped, monkeypatch):
         assert page.locator(f"{PLAYER} .mp-label-failed").inner_text().endswith("failed: it failed on the server")
         page.locator("#summary", has_text="Rectified flow: it failed on the server").wait_for(timeout=30000)
         t0 = page.evaluate("() => window.gesturelsmPlayer.clock.currentTime")
-        page.wait_for_timeout(1000)
-        assert page.evaluate("() => window.gesturelsmPlayer.clock.currentTime") > t0 + 0.3     # it plays on
+        page.wait_for_function(f"() => window.gesturelsmPlayer.clock.currentTime > {t0 + 0.3}",
+                               timeout=60000)                                                # it plays on

@@ -19,6 +19,8 @@ T = 300                                     # 10 s at 30 fps
 
 
 def _files(tmp_path) -> tuple[dict, list[np.ndarray]]:
+    """The page's files (the player bundle, the mannequin, speech, two motions) and the two motions' rotations; the
+    test skipped, saying why, without chromium or the player bundle."""
     import soundfile as sf
 
     from gesturelsm.body.model import resolve_body
@@ -27,6 +29,10 @@ def _files(tmp_path) -> tuple[dict, list[np.ndarray]]:
     from gesturelsm.motion.sequence import MotionSequence
     from gesturelsm.webapp.player.component import BUNDLE
 
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
+    if not BUNDLE.exists():
+        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
     body = resolve_body(None)
     rng = np.random.default_rng(5)
     files = {"/index.html": (b'<!doctype html><div id="p"></div>', "text/html"),
@@ -61,18 +67,27 @@ STATE = """() => { const p = window.player, e = p.element;
             labels: [...e.querySelectorAll('.mp-label')].map((l) => l.textContent)}; }"""
 
 
-def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
-    from gesturelsm.webapp.player.component import BUNDLE
+def _start(page) -> None:
+    """A player on the page's empty element (window.player)."""
+    page.evaluate("""async () => { const m = await import('/player.js');
+        window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
 
-    if CHROMIUM is None:
-        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
-    if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
+
+def _paused(page) -> dict:
+    """The player paused, once it shows the frame of its clock's time; its STATE then."""
+    page.evaluate("() => window.player.pause()")
+    page.wait_for_function("""() => { const p = window.player;
+        return p.element.dataset.state === 'paused'
+          && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
+                           timeout=30000)
+    return page.evaluate(STATE)
+
+
+def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
     files, rotations = _files(tmp_path)
 
     with routed_page(files) as page:
-        page.evaluate("""async () => { const m = await import('/player.js');
-            window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
+        _start(page)
         page.evaluate("(p) => { window.player.load(p); }", _payload([None, None]))    # speech and slots only
         page.wait_for_function("() => window.player.element.querySelectorAll('.mp-label').length === 3",
                                timeout=30000)                                     # the three slots are built
@@ -90,12 +105,7 @@ def test_a_body_that_arrives_later_joins_on_the_shared_clock(tmp_path):
         assert joined["t"] >= before["t"] and joined["state"] == "playing"        # nothing restarted
         assert joined["failed"] == "1" and joined["labels"][2].endswith("failed: it failed on the server")
         assert "generating" not in " ".join(joined["labels"])
-        page.evaluate("() => window.player.pause()")
-        page.wait_for_function("""() => { const p = window.player;
-            return p.element.dataset.state === 'paused'
-              && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
-                               timeout=10000)
-        end = page.evaluate(STATE)
+        end = _paused(page)
         shown = [np.asarray(page.evaluate(f"() => window.player.jointRotations({k})")) for k in range(2)]
     f = end["frame"]
     assert f >= int(before["t"] * 30) and f > 30                # the same speech position, well past the start
@@ -116,12 +126,7 @@ def test_the_first_body_moves_on_its_first_windows_and_ends_on_the_finished_moti
     import numpy as np
 
     from gesturelsm.export.motion_codec import MotionRecord, encode
-    from gesturelsm.webapp.player.component import BUNDLE
 
-    if CHROMIUM is None:
-        pytest.skip("chromium is not installed (apt-get install chromium libatomic1; scripts/setup.sh does it)")
-    if not BUNDLE.exists():
-        pytest.skip(f"the player bundle {BUNDLE} is not built (scripts/setup.sh builds it with npm)")
     files, rotations = _files(tmp_path)
     raw = rotations[1]                                   # the partial motions: other frames than the finished m0
     for n in (60, 150):
@@ -130,8 +135,7 @@ def test_the_first_body_moves_on_its_first_windows_and_ends_on_the_finished_moti
     frames = "window.player.frames()"
 
     with routed_page(files) as page:
-        page.evaluate("""async () => { const m = await import('/player.js');
-            window.player = new m.MotionPlayer(document.querySelector('#p')); }""")
+        _start(page)
         page.evaluate("(p) => { window.player.load(p); }", _growing(None))
         page.wait_for_function("() => window.player.element.querySelectorAll('.mp-label').length === 2",
                                timeout=30000)
@@ -146,12 +150,7 @@ def test_the_first_body_moves_on_its_first_windows_and_ends_on_the_finished_moti
         page.wait_for_function(f"() => window.player.element.dataset.bodies === '2' && {frames} === {T}",
                                timeout=30000)
         page.wait_for_function("() => window.player.clock.currentTime > 2.5", timeout=30000)
-        page.evaluate("() => window.player.pause()")
-        page.wait_for_function("""() => { const p = window.player;
-            return p.element.dataset.state === 'paused'
-              && Number(p.element.dataset.frame) === Math.floor(p.clock.currentTime * p.fps + 1e-6); }""",
-                               timeout=10000)
-        end = page.evaluate(STATE)
+        end = _paused(page)
         shown = np.asarray(page.evaluate("() => window.player.jointRotations(0)"))
         length = page.evaluate("() => Number(window.player.range.max)")
     assert end["t"] >= grown["t"] and length == pytest.approx(T / 30)                # one clock, the full length

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import soundfile as sf
 
-from _support import gradio_client
+from _support import gradio_client, until
 from gesturelsm.serve.request import TIMING_COLUMNS
 
 CHROMIUM = next((p for p in ("/usr/lib/chromium/chromium", "/usr/bin/chromium", shutil.which("chromium") or "")
@@ -167,7 +167,9 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
         v.muted = false;
         if (v.readyState < 2) await new Promise(r => v.addEventListener('loadeddata', r, {once: true}));
         await v.play();
-        await new Promise(r => setTimeout(r, 1200));
+        const t0 = performance.now();           // until it has played 0.3 s (a loaded machine plays late)
+        while (v.currentTime <= 0.3 && !v.ended && performance.now() - t0 < 60000)
+            await new Promise(r => setTimeout(r, 50));
         return {t: v.currentTime, dur: v.duration, audio: v.webkitAudioDecodedByteCount,
                 video: v.webkitVideoDecodedByteCount, w: v.videoWidth, h: v.videoHeight};
     }""")
@@ -183,11 +185,7 @@ def test_browser_generate_plays_video_with_audio(browser, app_url, speech_wav, t
     page.locator("#view3d-show").click()                                   # the GLB viewer, opened only after the
     canvas = page.locator("#view3d canvas")                                # run, draws the body
     canvas.scroll_into_view_if_needed(timeout=30000)                       # the body (WebGL renders on screen)
-    for _ in range(20):
-        page.wait_for_timeout(500)
-        if body_pixels(canvas.screenshot()) > 0.005:
-            break
-    assert body_pixels(canvas.screenshot()) > 0.005
+    until(lambda: body_pixels(canvas.screenshot()) > 0.005, "the GLB viewer drew the body", every=0.5)
     page.screenshot(path=str(tmp_path / "page.png"), full_page=True)
     page.close()
 
