@@ -209,8 +209,10 @@ def _input_column(service: GestureService) -> tuple[list, gr.Button, gr.File, gr
     server's methods); returns the request's inputs in the handlers' order (`page_params`), the button, the Character
     upload, the note."""
     make = controls_of(service)                    # each setting's control as its field says (webapp/controls.py)
+    # the browser's own audio player: Gradio's waveform decodes and draws the whole upload on the page's main thread
+    # (0.1-0.4 s measured) just as the visitor clicks Generate and the first body is fetched (docs/WEBAPP.md)
     audio = gr.Audio(sources=["upload", "microphone"], type="filepath", label="Speech (record or upload)",
-                     elem_id="speech")
+                     elem_id="speech", waveform_options=gr.WaveformOptions(show_recording_waveform=False))
     text = gr.Textbox(label="Transcript (optional: words are timed automatically)", lines=3,
                       placeholder="Type what is said, or leave empty to transcribe the speech automatically",
                       elem_id="transcript")
