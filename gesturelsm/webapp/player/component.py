@@ -65,8 +65,8 @@ def player_component(service: GestureService) -> gr.HTML:
 def payload(service: GestureService, out: Result, character=None) -> dict | None:
     """Write the player's files for a generated request (its folder) and return the player's payload
     (gesturelsm/export/player_payload.py builds it from `shown(out)`); with a character (gesturelsm/webapp/character.py)
-    its `character` entry puts every method made on it, and the edited method's motion before the edit as
-    `METHOD:before`, and no method being made shows its motion so far."""
+    its `character` entry puts every method made on it (and the edited method's motion before the edit as
+    `METHOD:before`); a method being made then shows no motion until it is made."""
     import soundfile as sf
 
     what = shown(out, previews=character is None)
