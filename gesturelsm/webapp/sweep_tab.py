@@ -146,15 +146,15 @@ class SweepHandlers:
 
     def open_run(self, state: PageSweep | None, run: str | None) -> dict | None:
         """The player's payload for one run of the sweep (written once into the sweep's folder)."""
-        from gesturelsm.export.player_payload import player_payload
+        from gesturelsm.export.player_payload import Shown, Slot, player_payload
 
         if state is None or run is None:
             self._refuse("Run a sweep first, then choose one of its motions.")
         r = state.result.runs[int(run)]
         if r.motion is None:
             self._refuse("This sweep kept no motions to play.")
-        return player_payload([r.motion], [f"{label(r.method)} {r.steps} steps CFG {r.cfg:g} seed {r.seed}"],
-                              [r.method], self.service.body, state.folder / f"run-{int(run)}",
+        shown = Shown((Slot(r.method, f"{label(r.method)} {r.steps} steps CFG {r.cfg:g} seed {r.seed}", r.motion),))
+        return player_payload(shown, self.service.body, state.folder / f"run-{int(run)}",
                               self.service.workdir / BODIES, url=motion_player.file_url, audio=state.wav)
 
 

@@ -14,11 +14,10 @@ from pathlib import Path
 import gradio as gr
 
 from gesturelsm.constants import SAMPLE_RATE
-from gesturelsm.export.player_payload import body_glb, player_payload, write_motion
-from gesturelsm.motion.sequence import NUM_BETAS
+from gesturelsm.export.player_payload import Shown, Slot, player_payload, rest_body
 from gesturelsm.serve.editing import edited_method
 from gesturelsm.serve.request import Result
-from gesturelsm.request_files import BODIES, SPEECH, player_before, player_file, player_partial
+from gesturelsm.request_files import BODIES, SPEECH
 from gesturelsm.serve.service import GestureService
 
 from ..character import page_character
@@ -50,9 +49,7 @@ def served_paths() -> list[str]:
 
 def body_url(service: GestureService) -> str:
     """The rest body of the default shape (zero betas, what the generators output), written once."""
-    import numpy as np
-
-    return file_url(body_glb(service.body, np.zeros(NUM_BETAS, np.float32), service.workdir / BODIES))
+    return file_url(rest_body(service.body, service.workdir / BODIES))
 
 
 def player_component(service: GestureService) -> gr.HTML:
@@ -66,59 +63,38 @@ def player_component(service: GestureService) -> gr.HTML:
 
 
 def payload(service: GestureService, out: Result, character=None) -> dict | None:
-    """Write the player's files for a generated request (its folder) and return the player's payload; with a
-    character (gesturelsm/webapp/character.py) its `character` entry puts every method on it. For a result that is
-    still growing (serve/progressive.py) every method shown has a body entry, with its motion file once it is made
-    (`motion`) or why it failed (`error`); files already written for the request are not written again. For an
-    edited result, `compare` is the edited method's motion before the edit (the player's A/B), beside the
-    character's `METHOD:before`. A method still being made whose first windows are decoded (`Result.previews`, on the
-    mannequin) has a body entry with `partial` set and the motion so far (`frames` of them), replaced by its finished
-    motion once it is made."""
+    """Write the player's files for a generated request (its folder) and return the player's payload
+    (gesturelsm/export/player_payload.py builds it from `shown(out)`); with a character (gesturelsm/webapp/character.py)
+    its `character` entry puts every method made on it (and the edited method's motion before the edit as
+    `METHOD:before`); a method being made then shows no motion until it is made."""
     import soundfile as sf
 
-    slots = list(out.slots) or list(zip(out.motions, out.job.labels))
-    if not slots:
+    what = shown(out, previews=character is None)
+    if what is None:
         return None
     folder = out.job.folder
     wav = folder / SPEECH
     if not wav.exists():
         sf.write(wav, out.job.audio, SAMPLE_RATE, subtype="PCM_16")
-    order = [m for m, _ in slots]
-    made = [m for m in order if m in out.motions]
-    labels = {**dict(slots), **dict(zip(out.motions, out.job.labels))}     # an edited motion's label says so
-    p = player_payload([out.motions[m] for m in made], [labels[m] for m in made], made, service.body, folder,
-                       service.workdir / BODIES, url=file_url, audio=wav,
-                       names=[player_file(order.index(k), k) for k in made])
-    ready = {b["method"]: b for b in p["bodies"]}
-    rest = body_url(service)
-    growing = {} if character is not None else previews(service, out, folder, order)
-    p["bodies"] = [ready.get(m) or growing.get(m) or {"label": label, "method": m, "body": rest, "motion": None,
-                                                      "expressions": 0,
-                                                      **({"error": out.failed[m]} if m in out.failed else {})}
-                   for m, label in slots]
-    p["frames"] = p["frames"] or int(round(out.job.speech_seconds * p["fps"]))
-    p["duration"] = p["frames"] / p["fps"]
-    motions, edited = {m: out.motions[m] for m in made}, edited_method(out)
-    if edited is not None:
-        i, before = order.index(edited), out.previous.motions[edited].slice(0, p["frames"])
-        path, _ = write_motion(before, service.body, folder / player_before(i, edited))
-        p["compare"] = {"index": i, "method": edited, "motion": file_url(path)}
-        motions[f"{edited}:before"] = before
+    p = player_payload(what, service.body, folder, service.workdir / BODIES, url=file_url, audio=wav)
     if character is not None:           # from the first payload on: the slots are built on the character
+        motions = {s.method: s.motion for s in what.slots if s.motion is not None}
+        if what.before is not None:
+            motions[f"{what.before[0]}:before"] = what.before[1].slice(0, p["frames"])
         p["character"] = page_character(character, motions, folder, file_url, service.body, out.job.grounding)
     return p
 
 
-def previews(service: GestureService, out: Result, folder: Path, order: list[str]) -> dict[str, dict]:
-    """Body entries of the methods still being made whose raw first windows the result holds: each preview written
-    once (player-I-METHOD-upto-FRAMES.bin) and marked `partial`."""
-    bodies = {}
-    for m, seq in out.previews.items():
-        if m in out.motions or m not in order:
-            continue
-        i = order.index(m)
-        path = folder / player_partial(i, m, seq.num_frames)
-        p = player_payload([seq], [dict(out.slots).get(m, m)], [m], service.body, folder,
-                           service.workdir / BODIES, url=file_url, names=[path.name])
-        bodies[m] = {**p["bodies"][0], "partial": True, "frames": seq.num_frames}
-    return bodies
+def shown(out: Result, previews: bool = True) -> Shown | None:
+    """What the player shows of a result (None: no method at all): for a result that is still growing
+    (serve/progressive.py) every method shown, with its motion once it is made, its first windows while it is being
+    made (`Result.previews`, on the mannequin; with `previews`) or why it failed; for an edited result the edited
+    method's motion before the edit (the player's A/B)."""
+    slots = list(out.slots) or list(zip(out.motions, out.job.labels))
+    if not slots:
+        return None
+    labels = {**dict(slots), **dict(zip(out.motions, out.job.labels))}     # an edited motion's label says so
+    grown = out.previews if previews else {}
+    edited = edited_method(out)
+    return Shown(tuple(Slot(m, labels[m], out.motions.get(m), grown.get(m), out.failed.get(m)) for m, _ in slots),
+                 out.job.speech_seconds, None if edited is None else (edited, out.previous.motions[edited]))
