@@ -76,6 +76,8 @@ def test_live_tab_streams_motion_from_the_microphone_and_stops(live_url, speech_
         assert re.fullmatch(r"\d+", latency) and int(latency) > 0, latency
         assert "p90" in _value(page, "live-stats") and "real-time factor" in _value(page, "live-stats")
         assert page.get_attribute(PLAYER, "data-gaps") is None        # every chunk arrived, in order
+        page.wait_for_function("() => { const l = window.gesturelsmPlayer.live.last; "
+                               "return l && l.audio_seconds > 2; }", timeout=60000)   # over 2 s of speech streamed
         page.locator("#live-stop").click()
         page.wait_for_function("() => document.querySelector('#live-status').textContent === 'stopped'",
                                timeout=30000)
