@@ -33,6 +33,17 @@ BEAT2 = SHARED / "data" / "beat2"                          # smplxflame_30/, wav
 CHARACTERS = SHARED / "assets" / "characters"
 
 
+def cpu_name() -> str:
+    """The CPU's model name as the kernel reports it (a speed figure is quoted with the CPU it was measured on)."""
+    try:
+        line = next(x for x in Path("/proc/cpuinfo").read_text().splitlines() if x.startswith("model name"))
+        return line.split(":", 1)[1].strip()
+    except (OSError, StopIteration):
+        import platform
+
+        return platform.processor() or platform.machine()
+
+
 def take_wav(name: str = "2_scott_0_2_2") -> Path:
     """A BEAT2 take's speech (16 kHz wav) in the shared data."""
     return BEAT2 / "wave16k" / f"{name}.wav"

@@ -28,7 +28,6 @@ os.environ["RAY_worker_niceness"] = "0"
 import argparse
 import contextlib
 import io
-import platform
 import shutil
 import tempfile
 import threading
@@ -36,16 +35,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _harness import REPO, Rows, Stopwatch, json_flag, save_json, set_threads
+from _harness import REPO, Rows, Stopwatch, cpu_name, json_flag, save_json, set_threads
 
 EXAMPLES = REPO / "gesturelsm" / "webapp" / "examples"
 
-
-def cpu_name() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return platform.processor() or "unknown CPU"
 
 
 def speech_folder(root: Path, n: int) -> Path:

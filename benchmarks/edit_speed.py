@@ -18,13 +18,11 @@ medians over the rounds.
 """
 from __future__ import annotations
 
-from _harness import BEAT2, set_threads
+from _harness import BEAT2, cpu_name, set_threads
 from _harness import timed as harness_timed
 
 import argparse
-import platform
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -37,13 +35,6 @@ sys.path.insert(0, str(REPO / "tests"))
 WAV = BEAT2 / "wave16k" / "2_scott_0_2_2.wav"
 EDIT_SECONDS = 2.0
 
-
-def cpu_name() -> str:
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
-        return next(line.split(":", 1)[1].strip() for line in out.splitlines() if line.startswith("Model name"))
-    except (OSError, subprocess.CalledProcessError, StopIteration):
-        return platform.processor() or "unknown CPU"
 
 
 def load_speech(seconds: float):

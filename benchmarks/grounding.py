@@ -29,7 +29,7 @@ character's units (metres for a VRM / glTF).
 """
 from __future__ import annotations
 
-from _harness import BEAT2, set_threads
+from _harness import BEAT2, cpu_name, set_threads
 
 import argparse
 import os
@@ -169,15 +169,6 @@ def one_core_seconds(seq: MotionSequence, repeats: int) -> tuple[float, float]:
         os.sched_setaffinity(0, cpus)
     return float(np.median(wall)), float(np.median(cpu))
 
-
-def cpu_name() -> str:
-    try:
-        line = next(x for x in Path("/proc/cpuinfo").read_text().splitlines() if x.startswith("model name"))
-        return line.split(":", 1)[1].strip()
-    except (OSError, StopIteration):
-        import platform
-
-        return platform.processor() or platform.machine()
 
 
 def generate(pipe, methods: list[str], seed: int) -> list[dict]:

@@ -7,7 +7,7 @@ is loaded once per process (int8 on CPU, `cpu_threads` = the cores we may use, a
 Short context: Whisper pads every piece of audio it reads to 30 s (3000 feature frames) and its encoder costs the same
 for 8 s of speech as for 30 s; the decoder then attends to all 1500 encoded positions. The English model encodes a piece
 whose speech fits in the first SHORT_FRAMES (15 s, less PAD_FRAMES of its padding kept) with only those frames: encoding
-is about 5x cheaper there (0.35 -> 0.07 s, measured) and decoding reads half the positions. That is the first
+is about 5x cheaper there (`benchmarks/recognition_speed.py`) and decoding reads half the positions. That is the first
 recognition window of every upload (asr/recognition_windows.py: the words the first motion waits for), speech under 14 s
 and the last piece of a longer one. Below 15 s of context the recogniser started repeating itself on the short rests of
 a window (a 0.7 s rest as "ok ok ok ..."), so the context is never shorter (docs/TRANSCRIPTION.md has the word recall
