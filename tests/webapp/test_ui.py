@@ -207,7 +207,8 @@ def test_browser_microphone_recording_generates(playwright, app_url):
         page.wait_for_timeout(2500)
         page.locator("#speech button.stop-button").first.click()
         recorded = time.monotonic() - started            # a loaded machine answers the clicks later
-        page.locator("#speech [aria-label='Play']").wait_for(timeout=20000)     # the recording is in the player
+        # the recording is in the speech box's player (the browser's own audio element, or Gradio's Play button)
+        page.locator("#speech audio[src], #speech [aria-label='Play']").first.wait_for(state="attached", timeout=60000)
         page.locator("#generate").click()
         show_video(page, 240000)
         duration = page.evaluate("""async () => { const v = document.querySelector('#video video');
