@@ -317,7 +317,8 @@ def build_demo(service: GestureService, queue_size: int = QUEUE_SIZE, engines=No
         # before the click: the upload's speech prepared (serve/prepared.py), the settings' motion made (serve/ahead.py)
         words = page_words.attach(inputs, note, h.prefetch)          # each upload its own words; prefetch
         shown = button.click(h.show_motion, [*inputs, character, words], [payload, table, summary, state, text, words,
-                             status], api_name="generate_motion", js=page_words.CLICK_JS, **gen)
+                             status], api_name="generate_motion", js=page_words.CLICK_JS,
+                             show_progress_on=[status], **gen)
         # every payload a handler sends (Generate's, one per method made; an edit's; an undo's) goes to the player at
         # once, in the browser; the statistics and the downloads made so far follow it, beside the chain below
         payload.change(None, payload, None, js=motion_player.LOAD_JS, api_visibility="private")

@@ -139,6 +139,12 @@ def test_generate_is_seen_and_the_edit_range_is_drawn(page_url, speeches):
         page.evaluate("() => window.scrollTo(0, 0)")
         page.locator("#generate").scroll_into_view_if_needed()
         page.locator("#generate").click()
+        # the request's progress: on the status line alone, its box marked without Gradio's endless pulse (which
+        # redrew the boxes all the while: gesturelsm/webapp/layout.py)
+        busy = page.wait_for_function("""() => { const g = [...document.querySelectorAll('.wrap.generating')];
+            return g.length ? g.map((e) => [(e.closest('[id]') || {}).id, getComputedStyle(e).animationName]) : null;
+            }""", polling="raf", timeout=60000).json_value()
+        assert busy == [["generate-status", "none"]], busy
         page.wait_for_function(IN_VIEW_JS, timeout=10000)                 # the player and its status, in view
         page.wait_for_function("() => document.querySelector('#generate-status').innerText.trim().length > 0",
                                timeout=60000)
