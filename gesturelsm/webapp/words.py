@@ -85,10 +85,12 @@ def attach(inputs: list, note, prefetch) -> gr.State:
                  trigger_mode="always_last")
     for changed in changes(inputs):
         if changed in (audio.upload, audio.stop_recording):
-            changed(new_speech, [text, words], [text, note, words], queue=False, api_visibility="private") \
+            changed(new_speech, [text, words], [text, note, words], queue=False, api_visibility="private",
+                    show_progress="hidden") \
                 .then(prefetch, [*inputs, words], None, **ahead)
         else:
             changed(prefetch, [*inputs, words], None, **ahead)
-    audio.clear(new_speech, [text, words], [text, note, words], queue=False, api_visibility="private")
+    audio.clear(new_speech, [text, words], [text, note, words], queue=False, api_visibility="private",
+                show_progress="hidden")
     text.input(lambda: gr.update(visible=False), None, note, queue=False, api_visibility="private")
     return words

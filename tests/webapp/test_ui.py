@@ -53,6 +53,7 @@ def test_build_demo_has_the_controls(service):
     for event in ("upload", "stop_recording"):     # first the words recognised for earlier speech leave the box
         dep = early[event]                        # (webapp/words.py), then the upload is prepared with the box's words
         assert dep["api_name"].startswith("new_speech") and dep["inputs"][0] == ids["transcript"]
+        assert dep["show_progress"] == "hidden"   # instant: a tracker over the box would only fade in and out
         dep = next(d for d in cfg["dependencies"] if d.get("trigger_after") == dep["id"])
         assert dep["api_name"].startswith("prefetch") and dep["inputs"][:2] == [ids["speech"], ids["transcript"]]
     # ... and then the motion of the settings shown is made ahead (serve/ahead.py): the prefetch gets every input the
