@@ -43,8 +43,8 @@ PAGE_CSS = """
 #motion-stats-box td:first-child, #sweep-table-box td:first-child { white-space: normal; min-width: 7em; }
 .gesturelsm-scroll { overflow-x: auto; max-width: 100%; }
 #generate-status { min-height: 1.5em; }
-/* a box being computed keeps Gradio's accent border, without its endless pulse: every pulse frame repainted the boxes
-   (in a browser drawing without a GPU, 0.6 of a core for the whole generation, taken from the server beside it) */
+/* a box being computed keeps Gradio's accent border, without its endless pulse: every pulse frame repainted the boxes,
+   which a browser drawing without a GPU does on the CPU for the whole generation (docs/BENCHMARKS.md) */
 .wrap.generating { animation: none !important; }
 #transcript-note { color: #9a4a00; }
 """

@@ -60,7 +60,7 @@ def test_build_demo_has_the_controls(service):
     # Generate button sends, again when a slider is let go or another setting changes
     click = next(d for d in cfg["dependencies"] if d.get("api_name") == "generate_motion")
     # its progress shows on the status line under the player alone, not over every box it fills in (each box's
-    # tracker redrew it all the while: a browser drawing without a GPU spent a core on that, beside the server)
+    # tracker kept the page redrawing until the end)
     assert click["show_progress_on"] == [ids["generate-status"]]
     prefetches = [d for d in cfg["dependencies"] if (d.get("api_name") or "").startswith("prefetch")]
     assert all(d["inputs"] == click["inputs"][:-2] + click["inputs"][-1:] for d in prefetches)  # not the character
