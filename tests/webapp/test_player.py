@@ -88,9 +88,10 @@ def test_player_plays_generated_methods_in_sync_with_the_speech(shipped, monkeyp
         page.locator("#generate").click()
         page.wait_for_selector(f"{PLAYER}[data-state=playing]", timeout=120000)
         page.wait_for_selector(f"{PLAYER}[data-bodies='2']", timeout=120000)
-        # the speech plays and new frames are drawn: the clock moves on by 0.3 s and the frame count grows from where
-        # they were when both bodies arrived, watched in the page (sampled 1.5 s apart from here, a loaded machine
-        # let the 5 s clip end before the first sample: nothing moved after it)
+        # the speech plays with both bodies and new frames are drawn: from its start (a loaded machine can make the
+        # second method after the 5 s clip has ended), the clock moves on by 0.3 s and the frame count grows, watched
+        # in the page
+        page.evaluate("() => { const p = window.gesturelsmPlayer; p.seek(0); return p.play(); }")
         page.wait_for_function("""() => { const f = Number(document.querySelector('#motion-player').dataset.frames);
             const t = window.gesturelsmPlayer.clock.currentTime;
             window.clock0 = window.clock0 || [f, t];
