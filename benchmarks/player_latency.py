@@ -1,12 +1,13 @@
 """What a visitor of the page waits for, measured in real headless Chromium (SwiftShader WebGL, the floor):
 click on "Generate" -> the first body moves (`#motion-player[data-state=playing]`, as Playwright sees it, polling on
 every animation frame) and all bodies move (`data-bodies` = the number of methods; a page without that attribute
-moves them all at once), the motion frames drawn in the first 2 s after that, click -> the payload in the page (the
-player's own mark), the player's frame rate while the server renders the mp4 and the speech plays (up to 10 s),
-click -> mp4 (--quick stops before these); without --quick also the frame rate after (server idle), the audio-motion
-offset when scrubbing, and generating again with another seed on the same page (the bodies are replaced), once after the
-video and once while it renders. Shipped checkpoints, eSpeak NG speech (as app/measure.py), audio only, steps 8, DDIM
-20, CFG 2, tiles 384.
+moves them all at once), the motion frames drawn in the first 2 s after that, click -> the payload in the page and
+click -> the first payload with motion in it handed to the player (the player's own marks: before it the server's
+part, after it the browser's fetch, decode and first draw), the player's frame rate while the server renders the mp4
+and the speech plays (up to 10 s), click -> mp4 (--quick stops before these); without --quick also the frame rate
+after (server idle), the audio-motion offset when scrubbing, and generating again with another seed on the same page
+(the bodies are replaced), once after the video and once while it renders. Shipped checkpoints, eSpeak NG speech (as
+app/measure.py), audio only, steps 8, DDIM 20, CFG 2, tiles 384.
 
     .venv/bin/python benchmarks/player_latency.py [--seconds 10 60] [--methods 1 3] [--think-s 3] [--repeat 3]
                                                   [--vs /path/to/other/checkout] [--quick] [--character avatar.vrm]
@@ -198,7 +199,8 @@ def per_draw(prof: dict | None) -> str:
 
 
 HEADER = ["speech", "methods", "page", "body", "click -> first body moving (s), median (range)",
-          "click -> all moving (s)", "frames drawn in the first 2 s", "click -> payload in the page (s)"]
+          "click -> all moving (s)", "frames drawn in the first 2 s", "click -> payload in the page (s)",
+          "click -> first motion handed to the player (s)"]
 FULL = ["player fps while the mp4 renders (next <= 10 s)", "click -> mp4 (s)", "player fps after (server idle)",
         "ms per draw after: pose / render / labels / dom", "scrub offset (frames)",
         "again, new seed -> playing (s)", "again while the mp4 renders -> playing (s) (runs where it still rendered)"]
@@ -209,8 +211,9 @@ def cells(dur: float, n: int, page: str, body: str, runs: list[dict], quick: boo
     med = lambda k: median([x[k] for x in runs])               # noqa: E731
     spread = f" ({min(x['play'] for x in runs):.2f}-{max(x['play'] for x in runs):.2f})" if len(runs) > 1 else ""
     payload = median([x["marks"].get("payload", 0) for x in runs])
+    given = [x["marks"]["payload"] + x["marks"]["given"] / 1000 for x in runs if "given" in x["marks"]]
     out = [f"{dur:.1f} s", str(n), page, body, f"**{med('play'):.2f}**{spread}", f"{med('all'):.2f}",
-           f"{med('drawn2'):.0f}", f"{payload:.2f}"]
+           f"{med('drawn2'):.0f}", f"{payload:.2f}", f"{median(given):.2f}" if given else "n/a"]
     if not quick:
         busy = sum(x["rendering"] for x in runs)
         out += [f"{med('fps_render'):.1f}", f"{med('mp4'):.1f}", f"{med('fps_idle'):.1f}", per_draw(runs[-1]["prof"]),

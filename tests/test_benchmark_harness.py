@@ -113,11 +113,15 @@ def test_player_latency_keeps_its_flags_and_its_table(monkeypatch, capsys):
     for flag in ("--seconds", "--methods", "--think-s", "--repeat", "--vs", "--quick", "--without-ahead", "--new-seed",
                  "--character", "--chromium", "--json"):
         assert flag in shown, flag
-    run = {"play": 1.0, "all": 1.5, "marks": {"payload": 0.2}, "drawn2": 30, "fps_render": 20.0, "mp4": 9.0,
-           "fps_idle": 30.0, "prof": None, "scrub": 0, "again": 1.1, "again_rendering": 1.2, "rendering": True}
+    run = {"play": 1.0, "all": 1.5, "marks": {"payload": 0.2, "given": 500.0}, "drawn2": 30, "fps_render": 20.0,
+           "mp4": 9.0, "fps_idle": 30.0, "prof": None, "scrub": 0, "again": 1.1, "again_rendering": 1.2,
+           "rendering": True}
     quick = m.Rows(m.HEADER)
     quick.add(*m.cells(10.0, 1, "this checkout", "mannequin", [run, run], True))
-    assert quick.last() == "| 10.0 s | 1 | this checkout | mannequin | **1.00** (1.00-1.00) | 1.50 | 30 | 0.20 |"
+    assert quick.last() == "| 10.0 s | 1 | this checkout | mannequin | **1.00** (1.00-1.00) | 1.50 | 30 | 0.20 | 0.70 |"
+    older = {**run, "marks": {"payload": 0.2}}                    # a player bundle without the `given` mark (--vs)
+    quick.add(*m.cells(10.0, 1, "before (--vs)", "mannequin", [older], True))
+    assert quick.last().endswith("| 0.20 | n/a |")
     full = m.Rows(m.HEADER + m.FULL)
     full.add(*m.cells(10.0, 1, "this checkout", "mannequin", [run], False))
     assert full.last().endswith("| 20.0 | 9.0 | 30.0 | n/a | 0 | 1.10 | 1.20 (1/1) |")

@@ -161,9 +161,13 @@ class _Handlers:
         try:
             for out in self.pages.until_closed(request, progress, lambda p: self.service.stream(req, progress=p)):
                 self.mark_newest(request, out)
+                shown = motion_player.payload(self.service, out, character)
+                if out.previews:     # a longer preview of a method being made: the player's payload alone (redrawing
+                    yield shown, gr.skip(), gr.skip(), out, gr.skip(), gr.skip(), gr.skip()   # the unchanged boxes
+                    continue                                        # cost the browser what the first body needs)
                 recognised = out.transcript if out.transcript else gr.skip()   # the automatic transcript, to correct
-                yield (motion_player.payload(self.service, out, character), out.table, out.summary, out, recognised,
-                       page_words.recognised(audio, out), page_words.status(out))
+                yield (shown, out.table, out.summary, out, recognised, page_words.recognised(audio, out),
+                       page_words.status(out))
         except GestureError as exc:
             self.refuse(exc)
 

@@ -153,3 +153,20 @@ def test_the_button_sends_the_recognised_words_with_their_upload_and_a_status(se
     payload, _table, _summary, out, text, words, status = outs[-1]
     assert text == "hello there" and words == {"audio": str(speech_wav), "text": "hello there"}
     assert status.startswith("**Motion made** for 1 of 1 methods")
+
+
+def test_a_growing_preview_hands_the_player_its_payload_and_redraws_nothing_else(service, speech_wav):
+    """Each longer preview of the method being made (serve/preview.py) changes the player's payload alone: the timing
+    table, summary, transcript, words and status line are left as they are (redrawing them competed with the first
+    body for the browser), and every other yield fills the table, summary and status line."""
+    h = _Handlers(service)
+    args = (str(speech_wav), "", None, ["gesturelsm", "rectified_flow", "ddim"], 1, 2.0, 0, 2, False, "light", 256,
+            False, True, "auto")
+    outs = list(h.show_motion(*args, progress=quiet))
+    grows = [any(b.get("partial") for b in o[0]["bodies"]) for o in outs]
+    assert any(grows) and not grows[0] and not grows[-1], grows       # the speech first, the finished motion last
+    for o, grown in zip(outs, grows):
+        assert o[3].previews if grown else not o[3].previews            # the page's state: every result
+        boxes = (o[1], o[2], o[4], o[5], o[6]) if grown else (o[1], o[2], o[6])
+        assert all((v == gr.skip()) == grown for v in boxes), (grown, boxes)
+    assert outs[-1][6].startswith("**Motion made** for 3 of 3 methods") and outs[-1][1]

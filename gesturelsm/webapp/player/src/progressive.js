@@ -13,7 +13,8 @@
 // play / pause: its first body starts the speech where the previous one was. A payload with `compare` (an edit) loads
 // the motion before the edit for the A/B button once the edited body has joined.
 // With measuring on (measure.js) the element's data-marks holds, in ms from the first payload: bodies (slots
-// built), motion (first motion decoded), play (first body moving, the speech playing), all (every slot moving).
+// built), given (the first payload with a motion URL handed over), motion (first motion decoded), play (first body
+// moving, the speech playing), all (every slot moving).
 import { decodeMotion } from './motion_decoder.js';
 
 function fetchRecord(url) {
@@ -103,6 +104,7 @@ export async function loadPayload(p, payload) {
       req.failed.add(i);
       req.slots.then((ok) => { if (ok && p.request === req) { p.fail(i, b.error); allIn(p, req); } });
     } else if (b.motion) {
+      if (req.marks && req.marks.given === undefined) req.marks.given = performance.now() - req.marks.start;
       if (!b.partial) (req.asked = req.asked || new Set()).add(i);   // the finished motion: nothing after it
       req.urls[i] = b.motion;
       pending.push(arrive(p, req, payload, i));
