@@ -226,9 +226,12 @@ def test_the_page_plays_every_method_on_an_uploaded_character(service, app_url, 
         page.wait_for_selector(f"{player}[data-state=playing][data-character='cryptovoxels.vrm']", timeout=180000)
         page.wait_for_function("() => { const p = window.gesturelsmPlayer; "           # every method's body joined
                                "return Number(p.element.dataset.bodies) === p.payload.bodies.length; }", timeout=180000)
+        # frames advance on the speech's clock, from its start (a loaded machine can join the last body after the 8 s
+        # of speech have played)
         n0 = int(page.get_attribute(player, "data-frames"))
+        page.evaluate("() => { const p = window.gesturelsmPlayer; p.seek(0); return p.play(); }")
         page.wait_for_function(f"() => Number(document.querySelector('{player}').dataset.frames) > {n0}",
-                               timeout=30000)                            # frames advance on the speech's clock
+                               timeout=30000)
         page.evaluate("() => window.gesturelsmPlayer.pause()")
         page.evaluate("() => window.gesturelsmPlayer.seek(1.5)")
         page.wait_for_function("""() => { const p = window.gesturelsmPlayer;
