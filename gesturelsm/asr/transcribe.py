@@ -35,6 +35,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from ..align import AlignConfig, Word, align_words
+from ..align.dtw import warm
 from ..align.features import frame_time, voice_activity
 from ..constants import SAMPLE_RATE
 from . import multilingual
@@ -122,18 +123,26 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE, model=None,
     return words, (logp / ntok if ntok else -math.inf), details
 
 
+def _spoken(segments: list) -> list:
+    """The segments with a letter or digit in them. Whisper ends some windows on a segment of punctuation alone (" ."
+    over the last second of a short-context piece); its compression ratio is the window's, often over LOOP_RATIO, and
+    such a segment holds no words to recover, so it must not set off the fallback's five sampling passes (2.5 s more
+    for the last 13 s of 2_scott_0_3_3, which then ended on a made-up "Okay.")."""
+    return [seg for seg in segments if any(ch.isalnum() for ch in seg.text)]
+
+
 def _recognized(audio: np.ndarray, beam_size: int, model, language: str) -> tuple[list[Word], float, int, dict]:
     """recognize's words, the sum of token log-probabilities and the token count (to pool windows), details
     (with "word_probabilities": the words' probabilities)."""
     label = MODEL_NAME if model is None else multilingual.MODEL_NAME
-    segments = _decode(audio, beam_size, 0.0, model, language)
+    segments = _spoken(_decode(audio, beam_size, 0.0, model, language))
     loops = [seg.compression_ratio > LOOP_RATIO for seg in segments]
     if segments and all(loops):
         return [], 0.0, 0, {"model": label, "mean_word_probability": 0.0, "repeated_phrase": True,
                             "heard_repeated": _clip(" ".join(segments[0].text.split())), "word_probabilities": [],
                             "max_no_speech_probability": max(float(seg.no_speech_prob) for seg in segments)}
     if any(loops):
-        segments = _decode(audio, beam_size, list(FALLBACK_TEMPERATURES), model, language)
+        segments = _spoken(_decode(audio, beam_size, list(FALLBACK_TEMPERATURES), model, language))
     words: list[Word] = []
     logp, ntok, probs, no_speech = 0.0, 0, [], []
     for seg in segments:
@@ -176,7 +185,10 @@ def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     cuts = recognition_cuts(y)
     spans = list(zip(cuts, cuts[1:]))
     last = len(spans) - 1
-    yield _piece(y, *spans[0], *_recognized(y[spans[0][0]:spans[0][1]], beam_size, None, ENGLISH), timing, last == 0)
+    aligner = _aligner_loading(timing)
+    first = _recognized(y[spans[0][0]:spans[0][1]], beam_size, None, ENGLISH)
+    aligner.join()
+    yield _piece(y, *spans[0], *first, timing, last == 0)
     if last == 0:
         return
     heard: queue.Queue = queue.Queue(maxsize=1)
@@ -203,6 +215,20 @@ def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
         stop.set()
         with contextlib.suppress(queue.Empty):
             heard.get_nowait()              # a window recognised for nobody: the thread ends
+
+
+def _aligner_loading(timing: str) -> threading.Thread:
+    """The aligner's compiled recursion made ready (align/dtw.py `warm`: numba imported and its kernel read from the
+    disk cache, 0.6-0.9 s in a fresh process, once) on a thread of its own while the first window is recognised, so
+    that timing that window's words does not wait for it. A failure here is left to the aligner's own call."""
+    def load() -> None:
+        if timing != "whisper":
+            with contextlib.suppress(Exception):
+                warm()
+
+    thread = threading.Thread(target=load, name="gesturelsm-aligner-ready", daemon=True)
+    thread.start()
+    return thread
 
 
 def _piece(y: np.ndarray, a: int, b: int, words: list[Word], logp: float, ntok: int, details: dict, timing: str,

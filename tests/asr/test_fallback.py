@@ -72,6 +72,25 @@ def test_a_loop_in_some_windows_decodes_again_with_the_fallback(fake):
     assert [w.text for w in words] == ["real", "words", "here", "and", "then", "more"]
 
 
+def test_a_window_ending_on_punctuation_alone_is_not_a_loop_and_adds_no_words(fake):
+    """Whisper gives a short-context window's last second as " ." with the window's compression ratio, over the loop
+    bar: there are no words in it to recover, so one greedy pass stands and the dot is no word."""
+    model = fake([_segment("real words here", 1.4), _segment(" .", LOOP_RATIO + 3.5, 2.0)],
+                 fallback=[_segment("real words here", 1.4), _segment("Okay.", 1.2, 2.0)])
+    words, avg, details = recognize(AUDIO)
+    assert model.asked == [0.0]
+    assert [w.text for w in words] == ["real", "words", "here"] and avg == pytest.approx(-0.2)
+    assert details["word_probabilities"] == [0.9] * 3
+
+
+def test_punctuation_alone_everywhere_is_no_speech_not_a_repeated_phrase(fake):
+    model = fake([_segment("...", LOOP_RATIO + 3), _segment(" .", LOOP_RATIO + 3, 2.0)])
+    words, avg, details = recognize(AUDIO)
+    assert model.asked == [0.0] and words == [] and avg == -np.inf and "repeated_phrase" not in details
+    tr = transcribe(AUDIO, timing="whisper")
+    assert not tr.accepted and "No speech was recognised" in tr.warnings[0] and tr.details["no_words"]
+
+
 def test_chords_are_rejected_by_the_real_recogniser_in_one_pass(recognizer, monkeypatch):
     """30 s of a steady chord: Whisper's greedy pass writes one phrase over and over (the CTranslate2 kernels of some
     CPUs give no segment at all); either way it is rejected without the five sampling passes of the fallback: one
