@@ -31,7 +31,7 @@ from .backends import (GROUND_TRUTH, Backend, Bounds, FlowBackend, MethodSpec, S
 from .constants import ASSETS, Progress
 from .errors import AudioError, InputError
 from .progress import GENERATION
-from .features.audio import audio_channels
+from .features.audio import audio_channels, warm_audio_features
 from .features.text import TEXT_DIM, TextEmbedder
 from .pipelined import (HIDDEN, OUTPUTS, STREAMED_LANGUAGES, WAITING, PendingWords, Restart, automatic_speech, finish,
                         finished, overlap_timings, with_speech, with_words)
@@ -80,7 +80,7 @@ class GesturePipeline:
         """Load the text encoder and compile librosa's onset kernels now, so that one-off start-up costs
         (~3 s) are not counted in the first request's feature time."""
         TextEmbedder.shared().available  # loads the model
-        audio_channels(np.random.default_rng(0).normal(scale=0.1, size=SAMPLE_RATE).astype(np.float32))
+        warm_audio_features()
 
     @property
     def methods(self) -> list[str]:
@@ -113,7 +113,7 @@ class GesturePipeline:
         return self.backends[method]
 
     # ---- speech ------------------------------------------------------------------------------------------
-    def _checked_audio(self, audio: np.ndarray, sr: int) -> tuple[np.ndarray, int]:
+    def checked_audio(self, audio: np.ndarray, sr: int) -> tuple[np.ndarray, int]:
         """Mono 16 kHz samples cut to whole frames, and their frame count T; bad audio raises InputError."""
         y = to_mono(audio)
         if sr <= 0:
@@ -135,12 +135,12 @@ class GesturePipeline:
     def prefetch_transcript(self, audio: np.ndarray, sr: int = SAMPLE_RATE, language: str = AUTO) -> AutomaticWords:
         """Transcribe now what prepare_speech(audio, sr) would transcribe, so that it finds the words ready
         (asr.source remembers them by content); returns them. Bad audio raises InputError, as prepare_speech would."""
-        return automatic_words(self._checked_audio(audio, sr)[0], language=language)
+        return automatic_words(self.checked_audio(audio, sr)[0], language=language)
 
     def remember_transcript(self, audio: np.ndarray, sr: int, words: AutomaticWords, language: str = AUTO) -> None:
         """Words `prefetch_transcript` returned in another process for this audio: prepare_speech(audio, sr) here
         uses them instead of transcribing again."""
-        remember_words(self._checked_audio(audio, sr)[0], words, language)
+        remember_words(self.checked_audio(audio, sr)[0], words, language)
 
     def prepare_speech(self, audio: np.ndarray, sr: int = SAMPLE_RATE, words: list | None = None,
                        text: str | None = None, progress: Progress | None = None,
@@ -152,15 +152,32 @@ class GesturePipeline:
         windows (gesturelsm.pipelined; the same motion as without); the speech's words, mode and transcript are those
         of `settled(speech)` once generated."""
         t0 = time.perf_counter()
-        y, T = self._checked_audio(audio, sr)
-        channels = torch.from_numpy(audio_channels(y))
+        y, T = self.checked_audio(audio, sr)
+        typed = bool(text and text.strip())
+        pending = None
+        if stream and not typed and words is None and transcribe and language in STREAMED_LANGUAGES \
+                and not TextEmbedder.shared().error:           # the words are recognised while the features are made
+            if progress:
+                progress(0.1, "recognising the words (automatic transcription)")
+            pending = PendingWords.begin(SpeechInput(y, T, None, None, None, None, ""), language, automatic_words,
+                                         progress)
+        try:
+            once = warm_audio_features()                 # one-off (the first speech of a process): not feature time
+            channels = torch.from_numpy(audio_channels(y))
+        except BaseException:
+            if pending is not None:
+                pending.abandon()
+            raise
         speech = SpeechInput(y, T, channels, None, torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool),
-                             "audio-only (no transcript given)", {"features": time.perf_counter() - t0}, [], None)
+                             "audio-only (no transcript given)", {"features": time.perf_counter() - t0 - once}, [],
+                             None)
         if progress:
             progress(0.1, "audio features")
-        if text and text.strip() and not gesture_words(language, text):
+        if pending is not None:
+            return pending.attach(speech)
+        if typed and not gesture_words(language, text):
             return replace(speech, text_mode=f"audio-only (a Chinese or Japanese transcript: {NOT_FOR_GESTURES})")
-        if text and text.strip():
+        if typed:
             if progress:
                 progress(0.1, "timing the transcript's words")
             t1 = time.perf_counter()
@@ -176,8 +193,6 @@ class GesturePipeline:
             return speech
         if progress:
             progress(0.1, "recognising the words (automatic transcription)")
-        if stream and language in STREAMED_LANGUAGES and TextEmbedder.shared().available:
-            return PendingWords.start(speech, language, automatic_words, progress)
         t1 = time.perf_counter()
         auto = automatic_words(y, language=language)
         if progress:

@@ -106,15 +106,15 @@ def with_words(speech: SpeechInput, words: list | None, mode: str, transcript: s
     T = speech.num_frames
     wf, hw = torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool)
     if words:
-        t0 = time.perf_counter()
         emb = TextEmbedder.shared()
-        if emb.available:
+        if emb.available:             # loads the encoder, or waits for the thread loading it: not feature time
+            t0 = time.perf_counter()
             ft = emb.frame_features(words, T)
             wf, hw = torch.from_numpy(ft.features), torch.from_numpy(ft.has_word)
+            timings["features"] = timings.get("features", 0.0) + time.perf_counter() - t0
         else:
             warnings.append(f"{emb.error}; generating from audio only")
             words, mode = None, "audio-only (text encoder unavailable)"
-        timings["features"] = timings.get("features", 0.0) + time.perf_counter() - t0
     return replace(speech, words=words or None, word_features=wf, has_word=hw, text_mode=mode, timings=timings,
                    warnings=warnings, transcript=transcript if words else None,
                    ready_points=ready_points if words else (), stream=None)
@@ -153,6 +153,9 @@ class PendingWords:
         self.text_seconds = 0.0
         self.started = time.perf_counter()
         self.transcription_s = 0.0
+        self._no_encoder = False
+        self.encoder_wait = 0.0           # the words thread's wait for the text encoder to load (not transcription)
+        self._attached = threading.Event()
         self._thread = threading.Thread(target=self._run, name="gesturelsm-words", daemon=True)
 
     @classmethod
@@ -160,14 +163,35 @@ class PendingWords:
         """`speech` (audio features ready) with its words being recognised on a thread started by this call, by
         `recognise` (asr.source.automatic_words or a stand-in with its signature); `progress` hears "speech
         transcribed"."""
+        return cls.begin(speech, language, recognise, progress).attach(speech)
+
+    @classmethod
+    def begin(cls, speech: SpeechInput, language: str, recognise=automatic_words, progress=None) -> "PendingWords":
+        """The recognition of `speech`'s audio started before its audio features are computed (they are not read until
+        the words are known): `attach` the speech with its features to get the streamed speech."""
         pending = cls(speech, language, recognise, progress)
-        streamed = replace(speech, words=[], word_features=torch.from_numpy(pending.features.features),
-                           has_word=torch.from_numpy(pending.features.has_word), text_mode=PENDING_MODE,
-                           ready_points=pending.ready_points, stream=pending)
         pending._thread.start()
-        return streamed
+        return pending
+
+    def attach(self, speech: SpeechInput) -> SpeechInput:
+        """`speech` (the same audio, its audio features ready) streamed: its word features fill in as they come."""
+        self.base = speech
+        self._attached.set()
+        return replace(speech, words=[], word_features=torch.from_numpy(self.features.features),
+                       has_word=torch.from_numpy(self.features.has_word), text_mode=PENDING_MODE,
+                       ready_points=self.ready_points, stream=self)
+
+    def abandon(self) -> None:
+        """No speech will be attached (preparing its audio features failed): the thread ends once the words are in."""
+        self.base = None
+        self._attached.set()
 
     def _piece(self, piece: Piece) -> None:
+        t0 = time.perf_counter()
+        if self._no_encoder or not self.features.embedder.available:   # loads it, or waits for its loading
+            self._no_encoder = True       # the words are recognised on; the finished speech says why audio-only
+            return
+        self.encoder_wait += time.perf_counter() - t0
         t0 = time.perf_counter()
         self.features.extend(piece.words, piece.final_until)
         self.text_seconds += time.perf_counter() - t0
@@ -180,12 +204,16 @@ class PendingWords:
         torch.set_num_threads(WORDS_THREADS)          # the text encoder here: generation has the other core
         try:
             auto = self.recognise(self.base.audio, language=self.language, on_piece=self._piece)
-            self.transcription_s = time.perf_counter() - self.started - self.text_seconds
+            self.transcription_s = time.perf_counter() - self.started - self.text_seconds - self.encoder_wait
+            self._attached.wait()                     # the speech with its audio features, which the result keeps
+            if self.base is None:
+                return
             streamed = list(self.features.words)
-            if auto.words and not streamed and ready_points_of(auto, self.base.audio, self.base.num_frames):
+            if auto.words and not streamed and not self._no_encoder and \
+                    ready_points_of(auto, self.base.audio, self.base.num_frames):
                 self._piece(Piece(list(auto.words), math.inf, "", 0.0, 0, "", [], {}))   # remembered: all at once
                 streamed = list(auto.words)
-            self.valid = bool(auto.words) and streamed == list(auto.words) and \
+            self.valid = bool(auto.words) and not self._no_encoder and streamed == list(auto.words) and \
                 ready_points_of(auto, self.base.audio, self.base.num_frames) == self.ready_points
             if self.valid:
                 transcript = auto.transcript.text if auto.transcript is not None else None

@@ -3,6 +3,7 @@ generation window conditioned as soon as its words are final; the same motion, b
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 import pytest
@@ -112,3 +113,47 @@ def test_a_rejected_transcript_regenerates_as_the_one_shot_path(tiny_pipeline, r
     a = tiny_pipeline.generate(one, steps=2, seed=0, output="raw")
     _same(a.motion, b.motion)
     assert b.text_mode.startswith("audio-only") and "not English" in b.warnings
+
+
+def test_the_words_are_recognised_while_the_audio_features_are_made(tiny_pipeline, monkeypatch):
+    """prepare_speech(stream=True) starts the recogniser before it computes the audio features, and the finished
+    speech keeps those features."""
+    if not TextEmbedder.shared().available:
+        pytest.skip("text encoder not installed")
+    started, seen = threading.Event(), []
+    real = pipeline_module.audio_channels
+
+    def words(y, remember=True, language="auto", on_piece=None):
+        started.set()
+        return AutomaticWords(None, "audio-only (automatic transcription rejected)", None, ["not English"])
+
+    def channels(y, sr=SAMPLE_RATE):
+        seen.append(started.wait(5) if len(y) > SAMPLE_RATE else None)     # not the one-off warm-up's noise
+        return real(y, sr)
+    monkeypatch.setattr(pipeline_module, "automatic_words", words)
+    monkeypatch.setattr(pipeline_module, "audio_channels", channels)
+    y = speech_like(6.0, seed=4)
+    speech = tiny_pipeline.prepare_speech(y, stream=True)
+    assert [s for s in seen if s is not None] == [True]
+    done = tiny_pipeline.settled(speech)
+    assert done.channels is speech.channels and done.words is None and done.text_mode.startswith("audio-only")
+
+
+def test_audio_features_that_fail_end_the_words_thread(tiny_pipeline, monkeypatch):
+    if not TextEmbedder.shared().available:
+        pytest.skip("text encoder not installed")
+    threads = []
+
+    def words(y, remember=True, language="auto", on_piece=None):
+        threads.append(threading.current_thread())
+        return AutomaticWords(None, "audio-only (automatic transcription rejected)", None, ["not English"])
+
+    def broken(y, sr=SAMPLE_RATE):
+        raise MemoryError("no room for the features")
+    monkeypatch.setattr(pipeline_module, "automatic_words", words)
+    monkeypatch.setattr(pipeline_module, "audio_channels", broken)
+    monkeypatch.setattr(pipeline_module, "warm_audio_features", lambda: 0.0)
+    with pytest.raises(MemoryError):
+        tiny_pipeline.prepare_speech(speech_like(3.0, seed=4), stream=True)
+    threads[0].join(10)
+    assert not threads[0].is_alive()

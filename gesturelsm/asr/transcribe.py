@@ -180,16 +180,18 @@ def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     details["repeated_phrase"]); `english_transcript` pools the pieces.
 
     The first window is recognised and timed before anything else (its words are the ones the first motion waits
-    for); after it, window j + 1 is recognised on a thread of its own while window j is timed, so the aligner's work
-    hides under the recogniser's. The pieces are the same either way, in order."""
+    for); then window j + 1 is recognised on a thread of its own while window j is handed over and timed, so that
+    neither the aligner's work nor what the caller does with a piece (the text features) holds the recogniser up.
+    The pieces are the same either way, in order."""
     cuts = recognition_cuts(y)
     spans = list(zip(cuts, cuts[1:]))
     last = len(spans) - 1
     aligner = _aligner_loading(timing)
     first = _recognized(y[spans[0][0]:spans[0][1]], beam_size, None, ENGLISH)
     aligner.join()
-    yield _piece(y, *spans[0], *first, timing, last == 0)
+    first = _piece(y, *spans[0], *first, timing, last == 0)
     if last == 0:
+        yield first
         return
     heard: queue.Queue = queue.Queue(maxsize=1)
     stop = threading.Event()
@@ -206,6 +208,7 @@ def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
     thread = threading.Thread(target=recognise, name="gesturelsm-recognise", daemon=True)
     thread.start()
     try:
+        yield first
         for j in range(1, last + 1):
             span, got = heard.get()
             if span is None:

@@ -101,18 +101,14 @@ def run_generate(args: argparse.Namespace) -> int:
     if rig is not None:
         check_usable(rig, draw=False)
     words = read_words(a.textgrid) if a.textgrid else None
-    say(0.0, f"loading the models ({args.method})")
-    recognised = words is None and not args.text and a.settings.transcribe
-    preload = preloading(text=recognised or words is not None or bool(args.text), recogniser=recognised,
-                         aligner=recognised or bool(args.text))
+    audio = load_audio(a.audio, max_seconds=a.max_seconds)
+    say(0.0, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
+    ahead = SpeechAhead(audio, words, args.text, a.settings, a.max_seconds)      # bad speech stops here
+    say(0.05, f"loading the models ({args.method})")
     pipe = GesturePipeline.from_pretrained(checkpoints=checkpoint_sources(args.checkpoints), methods=[args.method],
                                            max_seconds=a.max_seconds)
-    preload.join()
     t1 = time.perf_counter()
-    audio = load_audio(a.audio, max_seconds=a.max_seconds)
-    say(0.05, f"{a.audio.name}: {len(audio) / SAMPLE_RATE:.1f} s of speech")
-    speech = pipe.prepare_speech(audio, SAMPLE_RATE, words=words, text=args.text, progress=say,
-                                 transcribe=a.settings.transcribe, language=a.settings.language, stream=True)
+    speech = ahead.speech()
     res = pipe.generate(speech, settings=replace(a.settings, methods=(args.method,)),   # finished, keeping its words
                         progress=say)                             # starts while the words are still recognised
     speech = pipe.settled(speech)
@@ -129,30 +125,41 @@ def run_generate(args: argparse.Namespace) -> int:
     return 0
 
 
-def preloading(text: bool, recogniser: bool, aligner: bool = False) -> threading.Thread:
-    """A started thread that loads the text encoder (`text`), the speech recogniser (`recogniser`) and the aligner's
-    compiled recursion (`aligner`: words typed or recognised are timed by it) while the
-    generator loads (each mostly on one core); join it before the speech is prepared. What fails to load here is
-    reported where it is used."""
-    from ..asr import model
-    from ..features.text import TextEmbedder
+class SpeechAhead:
+    """The speech prepared on a thread of its own while the generator loads (`prepare_speech` needs no generator):
+    its audio features, and its words typed and timed, given, or recognised window by window (the recogniser's
+    words thread keeps going while generation starts, as in `prepare_speech(stream=True)`). `speech()` joins it
+    and raises what preparing it raised (bad audio: the InputError that prepare_speech raises)."""
 
-    def load() -> None:
-        if text:
-            TextEmbedder.shared().available
-        if recogniser and model.available():
+    def __init__(self, audio, words, text: str | None, settings: Settings, max_seconds: float):
+        from ..pipeline import GesturePipeline
+
+        from ..features.text import TextEmbedder
+
+        self.started = time.perf_counter()
+        self._out: list = []
+        preparer = GesturePipeline({}, max_seconds=max_seconds)     # no methods: it prepares speech only
+        preparer.checked_audio(audio, SAMPLE_RATE)                  # silent, too short or too long: said at once
+        if words is not None or text or settings.transcribe:         # the text encoder (~3 s) loads from the start,
+            threading.Thread(target=lambda: TextEmbedder.shared().available, name="gesturelsm-text-encoder",
+                             daemon=True).start()                    # beside the recogniser and the generator
+
+        def prepare() -> None:
             try:
-                model.load_model()
-            except Exception:  # reported by the recognition that needs it
-                pass
-        if aligner:
-            from ..align.dtw import warm
+                self._out.append(preparer.prepare_speech(audio, SAMPLE_RATE, words=words, text=text, progress=say,
+                                                         transcribe=settings.transcribe, language=settings.language,
+                                                         stream=True))
+            except BaseException as exc:  # raised where the speech is asked for
+                self._out.append(exc)
 
-            warm()
+        self._thread = threading.Thread(target=prepare, name="gesturelsm-speech", daemon=True)
+        self._thread.start()
 
-    thread = threading.Thread(target=load, name="gesturelsm-preload", daemon=True)
-    thread.start()
-    return thread
+    def speech(self):
+        self._thread.join()
+        if isinstance(self._out[0], BaseException):
+            raise self._out[0]
+        return self._out[0]
 
 
 def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: float, loading: float,
@@ -162,23 +169,28 @@ def report(res: GenerationResult, settings: Settings, path: Path, end_to_end: fl
           f"CFG {res.cfg:g}, seed {res.seed}, smoothing {post.smoothing}"
           f"{', standing in place' if post.stand_in_place else ''}, grounding {'on' if post.grounding else 'off'}; "
           f"{res.text_mode}")
-    print("timings: " + ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items()))
+    from ..pipelined import HIDDEN
+
+    print("timings: " + ", ".join(f"{k} {v:.2f}s" for k, v in res.timings.items() if k != HIDDEN))   # said below
     print(f"real-time factor {res.real_time_factor:.1f}x for generation (features, sampling, decoding: the paper's "
-          f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.2f} s: "
-          f"reading the speech, its words, generation, post-processing, writing); loading the models {loading:.1f} s; "
-          f"total {total:.1f} s")
+          f"AITS convention), {res.motion.duration / max(end_to_end, 1e-9):.1f}x end to end ({end_to_end:.2f} s "
+          f"from the models loaded to the file written: the rest of the speech's words, generation, post-processing, "
+          f"writing); loading the models {loading:.1f} s, while the speech was read and prepared; total {total:.1f} s")
     hidden = hidden_transcription(res.timings)
     if hidden:
         print(hidden)
 
 
 def hidden_transcription(timings: dict[str, float]) -> str | None:
-    """"transcription 3.10 s, 2.40 s of it (77 %) hidden under generation" for pipelined speech, else None."""
+    """"transcription 3.10 s, 2.85 s of it (92 %) hidden under loading the models and generation (...)" for words
+    recognised while generated, else None: the speech's words are recognised from the moment it is read (SpeechAhead),
+    so all of the transcription but what generation waited for was hidden."""
     from ..pipelined import HIDDEN, WAITING
 
     if HIDDEN not in timings:
         return None
-    tr, hid = timings.get("transcription", 0.0), timings[HIDDEN]
-    return (f"transcription {tr:.2f} s, {hid:.2f} s of it ({100 * hid / max(tr, 1e-9):.0f} %) hidden under generation "
-            f"(recognised window by window while the first windows were generated; generation waited "
-            f"{timings.get(WAITING, 0.0):.2f} s for words)")
+    tr, waited = timings.get("transcription", 0.0), timings.get(WAITING, 0.0)
+    hid = max(0.0, tr - waited)
+    return (f"transcription {tr:.2f} s, {hid:.2f} s of it ({100 * hid / max(tr, 1e-9):.0f} %) hidden under loading "
+            f"the models and generation (recognised window by window from the moment the speech was read; generation "
+            f"waited {waited:.2f} s for words)")

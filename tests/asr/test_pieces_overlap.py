@@ -72,6 +72,26 @@ def test_the_next_window_is_recognised_while_the_one_before_is_timed_and_pieces_
     assert pieces[1].words[0].start == pytest.approx(stand.starts[1] / SR + 0.5)
 
 
+def test_the_next_window_is_recognised_while_the_caller_handles_the_first_piece(monkeypatch):
+    """What the caller does with window 0's piece (the pipeline makes its text features, which may wait for the text
+    encoder to load) does not hold up the recognition of window 1."""
+    y = _speech()
+    second = threading.Event()
+    starts = recognition_cuts(y)[:-1]
+
+    def fake(chunk, beam_size, model, language):
+        if np.shares_memory(chunk, y[starts[1]:starts[1] + 1]):
+            second.set()
+        return [Word("w", 0.5, 0.9)], -0.2, 4, {"max_no_speech_probability": 0.0}
+    monkeypatch.setattr(tr, "_recognized", fake)
+    monkeypatch.setattr(tr, "_timed", lambda chunk, words, heard, timing: (words, "dtw", []))
+    got = tr.english_pieces(y)
+    first = next(got)                                  # the caller holds the first piece ...
+    assert second.wait(5), "window 1 was recognised only once the caller was done with window 0's piece"
+    assert first.final_until == starts[1] / SR
+    assert [p.heard for p in got] == ["w"] * (len(starts) - 1)
+
+
 def test_a_recognition_error_on_the_thread_is_raised_where_the_pieces_are_read(monkeypatch):
     y = _speech()
     starts = recognition_cuts(y)[:-1]
