@@ -132,11 +132,9 @@ class SpeechAhead:
     and raises what preparing it raised (bad audio: the InputError that prepare_speech raises)."""
 
     def __init__(self, audio, words, text: str | None, settings: Settings, max_seconds: float):
+        from ..features.text import TextEmbedder
         from ..pipeline import GesturePipeline
 
-        from ..features.text import TextEmbedder
-
-        self.started = time.perf_counter()
         self._out: list = []
         preparer = GesturePipeline({}, max_seconds=max_seconds)     # no methods: it prepares speech only
         preparer.checked_audio(audio, SAMPLE_RATE)                  # silent, too short or too long: said at once
