@@ -186,7 +186,7 @@ def test_generate_recognises_the_words_while_the_models_load(tiny_assets, tmp_pa
     real = pipeline.GesturePipeline.from_pretrained
 
     def loading(*args, **kwargs):
-        seen.append(started.wait(5))
+        seen.append(started.wait(30))
         return real(*args, **kwargs)
     monkeypatch.setattr(pipeline, "automatic_words", hear)
     monkeypatch.setattr(pipeline.GesturePipeline, "from_pretrained", staticmethod(loading))

@@ -128,7 +128,7 @@ def test_the_words_are_recognised_while_the_audio_features_are_made(tiny_pipelin
         return AutomaticWords(None, "audio-only (automatic transcription rejected)", None, ["not English"])
 
     def channels(y, sr=SAMPLE_RATE):
-        seen.append(started.wait(5) if len(y) > SAMPLE_RATE else None)     # not the one-off warm-up's noise
+        seen.append(started.wait(30) if len(y) > SAMPLE_RATE else None)     # not the one-off warm-up's noise
         return real(y, sr)
     monkeypatch.setattr(pipeline_module, "automatic_words", words)
     monkeypatch.setattr(pipeline_module, "audio_channels", channels)
