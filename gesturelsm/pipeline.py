@@ -164,15 +164,15 @@ class GesturePipeline:
         try:
             once = warm_audio_features()                 # one-off (the first speech of a process): not feature time
             channels = torch.from_numpy(audio_channels(y))
+            speech = SpeechInput(y, T, channels, None, torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool),
+                                 "audio-only (no transcript given)", {"features": time.perf_counter() - t0 - once},
+                                 [], None)
+            if progress:
+                progress(0.1, "audio features")       # a request's progress may raise: it was stopped
         except BaseException:
             if pending is not None:
                 pending.abandon()
             raise
-        speech = SpeechInput(y, T, channels, None, torch.zeros(T, TEXT_DIM), torch.zeros(T, dtype=torch.bool),
-                             "audio-only (no transcript given)", {"features": time.perf_counter() - t0 - once}, [],
-                             None)
-        if progress:
-            progress(0.1, "audio features")
         if pending is not None:
             return pending.attach(speech)
         if typed and not gesture_words(language, text):

@@ -139,7 +139,14 @@ def test_the_words_are_recognised_while_the_audio_features_are_made(tiny_pipelin
     assert done.channels is speech.channels and done.words is None and done.text_mode.startswith("audio-only")
 
 
-def test_audio_features_that_fail_end_the_words_thread(tiny_pipeline, monkeypatch):
+class Stopped(Exception):
+    """What a stopped request's progress raises."""
+
+
+@pytest.mark.parametrize("fails", ["features", "progress"])
+def test_speech_whose_preparation_stops_ends_its_words_thread(tiny_pipeline, monkeypatch, fails):
+    """The audio features fail, or the request is stopped (its progress raises) after the recogniser started: the
+    error reaches the caller and the words thread does not wait forever for the speech."""
     if not TextEmbedder.shared().available:
         pytest.skip("text encoder not installed")
     threads = []
@@ -149,11 +156,20 @@ def test_audio_features_that_fail_end_the_words_thread(tiny_pipeline, monkeypatc
         return AutomaticWords(None, "audio-only (automatic transcription rejected)", None, ["not English"])
 
     def broken(y, sr=SAMPLE_RATE):
-        raise MemoryError("no room for the features")
+        raise Stopped("no room for the features")
+
+    def progress(fraction, message):
+        if message == "audio features":
+            raise Stopped("the visitor pressed Stop")
     monkeypatch.setattr(pipeline_module, "automatic_words", words)
-    monkeypatch.setattr(pipeline_module, "audio_channels", broken)
     monkeypatch.setattr(pipeline_module, "warm_audio_features", lambda: 0.0)
-    with pytest.raises(MemoryError):
-        tiny_pipeline.prepare_speech(speech_like(3.0, seed=4), stream=True)
-    threads[0].join(10)
-    assert not threads[0].is_alive()
+    if fails == "features":
+        monkeypatch.setattr(pipeline_module, "audio_channels", broken)
+    before = set(threading.enumerate())
+    with pytest.raises(Stopped):
+        tiny_pipeline.prepare_speech(speech_like(3.0, seed=4), stream=True, progress=progress)
+    started = [t for t in threading.enumerate() if t.name == "gesturelsm-words" and t not in before] + threads
+    assert started                                   # the recogniser had been started
+    for t in started:
+        t.join(30)
+        assert not t.is_alive()
