@@ -126,8 +126,8 @@ def recognize(audio: np.ndarray, beam_size: int = BEAM_SIZE, model=None,
 def _spoken(segments: list) -> list:
     """The segments with a letter or digit in them. Whisper ends some windows on a segment of punctuation alone (" ."
     over the last second of a short-context piece); its compression ratio is the window's, often over LOOP_RATIO, and
-    such a segment holds no words to recover, so it must not set off the fallback's five sampling passes (2.5 s more
-    for the last 13 s of 2_scott_0_3_3, which then ended on a made-up "Okay.")."""
+    such a segment holds no words to recover, so it must not set off the fallback's five sampling passes (seconds
+    more for the window, which may then end on a made-up word)."""
     return [seg for seg in segments if any(ch.isalnum() for ch in seg.text)]
 
 
@@ -222,8 +222,8 @@ def english_pieces(y: np.ndarray, timing: str = "auto", beam_size: int = BEAM_SI
 
 def _aligner_loading(timing: str) -> threading.Thread:
     """The aligner's compiled recursion made ready (align/dtw.py `warm`: numba imported and its kernel read from the
-    disk cache, 0.6-0.9 s in a fresh process, once) on a thread of its own while the first window is recognised, so
-    that timing that window's words does not wait for it. A failure here is left to the aligner's own call."""
+    disk cache, once per process) on a thread of its own while the first window is recognised, so that timing that
+    window's words does not wait for it. A failure here is left to the aligner's own call."""
     def load() -> None:
         if timing != "whisper":
             with contextlib.suppress(Exception):
